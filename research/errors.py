@@ -1,0 +1,40 @@
+"""Specific exceptions for bad input. Each message names the file, line, field or index at fault
+and what was expected, so a user can fix the input without reading the code."""
+
+
+class ResearchError(Exception):
+    """Base class of every error this package raises on purpose."""
+
+
+class PathError(ResearchError, ValueError):
+    """A tool path is unusable: empty, NaN coordinates, zero-length segment, wrong shape."""
+
+
+class GCodeError(PathError):
+    """Malformed or unsupported G-code.
+
+    Attributes:
+        source: file name or ``"<string>"``.
+        line: 1-based line number.
+        column: 1-based column of the offending word.
+    """
+
+    def __init__(self, message: str, *, source: str = "<string>", line: int = 0, column: int = 0):
+        self.source, self.line, self.column = source, line, column
+        super().__init__(f"{source}:{line}:{column}: {message}")
+
+
+class ParameterError(ResearchError, ValueError):
+    """A numeric parameter is out of its domain (feed <= 0, delay <= 0, tolerance < 0, NaN ...)."""
+
+
+class ConfigError(ResearchError, ValueError):
+    """An experiment config has a typo, a wrong type or a wrong unit; the message names file and key."""
+
+
+class DriveLogError(ResearchError, ValueError):
+    """A drive log is unusable (NaN, non-monotonic time, missing column); names file, column, index."""
+
+
+class InfeasibleProblem(ResearchError, RuntimeError):
+    """An optimisation problem has no solution under the stated limits; carries diagnostics."""

@@ -1,0 +1,193 @@
+"""Piecewise polynomials in local coordinates: the exact form of FIR-filtered motion profiles.
+
+A moving-average (FIR) filter maps a piecewise polynomial of degree d to one of degree d + 1
+(Sencer 2015, eq 1-4), so a chain of n filters applied to rectangular velocity pulses gives an
+exact piecewise-polynomial trajectory. This module holds that representation and the three
+operations the interpolators need: antiderivative, moving average and evaluation. Everything is
+written with ``jax.numpy`` so it can be jitted and differentiated with respect to the break points
+(filter delays, overlap times).
+
+Representation: breaks ``b[0] <= ... <= b[K]`` (zero-length pieces allowed) and coefficients
+``c[i, m, :]`` in *ascending* powers of the local coordinate ``t - b[i]``::
+
+    f(t) = sum_m c[i, m, :] * (t - b[i]) ** m      for b[i] <= t < b[i + 1]
+
+Local coordinates keep every coefficient a local derivative, so nothing cancels catastrophically
+on long time spans. Outside ``[b[0], b[K]]`` the function is held at its end values and all of its
+derivatives are zero: motion profiles start and end at rest.
+"""
+
+from __future__ import annotations
+
+from functools import partial
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jax import Array
+
+
+class PiecewisePolynomial(eqx.Module):
+    """A vector-valued piecewise polynomial in local coordinates.
+
+    Attributes:
+        breaks: ``(K + 1,)`` non-decreasing break points [s].
+        coeffs: ``(K, d + 1, A)`` ascending local coefficients for ``A`` output channels (axes).
+
+    Example:
+        >>> import jax.numpy as jnp
+        >>> pp = PiecewisePolynomial.from_steps(jnp.array([0.0, 1.0]), jnp.array([[2.0]]))
+        >>> float(pp.antiderivative()(jnp.array([0.5]))[0, 0])
+        1.0
+    """
+
+    breaks: Array
+    coeffs: Array
+
+    @staticmethod
+    def from_steps(breaks: Array, values: Array) -> "PiecewisePolynomial":
+        """Piecewise-constant function: ``values[i]`` (shape ``(K, A)``) on ``[breaks[i], breaks[i+1])``."""
+        values = jnp.asarray(values, dtype=jnp.float64)
+        return PiecewisePolynomial(jnp.asarray(breaks, dtype=jnp.float64), values[:, None, :])
+
+    @property
+    def degree(self) -> int:
+        return self.coeffs.shape[1] - 1
+
+    @property
+    def n_channels(self) -> int:
+        return self.coeffs.shape[2]
+
+    @property
+    def start(self) -> Array:
+        return self.breaks[0]
+
+    @property
+    def end(self) -> Array:
+        return self.breaks[-1]
+
+    def derivative(self, nu: int = 1) -> "PiecewisePolynomial":
+        """The ``nu``-th derivative (degree drops by ``nu``; a constant if ``nu > degree``)."""
+        c = self.coeffs
+        for _ in range(nu):
+            if c.shape[1] == 1:
+                c = jnp.zeros_like(c)
+                continue
+            powers = jnp.arange(1, c.shape[1], dtype=c.dtype)[None, :, None]
+            c = c[:, 1:, :] * powers
+        return PiecewisePolynomial(self.breaks, c)
+
+    def antiderivative(self, initial: Array | float = 0.0) -> "PiecewisePolynomial":
+        """Integral from ``breaks[0]``, plus ``initial`` (scalar or ``(A,)``)."""
+        c = self.coeffs
+        d = c.shape[1]
+        powers = jnp.arange(1, d + 1, dtype=c.dtype)[None, :, None]
+        integrated = c / powers  # coefficient of (t - b)^(m + 1)
+        h = jnp.diff(self.breaks)[:, None]
+        hp = h[:, None, :] ** powers  # (K, d, 1)
+        piece_integral = jnp.sum(integrated * hp, axis=1)  # (K, A)
+        offsets = jnp.cumsum(piece_integral, axis=0) - piece_integral
+        const = offsets + jnp.broadcast_to(jnp.asarray(initial, dtype=c.dtype), offsets.shape)
+        return PiecewisePolynomial(self.breaks, jnp.concatenate([const[:, None, :], integrated], axis=1))
+
+    def end_values(self) -> Array:
+        """Value at ``breaks[-1]``, shape ``(A,)``."""
+        h = self.breaks[-1] - self.breaks[-2]
+        return _horner(self.coeffs[-1], h)
+
+    def moving_average(self, delay: Array | float) -> "PiecewisePolynomial":
+        """Output of the unity-gain FIR filter M(s) = (1 - exp(-s T)) / (s T) (Sencer 2015, eq 1).
+
+        ``y(t) = (C(t) - C(t - T)) / T`` with ``C`` the antiderivative. Requires the function to be
+        zero outside its breaks (a velocity-like signal); the result lives on
+        ``[breaks[0], breaks[-1] + T]`` and has one degree more.
+        """
+        delay = jnp.asarray(delay, dtype=jnp.float64)
+        C = self.antiderivative()
+        b = C.breaks
+        new_breaks = jnp.sort(jnp.concatenate([b, b + delay]))
+        left = new_breaks[:-1]
+        # Pick the old piece by the *midpoint* of each new piece: a new piece lies inside one old
+        # piece of C(t) and one of C(t - T), and the midpoint finds it without rounding ambiguity.
+        mid = 0.5 * (left + new_breaks[1:])
+        now = _recentred(C, mid, left)
+        before = _recentred(C, mid - delay, left - delay)
+        return PiecewisePolynomial(new_breaks, (now - before) / delay)
+
+    def __call__(self, t: Array, nu: int = 0) -> Array:
+        """Evaluate the ``nu``-th derivative at times ``t`` (any shape ``S``); returns ``S + (A,)``."""
+        f = self.derivative(nu) if nu else self
+        t = jnp.asarray(t, dtype=jnp.float64)
+        flat = t.reshape(-1)
+        K = f.coeffs.shape[0]
+        i = jnp.clip(jnp.searchsorted(f.breaks, flat, side="right") - 1, 0, K - 1)
+        tau = jnp.clip(flat, f.breaks[0], f.breaks[-1]) - f.breaks[i]
+        out = _horner(f.coeffs[i], tau)
+        if nu:
+            outside = (flat < f.breaks[0]) | (flat > f.breaks[-1])
+            out = jnp.where(outside[:, None], 0.0, out)
+        return out.reshape(t.shape + (f.coeffs.shape[2],))
+
+    def sample(self, sample_period: float, n_samples: int, orders: int = 4) -> Array:
+        """Values and derivatives ``0 .. orders-1`` on the grid ``breaks[0] + i * sample_period``.
+
+        O(n_samples + K): the piece of each sample comes from a scatter-add and a cumulative sum,
+        not a search. Returns ``(orders, n_samples, A)``.
+        """
+        return _sample_uniform(self, jnp.asarray(sample_period, jnp.float64), n_samples, orders)
+
+
+def _horner(coeffs: Array, tau: Array) -> Array:
+    """Evaluate ascending coefficients ``(..., d + 1, A)`` at ``tau`` (shape ``(...)``)."""
+    out = coeffs[..., -1, :]
+    for m in range(coeffs.shape[-2] - 2, -1, -1):
+        out = out * tau[..., None] + coeffs[..., m, :]
+    return out
+
+
+def _taylor_shift(coeffs: Array, delta: Array) -> Array:
+    """Re-centre ascending coefficients ``(N, d + 1, A)`` by ``delta`` ``(N,)`` (exact in O(d^2))."""
+    c = [coeffs[:, m, :] for m in range(coeffs.shape[1])]
+    d = len(c) - 1
+    dl = delta[:, None]
+    for i in range(d):
+        for m in range(d - 1, i - 1, -1):
+            c[m] = c[m] + dl * c[m + 1]
+    return jnp.stack(c, axis=1)
+
+
+def _recentred(C: PiecewisePolynomial, locate: Array, origin: Array) -> Array:
+    """Coefficients of ``C`` about ``origin``, taking the piece that contains ``locate``.
+
+    Before ``breaks[0]`` C is zero; after ``breaks[-1]`` it holds its end value.
+    """
+    K = C.coeffs.shape[0]
+    i = jnp.searchsorted(C.breaks, locate, side="right") - 1  # -1 .. K
+    zero = jnp.zeros_like(C.coeffs[:1])
+    hold = jnp.zeros_like(C.coeffs[:1]).at[0, 0, :].set(C.end_values())
+    table = jnp.concatenate([zero, C.coeffs, hold], axis=0)
+    table_origin = jnp.concatenate([C.breaks[:1], C.breaks[:K], C.breaks[-1:]])
+    j = jnp.clip(i + 1, 0, K + 1)
+    return _taylor_shift(table[j], origin - table_origin[j])
+
+
+@partial(jax.jit, static_argnums=(2, 3))
+def _sample_uniform(pp: PiecewisePolynomial, sample_period: Array, n_samples: int, orders: int) -> Array:
+    K = pp.coeffs.shape[0]
+    # index of the first sample at or after each interior break
+    first = jnp.ceil((pp.breaks[1:K] - pp.breaks[0]) / sample_period)
+    first = jnp.clip(first, 0, n_samples).astype(jnp.int32)
+    counts = jnp.zeros(n_samples + 1, jnp.int32).at[first].add(1)
+    piece = jnp.cumsum(counts)[:n_samples]
+    t = pp.breaks[0] + jnp.arange(n_samples, dtype=jnp.float64) * sample_period
+    tau = jnp.clip(t, pp.breaks[0], pp.breaks[-1]) - pp.breaks[piece]
+    after = t > pp.breaks[-1]
+    c = pp.coeffs[piece]  # (N, d + 1, A)
+    out = []
+    for nu in range(orders):
+        if nu > 0:
+            c = c[:, 1:, :] * jnp.arange(1, c.shape[1], dtype=c.dtype)[None, :, None] if c.shape[1] > 1 else jnp.zeros_like(c)
+        value = _horner(c, tau)
+        out.append(jnp.where(after[:, None], 0.0, value) if nu else value)
+    return jnp.stack(out)
+
