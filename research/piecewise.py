@@ -116,17 +116,7 @@ class PiecewisePolynomial(eqx.Module):
 
     def __call__(self, t: Array, nu: int = 0) -> Array:
         """Evaluate the ``nu``-th derivative at times ``t`` (any shape ``S``); returns ``S + (A,)``."""
-        f = self.derivative(nu) if nu else self
-        t = jnp.asarray(t, dtype=jnp.float64)
-        flat = t.reshape(-1)
-        K = f.coeffs.shape[0]
-        i = jnp.clip(jnp.searchsorted(f.breaks, flat, side="right") - 1, 0, K - 1)
-        tau = jnp.clip(flat, f.breaks[0], f.breaks[-1]) - f.breaks[i]
-        out = _horner(f.coeffs[i], tau)
-        if nu:
-            outside = (flat < f.breaks[0]) | (flat > f.breaks[-1])
-            out = jnp.where(outside[:, None], 0.0, out)
-        return out.reshape(t.shape + (f.coeffs.shape[2],))
+        return _evaluate(self, jnp.asarray(t, dtype=jnp.float64), nu)
 
     def sample(self, sample_period: float, n_samples: int, orders: int = 4) -> Array:
         """Values and derivatives ``0 .. orders-1`` on the grid ``breaks[0] + i * sample_period``.
@@ -135,6 +125,20 @@ class PiecewisePolynomial(eqx.Module):
         not a search. Returns ``(orders, n_samples, A)``.
         """
         return _sample_uniform(self, jnp.asarray(sample_period, jnp.float64), n_samples, orders)
+
+
+@partial(jax.jit, static_argnums=2)
+def _evaluate(pp: PiecewisePolynomial, t: Array, nu: int) -> Array:
+    f = pp.derivative(nu) if nu else pp
+    flat = t.reshape(-1)
+    K = f.coeffs.shape[0]
+    i = jnp.clip(jnp.searchsorted(f.breaks, flat, side="right") - 1, 0, K - 1)
+    tau = jnp.clip(flat, f.breaks[0], f.breaks[-1]) - f.breaks[i]
+    out = _horner(f.coeffs[i], tau)
+    if nu:
+        outside = (flat < f.breaks[0]) | (flat > f.breaks[-1])
+        out = jnp.where(outside[:, None], 0.0, out)
+    return out.reshape(t.shape + (f.coeffs.shape[2],))
 
 
 def _horner(coeffs: Array, tau: Array) -> Array:

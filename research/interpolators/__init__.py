@@ -1,0 +1,27 @@
+"""Interpolators: tool path -> :class:`~research.trajectory.Trajectory`."""
+
+from research.interpolators._fir_chain import (
+    acceleration_spectrum,
+    delays_for_modes,
+    frequency_response,
+    kernel_second_integral,
+    magnitude_response,
+    total_delay,
+)
+from research.interpolators._fir_overlap import cornering_error, overlap_time
+from research.interpolators.fir import FIRPlan, fir_by_convolution, fir_interpolate, plan_fir
+
+__all__ = [
+    "FIRPlan",
+    "acceleration_spectrum",
+    "cornering_error",
+    "delays_for_modes",
+    "fir_by_convolution",
+    "fir_interpolate",
+    "frequency_response",
+    "kernel_second_integral",
+    "magnitude_response",
+    "overlap_time",
+    "plan_fir",
+    "total_delay",
+]

@@ -1,0 +1,162 @@
+"""Figures of merit shared by every comparison: cycle time, contour and corner error, peak kinematics.
+
+All take a :class:`~research.trajectory.Trajectory` (and the reference path where relevant). When
+the trajectory carries its exact profile, extrema are refined between samples (golden-section
+search on the exact profile), so results do not depend on where the samples happen to fall.
+Units: s, mm, mm/s, mm/s^2, mm/s^3.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from research.paths.polyline import Polyline
+from research.trajectory import Trajectory
+
+_GOLDEN = 0.5 * (np.sqrt(5.0) - 1.0)
+
+
+def cycle_time(traj: Trajectory) -> float:
+    """Motion time [s] (exact when the producer knows it, e.g. FIR: ``sum T_v + T_d + sum (T_d - T_k)``)."""
+    return float(traj.duration)
+
+
+def contour_errors(traj: Trajectory, path: Polyline) -> np.ndarray:
+    """Exact distance [mm] from each trajectory sample to the polyline, shape ``(N,)``."""
+    return path.distance(np.asarray(traj.q))
+
+
+def max_contour_error(traj: Trajectory, path: Polyline, candidates: int = 16) -> float:
+    """Maximum distance [mm] from the trajectory to the polyline, refined between samples.
+
+    The ``candidates`` largest local maxima of the sampled distance are refined on
+    ``[t_i - Ts, t_i + Ts]`` when the trajectory has an exact profile.
+    """
+    d = contour_errors(traj, path)
+    if traj.exact is None or d.size < 3:
+        return float(d.max())
+    peaks = _top_local_extrema(d, candidates)
+    t = np.asarray(traj.t)
+    lo, hi = t[np.maximum(peaks - 1, 0)], t[np.minimum(peaks + 1, d.size - 1)]
+    best = _golden_min(lambda s: -path.distance(traj.evaluate(s)), lo, hi)
+    return float(max(d.max(), -best.min()))
+
+
+def corner_errors(traj: Trajectory, path: Polyline, candidates: int = 8) -> np.ndarray:
+    """Distance [mm] from each interior vertex of ``path`` to the trajectory, shape ``(M - 1,)``.
+
+    The trajectory samples nearest to each vertex are found with a KD-tree; with an exact profile
+    each is refined on ``[t_i - Ts, t_i + Ts]``.
+    """
+    vertices = path.corners
+    if vertices.shape[0] == 0:
+        return np.zeros(0)
+    q = np.asarray(traj.q)
+    k = min(candidates, q.shape[0])
+    d, idx = cKDTree(q).query(vertices, k=k)
+    d, idx = d.reshape(len(vertices), k), idx.reshape(len(vertices), k)
+    if traj.exact is None:
+        return d.min(axis=1)
+    t = np.asarray(traj.t)
+    lo, hi = t[np.maximum(idx - 1, 0)], t[np.minimum(idx + 1, q.shape[0] - 1)]
+    target = np.repeat(vertices[:, None, :], k, axis=1)
+    refined = _golden_min(lambda s: np.linalg.norm(traj.evaluate(s) - target, axis=-1), lo, hi)
+    return np.minimum(d, refined).min(axis=1)
+
+
+def peak_axis_values(traj: Trajectory, nu: int) -> np.ndarray:
+    """Peak ``|d^nu q / dt^nu|`` per axis over the motion (``nu`` = 1, 2, 3), shape ``(A,)``.
+
+    With an exact profile the break points (where piecewise-polynomial derivatives peak) are added
+    to the samples and the largest sampled local maxima are refined between samples.
+    """
+    samples = np.abs(np.asarray((traj.q, traj.v, traj.a, traj.j)[nu]))
+    peak = samples.max(axis=0)
+    if traj.exact is None:
+        return peak
+    breaks = np.asarray(traj.exact.breaks)
+    # both one-sided values at each break: derivatives of order >= degree jump there
+    eps = 1e-12 * max(1.0, float(breaks[-1]))
+    at_breaks = np.abs(np.concatenate([traj.evaluate(breaks - eps, nu), traj.evaluate(breaks + eps, nu)]))
+    peak = np.maximum(peak, at_breaks.max(axis=0))
+    # a jump in the derivative below (e.g. the acceleration of a single FIR filter) makes this one
+    # a Dirac impulse: report it as unbounded rather than as the zero seen between the jumps
+    below = traj.evaluate(breaks + eps, nu - 1) - traj.evaluate(breaks - eps, nu - 1)
+    scale = np.abs(np.asarray((traj.q, traj.v, traj.a, traj.j)[nu - 1])).max(axis=0)
+    jumps = np.abs(below).max(axis=0) > 1e-6 * np.maximum(scale, 1e-300)
+    peak = np.where(jumps, np.inf, peak)
+    t = np.asarray(traj.t)
+    for a in range(samples.shape[1]):
+        peaks = _top_local_extrema(samples[:, a], 4)
+        lo, hi = t[np.maximum(peaks - 1, 0)], t[np.minimum(peaks + 1, t.size - 1)]
+        best = _golden_min(lambda s: -np.abs(traj.evaluate(s, nu)[..., a]), lo, hi)
+        peak[a] = max(peak[a], -best.min())
+    return peak
+
+
+def peak_feed(traj: Trajectory) -> float:
+    """Peak path speed ``max ||v||`` [mm/s] (sampled, refined between samples when exact)."""
+    f = traj.feed
+    if traj.exact is None or f.size < 3:
+        return float(f.max())
+    peaks = _top_local_extrema(f, 8)
+    t = np.asarray(traj.t)
+    lo, hi = t[np.maximum(peaks - 1, 0)], t[np.minimum(peaks + 1, f.size - 1)]
+    best = _golden_min(lambda s: -np.linalg.norm(traj.evaluate(s, 1), axis=-1), lo, hi)
+    return float(max(f.max(), -best.min()))
+
+
+@dataclass(frozen=True)
+class MotionMetrics:
+    """The standard comparison row. Per-axis arrays follow ``axes``."""
+
+    axes: tuple[str, ...]
+    cycle_time: float  # s
+    max_contour_error: float  # mm
+    max_corner_error: float  # mm
+    corner_errors: np.ndarray  # mm, one per interior vertex
+    peak_velocity: np.ndarray  # mm/s per axis
+    peak_acceleration: np.ndarray  # mm/s^2 per axis
+    peak_jerk: np.ndarray  # mm/s^3 per axis
+    peak_feed: float  # mm/s
+
+    def as_dict(self) -> dict:
+        """JSON-ready dictionary (arrays become lists)."""
+        return {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in asdict(self).items()}
+
+
+def summarize(traj: Trajectory, path: Polyline) -> MotionMetrics:
+    """All metrics of ``traj`` against ``path``."""
+    corners = corner_errors(traj, path)
+    return MotionMetrics(
+        axes=traj.axes,
+        cycle_time=cycle_time(traj),
+        max_contour_error=max_contour_error(traj, path),
+        max_corner_error=float(corners.max()) if corners.size else 0.0,
+        corner_errors=corners,
+        peak_velocity=peak_axis_values(traj, 1),
+        peak_acceleration=peak_axis_values(traj, 2),
+        peak_jerk=peak_axis_values(traj, 3),
+        peak_feed=peak_feed(traj),
+    )
+
+
+def _top_local_extrema(x: np.ndarray, count: int) -> np.ndarray:
+    """Indices of the ``count`` largest local maxima of a 1-D array (plateaus included)."""
+    inner = np.flatnonzero((x[1:-1] >= x[:-2]) & (x[1:-1] >= x[2:])) + 1
+    ends = [i for i in (0, x.size - 1) if x.size]
+    idx = np.unique(np.concatenate([inner, ends]).astype(int))
+    return idx[np.argsort(x[idx])[::-1][:count]]
+
+
+def _golden_min(f, lo: np.ndarray, hi: np.ndarray, steps: int = 60) -> np.ndarray:
+    """Vectorised golden-section minimisation of ``f`` on each bracket ``[lo, hi]``; returns minima."""
+    lo, hi = np.array(lo, dtype=np.float64), np.array(hi, dtype=np.float64)
+    for _ in range(steps):
+        a, b = hi - _GOLDEN * (hi - lo), lo + _GOLDEN * (hi - lo)
+        left = f(a) < f(b)
+        lo, hi = np.where(left, lo, a), np.where(left, b, hi)
+    return f(0.5 * (lo + hi))
