@@ -115,36 +115,52 @@ def plan_fir(path: Polyline, feed, delays, tolerance, *, refine: bool = True) ->
     if not isinstance(path, Polyline):
         raise ParameterError(f"path must be a Polyline, got {type(path).__name__}")
     _check_concrete(delays, feed, tolerance, path.n_segments)
+    M = path.n_segments
+    pad = max(4, 1 << (M - 1).bit_length()) - M  # bucket sizes so similar paths share compiled code
     delays = jnp.asarray(delays, dtype=jnp.float64).reshape(-1)
-    feeds = jnp.broadcast_to(jnp.asarray(feed, dtype=jnp.float64), (path.n_segments,))
+    feeds = jnp.broadcast_to(jnp.asarray(feed, dtype=jnp.float64), (M,))
     tolerance = jnp.asarray(tolerance, dtype=jnp.float64)
-    points = jnp.asarray(path.points)
-    u = jnp.asarray(path.directions)
-    pulse_times = jnp.asarray(path.lengths) / feeds
-    speed_change = _safe_norm(feeds[1:, None] * u[1:] - feeds[:-1, None] * u[:-1])
-    overlaps = overlap_time(tolerance, speed_change, delays)
+    # padding segments have zero length and full overlap: they add neither motion nor time
+    points = jnp.concatenate([jnp.asarray(path.points), jnp.repeat(jnp.asarray(path.points[-1:]), pad, axis=0)])
+    u = jnp.concatenate([jnp.asarray(path.directions), jnp.zeros((pad, path.dim))])
+    feeds_p = jnp.concatenate([feeds, jnp.ones(pad)])
+    pulse_times = jnp.concatenate([jnp.asarray(path.lengths), jnp.zeros(pad)]) / feeds_p
+    real = jnp.arange(M + pad - 1) < M - 1
 
-    build = partial(_build, points, u, feeds, pulse_times, delays)
-    starts, position, errors = build(overlaps)
-    if refine and path.n_segments > 1:
-        n = delays.shape[0]
+    overlaps = _initial_overlaps(u, feeds_p, delays, tolerance, real)
+    starts, position, errors = _build(points, u, feeds_p, pulse_times, delays, overlaps, real)
+    if refine and M > 1:
         limit = tolerance * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
-        for round_ in range(_SCALING_ROUNDS + path.n_segments):
-            violated = errors > limit
-            if not bool(jnp.any(violated)):
+        for round_ in range(_SCALING_ROUNDS + M):
+            if not bool(jnp.any(errors > limit)):
                 break
-            if round_ < _SCALING_ROUNDS:
-                ratio = tolerance / jnp.where(violated, errors, 1.0)
-                shrink = jnp.clip(0.98 * ratio ** (1.0 / (n + 1)), 0.0, 1.0)
-                overlaps = jnp.where(violated, overlaps * shrink, overlaps)
-            else:
-                overlaps = jnp.where(violated, 0.0, overlaps)
-            starts, position, errors = build(overlaps)
-    return FIRPlan(starts, pulse_times, overlaps, feeds, delays, position, errors, path.axes)
+            overlaps = _refine_overlaps(overlaps, errors, tolerance, limit, delays.shape[0], round_ < _SCALING_ROUNDS)
+            starts, position, errors = _build(points, u, feeds_p, pulse_times, delays, overlaps, real)
+    return FIRPlan(
+        starts[:M], pulse_times[:M], overlaps[: M - 1], feeds, delays, position, errors[: M - 1], path.axes
+    )
 
 
 @jax.jit
-def _build(points, u, feeds, pulse_times, delays, overlaps):
+def _initial_overlaps(u, feeds, delays, tolerance, real):
+    """Eq 13/14 overlap per corner from ``|F+ u+ - F- u-|``; padding corners get full overlap."""
+    speed_change = _safe_norm(feeds[1:, None] * u[1:] - feeds[:-1, None] * u[:-1])
+    return jnp.where(real, overlap_time(tolerance, speed_change, delays), jnp.sum(delays))
+
+
+@partial(jax.jit, static_argnums=(4, 5))
+def _refine_overlaps(overlaps, errors, tolerance, limit, n_filters: int, scale: bool):
+    """One round of the short-segment rule: shrink (or, late, zero) every violating overlap."""
+    violated = errors > limit
+    if not scale:
+        return jnp.where(violated, 0.0, overlaps)
+    ratio = tolerance / jnp.where(violated, errors, 1.0)
+    shrink = jnp.clip(0.98 * ratio ** (1.0 / (n_filters + 1)), 0.0, 1.0)
+    return jnp.where(violated, overlaps * shrink, overlaps)
+
+
+@jax.jit
+def _build(points, u, feeds, pulse_times, delays, overlaps, real):
     """Schedule the pulses, filter them exactly, and measure every corner's error."""
     Td = jnp.sum(delays)
     gaps = Td - overlaps
@@ -160,7 +176,7 @@ def _build(points, u, feeds, pulse_times, delays, overlaps):
     # the bisector point of corner k: averaging window centred on the gap after pulse k
     centre = ends[:-1] + 0.5 * gaps + 0.5 * Td
     errors = corner_distances(position, points[1:-1], centre, 0.5 * Td)
-    return starts, position, errors
+    return starts, position, jnp.where(real, errors, 0.0)
 
 
 def corner_distances(position: PiecewisePolynomial, vertices: Array, centre: Array, half_window: Array) -> Array:
