@@ -124,7 +124,8 @@ class PiecewisePolynomial(eqx.Module):
         O(n_samples + K): the piece of each sample comes from a scatter-add and a cumulative sum,
         not a search. Returns ``(orders, n_samples, A)``.
         """
-        return _sample_uniform(self, jnp.asarray(sample_period, jnp.float64), n_samples, orders)
+        bucket = max(256, 1 << (n_samples - 1).bit_length())  # share compiled code across lengths
+        return _sample_uniform(self, jnp.asarray(sample_period, jnp.float64), bucket, orders)[:, :n_samples]
 
 
 @partial(jax.jit, static_argnums=2)
