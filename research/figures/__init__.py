@@ -1,0 +1,19 @@
+"""Regenerated paper figures: one module per figure, each with ``NAME``, ``REPRODUCES`` and
+``make_figure(out_dir, fast=False) -> list[Path]``. ``python -m research figures`` runs them all."""
+
+from __future__ import annotations
+
+import importlib
+from types import ModuleType
+
+#: registered figure modules, in the order they are regenerated
+FIGURE_MODULES = (
+    "research.figures.fir_spectrum",
+    "research.figures.fir_cornering",
+)
+
+
+def registry() -> dict[str, ModuleType]:
+    """``{NAME: module}`` of every registered figure."""
+    modules = [importlib.import_module(m) for m in FIGURE_MODULES]
+    return {m.NAME: m for m in modules}

@@ -1,0 +1,51 @@
+"""Metrics: exact refinement between samples, corner error definition, unbounded jerk detection."""
+
+import numpy as np
+import pytest
+
+from research.interpolators import fir_interpolate
+from research.metrics import corner_errors, max_contour_error, peak_axis_values, peak_feed, summarize
+from research.paths import Polyline, named_path
+from research.trajectory import Trajectory
+
+
+def test_corner_error_independent_of_sampling():
+    path = named_path("corner90")
+    coarse = fir_interpolate(path, 250.0, [0.148, 0.089], 0.05, sample_period=5e-3)
+    fine = fir_interpolate(path, 250.0, [0.148, 0.089], 0.05, sample_period=1e-4)
+    assert corner_errors(coarse, path)[0] == pytest.approx(corner_errors(fine, path)[0], rel=1e-9)
+    assert corner_errors(coarse, path)[0] == pytest.approx(0.05, rel=1e-9)
+
+
+def test_contour_error_of_symmetric_corner():
+    """On a 90 deg corner the deepest point lies on the bisector: contour error = eps cos 45."""
+    path = named_path("corner90")
+    traj = fir_interpolate(path, 250.0, [0.148, 0.089], 0.2, sample_period=7e-3)
+    assert max_contour_error(traj, path) == pytest.approx(0.2 * np.cos(np.pi / 4), rel=1e-8)
+
+
+def test_peaks_match_fir_envelope():
+    """One straight move through two filters: |v| = F, |a| = F / T1, |j| = F / (T1 T2) exactly."""
+    path = Polyline([[0.0, 0.0], [30.0, 40.0]])
+    F, T1, T2 = 100.0, 0.05, 0.02
+    traj = fir_interpolate(path, F, [T1, T2], 0.0, sample_period=3.3e-3)
+    u = np.array([0.6, 0.8])
+    np.testing.assert_allclose(peak_axis_values(traj, 1), F * u, rtol=1e-9)
+    np.testing.assert_allclose(peak_axis_values(traj, 2), F / T1 * u, rtol=1e-9)
+    np.testing.assert_allclose(peak_axis_values(traj, 3), F / (T1 * T2) * u, rtol=1e-9)
+    assert peak_feed(traj) == pytest.approx(F, rel=1e-9)
+
+
+def test_single_filter_jerk_is_unbounded():
+    traj = fir_interpolate(named_path("corner90"), 100.0, [0.05], 0.1)
+    assert np.all(np.isinf(peak_axis_values(traj, 3)))
+
+
+def test_summary_of_sampled_log_without_exact_profile():
+    t = np.arange(0, 1.0, 1e-3)
+    q = np.column_stack([50 * t, 0.01 * np.sin(2 * np.pi * t)])
+    traj = Trajectory.from_positions(t, q, axes=("x", "y"))
+    m = summarize(traj, Polyline([[0.0, 0.0], [50.0, 0.0]]))
+    assert m.max_contour_error == pytest.approx(0.01, rel=1e-4)
+    assert m.corner_errors.size == 0 and m.cycle_time == pytest.approx(0.999)
+    assert set(m.as_dict()) >= {"cycle_time", "max_contour_error", "peak_jerk"}
