@@ -101,7 +101,7 @@ def fir_interpolate(
         >>> from research.paths import named_path
         >>> tr = fir_interpolate(named_path("corner90"), 250.0, [0.148, 0.089], 0.5)
         >>> round(float(tr.duration), 4)
-        0.7106
+        0.7777
     """
     return plan_fir(path, feed, delays, tolerance, refine=refine).trajectory(sample_period)
 
