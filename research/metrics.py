@@ -13,6 +13,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from research.limits import AxisLimits
 from research.paths.polyline import Polyline
 from research.trajectory import Trajectory
 
@@ -107,6 +108,17 @@ def peak_feed(traj: Trajectory) -> float:
     lo, hi = t[np.maximum(peaks - 1, 0)], t[np.minimum(peaks + 1, f.size - 1)]
     best = _golden_min(lambda s: -np.linalg.norm(traj.evaluate(s, 1), axis=-1), lo, hi)
     return float(max(f.max(), -best.min()))
+
+
+def limit_ratios(traj: Trajectory, limits: AxisLimits) -> dict[str, np.ndarray]:
+    """Per-axis ``peak / limit`` of velocity, acceleration and jerk (exact peaks where possible);
+    a value above 1 means the trajectory exceeds that limit."""
+    return limits.ratios(*(peak_axis_values(traj, nu) for nu in (1, 2, 3)))
+
+
+def within_limits(traj: Trajectory, limits: AxisLimits, rtol: float = 1e-6) -> bool:
+    """True when every per-axis peak is at most ``limit * (1 + rtol)``."""
+    return all(np.all(r <= 1 + rtol) for r in limit_ratios(traj, limits).values())
 
 
 @dataclass(frozen=True)

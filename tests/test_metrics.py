@@ -49,3 +49,17 @@ def test_summary_of_sampled_log_without_exact_profile():
     assert m.max_contour_error == pytest.approx(0.01, rel=1e-4)
     assert m.corner_errors.size == 0 and m.cycle_time == pytest.approx(0.999)
     assert set(m.as_dict()) >= {"cycle_time", "max_contour_error", "peak_jerk"}
+
+
+def test_limit_ratios_against_fir_envelope():
+    """A straight move along x through two filters sits exactly on its nominal envelope."""
+    from research.limits import AxisLimits
+    from research.metrics import limit_ratios, within_limits
+
+    path = Polyline([[0.0, 0.0], [40.0, 0.0]])
+    traj = fir_interpolate(path, 100.0, [0.05, 0.02], 0.0)
+    env = AxisLimits.fir_envelope(2, 100.0, [0.05, 0.02])
+    ratios = limit_ratios(traj, env)
+    np.testing.assert_allclose([r[0] for r in ratios.values()], [1.0, 1.0, 1.0], rtol=1e-9)
+    assert within_limits(traj, env)
+    assert not within_limits(traj, AxisLimits.uniform(2, 100.0, 1000.0, 1e5))
