@@ -88,6 +88,22 @@ def _continuous_system(model, mode):
     return A, B, Bw
 
 
+def _balanced_expm(M, iterations: int = 8):
+    """``expm(M)`` computed on a diagonally balanced matrix ``D^-1 M D`` (power-of-two scaling, so the
+    similarity is exact in floating point). The drive matrices mix entries from 1 to ``a3 Ts ~ 1e3``;
+    balancing makes the Pade/squaring error, and hence finite differences of the result, ~1e-13
+    relative instead of ~1e-9. The scaling is computed under ``stop_gradient`` (it is piecewise constant)."""
+    mag = jax.lax.stop_gradient(jnp.abs(M))
+    d = jnp.ones(M.shape[0])
+    for _ in range(iterations):
+        Bm = mag * d[None, :] / d[:, None]
+        col = jnp.sum(Bm, 0) - jnp.diag(Bm)
+        row = jnp.sum(Bm, 1) - jnp.diag(Bm)
+        ok = (col > 0) & (row > 0)
+        d = d * jnp.where(ok, jnp.exp2(jnp.round(0.5 * jnp.log2(jnp.where(ok, row, 1.0) / jnp.where(ok, col, 1.0)))), 1.0)
+    return expm(M * d[None, :] / d[:, None]) * d[:, None] / d[None, :]
+
+
 def discretize(A, B, Bw, sample_period, hold: str = "cubic"):
     """Exact discretization of ``z' = A z + B r + Bw w`` for the reference hold ``hold``.
 
@@ -104,18 +120,18 @@ def discretize(A, B, Bw, sample_period, hold: str = "cubic"):
         m = n + 6
         M = jnp.zeros((m, m)).at[:n, :n].set(A).at[:n, n : n + 3].set(B).at[:n, n + 4 :].set(Bw)
         M = M.at[n, n + 1].set(1.0).at[n + 1, n + 2].set(1.0).at[n + 2, n + 3].set(1.0)
-        Phi = expm(M * sample_period)
+        Phi = _balanced_expm(M * sample_period)
         return Phi[:n, :n], Phi[:n, n : n + 4], Phi[:n, n + 4 :]
     if hold == "zoh":
         m = n + 5
         M = jnp.zeros((m, m)).at[:n, :n].set(A).at[:n, n : n + 3].set(B).at[:n, n + 3 :].set(Bw)
-        Phi = expm(M * sample_period)
+        Phi = _balanced_expm(M * sample_period)
         return Phi[:n, :n], Phi[:n, n : n + 3], Phi[:n, n + 3 :]
     if hold == "foh":
         m = n + 8
         M = jnp.zeros((m, m)).at[:n, :n].set(A).at[:n, n : n + 3].set(B).at[:n, n + 6 :].set(Bw)
         M = M.at[n : n + 3, n + 3 : n + 6].set(jnp.eye(3))
-        Phi = expm(M * sample_period)
+        Phi = _balanced_expm(M * sample_period)
         return Phi[:n, :n], Phi[:n, n : n + 6], Phi[:n, n + 6 :]
     raise ParameterError(f"hold must be one of {HOLDS}, got {hold!r}")
 
