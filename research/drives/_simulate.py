@@ -17,7 +17,8 @@ Discretization (exact for the linear part). Over each period ``[t_k, t_k + Ts)``
 The linear state update is then ``z_{k+1} = Ad z_k + G c_k + Gw w_k`` with ``Ad = e^{A Ts}`` and ``G``,
 ``Gw`` read off the matrix exponential of an augmented system (Van Loan's construction), so the states
 at the sample instants are exact for the held inputs. Axes are independent: the per-axis
-discretization and step are ``jax.vmap``-ed over the axes and one ``scan`` runs all axes together.
+discretization is ``jax.vmap``-ed over the axes and one ``scan`` steps all axes together (batched
+matrix-vector product), which is ~10x faster on CPU than a vmapped per-axis step function.
 """
 
 from __future__ import annotations
@@ -153,7 +154,9 @@ def _axis_outputs(model):
     return r.C, r.D, r.Dw, r.friction_amplitude, r.friction_feedforward
 
 
-def _simulate_core(models, modes, q, v, a, j, width, *, sample_period, hold, friction, indices, has_modes):
+def _simulate_core(models, modes, q, v, a, j, width, *, sample_period, hold, friction, indices, has_modes, has_control):
+    """Discretize every axis (vmap) and step all axes together in one ``scan``; returns
+    ``(x, x', u or None, deflection or None, residual friction)``, each ``(N, A)``."""
     pos_i, vel_i = indices
     sigma = coulomb_sign if friction == "exact" else (lambda x: smooth_sign(x, width))
 
@@ -165,31 +168,34 @@ def _simulate_core(models, modes, q, v, a, j, width, *, sample_period, hold, fri
     C, D, Dw, fc, fff = jax.vmap(_axis_outputs)(models)
     n = Ad.shape[-1]
 
-    c = _hold_inputs(q, v, a, j, sample_period, hold)  # (N, A, m)
-    U = jnp.einsum("aim,nam->nai", G, c)  # (N, A, n)
+    c = _hold_inputs(q, v, a, j, sample_period, hold)  # (N, A, m); c[..., :3] = [x_r, x_r', x_r'']
     sr = sigma(v)  # (N, A)
     z0 = jnp.zeros((q.shape[1], n)).at[:, pos_i].set(q[0]).at[:, vel_i].set(v[0])
+    n0 = C.shape[-1]
 
-    def axis_step(z, u, s_ref, Ad, Gw, fc, fff):
-        w = jnp.stack([fc * sigma(z[vel_i]), fff * s_ref])
-        return Ad @ z + u + Gw @ w, w
+    def mv(M, x):  # batched over axes: (A, i, j) @ (A, j) -> (A, i)
+        return jnp.sum(M * x[:, None, :], axis=-1)
 
-    step = jax.vmap(axis_step)
+    gc, gf = Gw[:, :, 0], Gw[:, :, 1]
 
     def body(z, xs):
-        u, s_ref = xs
-        z_next, w = step(z, u, s_ref, Ad, Gw, fc, fff)
-        return z_next, (z, w)
+        # all axes at once, z (A, n); friction held over the period from the velocity at its start
+        c_k, s_k = xs
+        w = fc * sigma(z[:, vel_i])
+        return mv(Ad, z) + mv(G, c_k) + gc * w[:, None] + gf * (fff * s_k)[:, None], z
 
-    _, (Z, W) = jax.lax.scan(body, z0, (U, sr))
-    n0 = C.shape[-1]
-    ref = jnp.stack([q, v, a], axis=-1)
-    Y = jnp.einsum("aoi,nai->nao", C, Z[..., :n0]) + jnp.einsum("aok,nak->nao", D, ref) + jnp.einsum("aok,nak->nao", Dw, W)
+    _, Z = jax.lax.scan(body, z0, (c, sr))
+    W = jnp.stack([fc * sigma(Z[:, :, vel_i]), fff * sr], axis=-1)  # (N, A, 2): the held friction inputs
+    # position and velocity are states (unit rows of C); the control voltage needs the full output map
+    control = None
+    if has_control:
+        control = (jnp.sum(C[None, :, 2, :] * Z[..., :n0], -1) + jnp.sum(D[None, :, 2, :] * c[..., :3], -1)
+                   + jnp.sum(Dw[None, :, 2, :] * W, -1))
     deflection = Z[..., n0] if has_modes else None
-    return Y, deflection, W[..., 0] - W[..., 1]
+    return Z[..., pos_i], Z[..., vel_i], control, deflection, W[..., 0] - W[..., 1]
 
 
-_core = jax.jit(_simulate_core, static_argnames=("sample_period", "hold", "friction", "indices", "has_modes"))
+_core = jax.jit(_simulate_core, static_argnames=("sample_period", "hold", "friction", "indices", "has_modes", "has_control"))
 
 
 def _per_axis(name, value, axes, kind):
@@ -261,15 +267,15 @@ def simulate(
         raise ParameterError(f"friction_width must be > 0 mm/s, got {friction_width!r}")
     stacked = jax.tree.map(lambda *x: jnp.stack(x), *models)
     stacked_modes = jax.tree.map(lambda *x: jnp.stack(x), *mode_list) if has_modes else jnp.zeros(len(axes))
-    Y, deflection, fr = _core(
+    x, xd, control, deflection, fr = _core(
         stacked, stacked_modes,
         jnp.asarray(trajectory.q), jnp.asarray(trajectory.v), jnp.asarray(trajectory.a), jnp.asarray(trajectory.j),
         jnp.asarray(friction_width, dtype=jnp.float64),
         sample_period=Ts, hold=hold, friction=friction,
-        indices=(r0.position_index, r0.velocity_index), has_modes=has_modes,
+        indices=(r0.position_index, r0.velocity_index), has_modes=has_modes, has_control=r0.has_control,
     )
     return DriveResponse(
-        t=jnp.asarray(trajectory.t), reference=jnp.asarray(trajectory.q), position=Y[..., 0], velocity=Y[..., 1],
-        control=Y[..., 2] if r0.has_control else None, deflection=deflection, friction=fr,
+        t=jnp.asarray(trajectory.t), reference=jnp.asarray(trajectory.q), position=x, velocity=xd,
+        control=control, deflection=deflection, friction=fr,
         axes=tuple(axes), sample_period=Ts,
     )
