@@ -27,7 +27,10 @@ because absolute times on a shared machine mean little):
    start to its end (exact stop), with the FIR's nominal per-axis envelope as limits:
    ``v = F |u_axis|``, ``a = F |u_axis| / T1``, ``j = F |u_axis| / (T1 T2)`` and phase
    synchronisation (a straight G01 line); the default time synchronisation is shown for
-   information. Target: ours <= ruckig per segment (speed ratio t_ruckig / t_ours >= 1).
+   information. Target: ours <= ruckig per segment (speed ratio t_ruckig / t_ours >= 1), judged
+   twice: for the paper's planning (``refine=False``: eq 13/14 overlaps and the exact profile, the
+   like-for-like counterpart of a ruckig profile) and for the verified plan (which also measures
+   every corner's error on the profile and repairs interacting corners).
 
 Targets: issue "Core pipeline" §8. Each target line prints PASS or MISS as measured; nothing is
 tuned to make them pass. When a target is missed, the "where the time goes" block splits the warm
@@ -226,8 +229,7 @@ def bench_breakdown(path: Polyline, feeds, plan, t_ours: float, repeats: int, ta
 
     # the corner-error search on its own, on the plan's real corners
     Td = float(np.sum(DELAYS))
-    ends = plan.start_times + plan.pulse_times
-    centre = ends[:-1] + 0.5 * (Td - plan.overlaps) + 0.5 * Td
+    centre = plan.corner_times
     vertices = jnp.asarray(path.points[1:-1])
     search = jax.jit(fir_module.corner_distances)
     timed(search, plan.position, vertices, centre, 0.5 * Td)  # compile
@@ -235,7 +237,7 @@ def bench_breakdown(path: Polyline, feeds, plan, t_ours: float, repeats: int, ta
     # plan_fir pads the path to a bucket size: 2 breaks per padded segment, doubled by each filter
     padded = plan.position.breaks.shape[0] // (2 * 2 ** len(DELAYS))
     table.row(f"  corner_distances alone ({path.n_segments - 1} real corners)", f"{t_search * 1e3:.1f} ms",
-              f"{t_search / t_ours:.0%} (inside _build: all padded corners)")
+              f"{t_search / t_ours:.0%} (once per verification round)")
     table.row("  profile pieces K / segments after padding", f"{plan.position.coeffs.shape[0]:,}",
               f"{padded:,} padded segments (real: {path.n_segments:,})")
     table.row("sampling (FIRPlan.trajectory, q v a j)", f"{t_sample * 1e3:.1f} ms", f"{t_sample / t_ours:.0%}")
@@ -288,9 +290,13 @@ def bench_planning(path: Polyline, feeds, repeats: int, table: Table) -> None:
         note = f" ({failed} failed)" if failed else ""
         table.row(f"ruckig {ruckig.__version__} exact stop, {label}, per segment", f"{theirs * 1e6:.2f} us",
                   f"exact-stop motion {total:.1f} s{note}")
-        table.row("  speed ratio ours / ruckig (t_ruckig / t_ours)", "", f"{theirs / ours:.3f}x",
-                  f">= {TARGET_VS_RUCKIG:g}x" if is_target else "",
-                  verdict(theirs / ours >= TARGET_VS_RUCKIG) if is_target else "")
+        # Like for like: ruckig plans each block and its profile, as plan_fir(refine=False) does
+        # (eq 13/14 overlaps + the exact profile); the verified plan also measures every corner's
+        # error on the profile and repairs interacting corners, which ruckig has no counterpart for.
+        for ours_label, ours_t in (("eq 13/14 plan", t_plan_eq / M), ("verified plan", ours)):
+            table.row(f"  speed ratio ours ({ours_label}) / ruckig (t_ruckig / t_ours)", "", f"{theirs / ours_t:.3f}x",
+                      f">= {TARGET_VS_RUCKIG:g}x" if is_target else "",
+                      verdict(theirs / ours_t >= TARGET_VS_RUCKIG) if is_target else "")
 
 
 # -- main ------------------------------------------------------------------------------------------

@@ -86,10 +86,10 @@ class Trajectory(eqx.Module):
         """
         duration = position.end - position.start
         n = int(np.ceil(float(jax.lax.stop_gradient(duration)) / sample_period - 1e-9)) + 1
-        samples = position.sample(sample_period, n, orders=4)
+        q, v, a, j = position.sample(sample_period, n, orders=4)
         shifted = PiecewisePolynomial(position.breaks - position.start, position.coeffs)
         t = np.arange(n) * sample_period
-        return Trajectory(t, samples[0], samples[1], samples[2], samples[3], duration, shifted, tuple(axes), float(sample_period))
+        return Trajectory(t, q, v, a, j, duration, shifted, tuple(axes), float(sample_period))
 
     @staticmethod
     def from_positions(t, q, axes: tuple[str, ...], duration: float | None = None) -> "Trajectory":

@@ -38,12 +38,12 @@ from research.errors import ParameterError
 from research.interpolators._fir_chain import check_delays
 from research.interpolators._fir_overlap import overlap_time
 from research.paths.polyline import Polyline
-from research.piecewise import PiecewisePolynomial
+from research.piecewise import PiecewisePolynomial, bucket_size
 from research.trajectory import Trajectory
 
 _SCALING_ROUNDS = 6  # refinement rounds that shrink overlaps before violators are set to exact stops
-_GRID = 33  # grid points per corner window for the corner-error search
-_GOLDEN_STEPS = 48
+_GRID = 9  # grid points per corner window for the corner-error search
+_NEWTON_STEPS = 4
 
 
 class FIRPlan(eqx.Module):
@@ -56,7 +56,9 @@ class FIRPlan(eqx.Module):
         feeds: ``(M,)`` commanded feed per segment [mm/s].
         delays: ``(n,)`` filter delays ``T_i`` [s].
         position: exact position profile [mm].
-        corner_errors: ``(M - 1,)`` distance from each corner vertex to the trajectory [mm].
+        corner_times: ``(M - 1,)`` time [s] at which the averaging window is centred on each
+            corner's gap (the bisector point of eq 13/14).
+        vertices: ``(M - 1, d)`` corner vertices [mm].
         axes: axis names.
     """
 
@@ -66,13 +68,25 @@ class FIRPlan(eqx.Module):
     feeds: Array
     delays: Array
     position: PiecewisePolynomial
-    corner_errors: Array
+    corner_times: Array
+    vertices: Array
     axes: tuple[str, ...] = eqx.field(static=True)
 
     @property
     def cycle_time(self) -> Array:
         """Total motion time [s]: ``sum T_v + T_d + sum (T_d - T_k)``."""
         return self.position.end - self.position.start
+
+    @property
+    def corner_errors(self) -> Array:
+        """``(M - 1,)`` distance [mm] from each corner vertex to the trajectory (exact profile,
+        searched around :attr:`corner_times`; never optimistic)."""
+        C = self.vertices.shape[0]
+        pad = bucket_size(C) - C
+        centre = jnp.concatenate([self.corner_times, jnp.zeros(pad)])
+        vertices = jnp.concatenate([self.vertices, jnp.zeros((pad, self.vertices.shape[1]))])
+        real = jnp.arange(C + pad) < C
+        return _corner_errors(self.position, vertices, centre, 0.5 * jnp.sum(self.delays), real)[:C]
 
     def trajectory(self, sample_period: float = 1e-3) -> Trajectory:
         """Sample the exact profile at the interpolation period ``Ts`` [s]."""
@@ -116,7 +130,7 @@ def plan_fir(path: Polyline, feed, delays, tolerance, *, refine: bool = True) ->
         raise ParameterError(f"path must be a Polyline, got {type(path).__name__}")
     _check_concrete(delays, feed, tolerance, path.n_segments)
     M = path.n_segments
-    pad = max(4, 1 << (M - 1).bit_length()) - M  # bucket sizes so similar paths share compiled code
+    pad = bucket_size(M) - M  # similar paths share compiled code
     delays = jnp.asarray(delays, dtype=jnp.float64).reshape(-1)
     feeds = jnp.broadcast_to(jnp.asarray(feed, dtype=jnp.float64), (M,))
     tolerance = jnp.asarray(tolerance, dtype=jnp.float64)
@@ -127,17 +141,21 @@ def plan_fir(path: Polyline, feed, delays, tolerance, *, refine: bool = True) ->
     pulse_times = jnp.concatenate([jnp.asarray(path.lengths), jnp.zeros(pad)]) / feeds_p
     real = jnp.arange(M + pad - 1) < M - 1
 
+    vertices = points[1:-1]
+    half_window = 0.5 * jnp.sum(delays)
     overlaps = _initial_overlaps(u, feeds_p, delays, tolerance, real)
-    starts, position, errors = _build(points, u, feeds_p, pulse_times, delays, overlaps, real)
+    starts, position, centre = _build(points, u, feeds_p, pulse_times, delays, overlaps)
     if refine and M > 1:
         limit = tolerance * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
         for round_ in range(_SCALING_ROUNDS + M):
+            errors = _corner_errors(position, vertices, centre, half_window, real)
             if not bool(jnp.any(errors > limit)):
                 break
             overlaps = _refine_overlaps(overlaps, errors, tolerance, limit, delays.shape[0], round_ < _SCALING_ROUNDS)
-            starts, position, errors = _build(points, u, feeds_p, pulse_times, delays, overlaps, real)
+            starts, position, centre = _build(points, u, feeds_p, pulse_times, delays, overlaps)
     return FIRPlan(
-        starts[:M], pulse_times[:M], overlaps[: M - 1], feeds, delays, position, errors[: M - 1], path.axes
+        starts[:M], pulse_times[:M], overlaps[: M - 1], feeds, delays, position, centre[: M - 1],
+        jnp.asarray(path.corners), path.axes,
     )
 
 
@@ -160,8 +178,8 @@ def _refine_overlaps(overlaps, errors, tolerance, limit, n_filters: int, scale: 
 
 
 @jax.jit
-def _build(points, u, feeds, pulse_times, delays, overlaps, real):
-    """Schedule the pulses, filter them exactly, and measure every corner's error."""
+def _build(points, u, feeds, pulse_times, delays, overlaps):
+    """Schedule the pulses and filter them exactly; also returns each corner's bisector time."""
     Td = jnp.sum(delays)
     gaps = Td - overlaps
     starts = jnp.concatenate([jnp.zeros(1), jnp.cumsum(pulse_times[:-1] + gaps)])
@@ -175,41 +193,43 @@ def _build(points, u, feeds, pulse_times, delays, overlaps, real):
     position = velocity.antiderivative(points[0])
     # the bisector point of corner k: averaging window centred on the gap after pulse k
     centre = ends[:-1] + 0.5 * gaps + 0.5 * Td
-    errors = corner_distances(position, points[1:-1], centre, 0.5 * Td)
-    return starts, position, jnp.where(real, errors, 0.0)
+    return starts, position, centre
+
+
+@jax.jit
+def _corner_errors(position, vertices, centre, half_window, real):
+    """:func:`corner_distances` on padded corners; 0 on the padding."""
+    return jnp.where(real, corner_distances(position, vertices, centre, half_window), 0.0)
 
 
 def corner_distances(position: PiecewisePolynomial, vertices: Array, centre: Array, half_window: Array) -> Array:
     """Distance from each vertex to the profile, searched in ``centre +- half_window`` [s].
 
-    A grid of 33 points finds the basin, golden-section search refines it. Any point of the
-    trajectory gives an upper bound on the true distance, so the result is never optimistic by more
-    than the search precision (~1e-10 s in time).
+    A grid of 9 points finds the basin; safeguarded Newton steps on ``|p(t) - V|^2`` (exact
+    derivatives of the profile) refine it. Any point of the trajectory gives an upper bound on the
+    true distance, so the result is never optimistic.
     """
     if vertices.shape[0] == 0:
         return jnp.zeros(0)
     offsets = jnp.linspace(-1.0, 1.0, _GRID)
     grid = centre[:, None] + half_window * offsets[None, :]  # (C, G)
-
-    def dist2(t):  # t: (C, ...) -> squared distance to each corner's own vertex
-        p = position(t)
-        return jnp.sum((p - vertices.reshape((-1,) + (1,) * (t.ndim - 1) + vertices.shape[1:])) ** 2, axis=-1)
-
-    d2 = dist2(grid)
+    p = position(grid)
+    d2 = jnp.sum((p - vertices[:, None, :]) ** 2, axis=-1)
     best = jnp.argmin(d2, axis=1)
+    t = jnp.take_along_axis(grid, best[:, None], axis=1)[:, 0]
     step = half_window * (offsets[1] - offsets[0])
-    t_best = jnp.take_along_axis(grid, best[:, None], axis=1)[:, 0]
-    lo, hi = t_best - step, t_best + step
-    g = 0.5 * (jnp.sqrt(5.0) - 1.0)
+    lo, hi = t - step, t + step
 
-    def golden(_, bracket):
-        lo, hi = bracket
-        a, b = hi - g * (hi - lo), lo + g * (hi - lo)
-        left_better = dist2(a) < dist2(b)
-        return jnp.where(left_better, lo, a), jnp.where(left_better, b, hi)
+    def newton(_, t):
+        p, v, a = position.derivatives(t, 3)
+        e = p - vertices
+        slope = jnp.sum(e * v, axis=1)
+        curvature = jnp.sum(v * v, axis=1) + jnp.sum(e * a, axis=1)
+        t_new = jnp.where(curvature > 0, t - slope / jnp.where(curvature > 0, curvature, 1.0), t)
+        return jnp.clip(t_new, lo, hi)
 
-    lo, hi = jax.lax.fori_loop(0, _GOLDEN_STEPS, golden, (lo, hi))
-    squared = jnp.minimum(dist2(0.5 * (lo + hi)), jnp.min(d2, axis=1))
+    t = jax.lax.fori_loop(0, _NEWTON_STEPS, newton, t)
+    squared = jnp.minimum(jnp.sum((position(t) - vertices) ** 2, axis=1), jnp.min(d2, axis=1))
     positive = squared > 0
     return jnp.where(positive, jnp.sqrt(jnp.where(positive, squared, 1.0)), 0.0)
 
