@@ -10,6 +10,7 @@ from types import ModuleType
 FIGURE_MODULES = (
     "research.figures.fir_spectrum",
     "research.figures.fir_cornering",
+    "research.figures.drive_bode",
 )
 
 

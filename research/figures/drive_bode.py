@@ -5,18 +5,17 @@ from __future__ import annotations
 
 import pathlib
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
+from research.drives import frequency_response, table_6_1_closed_loop
+from research.figures._style import figure, save
 
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from research.drives import frequency_response, table_6_1_closed_loop  # noqa: E402
+NAME = "sencer2009_fig6_7_drive_bode"
+REPRODUCES = "Sencer 2009 thesis Fig 6.7 style: Bode plots of the Table 6.1 P-PI drive (eq 6.1/6.3)"
 
 
 def make_figure(out_dir: pathlib.Path, fast: bool = False) -> list[pathlib.Path]:
-    """Write ``drive_bode_table6_1.png`` into ``out_dir``.
+    """Write ``sencer2009_fig6_7_drive_bode.png`` into ``out_dir``.
 
     Args:
         out_dir: destination folder (created if missing).
@@ -29,7 +28,7 @@ def make_figure(out_dir: pathlib.Path, fast: bool = False) -> list[pathlib.Path]
     f = np.logspace(0, 2, 80 if fast else 400)  # 1-100 Hz, as thesis Fig 6.7
     fr = frequency_response(table_6_1_closed_loop(), f)
     track, dist = np.asarray(fr.tracking), np.asarray(fr.disturbance)
-    fig, ax = plt.subplots(2, 2, figsize=(10, 6), sharex=True)
+    fig, ax = figure(2, 2, figsize=(10, 6), sharex=True)
     for col, (g, title, unit) in enumerate(((track, "a) tracking $G_{track} = x/x_r$", "[mm/mm]"),
                                             (dist, "b) disturbance $G_{dist} = x/w$", "[mm/(mm/s$^2$)]"))):
         ax[0, col].loglog(f, np.abs(g), color="C0")
@@ -41,8 +40,6 @@ def make_figure(out_dir: pathlib.Path, fast: bool = False) -> list[pathlib.Path]
         for a in ax[:, col]:
             a.grid(True, which="both", alpha=0.3)
     fig.suptitle("Sencer 2009 Table 6.1 P-PI virtual drive (eq 6.1/6.3): wn 30.6 Hz, zeta 0.45, p 10.8 Hz")
-    fig.tight_layout()
-    path = out_dir / "drive_bode_table6_1.png"
-    fig.savefig(path, dpi=60 if fast else 150)
-    plt.close(fig)
+    path = out_dir / f"{NAME}.png"
+    save(fig, path)
     return [path]
