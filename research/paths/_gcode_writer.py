@@ -1,0 +1,108 @@
+"""G-code writer: a polyline as a G21/G90 program that :func:`parse_gcode` reads back exactly."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from research.errors import ParameterError
+from research.paths._gcode_constants import ZERO_LENGTH_MM
+from research.paths.polyline import Polyline
+
+
+def _num(v: float) -> str:
+    """Shortest decimal (no exponent) that reads back as exactly ``v``."""
+    return np.format_float_positional(v, unique=True, trim="-")
+
+
+def to_gcode(polyline, feeds_mm_per_min, rapid=None, *, line_numbers: bool = False) -> str:
+    """Write a polyline as a G21/G90 program of ``G1`` (and ``G0``) lines, one segment per line.
+
+    Coordinates are written with the shortest decimal that reads back as the same float, so
+    ``parse_gcode(text, start=P0)`` returns exactly the same vertices (``P0`` = first vertex padded
+    to 3-D; the program itself does not move to ``P0``, its header comment states it). Only axes
+    that change are written; ``F`` only when the feed changes; ``G0``/``G1`` only when the motion
+    mode changes.
+
+    Args:
+        polyline: :class:`Polyline` (or ``(M + 1, d)`` points) [mm]; axes named ``x``, ``y``, ``z``.
+        feeds_mm_per_min: feed [mm/min], a scalar or one per segment ``(M,)``; ignored for rapid
+            segments. Note :attr:`GCodeProgram.feeds` is mm/s: pass ``prog.feeds * 60``.
+        rapid: ``(M,)`` bool, True writes the segment as ``G0``; default all ``G1``.
+        line_numbers: prefix lines with ``N10, N20, ...``.
+
+    Returns:
+        the program text, ending with ``M30`` and ``%``.
+
+    Raises:
+        ParameterError: feeds not finite and > 0 on the G1 segments, wrong shapes, unknown axis names,
+            a segment shorter than :data:`ZERO_LENGTH_MM` (it would read back as no motion).
+
+    Example:
+        >>> from research.paths.polyline import Polyline
+        >>> print(to_gcode(Polyline([[0, 0], [10, 0], [10, 5]]), 600), end="")
+        %
+        (research.paths.gcode.to_gcode: start X0 Y0 Z0)
+        G21 G90 G17 G94
+        G1 X10 F600
+        Y5
+        M30
+        %
+    """
+    poly = polyline if isinstance(polyline, Polyline) else Polyline(np.asarray(polyline, dtype=np.float64))
+    m = poly.n_segments
+    idx = []
+    for a in poly.axes:
+        if a.lower() not in ("x", "y", "z"):
+            raise ParameterError(f"to_gcode: axis {a!r} cannot be written; expected axes named x, y, z")
+        idx.append("xyz".index(a.lower()))
+    if len(set(idx)) != len(idx):
+        raise ParameterError(f"to_gcode: repeated axis names {poly.axes}")
+    pts = np.zeros((m + 1, 3))
+    pts[:, idx] = poly.points
+    feeds = np.broadcast_to(np.asarray(feeds_mm_per_min, dtype=np.float64), (m,)) \
+        if np.ndim(feeds_mm_per_min) == 0 else np.asarray(feeds_mm_per_min, dtype=np.float64)
+    if feeds.shape != (m,):
+        raise ParameterError(f"to_gcode: feeds_mm_per_min must be a scalar or shape ({m},), got {feeds.shape}")
+    rap = np.zeros(m, dtype=bool) if rapid is None else np.asarray(rapid, dtype=bool)
+    if rap.shape != (m,):
+        raise ParameterError(f"to_gcode: rapid must have shape ({m},), got {rap.shape}")
+    cut = feeds[~rap]
+    if not np.all(np.isfinite(cut) & (cut > 0)):
+        k = int(np.flatnonzero(~rap)[np.flatnonzero(~(np.isfinite(cut) & (cut > 0)))[0]])
+        raise ParameterError(f"to_gcode: feed of segment {k} must be finite and > 0 [mm/min], got {feeds[k]}")
+
+    short = np.flatnonzero(np.linalg.norm(np.diff(pts, axis=0), axis=1) <= ZERO_LENGTH_MM)
+    if short.size:
+        k = int(short[0])
+        raise ParameterError(f"to_gcode: segment {k} is shorter than ZERO_LENGTH_MM = {ZERO_LENGTH_MM:g} mm; "
+                             "parse_gcode would read it as no motion, so it cannot round-trip")
+
+    p0 = pts[0]
+    out = ["%", f"(research.paths.gcode.to_gcode: start X{_num(p0[0])} Y{_num(p0[1])} Z{_num(p0[2])})",
+           "G21 G90 G17 G94"]
+    mode = None
+    feed = None
+    prev = p0
+    for k in range(m):
+        p = pts[k + 1]
+        words = []
+        g = 0 if rap[k] else 1
+        if g != mode:
+            words.append(f"G{g}")
+            mode = g
+        for i, letter in enumerate("XYZ"):
+            if p[i] != prev[i]:
+                words.append(f"{letter}{_num(p[i])}")
+        if g == 1 and feeds[k] != feed:
+            feed = feeds[k]
+            words.append(f"F{_num(feed)}")
+        prev = p
+        out.append(" ".join(words))
+    out += ["M30", "%"]
+    if line_numbers:
+        n = 0
+        for i, line in enumerate(out):
+            if line != "%" and not line.startswith("("):
+                n += 10
+                out[i] = f"N{n} {line}"
+    return "\n".join(out) + "\n"
