@@ -10,6 +10,7 @@ from research.interpolators._fir_chain import (
 )
 from research.interpolators._fir_overlap import cornering_error, overlap_time
 from research.interpolators.fir import FIRPlan, fir_by_convolution, fir_interpolate, plan_fir
+from research.interpolators.scurve import scurve_interpolate, scurve_phases, scurve_profile
 
 __all__ = [
     "FIRPlan",
@@ -23,5 +24,8 @@ __all__ = [
     "magnitude_response",
     "overlap_time",
     "plan_fir",
+    "scurve_interpolate",
+    "scurve_phases",
+    "scurve_profile",
     "total_delay",
 ]
