@@ -292,3 +292,18 @@ def test_zero_length_segments_merged_on_request():
     assert path.n_segments == 2
     traj = fir_interpolate(path, 100.0, [0.02], 0.01)
     assert np.all(np.isfinite(np.asarray(traj.q)))
+
+
+def test_eq7_acceleration_spectrum_of_a_filtered_pulse():
+    """eq 7: |a'(jw)| = |v(jw)| w |M_1 ... M_n(jw)|, checked by a Fourier integral of the exact
+    acceleration of one straight move (pulse F for T_v) through the paper's two filters."""
+    from research.interpolators import acceleration_spectrum
+
+    F, L = 100.0, 20.0
+    traj = fir_interpolate(Polyline([[0.0], [L]], axes=("x",)), F, PAPER_DELAYS, 0.0, sample_period=1e-4)
+    t, a = np.asarray(traj.t), np.asarray(traj.a)[:, 0]
+    w = 2 * np.pi * np.array([0.5, 3.0, 6.8, 9.0, 11.4])
+    numeric = np.abs(np.trapezoid(a[None, :] * np.exp(-1j * w[:, None] * t[None, :]), t, axis=1))
+    Tv = L / F
+    pulse = np.abs(F * (1 - np.exp(-1j * w * Tv)) / (1j * w))  # spectrum of the velocity pulse
+    np.testing.assert_allclose(numeric, acceleration_spectrum(w, PAPER_DELAYS, pulse), rtol=1e-3, atol=1e-3)
