@@ -38,3 +38,17 @@ class DriveLogError(ResearchError, ValueError):
 
 class InfeasibleProblem(ResearchError, RuntimeError):
     """An optimisation problem has no solution under the stated limits; carries diagnostics."""
+
+
+class ConvergenceError(ResearchError, RuntimeError):
+    """An iteration stopped before reaching its tolerance (e.g. the CEC mirror loop).
+
+    Attributes:
+        residual: the size of the residual when it stopped, in the unit the message states.
+        steps: iterations taken.
+        result: the last iterate (or a result object holding it), for inspection only.
+    """
+
+    def __init__(self, message: str, *, residual: float, steps: int, result=None):
+        self.residual, self.steps, self.result = residual, steps, result
+        super().__init__(message)
