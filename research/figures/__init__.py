@@ -11,6 +11,8 @@ FIGURE_MODULES = (
     "research.figures.fir_spectrum",
     "research.figures.fir_cornering",
     "research.figures.drive_bode",
+    "research.figures.dimarco2015_fig3",
+    "research.figures.dimarco2015_mtp",
 )
 
 

@@ -9,8 +9,23 @@ from research.interpolators._fir_chain import (
     total_delay,
 )
 from research.interpolators._fir_overlap import cornering_error, overlap_time
-from research.interpolators.fir import FIRPlan, fir_by_convolution, fir_interpolate, plan_fir
-from research.interpolators.scurve import scurve_interpolate, scurve_phases, scurve_profile
+from research.interpolators.fir import (
+    FIRPlan,
+    fir_by_convolution,
+    fir_interpolate,
+    plan_fir,
+)
+from research.interpolators.scurve import (
+    scurve_interpolate,
+    scurve_phases,
+    scurve_profile,
+)
+from research.interpolators.sigmoid import (
+    SigmoidMotion,
+    mtp_linear_baseline,
+    mtp_motion,
+    sigmoid_trajectory,
+)
 
 __all__ = [
     "FIRPlan",
@@ -24,8 +39,12 @@ __all__ = [
     "magnitude_response",
     "overlap_time",
     "plan_fir",
+    "SigmoidMotion",
+    "mtp_linear_baseline",
+    "mtp_motion",
     "scurve_interpolate",
     "scurve_phases",
     "scurve_profile",
+    "sigmoid_trajectory",
     "total_delay",
 ]

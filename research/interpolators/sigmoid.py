@@ -1,0 +1,356 @@
+"""Sigmoid and exponential interpolators for modulated tool path (MTP) machining (DiMarco 2015).
+
+The nominal motion of the part program is multiplied by blending functions that rise smoothly
+from 0 to 1 (DiMarco, Ziegert, Vermillion, J. Manuf. Syst. 2015, §2):
+
+* startup, linear component (eq 1-5): ``x_L = (m t + b) (1 - exp(-alpha t^3))``;
+* startup, sinusoidal component (eq 6-7): ``A sin(w t) (1 - exp(-alpha t^2))``;
+* MTP: their sum, the oscillation running along the feed direction.
+
+The paper's text ends after eq 7; the rest is designed here in its spirit:
+
+* Every change of nominal motion at ``t_k`` (new feed, or stop) adds the term
+  ``(x_new - x_old)(t) S(t - t_k)`` with ``S(tau) = 1 - exp(-alpha tau^3)``: position, velocity and
+  acceleration stay continuous because ``S = S' = S'' = 0`` at ``tau = 0``. The motion is
+  ``x = sum_k c_k(t) S_k(t - t_k)``, each ``c_k`` a ramp, a hold or a sinusoid.
+* A stop blends the moving nominal into a hold at the end point. Because ``exp(-alpha tau^3)``
+  never reaches 0, a blend that starts when the nominal arrives would overshoot the end point by
+  ``m (3 alpha)^(-1/3) e^(-1/3)``; the stop therefore starts ``delta`` earlier, with ``delta`` the
+  smallest lead that keeps the overshoot below ``overshoot_tol`` (bisection). The move has ended
+  (cycle time) when it stays within ``settle_tol`` of the end point.
+* The exponential interpolator of Rymansaib, as the paper reviews it, is the same construction
+  with a first-order exponent, ``S = 1 - exp(-alpha t)``: it starts with a jump of acceleration
+  (``a(0) = 2 m alpha``), which is why the paper raises the order to 3 (§2.1). ``order=1`` gives it.
+* ``alpha``: the largest value whose peak |acceleration| (and |jerk| when a limit is given) stays
+  within the limits over the whole move, by bisection on ``log alpha`` with every candidate checked
+  on a dense grid; a motion whose steady part already breaks a limit (``A w^2 > a_max``) cannot be
+  fixed by any ``alpha`` and is refused.
+
+Branch conditions, counted in this code (the paper claims about 17 for a linear interpolator and
+4 for the sigmoid): evaluating a sigmoid motion takes one test per term (``t >= t_k``, 4 terms for
+an MTP move); the S-curve baseline (:mod:`research.interpolators.scurve`) takes 3 case tests to
+plan a block and selects one of 7 jerk phases per sample. :data:`BRANCH_COUNTS` records them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from research.errors import InfeasibleProblem, ParameterError
+from research.trajectory import Trajectory
+
+#: max |exp(-u^3) (12 u^2 - 9 u^5)|: peak startup acceleration is m alpha^(1/3) times this (eq 5, b = 0)
+_EQ5_PEAK = 3.1003
+
+#: Branch conditions per implementation, counted by hand in this package's code (see module doc).
+BRANCH_COUNTS = {
+    "sigmoid MTP move: evaluation (one t >= t_k test per blend term)": 4,
+    "S-curve block: planning case tests (A reached, V reached, A reached when V is not)": 3,
+    "S-curve block: jerk phases selected per sample": 7,
+}
+
+
+@dataclass(frozen=True)
+class Ramp:
+    """Nominal linear motion ``x = m t + b`` (eq 1) [mm, mm/s]."""
+
+    m: float
+    b: float = 0.0
+
+    def derivatives(self, t: np.ndarray) -> list[np.ndarray]:
+        return [self.m * t + self.b, np.full_like(t, self.m), np.zeros_like(t), np.zeros_like(t)]
+
+
+@dataclass(frozen=True)
+class Sine:
+    """Nominal oscillation ``x = A sin(w t)`` (eq 6) [mm, rad/s]."""
+
+    amplitude: float
+    omega: float
+
+    def __post_init__(self):
+        if not (np.isfinite(self.amplitude) and self.amplitude != 0):
+            raise ParameterError(f"oscillation amplitude A must be finite and non-zero mm, got {self.amplitude!r}")
+        if not (np.isfinite(self.omega) and self.omega > 0):
+            raise ParameterError(f"oscillation frequency w must be finite and > 0 rad/s, got {self.omega!r}")
+
+    def derivatives(self, t: np.ndarray) -> list[np.ndarray]:
+        s, c = np.sin(self.omega * t), np.cos(self.omega * t)
+        A, w = self.amplitude, self.omega
+        return [A * s, A * w * c, -A * w**2 * s, -A * w**3 * c]
+
+
+@dataclass(frozen=True)
+class Blend:
+    """``S(tau) = 1 - exp(-alpha tau^order)`` for ``tau = t - start >= 0``, else 0 (eq 2, eq 7)."""
+
+    alpha: float
+    order: int = 3
+    start: float = 0.0
+
+    def __post_init__(self):
+        if not (np.isfinite(self.alpha) and self.alpha > 0):
+            raise ParameterError(f"blend time constant alpha must be finite and > 0, got {self.alpha!r}")
+
+    def derivatives(self, t: np.ndarray) -> list[np.ndarray]:
+        """``S, S', S'', S'''`` at ``t`` (exact; Faa di Bruno on ``exp(-g)``, ``g = alpha tau^p``)."""
+        on = t >= self.start
+        tau = np.where(on, t - self.start, 0.0)
+        p = self.order
+        g = [self.alpha * math.perm(p, i) * tau ** (p - i) if i <= p else np.zeros_like(tau) for i in range(4)]
+        E = np.exp(-g[0])
+        out = [1.0 - E, g[1] * E, (g[2] - g[1] ** 2) * E, (g[3] - 3 * g[1] * g[2] + g[1] ** 3) * E]
+        return [np.where(on, x, 0.0) for x in out]
+
+
+@dataclass(frozen=True)
+class SigmoidMotion:
+    """``x(t) = sum_k c_k(t) S_k(t)`` along a straight move: exact evaluation at any time.
+
+    Attributes:
+        terms: ``(component, blend)`` pairs; ``blend`` ``None`` means always on.
+        duration: time at which the motion has settled [s].
+        nominal: the part program's motion (for tracking error), same components without blends.
+        order: exponent of the ramp blends (3 sigmoid, 1 exponential).
+        stop_time: start of the stop blend [s].
+    """
+
+    terms: tuple
+    duration: float
+    nominal: tuple = field(default=())
+    order: int = 3
+    stop_time: float = 0.0
+
+    def derivatives(self, t) -> np.ndarray:
+        """Position and its first three derivatives at ``t``: shape ``(4,) + t.shape``."""
+        t = np.asarray(t, dtype=np.float64)
+        total = np.zeros((4,) + t.shape)
+        for component, blend in self.terms:
+            c = component.derivatives(t)
+            if blend is None:
+                total += np.stack(c)
+                continue
+            S = blend.derivatives(t)
+            for k in range(4):  # Leibniz: (c S)^(k) = sum_i C(k, i) c^(i) S^(k - i)
+                total[k] += sum(math.comb(k, i) * c[i] * S[k - i] for i in range(k + 1))
+        return total
+
+    def nominal_position(self, t) -> np.ndarray:
+        """The part program's motion (ramp + oscillation, then hold) at ``t`` [mm]."""
+        t = np.asarray(t, dtype=np.float64)
+        return sum(component.derivatives(t)[0] for component in self.nominal) if self.nominal else np.zeros_like(t)
+
+
+def mtp_motion(
+    length: float,
+    feed: float,
+    amplitude: float = 0.0,
+    frequency: float = 0.0,
+    *,
+    acceleration: float,
+    jerk: float | None = None,
+    order: int = 3,
+    overshoot_tol: float = 1e-4,
+    settle_tol: float = 1e-4,
+) -> SigmoidMotion:
+    """One MTP move along a line: ramp ``m t`` plus ``A sin(w t)``, from rest to rest.
+
+    Args:
+        length: move length ``L`` [mm], > 0.
+        feed: nominal feed ``m`` [mm/s], > 0.
+        amplitude: oscillation amplitude ``A`` [mm], >= 0 (0: plain move; > 0 needs ``frequency``).
+        frequency: oscillation frequency [Hz] (``w = 2 pi f``).
+        acceleration: limit ``a_max`` [mm/s^2]; ``jerk``: optional limit [mm/s^3].
+        order: exponent of the startup blend (3: sigmoid, eq 2; 1: exponential interpolator).
+        overshoot_tol: allowed overshoot past the end point [mm]; ``settle_tol``: band that ends
+            the move [mm].
+
+    Returns:
+        The :class:`SigmoidMotion` with the largest ``alpha`` that keeps the limits.
+
+    Raises:
+        ParameterError: ``L``, ``m``, ``a_max`` not > 0, ``A < 0``, ``A > 0`` with frequency <= 0.
+        InfeasibleProblem: no ``alpha`` meets the limits (e.g. ``A w^2 >= a_max``).
+    """
+    _check(length=length, feed=feed, acceleration=acceleration)
+    if jerk is not None:
+        _check(jerk=jerk)
+    if not (np.isfinite(amplitude) and amplitude >= 0):
+        raise ParameterError(f"MTP amplitude A must be >= 0 mm, got {amplitude!r}")
+    if amplitude > 0 and not (np.isfinite(frequency) and frequency > 0):
+        raise ParameterError(f"MTP frequency must be > 0 Hz when A > 0, got {frequency!r}")
+    if order not in (1, 2, 3):
+        raise ParameterError(f"blend order must be 1 (exponential), 2 or 3 (sigmoid), got {order!r}")
+    omega = 2 * np.pi * frequency
+    steady_a, steady_j = amplitude * omega**2, amplitude * omega**3
+    if steady_a >= acceleration or (jerk is not None and steady_j >= jerk):
+        raise InfeasibleProblem(
+            f"the steady oscillation alone needs |a| = A w^2 = {steady_a:.4g} mm/s^2 and |j| = A w^3 = "
+            f"{steady_j:.4g} mm/s^3, at or above the limits a_max = {acceleration:g}, j_max = {jerk}; "
+            "no alpha can meet them: lower A or the frequency"
+        )
+
+    def build(alpha):
+        return _build(length, feed, amplitude, omega, alpha, order, overshoot_tol, settle_tol)
+
+    def has_room(alpha):  # the stop must not start before the move does
+        return build(alpha).stop_time >= 0
+
+    def within_limits(alpha):
+        motion = build(alpha)
+        _, _, a, j = motion.derivatives(_grid(motion, alpha, omega))
+        margin = 1.0 + 1e-6  # peaks between grid points: keep 1e-6 in hand
+        return _peak(np.abs(a)) * margin <= acceleration and (jerk is None or _peak(np.abs(j)) * margin <= jerk)
+
+    # Larger alpha: faster blends, higher peaks; smaller alpha: longer blends, and below some
+    # alpha_room the stop no longer fits in the move. Start near the closed form for a startup
+    # ramp (peak |a| = 3.1003 m alpha^(1/3), eq 5 with b = 0), find alpha_room, then the largest
+    # alpha within the limits by bisection on log(alpha).
+    lo = hi = (acceleration / (feed * _EQ5_PEAK)) ** 3
+    while not has_room(hi):
+        lo, hi = hi, 10.0 * hi
+    while has_room(lo) and lo > 1e-12 * hi:
+        lo /= 10.0
+    for _ in range(15):  # lo: no room, hi: room (alpha_room to ~5 %)
+        mid = math.sqrt(lo * hi)
+        lo, hi = (lo, mid) if has_room(mid) else (mid, hi)
+    if not within_limits(hi):
+        raise InfeasibleProblem(
+            f"no alpha meets a_max = {acceleration:g}, j_max = {jerk} on this {length:g} mm move at "
+            f"{feed:g} mm/s: blends slow enough for the limits do not fit in the move (lower the feed)"
+        )
+    lo, hi = hi, 10.0 * hi  # lo: feasible
+    while within_limits(hi):
+        lo, hi = hi, 10.0 * hi
+    for _ in range(25):  # alpha to a relative 1e-7
+        mid = math.sqrt(lo * hi)
+        lo, hi = (mid, hi) if within_limits(mid) else (lo, mid)
+    return build(lo)
+
+
+def _build(L, m, A, omega, alpha, order, overshoot_tol, settle_tol) -> SigmoidMotion:
+    """Startup blends, then a stop that starts ``delta`` before the nominal arrival."""
+    start = [(Ramp(m), Blend(alpha, order))] + ([(Sine(A, omega), Blend(alpha, 2))] if A > 0 else [])
+    arrival = L / m
+    scale = alpha ** (-1 / order)  # time scale of a blend
+
+    def with_stop(t_stop):
+        stop = [(Ramp(-m, L), Blend(alpha, order, t_stop))]
+        if A > 0:
+            stop.append((Sine(-A, omega), Blend(alpha, order, t_stop)))
+        return tuple(start + stop)
+
+    def overshoot(t_stop):
+        t = max(t_stop, 0.0) + np.linspace(0.0, 12.0 * scale + 4 * A / m, 601)
+        return _peak(SigmoidMotion(with_stop(t_stop), 0.0).derivatives(t)[0]) - L
+
+    # latest stop start whose overshoot past L stays within tolerance
+    late, early = arrival, arrival - 2.0 * A / m - 12.0 * scale
+    if overshoot(late) <= overshoot_tol:
+        early = late
+    for _ in range(40):
+        if late - early <= 1e-7 * scale:
+            break
+        mid = 0.5 * (late + early)
+        late, early = (mid, early) if overshoot(mid) > overshoot_tol else (late, mid)
+    t_stop = early
+    # settled once |x - L| <= settle_tol for good: the factor exp(-alpha tau^p) bounds the rest
+    envelope = m * (arrival - t_stop + 12 * scale) + A
+    settle = t_stop + (math.log(max(envelope / settle_tol, 1.0 + 1e-12)) / alpha) ** (1 / order)
+    nominal = (Ramp(m),) + ((Sine(A, omega),) if A > 0 else ())
+    return SigmoidMotion(terms=with_stop(t_stop), duration=settle, nominal=nominal, order=order, stop_time=t_stop)
+
+
+def _grid(motion: SigmoidMotion, alpha: float, omega: float) -> np.ndarray:
+    """Dense grid over the whole move: 200 points per blend time scale and per oscillation period."""
+    dt = alpha ** (-1 / motion.order) / 200
+    if omega > 0:
+        dt = min(dt, 2 * np.pi / omega / 200)
+    n = int(min(motion.duration / dt, 2_000_000)) + 2
+    # jerk jumps where a blend starts (third derivative of S is 6 alpha there): both sides of it
+    # and peaks sit just after it: a geometric grid right behind every start
+    starts = np.array([b.start for _, b in motion.terms if b is not None and 0 <= b.start <= motion.duration])
+    eps = 1e-9 * max(motion.duration, 1.0)
+    behind = (starts[:, None] + 200 * dt * np.geomspace(1e-6, 1.0, 120)[None, :]).ravel()
+    grid = np.concatenate([np.linspace(0.0, motion.duration, n), starts, np.maximum(starts - eps, 0.0), behind])
+    return np.unique(np.clip(grid, 0.0, motion.duration))
+
+
+def _peak(y: np.ndarray) -> float:
+    """Largest value of a smooth sampled signal, refined by a parabola through its top 3 samples."""
+    i = int(np.argmax(y))
+    if 0 < i < y.size - 1:
+        a, b, c = y[i - 1], y[i], y[i + 1]
+        curvature = a - 2 * b + c
+        if curvature < 0:
+            return float(b - (a - c) ** 2 / (8 * curvature))
+    return float(y[i])
+
+
+def sigmoid_trajectory(motion: SigmoidMotion, start, direction, sample_period: float = 1e-3, axes=None) -> Trajectory:
+    """Sample a straight-line sigmoid motion on the axes: ``q = P0 + u s(t)``.
+
+    Args:
+        motion: arc-length motion from :func:`mtp_motion` [mm].
+        start: ``P0`` [mm]; ``direction``: unit vector ``u`` (normalised here).
+        sample_period: ``Ts`` [s]; ``axes``: names (default x, y, z cut to the dimension).
+    """
+    p0 = np.atleast_1d(np.asarray(start, dtype=np.float64))
+    u = np.atleast_1d(np.asarray(direction, dtype=np.float64))
+    norm = np.linalg.norm(u)
+    if u.shape != p0.shape or not norm > 0:
+        raise ParameterError(f"direction must be a non-zero vector like start {p0.shape}, got {u.tolist()}")
+    u = u / norm
+    n = int(np.ceil(motion.duration / sample_period - 1e-9)) + 1
+    t = np.arange(n) * sample_period
+    d = motion.derivatives(t)
+    q, v, a, j = (p0 * (k == 0) + d[k][:, None] * u for k in range(4))
+    axes = tuple(axes) if axes else ("x", "y", "z")[: p0.size]
+    return Trajectory(t, q, v, a, j, np.float64(motion.duration), None, axes, float(sample_period))
+
+
+def _check(**values) -> None:
+    for name, value in values.items():
+        if not (np.isfinite(value) and value > 0):
+            raise ParameterError(f"{name} must be finite and > 0, got {value!r}")
+
+
+def mtp_linear_baseline(
+    length: float, feed: float, amplitude: float, frequency: float, *, acceleration: float, jerk: float,
+    moves_per_period: int = 16, sample_period: float = 1e-3,
+) -> tuple[Trajectory, np.ndarray]:
+    """Current practice (DiMarco 2015 §1): the MTP motion approximated by short linear moves, each
+    run by the jerk-limited linear interpolator (S-curve, exact stop) at its own nominal feed.
+
+    Args:
+        length, feed, amplitude, frequency: the MTP move as in :func:`mtp_motion` [mm, mm/s, mm, Hz].
+        acceleration, jerk: the interpolator's limits [mm/s^2, mm/s^3].
+        moves_per_period: linear moves per oscillation period (the whole move is one move if A = 0).
+        sample_period: ``Ts`` [s].
+
+    Returns:
+        ``(trajectory of the arc length s (axis "s"), nominal times of the move end points [s])``.
+    """
+    from research.interpolators.scurve import scurve_interpolate
+    from research.limits import AxisLimits
+    from research.paths.polyline import Polyline
+
+    _check(length=length, feed=feed, acceleration=acceleration, jerk=jerk)
+    if amplitude > 0:
+        _check(frequency=frequency)
+        period = 1.0 / frequency
+        n = max(int(np.ceil(length / feed / period * moves_per_period)), 1)
+        times = np.linspace(0.0, length / feed, n + 1)
+        s = feed * times + amplitude * np.sin(2 * np.pi * frequency * times)
+        s[-1] = length
+    else:
+        times, s = np.array([0.0, length / feed]), np.array([0.0, length])
+    keep = np.concatenate([[True], np.abs(np.diff(s)) > 1e-9])  # drop moves of no length
+    times, s = times[keep], s[keep]
+    path = Polyline(s[:, None], axes=("s",))
+    feeds = np.abs(np.diff(s)) / np.diff(times)
+    limits = AxisLimits.uniform(1, np.inf, acceleration, jerk)
+    return scurve_interpolate(path, feeds, limits, sample_period), times
