@@ -46,5 +46,6 @@ __all__ = [
     "scurve_phases",
     "scurve_profile",
     "sigmoid_trajectory",
+    "velocity_transition",
     "total_delay",
 ]

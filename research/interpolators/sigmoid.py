@@ -144,6 +144,17 @@ class SigmoidMotion:
         return sum(component.derivatives(t)[0] for component in self.nominal) if self.nominal else np.zeros_like(t)
 
 
+def velocity_transition(feed_old: float, feed_new: float, at: float, alpha: float, order: int = 3) -> tuple:
+    """The blend term that moves a ramp of slope ``feed_old`` onto the ramp of slope ``feed_new``
+    through the same point at time ``at`` [s]: ``(m_new - m_old)(t - at) S(t - at)``.
+
+    Added to a motion's terms it keeps position, velocity and acceleration continuous at ``at``
+    (``S = S' = S'' = 0`` there) and, as ``(x_new - x_old)(at) = 0``, jerk too when ``order = 3``.
+    """
+    dm = feed_new - feed_old
+    return (Ramp(dm, -dm * at), Blend(alpha, order, at))
+
+
 def mtp_motion(
     length: float,
     feed: float,

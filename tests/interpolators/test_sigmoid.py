@@ -7,9 +7,20 @@ import numpy as np
 import pytest
 
 from research.errors import InfeasibleProblem, ParameterError
-from research.interpolators import mtp_linear_baseline, mtp_motion, scurve_profile, sigmoid_trajectory
+from research.interpolators import (
+    mtp_linear_baseline,
+    mtp_motion,
+    scurve_profile,
+    sigmoid_trajectory,
+)
 from research.interpolators import scurve as scurve_module
-from research.interpolators.sigmoid import BRANCH_COUNTS, Blend, Ramp, SigmoidMotion, Sine
+from research.interpolators.sigmoid import (
+    BRANCH_COUNTS,
+    Blend,
+    Ramp,
+    SigmoidMotion,
+    Sine,
+)
 
 M, B = 10.0, 0.3  # feed [mm/s], offset [mm]
 
@@ -145,3 +156,15 @@ def test_bad_input(kwargs, error, match):
         Sine(0.0, 1.0)
     with pytest.raises(ParameterError, match="w must be finite and > 0"):
         Sine(1.0, -1.0)
+
+
+def test_velocity_transition_is_smooth_and_converges():
+    """Feed change 10 -> 25 mm/s at t = 1 s: x, v, a (and jerk, order 3) continuous; v -> 25."""
+    from research.interpolators.sigmoid import velocity_transition
+
+    motion = SigmoidMotion(((Ramp(10.0), None), velocity_transition(10.0, 25.0, 1.0, 50.0)), 0.0)
+    before, after = motion.derivatives(np.array([1.0 - 1e-9, 1.0]))[:, 0], motion.derivatives(np.array([1.0]))[:, 0]
+    np.testing.assert_allclose(after, before, atol=1e-6)
+    x, v, _, _ = motion.derivatives(np.array([3.0]))
+    assert v[0] == pytest.approx(25.0, abs=1e-9)
+    assert x[0] == pytest.approx(10.0 + 25.0 * 2.0, abs=1e-9)  # back on the new nominal line
