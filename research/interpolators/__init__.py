@@ -1,4 +1,11 @@
-"""Interpolators: tool path -> :class:`~research.trajectory.Trajectory`."""
+"""Interpolators: tool path -> :class:`~research.trajectory.Trajectory`.
+
+- FIR-overlap cornering (Sencer 2015): :func:`plan_fir`, :func:`fir_interpolate`.
+- Jerk-limited S-curve with exact stops (the "linear interpolator"): :func:`scurve_interpolate`,
+  and the time-optimal double-S move with boundary speeds :func:`double_s`.
+- Geometric corner smoothing (Sencer 2015 Fig 6 baseline): :func:`blend_interpolate`.
+- Sigmoid / exponential interpolators for modulated tool paths (DiMarco 2015): :func:`mtp_motion`.
+"""
 
 from research.interpolators._fir_chain import (
     acceleration_spectrum,
@@ -9,43 +16,40 @@ from research.interpolators._fir_chain import (
     total_delay,
 )
 from research.interpolators._fir_overlap import cornering_error, overlap_time
-from research.interpolators.fir import (
-    FIRPlan,
-    fir_by_convolution,
-    fir_interpolate,
-    plan_fir,
-)
-from research.interpolators.scurve import (
-    scurve_interpolate,
-    scurve_phases,
-    scurve_profile,
-)
+from research.interpolators.blend import blend_interpolate, corner_blends
+from research.interpolators.fir import FIRPlan, fir_by_convolution, fir_interpolate, plan_fir
+from research.interpolators.scurve import double_s, max_end_speed, scurve_interpolate, scurve_phases, scurve_profile
 from research.interpolators.sigmoid import (
     SigmoidMotion,
     mtp_linear_baseline,
     mtp_motion,
     sigmoid_trajectory,
+    velocity_transition,
 )
 
 __all__ = [
     "FIRPlan",
+    "SigmoidMotion",
     "acceleration_spectrum",
+    "blend_interpolate",
+    "corner_blends",
     "cornering_error",
     "delays_for_modes",
+    "double_s",
     "fir_by_convolution",
     "fir_interpolate",
     "frequency_response",
     "kernel_second_integral",
     "magnitude_response",
-    "overlap_time",
-    "plan_fir",
-    "SigmoidMotion",
+    "max_end_speed",
     "mtp_linear_baseline",
     "mtp_motion",
+    "overlap_time",
+    "plan_fir",
     "scurve_interpolate",
     "scurve_phases",
     "scurve_profile",
     "sigmoid_trajectory",
-    "velocity_transition",
     "total_delay",
+    "velocity_transition",
 ]

@@ -120,3 +120,78 @@ def _check_positive(**values) -> None:
         bad = ~(np.isfinite(x) & (x > 0))
         if bad.any():
             raise ParameterError(f"S-curve {name} must be finite and > 0, got {np.ravel(x)[np.argmax(np.ravel(bad))]!r}")
+
+
+def double_s(length: float, v_start: float, v_end: float, velocity: float, acceleration: float, jerk: float):
+    """Time-optimal jerk-limited move of ``length`` [mm] from speed ``v_start`` to ``v_end`` [mm/s],
+    starting and ending with zero acceleration.
+
+    The double-S profile (Biagiotti & Melchiorri 2008, §3.4.2): a speed-up phase to a peak speed
+    ``v_p``, a cruise at ``v_p``, a slow-down phase, each phase a time-optimal speed change with
+    jerk ``+-J`` or 0. ``v_p = V`` when the move is long enough (then the cruise takes up the
+    rest); otherwise ``v_p`` is the speed whose two phases exactly cover the length (bisection: the
+    covered length grows with ``v_p``). Unlike the book's symmetric reduction of the acceleration
+    limit, each phase keeps its own jerk time, so the result equals ruckig's (tested).
+
+    Returns:
+        The scalar :class:`PiecewisePolynomial` ``s(t)`` (7 cubic pieces, some of zero length).
+
+    Raises:
+        ParameterError: the speed change cannot be made within the length (see :func:`max_end_speed`).
+    """
+    h, v0, v1, V, A, J = (float(x) for x in (length, v_start, v_end, velocity, acceleration, jerk))
+    if not (h > 0 and 0 <= v0 <= V and 0 <= v1 <= V and A > 0 and J > 0):
+        raise ParameterError(f"double_s: need length > 0 and 0 <= v_start, v_end <= V, got {h}, {v0}, {v1}, {V}")
+    if not _speed_change_fits(h, v0, v1, A, J):
+        raise ParameterError(f"double_s: cannot go from {v0:g} to {v1:g} mm/s within {h:g} mm under A = {A:g}, J = {J:g}")
+
+    def covered(vp):  # length of the two phases through peak speed vp
+        return 0.5 * (v0 + vp) * _speed_change(vp - v0, A, J)[1] + 0.5 * (vp + v1) * _speed_change(vp - v1, A, J)[1]
+
+    if covered(V) <= h:
+        vp, Tv = V, (h - covered(V)) / V
+    else:
+        lo, hi = max(v0, v1), V
+        for _ in range(100):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if covered(mid) <= h else (lo, mid)
+        vp, Tv = lo, (h - covered(lo)) / max(lo, 1e-300)  # remainder below the bisection precision
+    Tj1, Ta = _speed_change(vp - v0, A, J)
+    Tj2, Td = _speed_change(vp - v1, A, J)
+    durations = np.array([Tj1, Ta - 2 * Tj1, Tj1, Tv, Tj2, Td - 2 * Tj2, Tj2])
+    jerks = np.array([J, 0.0, -J, 0.0, -J, 0.0, J])
+    coeffs = np.zeros((7, 4, 1))
+    s, v, a = 0.0, v0, 0.0
+    for k in range(7):
+        coeffs[k, :, 0] = [s, v, a / 2, jerks[k] / 6]
+        dt = durations[k]
+        s, v, a = s + v * dt + a * dt**2 / 2 + jerks[k] * dt**3 / 6, v + a * dt + jerks[k] * dt**2 / 2, a + jerks[k] * dt
+    return PiecewisePolynomial(np.concatenate([[0.0], np.cumsum(durations)]), coeffs)
+
+
+def _speed_change(dv: float, A: float, J: float) -> tuple[float, float]:
+    """Jerk time and total time of a time-optimal speed change by ``dv >= 0`` from and to zero
+    acceleration (the acceleration limit is reached when ``dv J >= A^2``)."""
+    if dv * J < A * A:
+        Tj = float(np.sqrt(max(dv, 0.0) / J))
+        return Tj, 2 * Tj
+    return A / J, A / J + dv / A
+
+
+def max_end_speed(length: float, v_start: float, velocity: float, acceleration: float, jerk: float) -> float:
+    """Highest speed [mm/s] reachable (up or down are symmetric) from ``v_start`` within ``length``."""
+    lo, hi = v_start, velocity
+    if _speed_change_fits(length, v_start, hi, acceleration, jerk):
+        return hi
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if _speed_change_fits(length, v_start, mid, acceleration, jerk) else (lo, mid)
+    return lo
+
+
+def _speed_change_fits(h, v0, v1, A, J) -> bool:
+    """Biagiotti & Melchiorri eq 3.17-3.18: can the speed go from v0 to v1 within h?"""
+    dv = abs(v1 - v0)
+    Tj = min(np.sqrt(dv / J), A / J)
+    needed = Tj * (v0 + v1) if Tj < A / J else 0.5 * (v0 + v1) * (Tj + dv / A)
+    return h >= needed * (1 - 1e-12)
