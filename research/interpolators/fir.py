@@ -36,12 +36,15 @@ from jax import Array
 
 from research.errors import ParameterError
 from research.interpolators._fir_chain import check_delays
+from research.interpolators._fir_limits import corner_peak_ratios, feed_caps
 from research.interpolators._fir_overlap import overlap_time
+from research.limits import AxisLimits
 from research.paths.polyline import Polyline
 from research.piecewise import PiecewisePolynomial, bucket_size
 from research.trajectory import Trajectory
 
 _SCALING_ROUNDS = 6  # refinement rounds that shrink overlaps before violators are set to exact stops
+_LIMIT_ROUNDS = 16  # the same for corners that break axis limits
 _GRID = 9  # grid points per corner window for the corner-error search
 _NEWTON_STEPS = 4
 
@@ -120,11 +123,17 @@ def fir_interpolate(
     return plan_fir(path, feed, delays, tolerance, refine=refine).trajectory(sample_period)
 
 
-def plan_fir(path: Polyline, feed, delays, tolerance, *, refine: bool = True) -> FIRPlan:
+def plan_fir(path: Polyline, feed, delays, tolerance, *, refine: bool = True, limits: AxisLimits | None = None) -> FIRPlan:
     """Overlap times, schedule and exact profile; see :func:`fir_interpolate` for the arguments.
 
+    Args:
+        limits: per-axis limits to hold as well (beyond the paper, see ``_fir_limits``): each
+            block's feed is capped so that it keeps them alone, and the overlap of any corner whose
+            exact peaks break them is shrunk, down to an exact stop if need be.
+
     Differentiable with ``jax.grad`` with respect to ``feed``, ``delays`` and ``tolerance`` (not
-    under ``jax.jit`` when ``refine`` is on: the refinement loop stops on concrete values).
+    under ``jax.jit`` when ``refine`` is on: the refinement loop stops on concrete values; not
+    with ``limits``, whose peaks are found in NumPy).
     """
     if not isinstance(path, Polyline):
         raise ParameterError(f"path must be a Polyline, got {type(path).__name__}")
@@ -133,6 +142,10 @@ def plan_fir(path: Polyline, feed, delays, tolerance, *, refine: bool = True) ->
     pad = bucket_size(M) - M  # similar paths share compiled code
     delays = jnp.asarray(delays, dtype=jnp.float64).reshape(-1)
     feeds = jnp.broadcast_to(jnp.asarray(feed, dtype=jnp.float64), (M,))
+    if limits is not None:
+        if limits.n_axes != path.dim:
+            raise ParameterError(f"limits have {limits.n_axes} axes but the path has {path.dim}")
+        feeds = jnp.minimum(feeds, feed_caps(path.lengths, path.directions, np.asarray(delays), limits))
     tolerance = jnp.asarray(tolerance, dtype=jnp.float64)
     # padding segments have zero length and full overlap: they add neither motion nor time
     points = jnp.concatenate([jnp.asarray(path.points), jnp.repeat(jnp.asarray(path.points[-1:]), pad, axis=0)])
@@ -145,18 +158,33 @@ def plan_fir(path: Polyline, feed, delays, tolerance, *, refine: bool = True) ->
     half_window = 0.5 * jnp.sum(delays)
     overlaps = _initial_overlaps(u, feeds_p, delays, tolerance, real)
     starts, position, centre = _build(points, u, feeds_p, pulse_times, delays, overlaps)
-    if refine and M > 1:
+    if (refine or limits is not None) and M > 1:
         limit = tolerance * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
-        for round_ in range(_SCALING_ROUNDS + M):
-            errors = _corner_errors(position, vertices, centre, half_window, real)
-            if not bool(jnp.any(errors > limit)):
+        for round_ in range(_LIMIT_ROUNDS + M):
+            errors = _corner_errors(position, vertices, centre, half_window, real) if refine else jnp.zeros(M + pad - 1)
+            too_fast = _limit_violations(position, starts, pulse_times, delays, limits, M, pad)
+            if not (bool(jnp.any(errors > limit)) or too_fast.any()):
                 break
             overlaps = _refine_overlaps(overlaps, errors, tolerance, limit, delays.shape[0], round_ < _SCALING_ROUNDS)
+            if too_fast.any():  # shrink by 15 % a round, then exact stops
+                overlaps = jnp.where(too_fast, overlaps * (0.85 if round_ < _LIMIT_ROUNDS else 0.0), overlaps)
             starts, position, centre = _build(points, u, feeds_p, pulse_times, delays, overlaps)
     return FIRPlan(
         starts[:M], pulse_times[:M], overlaps[: M - 1], feeds, delays, position, centre[: M - 1],
         jnp.asarray(path.corners), path.axes,
     )
+
+
+def _limit_violations(position, starts, pulse_times, delays, limits, M: int, pad: int) -> np.ndarray:
+    """Corners (padded length) whose window ``[end of block k, start of block k+1 + T_d]`` holds a
+    velocity, acceleration or jerk above ``limits``."""
+    flags = np.zeros(M + pad - 1, dtype=bool)
+    if limits is None:
+        return flags
+    s, e = np.asarray(starts)[:M], np.asarray(starts + pulse_times)[:M]
+    ratios = corner_peak_ratios(position, e[:-1], s[1:] + float(jnp.sum(delays)), limits)
+    flags[: M - 1] = ratios > 1.0 + 1e-9
+    return flags
 
 
 @jax.jit

@@ -307,3 +307,39 @@ def test_eq7_acceleration_spectrum_of_a_filtered_pulse():
     Tv = L / F
     pulse = np.abs(F * (1 - np.exp(-1j * w * Tv)) / (1j * w))  # spectrum of the velocity pulse
     np.testing.assert_allclose(numeric, acceleration_spectrum(w, PAPER_DELAYS, pulse), rtol=1e-3, atol=1e-3)
+
+
+# -- beyond the paper: holding per-axis limits ----------------------------------------------------
+@pytest.mark.parametrize("name", ["corner90", "diamond", "zigzag"])
+def test_plain_overlap_breaks_the_nominal_jerk_and_limited_variant_holds_it(name):
+    """Plain FIR overlap exceeds its own nominal envelope (v = F, a = F/T1, j = F/(T1 T2)) at
+    corners; with ``limits`` every axis stays within it and the tolerance still holds."""
+    from research.limits import AxisLimits
+    from research.metrics import limit_ratios
+
+    path = named_path(name)
+    limits = AxisLimits.fir_envelope(2, 250.0, PAPER_DELAYS)
+    plain = fir_interpolate(path, 250.0, PAPER_DELAYS, 0.5)
+    held = plan_fir(path, 250.0, PAPER_DELAYS, 0.5, limits=limits).trajectory(1e-3)
+    if name == "diamond":
+        assert limit_ratios(plain, limits)["jerk"].max() == pytest.approx(np.sqrt(2), rel=1e-6)
+    ratios = limit_ratios(held, limits)
+    assert all(np.all(r <= 1 + 1e-6) for r in ratios.values())
+    assert np.max(corner_errors(held, path)) <= 0.5 * (1 + 1e-6)
+    assert float(held.duration) >= float(plain.duration) - 1e-12  # holding the limits costs time
+
+
+def test_feed_caps_for_short_blocks():
+    """A block shorter than T1 + T2 in time doubles its jerk, so its feed cap halves (or the
+    block is slowed until it is long enough, whichever is faster)."""
+    from research.interpolators._fir_limits import feed_caps
+    from research.limits import AxisLimits
+
+    T1, T2 = PAPER_DELAYS
+    limits = AxisLimits.uniform(1, 1e9, 1e9, 1000.0)
+    long_cap = 1000.0 * T1 * T2
+    caps = feed_caps(np.array([100.0, 2.0]), np.array([[1.0], [1.0]]), PAPER_DELAYS, limits)
+    assert caps[0] == pytest.approx(long_cap)  # 100 mm: long at this feed
+    assert caps[1] == pytest.approx(max(0.5 * long_cap, 2.0 / (T1 + T2)))
+    with pytest.raises(ParameterError, match="needs at least two FIR filters"):
+        feed_caps(np.array([1.0]), np.array([[1.0]]), [0.1], limits)
