@@ -1,0 +1,106 @@
+"""Contour error and its compensation (Prévost, Lavernhe, Lartigue, HSM 2012; Sencer 2009 thesis
+§4.3-4.4).
+
+- Exact contour error (spatial index + local projection) and tracking error:
+  :func:`contour_error`, :func:`tracking_error`, :func:`brute_force_contour_error` (reference only).
+- Prévost's decomposition e1 / e2 / eT: :func:`execution_errors`.
+- The thesis' estimators: :func:`frenet_contour_estimates` (basic eq 4.20, shifted eq 4.21-4.22,
+  compensated eq 4.23-4.27), :func:`orientation_contour_error` (eq 4.28-4.35), the exact errors they
+  approximate, and the §4.5 study on the eq 4.36 path (:func:`five_axis_contour_study`).
+- CEC mirror compensation (eq 3-4): :func:`cec_problem`, :func:`mirror_compensation` (optimistix
+  ``FixedPointIteration`` or ``Newton``), :func:`mirror_passes`, with the limit check
+  :func:`check_setpoint`; Prévost's two applications ready-made (:func:`prevost2012_application1`, ...).
+- The EMPS chain: identify the real EMPS axis, then CEC on a path within its stroke
+  (:func:`emps_cec_chain`).
+"""
+
+from research.contour._cec import (
+    CECProblem,
+    CompensationResult,
+    cec_problem,
+    corrected_setpoint,
+    cubic_hold,
+    execution_error_vector,
+    intersample_response,
+    mirror_compensation,
+    mirror_passes,
+    mirror_step,
+    q_filter,
+    simulate_correction,
+    simulate_setpoint,
+)
+from research.contour._decomposition import ExecutionErrors, execution_errors
+from research.contour._exact import (
+    ContourError,
+    TrackingError,
+    brute_force_contour_error,
+    check_same_grid,
+    contour_error,
+    tracking_error,
+)
+from research.contour._five_axis import FiveAxisContourStudy, eq436_trajectory, five_axis_contour_study
+from research.contour._frenet import (
+    FrenetEstimates,
+    OrientationContourError,
+    exact_orientation_contour_error,
+    exact_tip_contour_error,
+    frenet_contour_estimates,
+    frenet_frame,
+    orientation_contour_error,
+    tip_reference,
+)
+from research.contour._geometry import Projection, dense_polyline, project, trajectory_polyline
+from research.contour._limits import LimitCheck, check_setpoint
+from research.contour._prevost import (
+    PREVOST_FEED,
+    PrevostCase,
+    prevost2012_application1,
+    prevost2012_application2,
+    smoothed_corner_case,
+)
+
+__all__ = [
+    "CECProblem",
+    "CompensationResult",
+    "ContourError",
+    "ExecutionErrors",
+    "FiveAxisContourStudy",
+    "FrenetEstimates",
+    "LimitCheck",
+    "OrientationContourError",
+    "PREVOST_FEED",
+    "PrevostCase",
+    "Projection",
+    "TrackingError",
+    "brute_force_contour_error",
+    "cec_problem",
+    "check_same_grid",
+    "check_setpoint",
+    "contour_error",
+    "corrected_setpoint",
+    "cubic_hold",
+    "dense_polyline",
+    "eq436_trajectory",
+    "exact_orientation_contour_error",
+    "exact_tip_contour_error",
+    "execution_error_vector",
+    "execution_errors",
+    "five_axis_contour_study",
+    "frenet_contour_estimates",
+    "frenet_frame",
+    "intersample_response",
+    "mirror_compensation",
+    "mirror_passes",
+    "mirror_step",
+    "orientation_contour_error",
+    "prevost2012_application1",
+    "prevost2012_application2",
+    "project",
+    "q_filter",
+    "simulate_correction",
+    "simulate_setpoint",
+    "smoothed_corner_case",
+    "tip_reference",
+    "tracking_error",
+    "trajectory_polyline",
+]
