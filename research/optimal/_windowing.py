@@ -1,0 +1,121 @@
+"""Receding-window solution of long paths (Sencer 2009 thesis, §3.5, Fig 3.7).
+
+The thesis optimises the feed of a long tool path in a moving window of about 20 control points
+that advances with an overlap of 5 points from the previous solution. Here a window holds
+``window`` consecutive segments (phases); after it is solved, its first ``window - overlap``
+segments are committed and the next window starts from the committed state ``[p, v, a]`` at the
+last committed node (position, velocity and acceleration are continuous across the joint; the jerk
+is piecewise constant anyway). The ``overlap`` segments left over are look-ahead: they are solved
+again in the next window, warm-started from this window's solution.
+
+Every window ends at rest on its last vertex. That terminal state makes the scheme recursively
+feasible (the next window can always repeat the committed tail of the previous solution, stop on
+the same vertex and go on from rest), and it costs nothing on the committed part as long as the
+look-ahead is longer than the braking distance (about ``F (T_a + T_j) / 2`` for an S-curve stop;
+30 mm at 250 mm/s and the Sencer 2015 envelope). The last window runs to the path end.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from research.optimal._ocp import Geometry, PhaseGrid, PhaseProblem, ProblemSpec, SolveFailure, SolveStats
+
+
+@dataclass(frozen=True)
+class WindowReport:
+    """One window of the receding-window solution.
+
+    Attributes:
+        first_segment: first segment (phase) of the window.
+        stop_segment: one past its last segment.
+        committed_stop: one past the last segment kept from this window.
+        status: IPOPT return status.
+        iterations: IPOPT iterations.
+        solve_time: wall-clock time of the IPOPT solve [s].
+        duration: motion time of the whole window in its solution [s] (look-ahead included).
+    """
+
+    first_segment: int
+    stop_segment: int
+    committed_stop: int
+    status: str
+    iterations: int
+    solve_time: float
+    duration: float
+
+
+def window_schedule(n_segments: int, window: int | None, overlap: int) -> list[tuple[int, int, int]]:
+    """``(first, stop, committed_stop)`` of each window; one window when ``window`` is ``None`` or
+    covers the path. Consecutive windows share ``overlap`` segments."""
+    if window is None or window >= n_segments:
+        return [(0, n_segments, n_segments)]
+    out, first = [], 0
+    while first + window < n_segments:
+        out.append((first, first + window, first + window - overlap))
+        first += window - overlap
+    out.append((first, n_segments, n_segments))
+    return out
+
+
+class WindowFailure(Exception):
+    """Internal: a window did not solve; ``failure`` is the IPOPT outcome, ``first`` its first
+    segment (phases are local to the window)."""
+
+    def __init__(self, failure: SolveFailure, first: int, stop: int):
+        self.failure, self.first, self.stop = failure, first, stop
+        super().__init__(failure.stats.status)
+
+
+def solve_windows(
+    geometry: Geometry, spec: ProblemSpec, guess: PhaseGrid, initial_state: np.ndarray,
+    schedule: list[tuple[int, int, int]], ipopt_options: dict | None,
+) -> tuple[PhaseGrid, list[WindowReport], float]:
+    """Solve window after window and stitch the committed parts.
+
+    Args:
+        geometry: all segments of the path.
+        spec: problem constants; ``n_phases`` is replaced by each window's size.
+        guess: warm start on the whole path's phase grid.
+        initial_state: ``(3, d)`` start state (the first vertex, at rest).
+        schedule: from :func:`window_schedule`.
+        ipopt_options: IPOPT options.
+
+    Returns:
+        ``(solution on the whole grid, window reports, time spent building NLPs [s])``.
+    """
+    import time
+
+    N = spec.intervals
+    durations, states, jerks = guess.durations.copy(), guess.states.copy(), guess.jerks.copy()
+    problems: dict[int, PhaseProblem] = {}
+    build_time = 0.0
+    reports = []
+    state = np.asarray(initial_state, dtype=np.float64)
+    for first, stop, commit in schedule:
+        n = stop - first
+        if n not in problems:
+            t0 = time.perf_counter()
+            problems[n] = PhaseProblem(replace(spec, n_phases=n), ipopt_options)
+            build_time += time.perf_counter() - t0
+        window_geometry = Geometry(*(np.asarray(x)[first:stop] for x in (
+            geometry.start, geometry.end, geometry.direction, geometry.length, geometry.min_duration)))
+        window_guess = PhaseGrid(durations[first:stop], states[first * N : stop * N + 1].copy(), jerks[first * N : stop * N])
+        window_guess.states[0] = state
+        try:
+            solution, stats = problems[n].solve(window_geometry, state, window_guess)
+        except SolveFailure as failure:
+            raise WindowFailure(failure, first, stop) from None
+        solution.states[0] = state  # the joint state is the committed one, bit for bit
+        durations[first:stop] = solution.durations
+        states[first * N : stop * N + 1] = solution.states
+        jerks[first * N : stop * N] = solution.jerks
+        state = solution.states[(commit - first) * N].copy()
+        reports.append(_report(first, stop, commit, stats, float(solution.durations.sum())))
+    return PhaseGrid(durations, states, jerks), reports, build_time
+
+
+def _report(first: int, stop: int, commit: int, stats: SolveStats, duration: float) -> WindowReport:
+    return WindowReport(first, stop, commit, stats.status, stats.iterations, stats.solve_time, duration)
