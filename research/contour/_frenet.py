@@ -139,7 +139,7 @@ def frenet_contour_estimates(reference: TipReference, t, actual_tip, min_speed_r
     speed = np.linalg.norm(dR, axis=1)
     moving = speed > min_speed_ratio * speed.max()
     delay = np.where(moving, e_t / np.where(moving, speed, 1.0), 0.0)  # eq 4.21
-    Rd, dRd, ddRd = reference(np.clip(t - delay, t[0], t[-1]))
+    Rd, dRd, ddRd = reference(t - delay)
     tan_d, _, _ = frenet_frame(dRd, ddRd)  # eq 4.22
     shifted = normal_size(e, tan_d)
     h = R - Rd  # eq 4.23
