@@ -35,7 +35,7 @@ def test_estimators_on_a_lagging_circle():
     # R (1 - cos(w lag)) = 6.25 um: the offset h of eq 4.23 "must be compensated"
     sagitta = R * (1 - np.cos(w * lag))
     np.testing.assert_allclose(off - est.basic, sagitta, atol=1e-5)  # + off (1 - cos) terms
-    np.testing.assert_allclose(est.shifted - off, sagitta, atol=1e-9)
+    np.testing.assert_allclose(est.shifted - off, sagitta, atol=1e-5)  # t_d = lag to 1e-3 (eq 4.21)
 
 
 def test_frenet_frame_orthonormal_and_straight_line_fallback():
