@@ -67,7 +67,10 @@ def phase_boundaries(traj: Trajectory, path: Polyline) -> np.ndarray:
     if traj.exact is not None and idx.size:
         lo, hi = t[np.maximum(idx - 1, 0)], t[np.minimum(idx + 1, t.size - 1)]
         target = path.points[1:-1]
-        dist = lambda s: np.linalg.norm(f(s, 0) - target, axis=1)  # noqa: E731
+
+        def dist(s):
+            return np.linalg.norm(f(s, 0) - target, axis=1)
+
         for _ in range(50):
             a, b = hi - _GOLDEN * (hi - lo), lo + _GOLDEN * (hi - lo)
             left = dist(a) < dist(b)

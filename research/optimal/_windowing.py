@@ -17,11 +17,19 @@ look-ahead is longer than the braking distance (about ``F (T_a + T_j) / 2`` for 
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, replace
 
 import numpy as np
 
-from research.optimal._ocp import Geometry, PhaseGrid, PhaseProblem, ProblemSpec, SolveFailure, SolveStats
+from research.optimal._ocp import (
+    Geometry,
+    PhaseGrid,
+    PhaseProblem,
+    ProblemSpec,
+    SolveFailure,
+    SolveStats,
+)
 
 
 @dataclass(frozen=True)
@@ -86,8 +94,6 @@ def solve_windows(
     Returns:
         ``(solution on the whole grid, window reports, time spent building NLPs [s])``.
     """
-    import time
-
     N = spec.intervals
     durations, states, jerks = guess.durations.copy(), guess.states.copy(), guess.jerks.copy()
     problems: dict[int, PhaseProblem] = {}

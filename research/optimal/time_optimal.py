@@ -8,22 +8,44 @@ any other trajectory along the path (e.g. FIR overlap), over the whole path or i
 (``_windowing``, Sencer 2009 thesis §3.5). It is the yardstick of the interpolators: under equal
 limits and tolerance no interpolator can be faster than the OCP, up to the discretisation of the
 jerk on ``N`` equal intervals per segment (finer ``N``: closer to the continuous optimum).
+
+What is approximated, and by how much (measured in ``tests/optimal``):
+
+- the grid: jerk switching times fall between grid points, so the cycle time is an upper bound on
+  the continuous optimum; on a 100 mm line (Sencer 2015 envelope) it is 0.3 % above the S-curve
+  optimum with ``N = 24`` and 0.06 % with ``N = 48``; on corner90 ``N = 24`` is 0.13 % above
+  ``N = 48``;
+- between grid points the tube and the velocity / feed limits are imposed at ``checks_per_interval``
+  points only; the dense check (:class:`Verification`) has found at most 0.3 % excess on the
+  benchmark paths (acceleration and jerk are exact: linear and constant on each interval);
+- the tube is the rectangle (cylinder) of each segment between its end caps, not the full
+  ``eps``-capsule: the motion may not overshoot a vertex on the outer side of a corner;
+- windows end at rest on their last vertex (``_windowing``), which slows the committed part only
+  when the look-ahead is shorter than the braking distance.
 """
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from research.errors import InfeasibleProblem, ParameterError
-from research.interpolators.scurve import scurve_interpolate, scurve_phases, scurve_profile
+from research.interpolators.scurve import (
+    scurve_interpolate,
+    scurve_phases,
+    scurve_profile,
+)
 from research.limits import AxisLimits
 from research.optimal._ocp import Geometry, PhaseGrid, ProblemSpec, flow
 from research.optimal._profile import sampled_trajectory
 from research.optimal._warm import grid_from_trajectory
-from research.optimal._windowing import WindowFailure, WindowReport, solve_windows, window_schedule
+from research.optimal._windowing import (
+    WindowFailure,
+    WindowReport,
+    solve_windows,
+    window_schedule,
+)
 from research.paths.polyline import Polyline
 from research.trajectory import Trajectory
 
@@ -65,7 +87,8 @@ class TimeOptimalResult:
         trajectory: the motion, sampled at ``sample_period``, with its exact profile (one cubic per
             interval: piecewise-constant jerk).
         phase_durations: ``(M,)`` time spent in each segment's phase [s] (phase ``k`` ends at the
-            boundary node within ``eps`` of vertex ``k + 1``).
+            boundary node within ``eps`` of vertex ``k + 1``); their sum is the cycle time, an
+            upper bound on the continuous optimum (see the module docstring).
         status: IPOPT return status (``"Solve_Succeeded"`` when every window succeeded, else the
             first non-exact one, e.g. ``"Solved_To_Acceptable_Level"``); ``"exact stop"`` for
             ``eps = 0``, which needs no NLP.
@@ -205,7 +228,10 @@ def verify(grid: PhaseGrid, intervals: int, path: Polyline, limits: AxisLimits, 
     x = flow(np.repeat(grid.states[:-1, None], theta.size, axis=1), np.repeat(grid.jerks[:, None], theta.size, axis=1), h[:, None] * theta[None, :])
     q, v, a = (x[..., i, :].reshape(-1, path.dim) for i in range(3))
     dev = float(path.distance(q).max())
-    peak = lambda y: np.abs(y).max(axis=0)  # noqa: E731
+
+    def peak(y):
+        return np.abs(y).max(axis=0)
+
     return Verification(
         max_deviation=dev,
         deviation_ratio=dev / tolerance if tolerance > 0 else (0.0 if dev == 0 else np.inf),
@@ -250,7 +276,7 @@ def _exact_stop(path, limits, feed, intervals, sample_period) -> TimeOptimalResu
     traj = scurve_interpolate(path, _scurve_feed(limits, feed), limits, sample_period)
     along = np.array([limits.along(u) for u in path.directions])
     vmax = along[:, 0] if feed is None else np.minimum(along[:, 0], feed)
-    Tj, Ta, Tv = scurve_phases(path.lengths, vmax, along[:, 1], along[:, 2])
+    _, Ta, Tv = scurve_phases(path.lengths, vmax, along[:, 1], along[:, 2])
     durations = 2 * Ta + Tv
     return TimeOptimalResult(
         trajectory=traj, phase_durations=_frozen(durations), status="exact stop", iterations=0,

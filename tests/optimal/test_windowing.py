@@ -1,5 +1,7 @@
 """Receding-window solution (Sencer 2009 thesis §3.5) against the whole-path NLP."""
 
+from itertools import pairwise
+
 import numpy as np
 import pytest
 
@@ -20,19 +22,19 @@ def test_schedule_covers_the_path_with_overlap():
     assert window_schedule(11, None, 3) == [(0, 11, 11)]
     assert window_schedule(4, 6, 3) == [(0, 4, 4)]
     # committed parts tile the path
-    for (_, _, commit), (first, _, _) in zip(sched[:-1], sched[1:]):
+    for (_, _, commit), (first, _, _) in pairwise(sched):
         assert commit == first
 
 
 @pytest.fixture(scope="module")
 def whole_and_windowed():
     path = zigzag(12)  # 11 segments, 10 corners of 53 deg
-    kw = dict(feed=250.0, intervals_per_segment=16)
+    kw = {"feed": 250.0, "intervals_per_segment": 16}
     return path, time_optimal(path, LIMITS, 0.5, **kw), time_optimal(path, LIMITS, 0.5, window=6, overlap=3, **kw)
 
 
 def test_windowed_matches_whole_path(whole_and_windowed):
-    path, whole, windowed = whole_and_windowed
+    _, whole, windowed = whole_and_windowed
     assert len(whole.windows) == 1 and len(windowed.windows) == 3
     assert windowed.cycle_time == pytest.approx(whole.cycle_time, rel=WINDOW_RTOL)
     assert windowed.cycle_time >= whole.cycle_time * (1 - 1e-6)  # a window cannot beat the whole NLP
