@@ -22,12 +22,13 @@ from __future__ import annotations
 import math
 from functools import partial
 
-import numpy as np
-
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jax import Array
+
+_NUMPY_SAMPLES = 50_000  # below this many samples NumPy beats compiling a JAX sampler
 
 
 class PiecewisePolynomial(eqx.Module):
@@ -132,9 +133,32 @@ class PiecewisePolynomial(eqx.Module):
         O(n_samples + K): the piece of each sample comes from a scatter-add and a cumulative sum,
         not a search. Returns ``orders`` NumPy arrays of shape ``(n_samples, A)``.
         """
+        if n_samples <= _NUMPY_SAMPLES:  # small: NumPy, no compilation
+            t = np.asarray(self.breaks[0]) + np.arange(n_samples) * sample_period
+            return tuple(self.evaluate_numpy(t, nu) for nu in range(orders))
         piece, tau, moving = _sample_pieces(self.breaks, jnp.asarray(sample_period, jnp.float64), bucket_size(n_samples, 256))
         # one compiled call per order: XLA then fuses the coefficient gather into each Horner loop
         return tuple(np.asarray(_sample_order(self.coeffs, piece, tau, moving, nu))[:n_samples] for nu in range(orders))
+
+    def evaluate_numpy(self, t, nu: int = 0) -> np.ndarray:
+        """:meth:`__call__` in NumPy, for concrete arrays: no JAX compilation or dispatch, which
+        is cheaper for small or one-off evaluations. ``t`` of any shape ``S``; returns ``S + (A,)``."""
+        breaks, coeffs = np.asarray(self.breaks), np.asarray(self.coeffs)
+        t = np.asarray(t, dtype=np.float64)
+        flat = t.reshape(-1)
+        K, deg = coeffs.shape[0], coeffs.shape[1] - 1
+        clipped = np.clip(flat, breaks[0], breaks[-1])
+        piece = np.clip(np.searchsorted(breaks, clipped, side="right") - 1, 0, K - 1)
+        tau = (clipped - breaks[piece])[:, None]
+        if nu > deg:
+            value = np.zeros((flat.size, coeffs.shape[2]))
+        else:
+            value = coeffs[piece, deg, :] * math.perm(deg, nu)
+            for m in range(deg - 1, nu - 1, -1):
+                value = value * tau + coeffs[piece, m, :] * math.perm(m, nu)
+            if nu:
+                value = np.where(((flat >= breaks[0]) & (flat <= breaks[-1]))[:, None], value, 0.0)
+        return value.reshape(t.shape + (coeffs.shape[2],))
 
 
 def bucket_size(n: int, minimum: int = 4) -> int:

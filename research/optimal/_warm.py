@@ -14,19 +14,10 @@ import numpy as np
 
 from research.errors import ParameterError
 from research.optimal._ocp import PhaseGrid
-from research.optimal._profile import evaluate
 from research.paths.polyline import Polyline
 from research.trajectory import Trajectory
 
 _GOLDEN = 0.5 * (np.sqrt(5.0) - 1.0)
-
-
-def _evaluator(traj: Trajectory):
-    """``f(t, nu)`` for ``traj``: NumPy on the exact profile, else the trajectory's Hermite spline."""
-    if traj.exact is None:
-        return lambda t, nu: np.asarray(traj.evaluate(np.asarray(t), nu))
-    breaks, coeffs = np.asarray(traj.exact.breaks), np.asarray(traj.exact.coeffs)
-    return lambda t, nu: evaluate(breaks, coeffs, t, nu)
 
 
 def phase_boundaries(traj: Trajectory, path: Polyline) -> np.ndarray:
@@ -45,7 +36,7 @@ def phase_boundaries(traj: Trajectory, path: Polyline) -> np.ndarray:
     """
     if traj.n_axes != path.dim:
         raise ParameterError(f"warm_start has {traj.n_axes} axes but the path has {path.dim}")
-    f = _evaluator(traj)
+    f = traj.evaluate
     duration = float(traj.duration)
     if traj.exact is not None:  # dense enough to resolve every segment
         t = np.linspace(0.0, duration, 64 * path.n_segments + 1)
@@ -89,7 +80,7 @@ def grid_from_trajectory(traj: Trajectory, path: Polyline, intervals: int) -> Ph
     durations = np.diff(times)
     frac = np.arange(intervals) / intervals
     nodes = np.concatenate([(times[:-1, None] + durations[:, None] * frac[None, :]).ravel(), times[-1:]])
-    f = _evaluator(traj)
+    f = traj.evaluate
     states = np.stack([f(nodes, nu) for nu in range(3)], axis=1)
     states[-1, 0] = path.points[-1]
     states[-1, 1:] = 0.0  # the motion ends at rest on the last vertex

@@ -38,7 +38,6 @@ from research.interpolators.scurve import (
 )
 from research.limits import AxisLimits
 from research.optimal._ocp import Geometry, PhaseGrid, ProblemSpec, flow
-from research.optimal._profile import sampled_trajectory
 from research.optimal._warm import grid_from_trajectory
 from research.optimal._windowing import (
     WindowFailure,
@@ -47,6 +46,7 @@ from research.optimal._windowing import (
     window_schedule,
 )
 from research.paths.polyline import Polyline
+from research.piecewise import PiecewisePolynomial
 from research.trajectory import Trajectory
 
 _DENSE = 16  # verification points per interval
@@ -248,7 +248,7 @@ def _trajectory(grid: PhaseGrid, intervals: int, axes, sample_period: float) -> 
     h = np.repeat(grid.durations / intervals, intervals)
     breaks = np.concatenate([[0.0], np.cumsum(h)])
     coeffs = np.stack([grid.states[:-1, 0], grid.states[:-1, 1], grid.states[:-1, 2] / 2, grid.jerks / 6], axis=1)
-    return sampled_trajectory(breaks, coeffs, sample_period, tuple(axes))
+    return Trajectory.from_piecewise(PiecewisePolynomial(breaks, coeffs), sample_period, tuple(axes))
 
 
 def _scurve_warm_start(path: Polyline, limits: AxisLimits, feed) -> Trajectory:
@@ -266,7 +266,7 @@ def _scurve_warm_start(path: Polyline, limits: AxisLimits, feed) -> Trajectory:
         coeffs.append(c)
         t0 = float(breaks[-1][-1])
     breaks, coeffs = np.concatenate(breaks), np.concatenate(coeffs)
-    return sampled_trajectory(breaks, coeffs, max(t0 / 200, 1e-6), path.axes)
+    return Trajectory.from_piecewise(PiecewisePolynomial(breaks, coeffs), max(t0 / 200, 1e-6), path.axes)
 
 
 def _exact_stop(path, limits, feed, intervals, sample_period) -> TimeOptimalResult:
