@@ -13,6 +13,9 @@ FIGURE_MODULES = (
     "research.figures.drive_bode",
     "research.figures.dimarco2015_fig3",
     "research.figures.dimarco2015_mtp",
+    "research.figures.prevost2012_fig5",
+    "research.figures.prevost2012_fig6",
+    "research.figures.contour_sencer2009_fig4_6",
 )
 
 
