@@ -30,6 +30,7 @@ from research.contour._cec import (
     simulate_setpoint,
 )
 from research.contour._decomposition import ExecutionErrors, execution_errors
+from research.contour._emps import EMPSChainResult, emps_cec_chain
 from research.contour._exact import (
     ContourError,
     TrackingError,
@@ -63,6 +64,7 @@ __all__ = [
     "CECProblem",
     "CompensationResult",
     "ContourError",
+    "EMPSChainResult",
     "ExecutionErrors",
     "FiveAxisContourStudy",
     "FrenetEstimates",
@@ -80,6 +82,7 @@ __all__ = [
     "corrected_setpoint",
     "cubic_hold",
     "dense_polyline",
+    "emps_cec_chain",
     "eq436_trajectory",
     "exact_orientation_contour_error",
     "exact_tip_contour_error",
