@@ -1,0 +1,92 @@
+"""Closed-loop feed-drive identification from logged reference and actual positions (Sencer 2009 thesis
+ch 6): drive logs, the §6.5 excitation program, least squares (eq 6.7-6.12), the constrained PSO of §6.4,
+the same bounded problem solved with optimistix, an output-error fit of the JAX closed-loop model, and fit
+reports. Units: s, mm (logs in other units are converted on loading), rad/s for pole frequencies.
+"""
+
+from research.identification._bounded import SOLVERS, bounded_fit, grid_starts, sigma_from_u, u_from_sigma
+from research.identification._emps import EMPS_SPLIT_S, identify_emps, load_emps
+from research.identification._excitation import THESIS_PROGRAM, ExcitationProgram, identification_program
+from research.identification._least_squares import least_squares
+from research.identification._log import (
+    LENGTH_UNITS,
+    RESAMPLING_METHODS,
+    TIME_UNITS,
+    DriveLog,
+    load_drive_log,
+    save_drive_log,
+)
+from research.identification._output_error import output_error_fit, simulate_log
+from research.identification._projection import PoleBounds, ProjectedProblem, theta1_from_poles
+from research.identification._pso import PSOSettings, particle_swarm
+from research.identification._regression import (
+    COLUMNS,
+    MAX_CONDITION,
+    PARAMETERS,
+    Regression,
+    RegressionOptions,
+    build_regression,
+    coefficients_from_theta,
+    theta_from_coefficients,
+    theta_from_model,
+)
+from research.identification._report import FitReport, fit_percent, fit_report
+from research.identification._result import COEFFICIENTS, IdentifiedDrive
+from research.identification._synthetic import synthetic_log
+from research.identification._virtual import (
+    LEAD_RG,
+    THESIS_FRICTION_TORQUE,
+    THESIS_LS_DC,
+    THESIS_RG_OVER_J,
+    friction_torque,
+    thesis_physical_drive,
+)
+
+__all__ = [
+    "EMPS_SPLIT_S",
+    "identify_emps",
+    "load_emps",
+    "output_error_fit",
+    "simulate_log",
+    "FitReport",
+    "fit_percent",
+    "fit_report",
+    "LEAD_RG",
+    "THESIS_FRICTION_TORQUE",
+    "THESIS_LS_DC",
+    "THESIS_RG_OVER_J",
+    "friction_torque",
+    "thesis_physical_drive",
+    "COEFFICIENTS",
+    "COLUMNS",
+    "DriveLog",
+    "ExcitationProgram",
+    "IdentifiedDrive",
+    "LENGTH_UNITS",
+    "MAX_CONDITION",
+    "PARAMETERS",
+    "PSOSettings",
+    "PoleBounds",
+    "ProjectedProblem",
+    "RESAMPLING_METHODS",
+    "Regression",
+    "RegressionOptions",
+    "SOLVERS",
+    "THESIS_PROGRAM",
+    "TIME_UNITS",
+    "bounded_fit",
+    "build_regression",
+    "coefficients_from_theta",
+    "grid_starts",
+    "identification_program",
+    "least_squares",
+    "load_drive_log",
+    "particle_swarm",
+    "save_drive_log",
+    "sigma_from_u",
+    "synthetic_log",
+    "theta1_from_poles",
+    "theta_from_coefficients",
+    "theta_from_model",
+    "u_from_sigma",
+]
