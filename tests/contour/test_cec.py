@@ -69,8 +69,8 @@ def test_newton_needs_fewer_iterations_and_gets_closer(app1_results):
 
 def test_fixed_point_reports_non_convergence_with_residual(app1):
     with pytest.raises(ConvergenceError, match="did not converge") as info:
-        mirror_compensation(app1.problem, method="fixed_point", tolerance=0.1e-3, max_steps=4)
-    assert 0.1e-3 < info.value.residual < 2e-3 and info.value.steps == 4
+        mirror_compensation(app1.problem, method="fixed_point", tolerance=0.1e-3, max_steps=2)
+    assert 0.1e-3 < info.value.residual < 2e-3 and info.value.steps == 2
     assert info.value.result is not None and not info.value.result.converged
 
 
@@ -111,17 +111,18 @@ def test_application2_sharp_corner(app2):
 
 def test_application2_iteration_does_not_converge(app2):
     with pytest.raises(ConvergenceError) as info:
-        mirror_compensation(app2.problem, method="fixed_point", tolerance=2e-3, max_steps=8)
+        mirror_compensation(app2.problem, method="fixed_point", tolerance=2e-3, max_steps=4)
     assert info.value.residual > 5e-3
 
 
 def test_tangent_continuous_target(app2):
     # the paper's suggestion taken further: a C2 target within 17 um of the sharp corner, plus a 11 ms
-    # Q-filter on the mirror rule: eT falls from 27.6 um to a few um in 12 passes (3.2 um here).
+    # Q-filter on the mirror rule: eT falls from 27.6 um to a few um (4.3 um after 6 passes, 3.2 um
+    # after 12, Fig 6d).
     smooth = smoothed_corner_case(app2)
-    r = mirror_passes(smooth.problem, 12, smoothing=11, limits=smooth.limits, control_limit=smooth.control_limit)
+    r = mirror_passes(smooth.problem, 6, smoothing=11, limits=smooth.limits, control_limit=smooth.control_limit)
     assert r.before.max == pytest.approx(0.0276, abs=1e-3)
-    assert r.history[-1] < 4e-3
+    assert r.history[-1] < 5e-3
     assert r.limits.ratios["acceleration"].max() <= 1.0 and r.limits.ratios["velocity"].max() <= 1.0
-    # flagged, not hidden: jerk is ~3x the FIR nominal envelope
-    assert 1.0 < r.limits.ratios["jerk"].max() < 4.0
+    # flagged, not hidden: jerk is 4.1x the FIR nominal envelope after 6 passes (3.1x after 12)
+    assert 1.0 < r.limits.ratios["jerk"].max() < 5.0 and not r.limits.ok
