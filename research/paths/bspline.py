@@ -40,7 +40,7 @@ class BSplinePath:
     Example:
         >>> c = prevost2012_bspline()
         >>> c(0.0).round(6).tolist(), c(1.0).round(6).tolist()
-        [[-100.0, 0.0], [-100.0, -50.0]]
+        ([[-100.0, 0.0]], [[-100.0, -50.0]])
     """
 
     control_points: np.ndarray
