@@ -8,9 +8,11 @@ Gauss-Newton-type method on the reduced residual ``z_b - R11 theta1(sigma(u))``:
   ``zeta = zeta_min + (zeta_max - zeta_min) sig(u2)`` with the logistic ``sig``; every ``u`` is a stable model
   inside eq 6.14;
 * variable projection: the zeros and friction are eliminated by eq 6.21, so only 3 unknowns remain;
-* starts: the unconstrained LS solution when it lies inside the bounds, plus the best points of a coarse
-  grid over the region (cheap: the reduced objective costs a 3 x 3 product per point). All starts are
-  solved at once (``jax.vmap``) and the lowest loss wins.
+* starts: the unconstrained LS optimum (from the same QR) when it lies inside the bounds -- it is then the
+  global minimum of the bounded problem and LM only polishes it -- otherwise the best points of a coarse
+  grid over the region (cheap: the reduced objective costs a 3 x 3 product per point), solved at once
+  (``jax.vmap``); the lowest loss wins. Coordinates that end within 1e-4 of a bound are put on it when
+  that lowers the loss (the logistic map only approaches a bound).
 """
 
 from __future__ import annotations
@@ -76,7 +78,7 @@ def _solve_starts(u0, args, *, solver, max_steps):
     return jax.vmap(one)(u0)
 
 
-def grid_starts(prob: ProjectedProblem, bounds: PoleBounds, count: int = 4, shape=(16, 8, 16)) -> np.ndarray:
+def grid_starts(prob: ProjectedProblem, bounds: PoleBounds, count: int = 3, shape=(12, 6, 12)) -> np.ndarray:
     """The ``count`` lowest-loss points ``sigma`` of a grid over the bounded region (log-spaced in ``wn``, ``p``)."""
     lo, hi = bounds.lower, bounds.upper
     g = np.meshgrid(
@@ -93,8 +95,8 @@ def bounded_fit(
     *,
     bounds: PoleBounds = PoleBounds.thesis(),
     solver: str = "levenberg_marquardt",
-    starts: int = 4,
-    max_steps: int = 200,
+    starts: int = 3,
+    max_steps: int = 100,
     initial: np.ndarray | None = None,
     options: RegressionOptions = RegressionOptions(),
 ) -> IdentifiedDrive:
@@ -104,7 +106,7 @@ def bounded_fit(
         data: log, regression or :class:`ProjectedProblem`.
         bounds: :class:`PoleBounds` (default thesis §6.5).
         solver: ``"levenberg_marquardt"`` or ``"gauss_newton"`` (``optx.LevenbergMarquardt`` / ``optx.GaussNewton``).
-        starts: number of grid starts (plus the LS start when it is inside the bounds).
+        starts: number of grid starts, used when the LS optimum is outside the bounds or unstable.
         max_steps: solver steps per start.
         initial: optional extra start ``sigma = [wn, zeta, p]`` [rad/s, -, rad/s].
         options: regression processing when ``data`` is a log.
@@ -119,10 +121,13 @@ def bounded_fit(
         reg = data if isinstance(data, Regression) else build_regression(data, options)
         prob = ProjectedProblem.from_regression(reg)
     t0 = time.perf_counter()
-    cand = [grid_starts(prob, bounds, starts)]
     ls = _ls_sigma(prob)
     if ls is not None and bounds.contains(ls):
-        cand.append(ls[None])
+        # the unconstrained optimum satisfies eq 6.14, so it is the bounded problem's global minimum:
+        # one start suffices (LM only polishes it)
+        cand = [ls[None]]
+    else:
+        cand = [grid_starts(prob, bounds, starts)]
     if initial is not None:
         cand.append(np.clip(np.asarray(initial, dtype=np.float64), bounds.lower, bounds.upper)[None])
     sig0 = np.concatenate(cand)
@@ -131,7 +136,7 @@ def bounded_fit(
     u, f, steps = _solve_starts(jnp.asarray(u_from_sigma(sig0, bounds.lower, bounds.upper)), args, solver=solver, max_steps=max_steps)
     u, f, steps = np.asarray(u), np.asarray(f), np.asarray(steps)
     k = int(np.nanargmin(f))
-    sigma = np.asarray(sigma_from_u(u[k], bounds.lower, bounds.upper, xp=np))
+    sigma = _snap_to_bounds(prob, np.asarray(sigma_from_u(u[k], bounds.lower, bounds.upper, xp=np)), bounds)
     wall = time.perf_counter() - t0
     theta = prob.theta(sigma)
     return IdentifiedDrive.from_theta(
@@ -141,11 +146,22 @@ def bounded_fit(
     )
 
 
+def _snap_to_bounds(prob: ProjectedProblem, sigma: np.ndarray, bounds: PoleBounds) -> np.ndarray:
+    """The logistic map reaches a bound only asymptotically: put coordinates within 1e-4 (relative to the
+    range) of a bound on it when that lowers the loss."""
+    lo, hi = bounds.lower, bounds.upper
+    tol = 1e-4 * (hi - lo)
+    snapped = np.where(sigma - lo < tol, lo, np.where(hi - sigma < tol, hi, sigma))
+    return snapped if prob.loss(snapped) <= prob.loss(sigma) else sigma
+
+
 def _ls_sigma(prob: ProjectedProblem) -> np.ndarray | None:
-    """``[wn, zeta, p]`` of the unconstrained LS solution, or None when its poles are not of eq 6.13 form."""
-    reg = prob.regression
-    sol, *_ = np.linalg.lstsq(reg.Phi / reg.column_scale, reg.Y, rcond=None)
-    alpha3, alpha1, alpha2 = (sol / reg.column_scale)[:3]
+    """``[wn, zeta, p]`` of the unconstrained LS optimum (from the QR blocks: ``R11 theta1 = z_b``), or None when
+    its poles are not of the eq 6.13 form with positive ``wn``, ``zeta``, ``p``."""
+    try:
+        alpha1, alpha2, alpha3 = np.linalg.solve(prob.R11, prob.z_b) / prob.scale1
+    except np.linalg.LinAlgError:
+        return None
     a2 = 1 / alpha1
     r = np.roots([1.0, alpha2 * a2, a2, alpha3 * a2])
     if np.any(r.real >= 0):

@@ -148,12 +148,14 @@ class ProjectedProblem:
 
     def loss_full(self, sigma) -> np.ndarray:
         """The same objective evaluated the thesis' way on all N samples (eq 6.21 per particle, then eq 6.18);
-        ``sigma`` ``(P, 3)``. O(N P) work; used to check :meth:`loss` and in the benchmark."""
+        ``sigma`` ``(..., 3)``. O(N P) work; used to check :meth:`loss` and in the benchmark."""
         reg = self.regression
+        sigma = np.asarray(sigma, dtype=np.float64)
+        shape = sigma.shape[:-1]
         Phi1, Phi2 = reg.Phi[:, list(POLE_COLUMNS)], reg.Phi[:, list(ZERO_COLUMNS)]
-        t1 = theta1_from_poles(np.atleast_2d(np.asarray(sigma, dtype=np.float64)))  # (P, 3)
+        t1 = theta1_from_poles(sigma.reshape(-1, 3))  # (P, 3)
         rest = reg.Y[:, None] - Phi1 @ t1.T  # (N, P)
         t2, *_ = np.linalg.lstsq(Phi2, rest, rcond=None)  # eq 6.21 for every particle
         r = rest - Phi2 @ t2
-        return 0.5 * np.sum(r * r, axis=0)
+        return (0.5 * np.sum(r * r, axis=0)).reshape(shape)
 
