@@ -29,11 +29,16 @@ import time
 
 import numpy as np
 
-from research.drives import ClosedLoopModel, Encoder, table_6_1_closed_loop, table_6_2_closed_loop
+from research.drives import (
+    ClosedLoopModel,
+    Encoder,
+    table_6_1_closed_loop,
+    table_6_2_closed_loop,
+)
 from research.identification import (
     THESIS_LS_DC,
-    PSOSettings,
     ProjectedProblem,
+    PSOSettings,
     bounded_fit,
     build_regression,
     identification_program,
@@ -42,8 +47,8 @@ from research.identification import (
     particle_swarm,
     synthetic_log,
 )
-from research.identification._pso import _swarm
 from research.identification._projection import PoleBounds
+from research.identification._pso import _swarm
 
 EMPS_DEFAULT = pathlib.Path(__file__).resolve().parents[2] / "shared" / "data" / "emps" / "emps_estimation_first15s.mat"
 

@@ -8,13 +8,18 @@ import pathlib
 
 import numpy as np
 
-from research.drives import ClosedLoopModel, Encoder, frequency_response, table_6_1_closed_loop
+from research.drives import (
+    ClosedLoopModel,
+    Encoder,
+    frequency_response,
+    table_6_1_closed_loop,
+)
 from research.figures._style import figure, save
 from research.identification import (
     EMPS_SPLIT_S,
     THESIS_LS_DC,
-    PSOSettings,
     ProjectedProblem,
+    PSOSettings,
     RegressionOptions,
     bounded_fit,
     build_regression,
@@ -48,8 +53,8 @@ def _virtual(out_dir: pathlib.Path, fast: bool) -> list[pathlib.Path]:
     f = np.logspace(0, 2, 60 if fast else 300)
     fig, ax = figure(2, 2, figsize=(10, 6), sharex=True)
     tru = frequency_response(truth, f)
-    curves = [("actual", tru, dict(color="k", lw=2.2))] + [
-        (k, frequency_response(r.model(), f), dict(ls=s)) for (k, r), s in zip(fits.items(), ("--", "-", ":", "-."))
+    curves = [("actual", tru, {"color": "k", "lw": 2.2})] + [
+        (k, frequency_response(r.model(), f), {"ls": s}) for (k, r), s in zip(fits.items(), ("--", "-", ":", "-."))
     ]
     for name, fr, kw in curves:
         for col, g in enumerate((np.asarray(fr.tracking), np.asarray(fr.disturbance))):

@@ -4,9 +4,19 @@ the same bounded problem solved with optimistix, an output-error fit of the JAX 
 reports. Units: s, mm (logs in other units are converted on loading), rad/s for pole frequencies.
 """
 
-from research.identification._bounded import SOLVERS, bounded_fit, grid_starts, sigma_from_u, u_from_sigma
+from research.identification._bounded import (
+    SOLVERS,
+    bounded_fit,
+    grid_starts,
+    sigma_from_u,
+    u_from_sigma,
+)
 from research.identification._emps import EMPS_SPLIT_S, identify_emps, load_emps
-from research.identification._excitation import THESIS_PROGRAM, ExcitationProgram, identification_program
+from research.identification._excitation import (
+    THESIS_PROGRAM,
+    ExcitationProgram,
+    identification_program,
+)
 from research.identification._least_squares import least_squares
 from research.identification._log import (
     LENGTH_UNITS,
@@ -17,7 +27,11 @@ from research.identification._log import (
     save_drive_log,
 )
 from research.identification._output_error import output_error_fit, simulate_log
-from research.identification._projection import PoleBounds, ProjectedProblem, theta1_from_poles
+from research.identification._projection import (
+    PoleBounds,
+    ProjectedProblem,
+    theta1_from_poles,
+)
 from research.identification._pso import PSOSettings, particle_swarm
 from research.identification._regression import (
     COLUMNS,
@@ -43,48 +57,48 @@ from research.identification._virtual import (
 )
 
 __all__ = [
-    "EMPS_SPLIT_S",
-    "identify_emps",
-    "load_emps",
-    "output_error_fit",
-    "simulate_log",
-    "FitReport",
-    "fit_percent",
-    "fit_report",
-    "LEAD_RG",
-    "THESIS_FRICTION_TORQUE",
-    "THESIS_LS_DC",
-    "THESIS_RG_OVER_J",
-    "friction_torque",
-    "thesis_physical_drive",
     "COEFFICIENTS",
     "COLUMNS",
-    "DriveLog",
-    "ExcitationProgram",
-    "IdentifiedDrive",
+    "EMPS_SPLIT_S",
+    "LEAD_RG",
     "LENGTH_UNITS",
     "MAX_CONDITION",
     "PARAMETERS",
+    "RESAMPLING_METHODS",
+    "SOLVERS",
+    "THESIS_FRICTION_TORQUE",
+    "THESIS_LS_DC",
+    "THESIS_PROGRAM",
+    "THESIS_RG_OVER_J",
+    "TIME_UNITS",
+    "DriveLog",
+    "ExcitationProgram",
+    "FitReport",
+    "IdentifiedDrive",
     "PSOSettings",
     "PoleBounds",
     "ProjectedProblem",
-    "RESAMPLING_METHODS",
     "Regression",
     "RegressionOptions",
-    "SOLVERS",
-    "THESIS_PROGRAM",
-    "TIME_UNITS",
     "bounded_fit",
     "build_regression",
     "coefficients_from_theta",
+    "fit_percent",
+    "fit_report",
+    "friction_torque",
     "grid_starts",
     "identification_program",
+    "identify_emps",
     "least_squares",
     "load_drive_log",
+    "load_emps",
+    "output_error_fit",
     "particle_swarm",
     "save_drive_log",
     "sigma_from_u",
+    "simulate_log",
     "synthetic_log",
+    "thesis_physical_drive",
     "theta1_from_poles",
     "theta_from_coefficients",
     "theta_from_model",

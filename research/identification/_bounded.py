@@ -27,8 +27,18 @@ import optimistix as optx
 
 from research.errors import ParameterError
 from research.identification._log import DriveLog
-from research.identification._projection import PoleBounds, ProjectedProblem, theta1_from_poles
-from research.identification._regression import Regression, RegressionOptions, build_regression
+from research.identification._projection import (
+    THESIS_BOUNDS,
+    PoleBounds,
+    ProjectedProblem,
+    theta1_from_poles,
+)
+from research.identification._regression import (
+    DEFAULT_OPTIONS,
+    Regression,
+    RegressionOptions,
+    build_regression,
+)
 from research.identification._result import IdentifiedDrive
 
 SOLVERS = ("levenberg_marquardt", "gauss_newton")
@@ -93,12 +103,12 @@ def grid_starts(prob: ProjectedProblem, bounds: PoleBounds, count: int = 3, shap
 def bounded_fit(
     data: DriveLog | Regression | ProjectedProblem,
     *,
-    bounds: PoleBounds = PoleBounds.thesis(),
+    bounds: PoleBounds = THESIS_BOUNDS,
     solver: str = "levenberg_marquardt",
     starts: int = 3,
     max_steps: int = 100,
     initial: np.ndarray | None = None,
-    options: RegressionOptions = RegressionOptions(),
+    options: RegressionOptions = DEFAULT_OPTIONS,
 ) -> IdentifiedDrive:
     """Minimize eq 6.18 subject to eq 6.14 with optimistix (module docstring).
 

@@ -25,7 +25,7 @@ from research.paths import Polyline, to_gcode
 from research.trajectory import Trajectory
 
 #: Thesis §6.5 program: moves, range [mm], feed [mm/s], acceleration [mm/s^2], period [s]
-THESIS_PROGRAM = dict(n_moves=70, travel=50.0, feed=250.0, acceleration=2500.0, sample_period=1e-3)
+THESIS_PROGRAM = {"n_moves": 70, "travel": 50.0, "feed": 250.0, "acceleration": 2500.0, "sample_period": 1e-3}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -104,7 +104,7 @@ def identification_program(
     """
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool):
         raise ParameterError(f"identification_program: seed must be an int, got {seed!r}")
-    for name, v in dict(travel=travel, feed=feed, acceleration=acceleration, sample_period=sample_period).items():
+    for name, v in {"travel": travel, "feed": feed, "acceleration": acceleration, "sample_period": sample_period}.items():
         if not (np.isfinite(v) and v > 0):
             raise ParameterError(f"identification_program: {name} must be finite and > 0, got {v!r}")
     if n_moves < 1:

@@ -7,11 +7,16 @@ import time
 import numpy as np
 
 from research.identification._log import DriveLog
-from research.identification._regression import Regression, RegressionOptions, build_regression
+from research.identification._regression import (
+    DEFAULT_OPTIONS,
+    Regression,
+    RegressionOptions,
+    build_regression,
+)
 from research.identification._result import IdentifiedDrive
 
 
-def least_squares(data: DriveLog | Regression, options: RegressionOptions = RegressionOptions()) -> IdentifiedDrive:
+def least_squares(data: DriveLog | Regression, options: RegressionOptions = DEFAULT_OPTIONS) -> IdentifiedDrive:
     """Eq 6.12 ``theta = (Phi^T Phi)^-1 Phi^T Y`` (solved by an SVD-based ``lstsq`` on the column-scaled
     regressor, not by forming the normal equations), de-normalized by eq 6.8.
 

@@ -137,7 +137,7 @@ class DriveLog:
         return Trajectory.from_positions(t, self.reference[:, None], axes=("x",))
 
     # -- slicing -------------------------------------------------------------------------------
-    def window(self, start: float, stop: float) -> "DriveLog":
+    def window(self, start: float, stop: float) -> DriveLog:
         """Samples with ``start <= t < stop`` [s] (same source, columns and units).
 
         Raises:
@@ -150,11 +150,11 @@ class DriveLog:
             source=f"{self.source}[{start:g} s, {stop:g} s)",
         )
 
-    def split(self, at: float) -> tuple["DriveLog", "DriveLog"]:
+    def split(self, at: float) -> tuple[DriveLog, DriveLog]:
         """``(t < at, t >= at)``: an estimation part and a held-out validation part [s]."""
         return self.window(-np.inf, at), self.window(at, np.inf)
 
-    def resample(self, sample_period: float, method: str = "linear") -> "DriveLog":
+    def resample(self, sample_period: float, method: str = "linear") -> DriveLog:
         """Explicit resampling onto ``t[0] + k sample_period`` [s] with ``method`` ("linear": ``np.interp``,
         "cubic": ``scipy.interpolate.CubicSpline``); the method is recorded in :attr:`resampling`.
 
@@ -166,11 +166,11 @@ class DriveLog:
             raise DriveLogError(f"{self.source}: resampling period must be finite and > 0 s, got {sample_period!r}")
         t = self.t[0] + np.arange(int(np.floor(self.duration / sample_period + 1e-9)) + 1) * sample_period
         if method == "linear":
-            f = lambda y: np.interp(t, self.t, y)  # noqa: E731
+            f = lambda y: np.interp(t, self.t, y)
         else:
             from scipy.interpolate import CubicSpline
 
-            f = lambda y: CubicSpline(self.t, y)(t)  # noqa: E731
+            f = lambda y: CubicSpline(self.t, y)(t)
         ctl = None if self.control is None else f(self.control)
         return dataclasses.replace(
             self, t=t, reference=f(self.reference), actual=f(self.actual), control=ctl, resampling=method

@@ -24,8 +24,8 @@ import optimistix as optx
 from research.drives import ClosedLoopModel, denominator_from_poles, simulate
 from research.identification._bounded import bounded_fit, sigma_from_u, u_from_sigma
 from research.identification._log import DriveLog
-from research.identification._projection import PoleBounds
-from research.identification._regression import RegressionOptions
+from research.identification._projection import THESIS_BOUNDS, PoleBounds
+from research.identification._regression import DEFAULT_OPTIONS, RegressionOptions
 from research.identification._result import IdentifiedDrive
 
 HOLD = "foh"  # reference between samples: linear interpolation of x_r, x_r', x_r'' (logs carry samples only)
@@ -50,9 +50,9 @@ def output_error_fit(
     log: DriveLog,
     *,
     initial: IdentifiedDrive | None = None,
-    bounds: PoleBounds = PoleBounds.thesis(),
+    bounds: PoleBounds = THESIS_BOUNDS,
     max_steps: int = 20,
-    options: RegressionOptions = RegressionOptions(),
+    options: RegressionOptions = DEFAULT_OPTIONS,
 ) -> IdentifiedDrive:
     """Fit eq 6.3 to ``log`` by simulation error (module docstring).
 

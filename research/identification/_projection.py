@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import dataclasses
 
-import jax.numpy as jnp
 import numpy as np
 
 from research.errors import ParameterError
@@ -50,7 +49,7 @@ class PoleBounds:
                 raise ParameterError(f"PoleBounds: need 0 < {lo} < {hi} (eq 6.14), got {a!r}, {b!r}")
 
     @staticmethod
-    def thesis() -> "PoleBounds":
+    def thesis() -> PoleBounds:
         """Thesis §6.5: ``wn, p`` in [0.2, 500] Hz, ``zeta`` in [0.2, 2.0]."""
         return PoleBounds(0.2 * HZ, 500 * HZ, 0.2, 2.0, 0.2 * HZ, 500 * HZ)
 
@@ -71,6 +70,10 @@ class PoleBounds:
     def to_dict(self) -> dict:
         return {"wn_hz": [self.wn_min / HZ, self.wn_max / HZ], "zeta": [self.zeta_min, self.zeta_max],
                 "p_hz": [self.p_min / HZ, self.p_max / HZ]}
+
+
+#: the thesis §6.5 search region (module-level default for function arguments)
+THESIS_BOUNDS = PoleBounds.thesis()
 
 
 def theta1_from_poles(sigma, xp=np):
@@ -107,7 +110,7 @@ class ProjectedProblem:
     r0_squared: float
 
     @staticmethod
-    def from_regression(reg: Regression) -> "ProjectedProblem":
+    def from_regression(reg: Regression) -> ProjectedProblem:
         """QR-factorize the scaled ``[Phi2 Phi1]`` of ``reg`` (eq 6.19 split)."""
         s1 = reg.column_scale[list(POLE_COLUMNS)]
         s2 = reg.column_scale[list(ZERO_COLUMNS)]

@@ -15,8 +15,17 @@ import numpy as np
 
 from research.errors import ParameterError
 from research.identification._log import DriveLog
-from research.identification._projection import PoleBounds, ProjectedProblem
-from research.identification._regression import Regression, RegressionOptions, build_regression
+from research.identification._projection import (
+    THESIS_BOUNDS,
+    PoleBounds,
+    ProjectedProblem,
+)
+from research.identification._regression import (
+    DEFAULT_OPTIONS,
+    Regression,
+    RegressionOptions,
+    build_regression,
+)
 from research.identification._result import IdentifiedDrive
 
 
@@ -62,9 +71,9 @@ def particle_swarm(
     data: DriveLog | Regression | ProjectedProblem,
     *,
     seed: int,
-    bounds: PoleBounds = PoleBounds.thesis(),
+    bounds: PoleBounds = THESIS_BOUNDS,
     settings: PSOSettings = PSOSettings(),
-    options: RegressionOptions = RegressionOptions(),
+    options: RegressionOptions = DEFAULT_OPTIONS,
 ) -> IdentifiedDrive:
     """Thesis §6.4.2 steps 1-7.
 

@@ -85,9 +85,13 @@ class RegressionOptions:
             raise ParameterError(f"RegressionOptions.trim must be >= 0, got {self.trim}")
 
     @staticmethod
-    def thesis() -> "RegressionOptions":
+    def thesis() -> RegressionOptions:
         """Eq 6.9 as printed: rectangle-rule ``e``, 2nd-order differences, raw ``sign``, no prefilter."""
         return RegressionOptions("rectangle", 2, None, 4, None, False, 2)
+
+
+#: the default (improved) processing
+DEFAULT_OPTIONS = RegressionOptions()
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -137,7 +141,7 @@ def _lowpass(y, cutoff_hz, order, Ts):
     return sosfiltfilt(sos, y)
 
 
-def build_regression(log: DriveLog, options: RegressionOptions = RegressionOptions()) -> Regression:
+def build_regression(log: DriveLog, options: RegressionOptions = DEFAULT_OPTIONS) -> Regression:
     """Eq 6.7-6.9 from a log: numeric derivatives plus integrated tracking error.
 
     Args:
@@ -204,7 +208,7 @@ def coefficients_from_theta(theta) -> dict:
     """Inverse of eq 6.8: ``{a1, a2, a3, b0, b1, b2, dc}`` [1/s, 1/s^2, 1/s^3, -, 1/s, 1/s^2, mm/s^2]."""
     alpha3, alpha1, alpha2, beta0, beta1, beta2, delta = (float(v) for v in theta)
     a2 = 1.0 / alpha1
-    return dict(a1=alpha2 * a2, a2=a2, a3=alpha3 * a2, b0=beta0 * a2, b1=beta1 * a2, b2=beta2 * a2, dc=delta * a2)
+    return {"a1": alpha2 * a2, "a2": a2, "a3": alpha3 * a2, "b0": beta0 * a2, "b1": beta1 * a2, "b2": beta2 * a2, "dc": delta * a2}
 
 
 def theta_from_model(model: ClosedLoopModel) -> np.ndarray:

@@ -59,20 +59,20 @@ class FitReport:
         """Poles, zeros, frequency [Hz] and damping (thesis Table 6.3 layout) plus the stability flag."""
         c = self.result.coefficients
         wn, z, p = self.result.pole_parameters()
-        rows = [f"{self.result.method}: wn = {wn / (2 * np.pi):.4g} Hz, zeta = {z:.4g}, p = {p / (2 * np.pi):.4g} Hz, "
-                f"dc = {c['dc']:.5g} mm/s^2 ({'stable' if self.stable else 'UNSTABLE'})"]
+        rows = [(f"{self.result.method}: wn = {wn / (2 * np.pi):.4g} Hz, zeta = {z:.4g}, p = {p / (2 * np.pi):.4g} Hz, "
+                 f"dc = {c['dc']:.5g} mm/s^2 ({'stable' if self.stable else 'UNSTABLE'})")]
         for kind, roots in (("pole", self.result.poles()), ("zero", self.result.zeros())):
             for r in roots:
                 w = abs(r)
                 rows.append(f"  {kind} {r.real:12.5g} {r.imag:+12.5g}j rad/s  {w / (2 * np.pi):9.4g} Hz  damping {(-r.real / w if w else 1.0):7.3g}")
         return "\n".join(rows)
 
-    def frf_error(self, frequency_hz=np.logspace(-1, 2, 200)) -> dict | None:
-        """Largest tracking-FRF error against ``truth`` over ``frequency_hz`` [Hz]: magnitude [dB] and phase [deg];
+    def frf_error(self, frequency_hz=None) -> dict | None:
+        """Largest tracking-FRF error against ``truth`` over ``frequency_hz`` [Hz] (default 0.1-100 Hz): magnitude [dB] and phase [deg];
         None without a truth or for a model with ``dc < 0``."""
         if self.truth is None or self.result.dc < 0:
             return None
-        f = np.asarray(frequency_hz, dtype=np.float64)
+        f = np.logspace(-1, 2, 200) if frequency_hz is None else np.asarray(frequency_hz, dtype=np.float64)
         est = np.asarray(frequency_response(self.result.model(), f).tracking)
         tru = np.asarray(frequency_response(self.truth, f).tracking)
         mag = 20 * np.log10(np.abs(est) / np.abs(tru))

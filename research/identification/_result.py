@@ -8,7 +8,10 @@ import numpy as np
 
 from research.drives import ClosedLoopModel
 from research.errors import ParameterError
-from research.identification._regression import coefficients_from_theta, theta_from_coefficients
+from research.identification._regression import (
+    coefficients_from_theta,
+    theta_from_coefficients,
+)
 
 COEFFICIENTS = ("a1", "a2", "a3", "b0", "b1", "b2", "dc")
 
@@ -42,7 +45,7 @@ class IdentifiedDrive:
     info: dict = dataclasses.field(default_factory=dict)
 
     @staticmethod
-    def from_theta(theta, **kwargs) -> "IdentifiedDrive":
+    def from_theta(theta, **kwargs) -> IdentifiedDrive:
         """Build from eq 6.8 normalized parameters (de-normalized as in PSO step 7)."""
         return IdentifiedDrive(coefficients=coefficients_from_theta(theta), **kwargs)
 

@@ -21,7 +21,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from research.drives import PIDController, PPICascade, RigidBodyAxis, table_6_1_ppi, table_6_2_pid
+from research.drives import (
+    PIDController,
+    PPICascade,
+    RigidBodyAxis,
+    table_6_1_ppi,
+    table_6_2_pid,
+)
 from research.errors import ParameterError
 
 #: thesis Table 6.1: friction torque of the virtual drive [N m] and the LS estimate of eq 6.3 dc [mm/s^2]

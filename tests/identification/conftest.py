@@ -3,7 +3,12 @@
 import numpy as np
 import pytest
 
-from research.drives import ClosedLoopModel, Encoder, table_6_1_closed_loop, table_6_2_closed_loop
+from research.drives import (
+    ClosedLoopModel,
+    Encoder,
+    table_6_1_closed_loop,
+    table_6_2_closed_loop,
+)
 from research.identification import THESIS_LS_DC, identification_program, synthetic_log
 
 #: fine encoder of the reproduction tests: 0.05 um counts (the EMPS benchmark's resolution)

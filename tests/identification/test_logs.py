@@ -5,7 +5,12 @@ import pytest
 import scipy.io
 
 from research.errors import DriveLogError
-from research.identification import DriveLog, build_regression, load_drive_log, save_drive_log
+from research.identification import (
+    DriveLog,
+    build_regression,
+    load_drive_log,
+    save_drive_log,
+)
 
 
 def _arrays(n=400):

@@ -18,8 +18,8 @@ from research.identification import (
     least_squares,
     particle_swarm,
     synthetic_log,
-    theta_from_model,
     thesis_physical_drive,
+    theta_from_model,
 )
 
 from .conftest import FINE_ENCODER, relative_errors
@@ -45,7 +45,7 @@ def test_projected_objective_equals_the_n_sample_objective(problems):
 def test_every_method_recovers_the_virtual_drive(table, table_logs, problems):
     """Thesis Tables 6.1 / 6.2: LS, PSO and optimistix (LM and GN) recover wn, zeta, p within 1 % and
     dc = 585.30 mm/s^2 within 1 %, from a log with a 0.05 um encoder."""
-    truth, log = table_logs[table]
+    truth, _ = table_logs[table]
     prob = problems[table]
     ls = least_squares(prob.regression)
     pso = particle_swarm(prob, seed=0, settings=PSO16)
