@@ -15,10 +15,12 @@ Discretization (exact for the linear part). Over each period ``[t_k, t_k + Ts)``
   * ``"foh"``: each linearly interpolated between samples (scipy ``lsim(interp=True)``).
 
 The linear state update is then ``z_{k+1} = Ad z_k + G c_k + Gw w_k`` with ``Ad = e^{A Ts}`` and ``G``,
-``Gw`` read off the matrix exponential of an augmented system (Van Loan's construction), so the states
-at the sample instants are exact for the held inputs. Axes are independent: the per-axis
-discretization is ``jax.vmap``-ed over the axes and one ``scan`` steps all axes together (batched
-matrix-vector product), which is ~10x faster on CPU than a vmapped per-axis step function.
+``Gw`` read off the matrix exponential of an augmented system (Van Loan's construction,
+:mod:`research.drives._discretize`), so the states at the sample instants are exact for the held
+inputs. The per-axis discretization is ``jax.vmap``-ed over the axes; a sequential ``scan`` per axis then
+steps the recursion, with the held inputs, friction signs and outputs fused into its body
+(:mod:`research.drives._stepper`, which records why it is shaped this way). There is no separate
+"fast path": the Coulomb sign feeds back every period, so every model runs the same exact recursion.
 """
 
 from __future__ import annotations
@@ -30,15 +32,15 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import Array
-from jax.scipy.linalg import expm
 
+from research.drives._discretize import HOLDS, continuous_system, discretize
 from research.drives._friction import coulomb_sign, smooth_sign
 from research.drives._modes import FlexibleMode
+from research.drives._stepper import run
 from research.drives._validation import check_sample_period, check_stable, is_concrete
 from research.errors import ParameterError
 from research.trajectory import Trajectory
 
-HOLDS = ("cubic", "zoh", "foh")
 FRICTIONS = ("exact", "smooth")
 
 
@@ -74,80 +76,6 @@ class DriveResponse(eqx.Module):
         return self.reference - self.position
 
 
-# -- discretization ---------------------------------------------------------------------------------
-def _continuous_system(model, mode):
-    """(A, B, Bw) of one axis, with the structural mode (if any) appended to the state."""
-    r = model.realization()
-    if mode is None:
-        return r.A, r.B, r.Bw
-    Am, e = mode.state_matrices()
-    n = r.A.shape[0]
-    k = r.velocity_index
-    A = jnp.zeros((n + 2, n + 2)).at[:n, :n].set(r.A).at[n:, n:].set(Am).at[n:, :n].set(jnp.outer(e, r.A[k]))
-    B = jnp.concatenate([r.B, jnp.outer(e, r.B[k])])
-    Bw = jnp.concatenate([r.Bw, jnp.outer(e, r.Bw[k])])
-    return A, B, Bw
-
-
-def _balanced_expm(M, iterations: int = 8):
-    """``expm(M)`` computed on a diagonally balanced matrix ``D^-1 M D`` (power-of-two scaling, so the
-    similarity is exact in floating point). The drive matrices mix entries from 1 to ``a3 Ts ~ 1e3``;
-    balancing makes the Pade/squaring error, and hence finite differences of the result, ~1e-13
-    relative instead of ~1e-9. The scaling is computed under ``stop_gradient`` (it is piecewise constant)."""
-    mag = jax.lax.stop_gradient(jnp.abs(M))
-    d = jnp.ones(M.shape[0])
-    for _ in range(iterations):
-        Bm = mag * d[None, :] / d[:, None]
-        col = jnp.sum(Bm, 0) - jnp.diag(Bm)
-        row = jnp.sum(Bm, 1) - jnp.diag(Bm)
-        ok = (col > 0) & (row > 0)
-        d = d * jnp.where(ok, jnp.exp2(jnp.round(0.5 * jnp.log2(jnp.where(ok, row, 1.0) / jnp.where(ok, col, 1.0)))), 1.0)
-    return expm(M * d[None, :] / d[:, None]) * d[:, None] / d[None, :]
-
-
-def discretize(A, B, Bw, sample_period, hold: str = "cubic"):
-    """Exact discretization of ``z' = A z + B r + Bw w`` for the reference hold ``hold``.
-
-    Args:
-        A ``(n, n)``, B ``(n, 3)`` for ``r = [x_r, x_r', x_r'']``, Bw ``(n, 2)``: continuous matrices.
-        sample_period: ``Ts`` [s].
-        hold: ``"cubic"``, ``"zoh"`` or ``"foh"`` (module docstring).
-    Returns:
-        ``(Ad, G, Gw)``: ``z_{k+1} = Ad z_k + G c_k + Gw w_k`` where ``c_k`` is ``[q, v, a, j]`` (cubic),
-        ``[q, v, a]`` (zoh) or ``[q, v, a, dq, dv, da]`` with the slopes ``d = (r_{k+1} - r_k)/Ts`` (foh).
-    """
-    n = A.shape[0]
-    if hold == "cubic":
-        m = n + 6
-        M = jnp.zeros((m, m)).at[:n, :n].set(A).at[:n, n : n + 3].set(B).at[:n, n + 4 :].set(Bw)
-        M = M.at[n, n + 1].set(1.0).at[n + 1, n + 2].set(1.0).at[n + 2, n + 3].set(1.0)
-        Phi = _balanced_expm(M * sample_period)
-        return Phi[:n, :n], Phi[:n, n : n + 4], Phi[:n, n + 4 :]
-    if hold == "zoh":
-        m = n + 5
-        M = jnp.zeros((m, m)).at[:n, :n].set(A).at[:n, n : n + 3].set(B).at[:n, n + 3 :].set(Bw)
-        Phi = _balanced_expm(M * sample_period)
-        return Phi[:n, :n], Phi[:n, n : n + 3], Phi[:n, n + 3 :]
-    if hold == "foh":
-        m = n + 8
-        M = jnp.zeros((m, m)).at[:n, :n].set(A).at[:n, n : n + 3].set(B).at[:n, n + 6 :].set(Bw)
-        M = M.at[n : n + 3, n + 3 : n + 6].set(jnp.eye(3))
-        Phi = _balanced_expm(M * sample_period)
-        return Phi[:n, :n], Phi[:n, n : n + 6], Phi[:n, n + 6 :]
-    raise ParameterError(f"hold must be one of {HOLDS}, got {hold!r}")
-
-
-def _hold_inputs(q, v, a, j, sample_period, hold):
-    """Per-period input vectors ``c_k``, shape ``(N, A, m)`` (see :func:`discretize`)."""
-    if hold == "cubic":
-        return jnp.stack([q, v, a, j], axis=-1)
-    r = jnp.stack([q, v, a], axis=-1)
-    if hold == "zoh":
-        return r
-    slope = jnp.concatenate([(r[1:] - r[:-1]) / sample_period, jnp.zeros_like(r[:1])], axis=0)
-    return jnp.concatenate([r, slope], axis=-1)
-
-
 # -- simulation core --------------------------------------------------------------------------------
 def _axis_outputs(model):
     r = model.realization()
@@ -155,47 +83,54 @@ def _axis_outputs(model):
 
 
 def _simulate_core(models, modes, q, v, a, j, width, *, sample_period, hold, friction, indices, has_modes, has_control):
-    """Discretize every axis (vmap) and step all axes together in one ``scan``; returns
-    ``(x, x', u or None, deflection or None, residual friction)``, each ``(N, A)``."""
-    pos_i, vel_i = indices
+    """Discretize every axis (vmap) and step each axis through the trajectory
+    (:func:`research.drives._stepper.run`); returns ``(x, x', u or None, deflection or None, residual friction)``, each ``(N, A)``."""
     sigma = coulomb_sign if friction == "exact" else (lambda x: smooth_sign(x, width))
 
     def axis_discretization(model, mode):
-        A, B, Bw = _continuous_system(model, mode if has_modes else None)
-        return discretize(A, B, Bw, sample_period, hold)
+        return discretize(*continuous_system(model, mode if has_modes else None), sample_period, hold)
 
-    Ad, G, Gw = jax.vmap(axis_discretization)(models, modes)
-    C, D, Dw, fc, fff = jax.vmap(_axis_outputs)(models)
-    n = Ad.shape[-1]
-
-    c = _hold_inputs(q, v, a, j, sample_period, hold)  # (N, A, m); c[..., :3] = [x_r, x_r', x_r'']
-    sr = sigma(v)  # (N, A)
-    z0 = jnp.zeros((q.shape[1], n)).at[:, pos_i].set(q[0]).at[:, vel_i].set(v[0])
-    n0 = C.shape[-1]
-
-    def mv(M, x):  # batched over axes: (A, i, j) @ (A, j) -> (A, i)
-        return jnp.sum(M * x[:, None, :], axis=-1)
-
-    gc, gf = Gw[:, :, 0], Gw[:, :, 1]
-
-    def body(z, xs):
-        # all axes at once, z (A, n); friction held over the period from the velocity at its start
-        c_k, s_k = xs
-        w = fc * sigma(z[:, vel_i])
-        return mv(Ad, z) + mv(G, c_k) + gc * w[:, None] + gf * (fff * s_k)[:, None], z
-
-    _, Z = jax.lax.scan(body, z0, (c, sr))
-    W = jnp.stack([fc * sigma(Z[:, :, vel_i]), fff * sr], axis=-1)  # (N, A, 2): the held friction inputs
-    # position and velocity are states (unit rows of C); the control voltage needs the full output map
-    control = None
-    if has_control:
-        control = (jnp.sum(C[None, :, 2, :] * Z[..., :n0], -1) + jnp.sum(D[None, :, 2, :] * c[..., :3], -1)
-                   + jnp.sum(Dw[None, :, 2, :] * W, -1))
-    deflection = Z[..., n0] if has_modes else None
-    return Z[..., pos_i], Z[..., vel_i], control, deflection, W[..., 0] - W[..., 1]
+    system = jax.vmap(axis_discretization)(models, modes)
+    outputs = jax.vmap(_axis_outputs)(models)
+    return run(system, outputs, (q, v, a, j), sigma=sigma, sample_period=sample_period, hold=hold,
+               indices=indices, has_control=has_control)
 
 
 _core = jax.jit(_simulate_core, static_argnames=("sample_period", "hold", "friction", "indices", "has_modes", "has_control"))
+
+
+_state_matrices = jax.jit(jax.vmap(lambda model: model.realization().A))
+
+
+_LAYOUTS: dict = {}  # memo: model tree structure -> its static realization layout
+
+
+def _layout(model) -> dict:
+    """The static part of ``model.realization()`` (state indices, whether it has a control output).
+
+    It is read once per model structure (class and static fields) by abstract evaluation, which costs
+    no computation but a few ms of tracing, and memoized.
+    """
+    key = jax.tree_util.tree_structure(model)
+    if key not in _LAYOUTS:
+        found = {}
+
+        def probe(m):
+            r = m.realization()
+            found.update(indices=(r.position_index, r.velocity_index), has_control=r.has_control)
+            return r.A
+
+        jax.eval_shape(probe, model)
+        _LAYOUTS[key] = found
+    return _LAYOUTS[key]
+
+
+def _to_device(x) -> Array:
+    """``x`` as a float64 JAX array; a NumPy array is shared rather than copied where JAX allows it
+    (``jax.device_put`` on CPU aliases 64-byte aligned host memory)."""
+    if isinstance(x, np.ndarray) and x.dtype == np.float64:
+        return jax.device_put(x)
+    return jnp.asarray(x, dtype=jnp.float64)
 
 
 def _per_axis(name, value, axes, kind):
@@ -255,27 +190,24 @@ def simulate(
     has_modes = modes is not None
     mode_list = _per_axis("modes", modes, axes, "FlexibleMode") if has_modes else None
     Ts = float(trajectory.sample_period)
-    r0 = models[0].realization()
+    stacked = jax.tree.map(lambda *x: jnp.stack(x), *models)
+    stacked_modes = jax.tree.map(lambda *x: jnp.stack(x), *mode_list) if has_modes else jnp.zeros(len(axes))
     if is_concrete(models, mode_list):
-        for k, (m, name) in enumerate(zip(models, axes)):
-            poles = np.linalg.eigvals(np.asarray(m.realization().A, dtype=np.float64))
+        for k, (A, name) in enumerate(zip(np.asarray(_state_matrices(stacked), dtype=np.float64), axes)):
+            poles = np.linalg.eigvals(A)
             check_stable(f"the drive model of axis {name!r}", poles)
             if has_modes:
                 poles = np.concatenate([poles, mode_list[k].poles()])
             check_sample_period(f"the drive model of axis {name!r}", poles, Ts)
     if not (isinstance(friction_width, jax.core.Tracer) or float(friction_width) > 0):
         raise ParameterError(f"friction_width must be > 0 mm/s, got {friction_width!r}")
-    stacked = jax.tree.map(lambda *x: jnp.stack(x), *models)
-    stacked_modes = jax.tree.map(lambda *x: jnp.stack(x), *mode_list) if has_modes else jnp.zeros(len(axes))
+    q, v, a, j = (_to_device(x) for x in (trajectory.q, trajectory.v, trajectory.a, trajectory.j))
     x, xd, control, deflection, fr = _core(
-        stacked, stacked_modes,
-        jnp.asarray(trajectory.q), jnp.asarray(trajectory.v), jnp.asarray(trajectory.a), jnp.asarray(trajectory.j),
-        jnp.asarray(friction_width, dtype=jnp.float64),
-        sample_period=Ts, hold=hold, friction=friction,
-        indices=(r0.position_index, r0.velocity_index), has_modes=has_modes, has_control=r0.has_control,
+        stacked, stacked_modes, q, v, a, j, jnp.asarray(friction_width, dtype=jnp.float64),
+        sample_period=Ts, hold=hold, friction=friction, has_modes=has_modes, **_layout(models[0]),
     )
     return DriveResponse(
-        t=jnp.asarray(trajectory.t), reference=jnp.asarray(trajectory.q), position=x, velocity=xd,
+        t=_to_device(trajectory.t), reference=q, position=x, velocity=xd,
         control=control, deflection=deflection, friction=fr,
         axes=tuple(axes), sample_period=Ts,
     )
