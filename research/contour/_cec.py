@@ -22,10 +22,6 @@ Inside the loop the CAM path is a dense polyline (vertices ``spacing`` apart) an
 projected onto a fixed window of pieces around the foot of its uncompensated actual position, which
 keeps the loop in pure JAX; reported errors always come from the exact projection of
 :func:`research.contour.contour_error`, and the two are compared.
-
-Simulation is done relative to the setpoint's first sample: the eq 6.3 realization of
-:class:`~research.drives.ClosedLoopModel` is not translation invariant when started with a zero
-integrator state away from the origin, while the physical axis is.
 """
 
 from __future__ import annotations
@@ -83,10 +79,6 @@ class CECProblem(eqx.Module):
     def n_samples(self) -> int:
         return self.setpoint.n_samples
 
-    @property
-    def origin(self) -> Array:
-        return self.setpoint.q[0]
-
 
 def cec_problem(cam_path, setpoint: Trajectory, drive, *, friction: str = "exact", spacing: float = 0.02,
                 window_margin: float | None = None) -> CECProblem:
@@ -111,7 +103,7 @@ def cec_problem(cam_path, setpoint: Trajectory, drive, *, friction: str = "exact
     pts, arc = dense_polyline(cam_path, spacing)
     if pts.shape[1] != setpoint.n_axes:
         raise ParameterError(f"the CAM path has {pts.shape[1]} coordinates but the setpoint has {setpoint.n_axes} axes")
-    actual = _simulate(setpoint, drive, friction, None)
+    actual = simulate_setpoint(setpoint, drive, friction)
     P0 = np.asarray(actual.position)
     ref = Polyline.from_points(pts, merge_duplicates=True, tol=1e-9)
     pts = ref.points
@@ -147,25 +139,14 @@ def corrected_setpoint(problem: CECProblem, correction) -> Trajectory:
 
 
 def simulate_setpoint(setpoint: Trajectory, drive, friction: str = "exact") -> DriveResponse:
-    """:func:`research.drives.simulate` run relative to the setpoint's first sample and shifted back
-    (see the module docstring: the eq 6.3 realization is not translation invariant from a zero
-    integrator state). Positions in absolute coordinates [mm, rad]."""
-    return _simulate(setpoint, drive, friction, None)
-
-
-def _simulate(setpoint: Trajectory, drive, friction: str, origin) -> DriveResponse:
-    """Simulate relative to the first sample (module docstring) and shift back."""
-    o = setpoint.q[0] if origin is None else origin
-    rel = Trajectory(setpoint.t, setpoint.q - o, setpoint.v, setpoint.a, setpoint.j, setpoint.duration, None,
-                     setpoint.axes, setpoint.sample_period)
-    r = simulate(drive, rel, friction=friction)
-    return DriveResponse(r.t, r.reference + o, r.position + o, r.velocity, r.control, r.deflection, r.friction,
-                         r.axes, r.sample_period)
+    """:func:`research.drives.simulate` of ``setpoint`` (one drive, or one per axis), starting from
+    the loop's rest state at the first sample. Positions in absolute coordinates [mm, rad]."""
+    return simulate(drive, setpoint, friction=friction)
 
 
 def simulate_correction(problem: CECProblem, correction) -> DriveResponse:
     """Drive response to the corrected setpoint (absolute coordinates)."""
-    return _simulate(corrected_setpoint(problem, correction), problem.drive, problem.friction, problem.origin)
+    return simulate_setpoint(corrected_setpoint(problem, correction), problem.drive, problem.friction)
 
 
 def cubic_hold(setpoint: Trajectory, factor: int) -> Trajectory:
@@ -190,7 +171,7 @@ def intersample_response(problem: CECProblem, correction, factor: int = 6) -> Dr
     """Actual motion for the corrected setpoint on a grid ``factor`` times finer than ``Ts``
     (exact for the cubic hold, :func:`cubic_hold`)."""
     sp = cubic_hold(corrected_setpoint(problem, correction), factor)
-    return _simulate(sp, problem.drive, problem.friction, problem.origin)
+    return simulate_setpoint(sp, problem.drive, problem.friction)
 
 
 def _foot(problem: CECProblem, P: Array) -> Array:

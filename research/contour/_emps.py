@@ -16,8 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from research.contour._cec import CompensationResult, cec_problem, mirror_compensation, mirror_passes, simulate_setpoint
-from research.contour._exact import contour_error
+from research.contour._cec import CompensationResult, cec_problem, mirror_compensation, mirror_passes
 from research.errors import ConvergenceError, ParameterError
 from research.interpolators import fir_interpolate
 from research.limits import AxisLimits

@@ -25,6 +25,7 @@ steps the recursion, with the held inputs, friction signs and outputs fused into
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Sequence
 
 import equinox as eqx
@@ -92,8 +93,20 @@ def _simulate_core(models, modes, q, v, a, j, width, *, sample_period, hold, fri
 
     system = jax.vmap(axis_discretization)(models, modes)
     outputs = jax.vmap(_axis_outputs)(models)
-    return run(system, outputs, (q, v, a, j), sigma=sigma, sample_period=sample_period, hold=hold,
+    z0 = jax.vmap(partial(_initial_state, velocity_index=indices[1]))(models, q[0], v[0])
+    return run(system, outputs, (q, v, a, j), z0, sigma=sigma, sample_period=sample_period, hold=hold,
                indices=indices, has_control=has_control)
+
+
+def _initial_state(model, position, velocity, *, velocity_index):
+    """Drive state at sample 0: the equilibrium ``z = -A^-1 B [x_r, 0, 0]`` of the loop holding the
+    reference at rest at ``position`` (integrators loaded: e.g. ``int(x_r - x) dt = (a2 - b2) x_r / a3``
+    for eq 6.3), with the velocity state set to the reference velocity ``velocity``. A stable loop with
+    integral action has unit DC gain, so the position state equals ``position``. Friction is zero at
+    rest (``sigma(0) = 0``)."""
+    r = model.realization()
+    z = -jnp.linalg.solve(r.A, r.B[:, 0] * position)
+    return z.at[velocity_index].set(velocity)
 
 
 _core = jax.jit(_simulate_core, static_argnames=("sample_period", "hold", "friction", "indices", "has_modes", "has_control"))
@@ -173,8 +186,9 @@ def simulate(
         hold: reference hold over each period, ``"cubic"``, ``"zoh"`` or ``"foh"`` (module docstring).
     Returns:
         :class:`DriveResponse` with ``(N, A)`` arrays. The motion starts at the reference position and
-        velocity of sample 0 with all other states (integrators, modes) at zero, which is the
-        equilibrium for a trajectory that starts at rest.
+        velocity of sample 0, with the integrators at the equilibrium of a loop holding that position
+        and the modes at rest: exactly the steady state for a trajectory that starts at rest, so the
+        response does not depend on where the stroke lies (translation invariant).
     Raises:
         ParameterError: mismatched axis counts, unstable model (the poles are listed), ``Ts`` too coarse
             for the fastest pole, unknown ``hold``/``friction``.

@@ -79,6 +79,7 @@ def run(
     system,
     outputs,
     columns,
+    initial_state,
     *,
     sigma: Callable,
     sample_period: float,
@@ -94,6 +95,7 @@ def run(
             ``(A, 3, 2)``, ``(A,)``, ``(A,)``). The first ``n0`` states belong to the drive; states
             ``n0, n0 + 1`` (when ``n > n0``) are a structural mode's ``[delta, delta']``.
         columns: ``(q, v, a, j)``, each ``(N, A)`` (``j`` is read only for the cubic hold).
+        initial_state: ``(A, n0)`` drive states at sample 0 (the modes start at rest).
         sigma: the friction sign (exact or smooth), applied elementwise.
         sample_period: ``Ts`` [s].
         hold: ``"cubic"``, ``"zoh"`` or ``"foh"``.
@@ -133,8 +135,7 @@ def run(
             z_next = [_combine([*g[i], gw[i, 1]], [*c, w[1]]) + _combine([*ad[i], gw[i, 0]], [*z, w[0]]) for i in range(n0)]
             return jnp.stack(z_next), k + 1, res
 
-        z0 = jnp.zeros(n0, columns[0].dtype).at[pos_i].set(columns[0][0, axis]).at[vel_i].set(columns[1][0, axis])
-        results = _scan_axis(drive_step, z0, results, N)
+        results = _scan_axis(drive_step, initial_state[axis], results, N)
 
     position, velocity, friction = results[:3]
     if not has_modes:

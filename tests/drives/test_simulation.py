@@ -48,6 +48,21 @@ def test_step_response_matches_cont2discrete_zoh():
     assert abs(float(res.position[-1, 0]) - 1.0) < 1e-3
 
 
+@pytest.mark.parametrize("model", [table_6_1_closed_loop(), table_6_1_ppi(), table_6_2_pid()], ids=["eq6.3", "P-PI", "PID"])
+def test_response_is_translation_invariant(model):
+    """The loop starts at its rest state at the first reference sample (integrators loaded), so a
+    stroke 50 mm away from the origin gives the same motion, shifted. Tolerance: 1e-5 mm, the
+    Coulomb sign chattering on round-off velocities (~1e-12 mm/s) at rest; before the rest state was
+    used, a constant reference at 50 mm made eq 6.3 dip by ~10 mm."""
+    n = 600
+    q = polynomial_trajectory([0.0, 0.0, 0.0, 2000.0], n, Ts)  # cubic rise from rest
+    shifted = make_trajectory(np.asarray(q.q)[:, 0] + 50.0, Ts, np.asarray(q.v)[:, 0], np.asarray(q.a)[:, 0], np.asarray(q.j)[:, 0])
+    base, moved = simulate(model, q), simulate(model, shifted)
+    assert np.max(np.abs(np.asarray(moved.position) - 50.0 - np.asarray(base.position))) < 1e-5
+    still = simulate(model, make_trajectory(np.full(200, 50.0), Ts))
+    assert np.max(np.abs(np.asarray(still.position) - 50.0)) < 1e-5
+
+
 @pytest.mark.parametrize("hold", ["foh", "cubic"])
 def test_ramp_response_matches_lsim(hold):
     model = _linear(table_6_1_closed_loop())
