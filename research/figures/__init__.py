@@ -10,6 +10,7 @@ from types import ModuleType
 FIGURE_MODULES = (
     "research.figures.fir_spectrum",
     "research.figures.fir_cornering",
+    "research.figures.sencer2015_fig6",
     "research.figures.drive_bode",
     "research.figures.dimarco2015_fig3",
     "research.figures.dimarco2015_mtp",
