@@ -29,6 +29,8 @@ import numpy as np
 from jax import Array
 
 _NUMPY_SAMPLES = 50_000  # below this many samples NumPy beats compiling a JAX sampler
+#: breaks closer than this many sample periods after a grid instant are sampled as on it
+GRID_SNAP = 1e-9
 
 
 class PiecewisePolynomial(eqx.Module):
@@ -130,25 +132,29 @@ class PiecewisePolynomial(eqx.Module):
     def sample(self, sample_period: float, n_samples: int, orders: int = 4) -> tuple[np.ndarray, ...]:
         """Values and derivatives ``0 .. orders-1`` on the grid ``breaks[0] + i * sample_period``.
 
-        O(n_samples + K): the piece of each sample comes from a scatter-add and a cumulative sum,
-        not a search. Returns ``orders`` NumPy arrays of shape ``(n_samples, A)``.
+        Samples are right-hand limits, and a break within :data:`GRID_SNAP` ``* sample_period`` after
+        a sample counts as on it: a profile whose switching instants sit on the grid up to rounding
+        (``k Ts + 1e-16``) gives the new phase's acceleration/jerk at ``t_k``, not the old phase's
+        for a whole period. O(n_samples + K): the piece of each sample comes from a scatter-add and a
+        cumulative sum, not a search. Returns ``orders`` NumPy arrays of shape ``(n_samples, A)``.
         """
         if n_samples <= _NUMPY_SAMPLES:  # small: NumPy, no compilation
             t = np.asarray(self.breaks[0]) + np.arange(n_samples) * sample_period
-            return tuple(self.evaluate_numpy(t, nu) for nu in range(orders))
+            return tuple(self.evaluate_numpy(t, nu, snap=GRID_SNAP * sample_period) for nu in range(orders))
         piece, tau, moving = _sample_pieces(self.breaks, jnp.asarray(sample_period, jnp.float64), bucket_size(n_samples, 256))
         # one compiled call per order: XLA then fuses the coefficient gather into each Horner loop
         return tuple(np.asarray(_sample_order(self.coeffs, piece, tau, moving, nu))[:n_samples] for nu in range(orders))
 
-    def evaluate_numpy(self, t, nu: int = 0) -> np.ndarray:
+    def evaluate_numpy(self, t, nu: int = 0, snap: float = 0.0) -> np.ndarray:
         """:meth:`__call__` in NumPy, for concrete arrays: no JAX compilation or dispatch, which
-        is cheaper for small or one-off evaluations. ``t`` of any shape ``S``; returns ``S + (A,)``."""
+        is cheaper for small or one-off evaluations. ``t`` of any shape ``S``; returns ``S + (A,)``.
+        A break less than ``snap`` [s] after a time counts as at it (that time takes the next piece)."""
         breaks, coeffs = np.asarray(self.breaks), np.asarray(self.coeffs)
         t = np.asarray(t, dtype=np.float64)
         flat = t.reshape(-1)
         K, deg = coeffs.shape[0], coeffs.shape[1] - 1
         clipped = np.clip(flat, breaks[0], breaks[-1])
-        piece = np.clip(np.searchsorted(breaks, clipped, side="right") - 1, 0, K - 1)
+        piece = np.clip(np.searchsorted(breaks, clipped + snap, side="right") - 1, 0, K - 1)
         tau = (clipped - breaks[piece])[:, None]
         if nu > deg:
             value = np.zeros((flat.size, coeffs.shape[2]))
@@ -234,8 +240,8 @@ def _recentred(C: PiecewisePolynomial, piece: Array, origin: Array) -> Array:
 def _sample_pieces(breaks: Array, sample_period: Array, n_samples: int) -> tuple[Array, Array, Array]:
     """Piece index, local time and 'motion not yet ended' flag of each sample of the uniform grid."""
     K = breaks.shape[0] - 1
-    # index of the first sample at or after each interior break
-    first = jnp.clip(jnp.ceil((breaks[1:K] - breaks[0]) / sample_period), 0, n_samples).astype(jnp.int32)
+    # index of the first sample at or after each interior break (less GRID_SNAP: see sample())
+    first = jnp.clip(jnp.ceil((breaks[1:K] - breaks[0]) / sample_period - GRID_SNAP), 0, n_samples).astype(jnp.int32)
     piece = jnp.cumsum(jnp.zeros(n_samples + 1, jnp.int32).at[first].add(1))[:n_samples]
     t = breaks[0] + jnp.arange(n_samples, dtype=jnp.float64) * sample_period
     tau = jnp.clip(t, breaks[0], breaks[-1]) - breaks[piece]

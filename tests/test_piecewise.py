@@ -68,3 +68,16 @@ def test_grad_through_breaks():
 
     h = 1e-7
     assert float(jax.grad(f)(0.2)) == pytest.approx(float((f(0.2 + h) - f(0.2 - h)) / (2 * h)), rel=1e-6)
+
+
+@pytest.mark.parametrize("n_samples", [100, 60_000], ids=["numpy", "jax"])
+def test_sample_takes_the_new_phase_at_a_break_rounded_past_the_grid(n_samples):
+    """A jerk step whose break lands 1e-13 s after sample 30 (a break 'on the grid' up to rounding)
+    is sampled as on it: sample 30 has the new value, as for a break exactly on the grid. A break
+    1e-6 Ts after the sample is a real one and is left alone."""
+    Ts = 1e-3
+    for shift, expected in ((1e-13, -1.0), (0.0, -1.0), (1e-9, 1.0)):
+        pp = PiecewisePolynomial.from_steps(jnp.array([0.0, 30 * Ts + shift, n_samples * Ts]), jnp.array([[1.0], [-1.0]]))
+        (jerk,) = pp.sample(Ts, n_samples, orders=1)
+        assert jerk[29, 0] == 1.0 and jerk[31, 0] == -1.0
+        assert jerk[30, 0] == expected, shift

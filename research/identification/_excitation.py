@@ -68,14 +68,10 @@ class ExcitationProgram:
     def trajectory(self) -> Trajectory:
         """The reference ``x_r(t)`` sampled at ``Ts``: trapezoidal velocity, exact stop at every vertex.
 
-        Acceleration and jerk samples are the right-hand limits at each sample (the profile's value at
-        ``t_k + Ts/2``): the breaks sit on the grid up to rounding, and a break that rounds to just after
-        ``t_k`` would otherwise give ``a_k`` the value of the previous phase for a whole period.
+        The phase switches sit on the grid up to rounding; samples there take the new phase's
+        acceleration and jerk (see :meth:`research.piecewise.PiecewisePolynomial.sample`).
         """
-        tr = fir_interpolate(self.polyline(), self.feed, [self.filter_time], 0.0, self.sample_period)
-        mid = np.asarray(tr.t) + 0.5 * self.sample_period
-        a, j = tr.evaluate(mid, 2), tr.evaluate(mid, 3)
-        return Trajectory(tr.t, tr.q, tr.v, a, j, tr.duration, tr.exact, tr.axes, tr.sample_period)
+        return fir_interpolate(self.polyline(), self.feed, [self.filter_time], 0.0, self.sample_period)
 
 
 def identification_program(
