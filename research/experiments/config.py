@@ -1,8 +1,13 @@
 """Experiment configs: TOML files validated by a schema (pydantic).
 
-Units are in the key names (``feed_mm_per_s``, ``delays_ms``, ``tolerance_um``) and converted to
-the package's mm / s on entry. Unknown keys (typos), wrong types and out-of-range values raise
-:class:`~research.errors.ConfigError` naming the file and the key.
+An experiment is a path + one or more interpolators + an optional drive model (with structural
+modes) + optional identification + the metrics to report + what to write; a ``[sweep]`` table
+turns it into a sensitivity study (:mod:`research.experiments.sweep`). Units are in the key names
+(``feed_mm_per_s``, ``delays_ms``, ``tolerance_um``, ``frequency_hz``) and converted to the
+package's mm / s on entry. Unknown keys (typos, or a unit the key does not have, e.g.
+``feed_mm_per_min``), wrong types, out-of-range values and missing input files raise
+:class:`~research.errors.ConfigError` naming the file and the key. Every default is in the
+``Field(...)`` of its key, with its description (``ExperimentConfig.model_json_schema()`` lists them).
 
 Example (``experiments/sencer2015_diamond.toml``)::
 
@@ -21,16 +26,31 @@ Example (``experiments/sencer2015_diamond.toml``)::
 
 from __future__ import annotations
 
+import difflib
 import tomllib
 from pathlib import Path
-from typing import Literal
+from typing import Annotated, Literal, Union
 
 import numpy as np
-
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from research.errors import ConfigError
 from research.paths import PATHS, Polyline, named_path
+
+#: metric names a config may ask for (``metrics = [...]``); units in :data:`METRIC_UNITS`
+METRIC_UNITS = {
+    "cycle_time": "s",
+    "max_corner_error": "mm",
+    "max_contour_error": "mm",
+    "peak_feed": "mm/s",
+    "residual_vibration": "mm",
+    "max_tracking_error": "mm",
+    "wn_error": "-",
+    "zeta_error": "-",
+    "p_error": "-",
+    "dc_error": "-",
+}
+DRIVE_MODELS = ("ideal", "sencer2009_table6_1", "sencer2009_table6_1_ppi", "sencer2009_table6_2", "sencer2009_table6_2_pid")
 
 
 class _Strict(BaseModel):
@@ -59,6 +79,7 @@ class FIRConfig(_Strict):
     """Sencer 2015 FIR-overlap interpolator settings (defaults: the paper's §4 experiment)."""
 
     kind: Literal["fir"] = "fir"
+    label: str | None = Field(None, description="name in results (default: kind)")
     feed_mm_per_s: float = Field(250.0, gt=0, description="commanded feed F [mm/s]")
     delays_ms: list[float] = Field([148.0, 89.0], min_length=1, description="FIR delays T_i [ms]")
     tolerance_um: float = Field(500.0, ge=0, description="cornering tolerance epsilon [um]")
@@ -73,19 +94,135 @@ class FIRConfig(_Strict):
         return self
 
 
+class TimeOptimalConfig(_Strict):
+    """CasADi minimum-time reference (:func:`research.optimal.time_optimal`) in the tolerance tube,
+    under the nominal envelope of an FIR with ``envelope_delays_ms`` (``v = F, a = F/T1, j = F/(T1 T2)``)."""
+
+    kind: Literal["time_optimal"]
+    label: str | None = Field(None, description="name in results (default: kind)")
+    feed_mm_per_s: float = Field(250.0, gt=0, description="path speed bound F and envelope feed [mm/s]")
+    tolerance_um: float = Field(500.0, gt=0, description="tube radius epsilon [um]")
+    envelope_delays_ms: list[float] = Field([148.0, 89.0], min_length=1, description="FIR delays setting the limits [ms]")
+    intervals_per_segment: int = Field(16, ge=3, description="jerk intervals per segment")
+    window: int | None = Field(None, ge=1, description="segments per receding window (none: whole path)")
+    sample_period_ms: float = Field(1.0, gt=0, description="sample period of the returned trajectory [ms]")
+
+
+Interpolator = Annotated[Union[FIRConfig, TimeOptimalConfig], Field(discriminator="kind")]
+
+
+class ModeConfig(_Strict):
+    """A lightly damped structural mode excited by one axis' acceleration (the beams of Sencer 2015 §4)."""
+
+    axis: str = Field(..., description="axis letter that excites it (x, y, z)")
+    frequency_hz: float = Field(..., gt=0, description="natural frequency [Hz]")
+    damping: float = Field(0.02, gt=0, lt=1, description="damping ratio [-] (2 %: the paper gives none)")
+
+
+class DriveConfig(_Strict):
+    """Drive model the references run through. ``ideal``: the axes follow the reference exactly and the
+    modes see the reference acceleration; otherwise a thesis catalog drive on every axis."""
+
+    model: Literal[DRIVE_MODELS] = Field("ideal", description=f"one of {DRIVE_MODELS}")
+    modes: list[ModeConfig] = Field([], description="structural modes")
+    settle_time_s: float = Field(1.5, gt=0, description="rest simulated after the motion [s] (catalog drives)")
+
+
+class IdentificationConfig(_Strict):
+    """Identify a drive from a log: a synthetic one (the thesis §6.5 program run through a catalog drive
+    and a noisy encoder, so errors against the truth are known) or a logged file."""
+
+    method: Literal["ls", "pso", "optimistix"] = Field("ls", description="least squares, PSO or optimistix fit")
+    truth: Literal["sencer2009_table6_1", "sencer2009_table6_2"] = Field(
+        "sencer2009_table6_1", description="catalog closed-loop drive that generates the synthetic log")
+    n_moves: int = Field(70, ge=1, description="excitation length: moves of the §6.5 program (thesis: 70)")
+    noise_um: float = Field(0.0, ge=0, description="encoder noise standard deviation [um]")
+    resolution_um: float = Field(0.05, ge=0, description="encoder resolution [um] (0: none)")
+    seed: int = Field(0, ge=0, description="seed of the program and the noise")
+    log_file: str | None = Field(None, description="logged drive data (csv/mat/npz, columns t, x_ref, x_act; "
+                                                    "relative to the config file) instead of a synthetic log")
+
+
+class Range(_Strict):
+    """``num`` evenly spaced values from ``start`` to ``stop`` (both included)."""
+
+    start: float
+    stop: float
+    num: int = Field(..., ge=1)
+
+    def values(self) -> list[float]:
+        return np.linspace(self.start, self.stop, self.num).tolist()
+
+
+class SweepConfig(_Strict):
+    """Sweep over any config fields, addressed as ``"section.key"`` or ``"section.key[i]"``."""
+
+    mode: Literal["grid", "list"] = Field("grid", description="grid: every combination; list: values zipped")
+    parameters: dict[str, list[float | int | str | bool] | Range] = Field(..., min_length=1, description="field -> values")
+    engine: Literal["auto", "vmap", "dask", "serial"] = Field(
+        "auto", description="auto: vmap when every swept field is an FIR/mode parameter, else dask")
+    sensitivities: bool = Field(True, description="autodiff d(metric)/d(T_i, eps, F) on the vmap path")
+    chunk: int = Field(2048, ge=1, description="points per compiled vmap call (one store entry each)")
+
+    def values(self) -> dict[str, list]:
+        return {k: v.values() if isinstance(v, Range) else list(v) for k, v in self.parameters.items()}
+
+
 class OutputConfig(_Strict):
     figure: bool = Field(True, description="write a figure to paper_figures/")
 
 
 class ExperimentConfig(_Strict):
-    """One study: a path, an interpolator, what it reproduces, and what to write."""
+    """One study: a path, interpolator(s), a drive, identification, metrics, what it reproduces."""
 
     name: str = Field(..., pattern=r"^[A-Za-z0-9_.-]+$", description="results and figure file stem")
     reproduces: str = Field(..., description="the paper result this experiment reproduces")
     description: str = ""
-    path: PathConfig
-    interpolator: FIRConfig = FIRConfig()
+    path: PathConfig | None = Field(None, description="tool path (required unless the study is identification only)")
+    interpolator: list[Interpolator] = Field([FIRConfig()], min_length=1,
+                                             description="one table, or an array of tables [[interpolator]]; kind defaults to fir")
+    drive: DriveConfig | None = None
+    identification: IdentificationConfig | None = None
+    metrics: list[Literal[tuple(METRIC_UNITS)]] | None = Field(None, description="metrics to report (default: all)")
     output: OutputConfig = OutputConfig()
+    sweep: SweepConfig | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _interpolator_list(cls, data):
+        if isinstance(data, dict) and "interpolator" in data:
+            items = data["interpolator"]
+            items = [items] if isinstance(items, dict) else items
+            if isinstance(items, list):
+                items = [({"kind": "fir"} | i) if isinstance(i, dict) else i for i in items]
+            data = data | {"interpolator": items}
+        return data
+
+    @model_validator(mode="after")
+    def _something_to_do(self):
+        if self.path is None and self.identification is None:
+            raise ValueError("give a [path] (motion study) or an [identification] table (or both)")
+        labels = [i.label or i.kind for i in self.interpolators]
+        if len(set(labels)) != len(labels):
+            raise ValueError(f"interpolator labels must be unique, got {labels}; set label = \"...\"")
+        if self.drive is not None and self.path is not None:
+            axes = named_axes(self)
+            bad = [m.axis for m in self.drive.modes if m.axis not in axes]
+            if bad:
+                raise ValueError(f"drive.modes: axis {bad[0]!r} is not an axis of the path {axes}")
+        return self
+
+    @property
+    def interpolators(self) -> list:
+        """The interpolator configs (always a list)."""
+        return list(self.interpolator)
+
+
+def named_axes(cfg: ExperimentConfig) -> tuple[str, ...]:
+    """Axis letters of the path (from its dimension: x, y, z)."""
+    p = cfg.path
+    dim = len(p.points_mm[0]) if p.points_mm else (named_path(p.name).dim if p.name else 3)
+    return ("x", "y", "z")[:dim]
 
 
 def load_config(file: str | Path) -> tuple[ExperimentConfig, Path]:
@@ -95,7 +232,8 @@ def load_config(file: str | Path) -> tuple[ExperimentConfig, Path]:
         ``(config, directory of the file)`` (relative paths in the config are resolved from it).
 
     Raises:
-        ConfigError: missing file, TOML syntax error, unknown key, wrong type or value.
+        ConfigError: missing file, TOML syntax error, unknown key, wrong type or value, or an input
+            file (G-code, drive log) that does not exist.
     """
     file = Path(file)
     try:
@@ -106,18 +244,61 @@ def load_config(file: str | Path) -> tuple[ExperimentConfig, Path]:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise ConfigError(f"{file}: TOML syntax error: {e}") from None
+    return validate(raw, file), file.parent
+
+
+def validate(raw: dict, file: str | Path) -> ExperimentConfig:
+    """Validate a config dictionary; errors name ``file`` and the dotted key. Also checks that the
+    input files it names exist (relative to the file's folder)."""
+    file = Path(file)
     try:
-        return ExperimentConfig.model_validate(raw), file.parent
+        cfg = ExperimentConfig.model_validate(raw)
     except ValidationError as e:
-        lines = []
-        for err in e.errors():
-            key = ".".join(str(p) for p in err["loc"]) or "(top level)"
-            msg = err["msg"].removeprefix("Value error, ")
-            if err["type"] == "extra_forbidden":
-                msg = "unknown key (typo?)"
-            got = f" (got {err['input']!r})" if err["type"] not in ("missing", "extra_forbidden") and not isinstance(err["input"], dict) else ""
-            lines.append(f"{file}: key '{key}': {msg}{got}")
-        raise ConfigError("\n".join(lines)) from None
+        single = isinstance(raw.get("interpolator"), dict)
+        raise ConfigError("\n".join(_describe(err, file, single) for err in e.errors())) from None
+    for key, name in input_files(cfg).items():
+        if not (file.parent / name).is_file():
+            raise ConfigError(f"{file}: key '{key}': file not found: {file.parent / name}")
+    return cfg
+
+
+def input_files(cfg: ExperimentConfig) -> dict[str, str]:
+    """``{dotted key: file name}`` of every input file the config reads (part of the results key)."""
+    files = {}
+    if cfg.path is not None and cfg.path.gcode is not None:
+        files["path.gcode"] = cfg.path.gcode
+    if cfg.identification is not None and cfg.identification.log_file is not None:
+        files["identification.log_file"] = cfg.identification.log_file
+    return files
+
+
+def _describe(err: dict, file: Path, single_interpolator: bool) -> str:
+    loc = list(err["loc"])
+    if loc[:1] == ["interpolator"]:  # drop the union tag, and the list index of a single [interpolator] table
+        loc = ["interpolator"] + [p for p in loc[1 + single_interpolator:] if p not in ("fir", "time_optimal")]
+    key = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in loc).lstrip(".") or "(top level)"
+    msg = err["msg"].removeprefix("Value error, ")
+    if err["type"] == "extra_forbidden":
+        msg = "unknown key (typo?" + _suggest(err["loc"]) + ")"
+    elif isinstance(err.get("input"), str) and err["type"].endswith(("_parsing", "_type")) and any(c.isalpha() for c in err["input"]):
+        msg += "; give a plain number, the unit is in the key name"
+    got = "" if err["type"] in ("missing", "extra_forbidden") or isinstance(err.get("input"), dict) else f" (got {err['input']!r})"
+    return f"{file}: key '{key}': {msg}{got}"
+
+
+def _suggest(loc: tuple) -> str:
+    """`` did you mean 'x'?`` for an unknown key close to a known one of the same table."""
+    model = ExperimentConfig
+    for part in loc[:-1]:
+        field = model.model_fields.get(part) if isinstance(part, str) else None
+        if field is None:
+            continue
+        ann = field.annotation
+        candidates = [a for a in getattr(ann, "__args__", (ann,)) if isinstance(a, type) and issubclass(a, BaseModel)]
+        if candidates:
+            model = candidates[0]
+    close = difflib.get_close_matches(str(loc[-1]), list(model.model_fields), n=1, cutoff=0.6)
+    return f" did you mean '{close[0]}'?" if close else ""
 
 
 def build_path(cfg: PathConfig, base: Path) -> tuple[Polyline, np.ndarray | None]:

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from research.experiments.runner import _atomic_write
+from research.experiments.store import atomic_write
 from research.interpolators import blend_interpolate, fir_interpolate, plan_fir, scurve_interpolate
 from research.limits import AxisLimits
 from research.metrics import corner_errors, limit_ratios, max_contour_error, peak_axis_values
@@ -129,7 +129,7 @@ def main(argv=None) -> int:
         window = 10 if path.n_segments > 12 else None
         rows += run_path(name, path, feed=PAPER["feed"], delays=PAPER["delays"], tolerance=PAPER["tolerance"], window=window)
         record = json.dumps({"setting": PAPER, "rows": [asdict(r) for r in rows]}, indent=1).encode()
-        _atomic_write(args.out, lambda f, data=record: f.write(data))  # completed paths survive interruption
+        atomic_write(args.out, record)  # completed paths survive interruption
     print(format_table(rows))
     print(f"\nrows written to {args.out}")
     return 0

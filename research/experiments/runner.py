@@ -1,24 +1,34 @@
-"""Run one experiment config end to end: path -> interpolator -> metrics -> results + figure.
+"""Run one experiment config end to end (``python -m research run CONFIG``).
 
-Results go to a git-ignored cache (``.cache/results/<name>/``: ``results.json`` and
-``trajectory.npz``, written atomically); the figure goes to ``paper_figures/<name>.png``.
+The result is looked up in the content-addressed store (:mod:`research.experiments.store`,
+``<cache>/store/``) under the hash of the config, the code version and the input files; only a miss
+computes (:func:`~research.experiments.evaluate.evaluate`). Either way the run leaves a readable
+view in ``<cache>/<name>/`` (``results.json``, ``trajectory.npz``) and the figure in
+``paper_figures/<name>.png``, all written atomically.
+
+Example:
+    >>> from pathlib import Path
+    >>> import tempfile
+    >>> tmp = Path(tempfile.mkdtemp())
+    >>> _ = (tmp / "e.toml").write_text('name = "e"\\nreproduces = "-"\\n[path]\\nname = "corner90"\\n[output]\\nfigure = false\\n')
+    >>> first = run_experiment(tmp / "e.toml", cache_dir=tmp / "c", log=lambda s: None)
+    >>> again = run_experiment(tmp / "e.toml", cache_dir=tmp / "c", log=lambda s: None)
+    >>> first.cached, again.cached, again.key == first.key
+    (False, True, True)
 """
 
 from __future__ import annotations
 
+import io
 import json
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-import research
-from research.experiments.config import ExperimentConfig, build_path, load_config
-from research.interpolators import FIRPlan, plan_fir
-from research.metrics import MotionMetrics, summarize
-from research.paths import Polyline
+from research.experiments.config import ExperimentConfig, input_files, load_config
+from research.experiments.evaluate import evaluate
+from research.experiments.store import COSMETIC, ResultStore, atomic_write, code_version, file_digest, result_key
 from research.trajectory import Trajectory
 
 DEFAULT_CACHE = Path(".cache") / "results"
@@ -27,94 +37,152 @@ DEFAULT_FIGURES = Path("paper_figures")
 
 @dataclass(frozen=True)
 class RunResult:
-    """What one run produced, and where it was written."""
+    """What one run produced, and where it was written.
+
+    Attributes:
+        config: the validated config.
+        key: its store key (hash of config + code version + input files).
+        record: the results (``scalars`` with ``units``, ``details`` per interpolator, provenance).
+        cached: the result came from the store (nothing was recomputed).
+        results_file: ``<cache>/<name>/results.json``.
+        figure_file: the figure, or ``None`` when ``output.figure`` is off.
+    """
 
     config: ExperimentConfig
-    path: Polyline
-    plan: FIRPlan
-    trajectory: Trajectory
-    metrics: MotionMetrics
+    key: str
+    record: dict
+    cached: bool
     results_file: Path
     figure_file: Path | None
 
+    def trajectory(self) -> Trajectory:
+        """The first interpolator's sampled trajectory (read back from ``trajectory.npz``)."""
+        return Trajectory.load(self.results_file.parent / "trajectory.npz")
 
-def run_experiment(
-    config_file: str | Path,
-    *,
-    cache_dir: str | Path = DEFAULT_CACHE,
-    figures_dir: str | Path = DEFAULT_FIGURES,
-    log=print,
-) -> RunResult:
-    """Run the experiment in ``config_file`` and save its results and figure.
+
+def hashed_config(cfg: ExperimentConfig) -> dict:
+    """The part of a config that sets its results (cosmetic fields dropped), JSON-ready."""
+    return cfg.model_dump(mode="json", exclude=set(COSMETIC))
+
+
+def config_key(cfg: ExperimentConfig, base: Path) -> str:
+    """Store key of a config whose relative file names are read from ``base``."""
+    return result_key(hashed_config(cfg), {k: base / f for k, f in input_files(cfg).items()})
+
+
+def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_CACHE,
+                   figures_dir: str | Path = DEFAULT_FIGURES, log=print, force: bool = False) -> RunResult:
+    """Run the experiment in ``config_file`` (or fetch it from the store) and save its results and figure.
 
     Args:
         config_file: TOML experiment config (see :mod:`research.experiments.config`).
-        cache_dir: results root; the run writes ``<cache_dir>/<name>/``.
+        cache_dir: results root: the store is ``<cache_dir>/store``, the readable view ``<cache_dir>/<name>/``.
         figures_dir: where the figure goes.
         log: progress callback taking one string (``print`` by default).
+        force: recompute even if the store has the result (the entry is kept; the new one is not stored).
     """
     cfg, base = load_config(config_file)
-    log(f"[1/4] path: {_describe_path(cfg)}")
-    path, program_feeds = build_path(cfg.path, base)
-    ic = cfg.interpolator
-    # An explicit feed in the config wins; otherwise a G-code program's own F words are used.
-    feed = program_feeds if (program_feeds is not None and "feed_mm_per_s" not in ic.model_fields_set) else ic.feed_mm_per_s
-    delays = np.asarray(ic.delays_ms) * 1e-3
-    log(f"[2/4] FIR interpolation: {path.n_segments} segments, T_i = {ic.delays_ms} ms, eps = {ic.tolerance_um} um")
-    plan = plan_fir(path, feed, delays, ic.tolerance_um * 1e-3, refine=ic.refine)
-    traj = plan.trajectory(ic.sample_period_ms * 1e-3)
-    log(f"[3/4] metrics on {traj.n_samples} samples at Ts = {ic.sample_period_ms} ms")
-    metrics = summarize(traj, path)
-
+    store = ResultStore(Path(cache_dir) / "store")
+    key = config_key(cfg, base)
+    entry = None if force else store.get(key)
+    want_figure = cfg.output.figure and cfg.path is not None
+    log(f"[1/3] {cfg.name}: key {key[:12]} (code {code_version()}) " + ("found in the store" if entry else "computing"))
+    if entry is None or (want_figure and entry.file("figure.png") is None):
+        ev = evaluate(cfg, base, log=lambda s: log(f"      {s}"))
+        record = {
+            "experiment": cfg.name, "reproduces": cfg.reproduces, "key": key, "code_version": code_version(),
+            "config": cfg.model_dump(mode="json"),
+            "inputs": {k: file_digest(base / f) for k, f in input_files(cfg).items()},
+        } | ev.record | _legacy_view(ev.record)
+        files = {}
+        runs = ev.objects.get("runs", [])
+        if runs:
+            buf = io.BytesIO()
+            runs[0][2].save(buf)
+            files["trajectory.npz"] = buf.getvalue()
+        if want_figure:
+            files["figure.png"] = _figure(cfg, ev)
+        if force and store.get(key) is not None:
+            entry = None
+        else:
+            entry = store.put(key, record, ev.arrays, files)
+        cached = False
+    else:
+        record, cached = entry.record, True
+        files = {}
+    shown = ", ".join(f"{k} = {v:.6g} {record['units'][k]}" for k, v in record["scalars"].items())
+    log(f"[2/3] results: {shown}")
     out = Path(cache_dir) / cfg.name
-    out.mkdir(parents=True, exist_ok=True)
-    record = {
-        "experiment": cfg.name,
-        "reproduces": cfg.reproduces,
-        "config": cfg.model_dump(),
-        "research_version": research.__version__,
-        "units": {"time": "s", "length": "mm", "overlap_times": "s", "corner_errors": "mm"},
-        "metrics": metrics.as_dict(),
-        "corners": {
-            "turning_angle_deg": np.degrees(path.turning_angles).tolist(),
-            "overlap_times": np.asarray(plan.overlaps).tolist(),
-            "corner_errors": np.asarray(plan.corner_errors).tolist(),
-        },
-    }
-    results_file = out / "results.json"
-    _atomic_write(results_file, lambda f: f.write(json.dumps(record, indent=2).encode()))
-    _atomic_write(out / "trajectory.npz", lambda f: traj.save(f))
+    results_file = atomic_write(out / "results.json", json.dumps(record, indent=2).encode())
+    traj = entry.file("trajectory.npz") if entry else None
+    traj_bytes = traj.read_bytes() if traj else files.get("trajectory.npz")
+    if traj_bytes:
+        atomic_write(out / "trajectory.npz", traj_bytes)
     figure_file = None
-    if cfg.output.figure:
-        from research.figures.fir_run import plot_fir_run
+    if want_figure:
+        png = entry.file("figure.png").read_bytes() if entry else files["figure.png"]
+        figure_file = atomic_write(Path(figures_dir) / f"{cfg.name}.png", png)
+    log(f"[3/3] {results_file}" + (f"; figure: {figure_file}" if figure_file else "") + ("; (cached)" if cached else ""))
+    return RunResult(cfg, key, record, cached, results_file, figure_file)
 
-        figures_dir = Path(figures_dir)
-        figures_dir.mkdir(parents=True, exist_ok=True)
-        figure_file = figures_dir / f"{cfg.name}.png"
-        fig = plot_fir_run(path, plan, traj, metrics, title=f"{cfg.name}\n{cfg.reproduces}")
-        _atomic_write(figure_file, lambda f: fig.savefig(f, format="png", dpi=150))
-    log(f"[4/4] results: {results_file}" + (f"; figure: {figure_file}" if figure_file else ""))
-    return RunResult(cfg, path, plan, traj, metrics, results_file, figure_file)
+
+def _legacy_view(record: dict) -> dict:
+    """``metrics`` and ``corners`` of the first interpolator, at the top level (the README's layout)."""
+    runs = [v for k, v in record["details"].items() if k != "identification"]
+    if not runs:
+        return {}
+    first = runs[0]
+    corners = {"turning_angle_deg": first["turning_angle_deg"]}
+    corners |= {k: first[k] for k in ("overlap_times", "corner_errors") if k in first}
+    return {"metrics": first["metrics"], "corners": corners,
+            "units": record["units"] | {"time": "s", "length": "mm", "overlap_times": "s", "corner_errors": "mm"}}
+
+
+def _figure(cfg: ExperimentConfig, ev) -> bytes:
+    """PNG of the first interpolator's run (Sencer 2015 Fig 6a-b layout)."""
+    from research.figures._style import save
+    from research.figures.fir_run import plot_fir_run
+
+    label, plan, traj, metrics = ev.objects["runs"][0]
+    fig = plot_fir_run(ev.objects["path"], plan, traj, metrics, title=f"{cfg.name}\n{cfg.reproduces}")
+    buf = io.BytesIO()
+    save(fig, buf)
+    return buf.getvalue()
 
 
 def format_summary(result: RunResult) -> str:
-    """A plain-text table of the run's metrics, with units."""
-    m, ic = result.metrics, result.config.interpolator
-    rows = [
-        ("experiment", result.config.name),
-        ("reproduces", result.config.reproduces),
-        ("segments / corners", f"{result.path.n_segments} / {max(result.path.n_segments - 1, 0)}"),
-        ("feed F [mm/s]", _range(np.asarray(result.plan.feeds))),
-        ("FIR delays T_i [ms]", ", ".join(f"{d:g}" for d in ic.delays_ms)),
-        ("tolerance eps [um]", f"{ic.tolerance_um:g}"),
-        ("cycle time [s]", f"{m.cycle_time:.6f}"),
-        ("max corner error [um]", f"{m.max_corner_error * 1e3:.3f}"),
-        ("max contour error [um]", f"{m.max_contour_error * 1e3:.3f}"),
-        ("overlap T_k [ms]", _range(np.asarray(result.plan.overlaps) * 1e3)),
-        ("peak feed [mm/s]", f"{m.peak_feed:.3f}"),
-    ]
-    for k, axis in enumerate(m.axes):
-        rows.append((f"peak |v|, |a|, |j| {axis} [mm/s^n]", f"{m.peak_velocity[k]:.1f}, {m.peak_acceleration[k]:.1f}, {m.peak_jerk[k]:.1f}"))
+    """A plain-text table of the run's results, with units."""
+    rec, cfg = result.record, result.config
+    rows = [("experiment", cfg.name), ("reproduces", cfg.reproduces),
+            ("store key", result.key[:16] + (" (cached)" if result.cached else ""))]
+    runs = {k: v for k, v in rec["details"].items() if k != "identification"}
+    for (label, d), ic in zip(runs.items(), cfg.interpolators):
+        m = d["metrics"]
+        tag = f"{label}: " if len(runs) > 1 else ""
+        n = len(d["turning_angle_deg"])
+        rows.append((f"{tag}segments / corners", f"{n + 1} / {n}"))
+        if ic.kind == "fir":
+            rows += [(f"{tag}feed F [mm/s]", _range(np.asarray(d["feeds"]))),
+                     (f"{tag}FIR delays T_i [ms]", ", ".join(f"{x:g}" for x in ic.delays_ms))]
+        else:
+            rows.append((f"{tag}OCP status / iterations", f"{d['status']} / {d['iterations']}"))
+        rows += [
+            (f"{tag}tolerance eps [um]", f"{ic.tolerance_um:g}"),
+            (f"{tag}cycle time [s]", f"{m['cycle_time']:.6f}"),
+            (f"{tag}max corner error [um]", f"{m['max_corner_error'] * 1e3:.3f}"),
+            (f"{tag}max contour error [um]", f"{m['max_contour_error'] * 1e3:.3f}"),
+        ]
+        if "overlap_times" in d:
+            rows.append((f"{tag}overlap T_k [ms]", _range(np.asarray(d["overlap_times"]) * 1e3)))
+        rows.append((f"{tag}peak feed [mm/s]", f"{m['peak_feed']:.3f}"))
+        for k, axis in enumerate(m["axes"]):
+            rows.append((f"{tag}peak |v|, |a|, |j| {axis} [mm/s^n]",
+                         f"{m['peak_velocity'][k]:.1f}, {m['peak_acceleration'][k]:.1f}, {m['peak_jerk'][k]:.1f}"))
+    shown = {"cycle_time", "max_corner_error", "max_contour_error", "peak_feed"}
+    for k, v in rec["scalars"].items():
+        if k.split(".")[-1] not in shown:
+            unit = rec["units"][k]
+            rows.append((f"{k} [um]", f"{v * 1e3:.3f}") if unit == "mm" else (f"{k} [{unit}]", f"{v:.6g}"))
     width = max(len(r[0]) for r in rows)
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
 
@@ -123,21 +191,3 @@ def _range(x: np.ndarray) -> str:
     if x.size == 0:
         return "-"
     return f"{x.min():.3f}" if np.ptp(x) < 1e-9 else f"{x.min():.3f} .. {x.max():.3f}"
-
-
-def _describe_path(cfg: ExperimentConfig) -> str:
-    p = cfg.path
-    return p.name if p.name else (f"G-code {p.gcode}" if p.gcode else f"{len(p.points_mm)} points")
-
-
-def _atomic_write(target: Path, write) -> None:
-    """Write through a temporary file in the same folder, then rename: never a half-written file."""
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            write(f)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise

@@ -61,7 +61,7 @@ def test_run_writes_results_and_figure(tmp_path):
     result = run_experiment(write(tmp_path, GOOD), cache_dir=tmp_path / "cache", figures_dir=tmp_path / "figs", log=lambda s: None)
     record = json.loads(result.results_file.read_text())
     assert record["metrics"]["max_corner_error"] == pytest.approx(0.1, rel=1e-6)
-    assert record["config"]["interpolator"]["delays_ms"] == [50.0, 30.0]
+    assert record["config"]["interpolator"][0]["delays_ms"] == [50.0, 30.0]
     traj = Trajectory.load(tmp_path / "cache" / "t" / "trajectory.npz")
     assert np.max(np.abs(traj.q[-1] - np.array([0.0, 50.0]))) < 1e-9
     assert result.figure_file.exists() and result.figure_file.stat().st_size > 10_000
@@ -71,4 +71,4 @@ def test_gcode_path_uses_program_feeds(tmp_path):
     (tmp_path / "part.nc").write_text("G21 G90\nG1 X10 F1200\nG1 Y10 F600\n")
     text = GOOD.replace('name = "corner90"', 'gcode = "part.nc"').replace("feed_mm_per_s = 200.0\n", "")
     result = run_experiment(write(tmp_path, text), cache_dir=tmp_path / "c", figures_dir=tmp_path / "f", log=lambda s: None)
-    np.testing.assert_allclose(np.asarray(result.plan.feeds), [20.0, 10.0])  # mm/min -> mm/s
+    np.testing.assert_allclose(result.record["details"]["fir"]["feeds"], [20.0, 10.0])  # mm/min -> mm/s

@@ -1,0 +1,128 @@
+"""Sweep points: expand a ``[sweep]`` table into per-point configs (grid or list over any field).
+
+Fields are addressed in the config's own key names: ``"interpolator.delays_ms[0]"``,
+``"interpolator.tolerance_um"``, ``"drive.modes[1].frequency_hz"``, ``"identification.noise_um"``.
+A single ``[interpolator]`` table needs no index (``interpolator.x`` means ``interpolator[0].x``).
+Each point is the base config with its fields replaced, validated again: a value out of range makes
+that point fail (recorded, the sweep goes on), a field that does not exist is a
+:class:`~research.errors.ConfigError` before anything runs.
+
+Example:
+    >>> from research.experiments.config import validate
+    >>> cfg = validate({"name": "s", "reproduces": "-", "path": {"name": "diamond"},
+    ...                 "sweep": {"parameters": {"interpolator.delays_ms[0]": [100.0, 148.0],
+    ...                                          "interpolator.tolerance_um": [50.0, 500.0]}}}, "s.toml")
+    >>> points = expand(cfg, "s.toml")
+    >>> len(points), points[3].values
+    (4, {'interpolator.delays_ms[0]': 148.0, 'interpolator.tolerance_um': 500.0})
+"""
+
+from __future__ import annotations
+
+import itertools
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+from research.errors import ConfigError
+from research.experiments.config import ExperimentConfig, validate
+
+_TOKEN = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)|\[(\d+)\]|\.")
+
+
+@dataclass(frozen=True)
+class Point:
+    """One sweep point: its index, the swept values, and its validated config (``None`` with ``error``)."""
+
+    index: int
+    values: dict
+    config: ExperimentConfig | None
+    error: str | None = None
+
+
+def parse_field(field: str) -> list[str | int]:
+    """``"drive.modes[1].frequency_hz"`` -> ``["drive", "modes", 1, "frequency_hz"]``."""
+    parts, pos = [], 0
+    for m in _TOKEN.finditer(field):
+        if m.start() != pos:
+            break
+        pos = m.end()
+        if m.group(1):
+            parts.append(m.group(1))
+        elif m.group(2):
+            parts.append(int(m.group(2)))
+    if pos != len(field) or not parts:
+        raise ValueError(f"cannot parse field {field!r}; write e.g. 'interpolator.delays_ms[0]'")
+    return parts
+
+
+def set_field(raw: dict, field: str, value) -> dict:
+    """A copy of ``raw`` with ``field`` set to ``value`` (raises ``KeyError``/``IndexError`` if absent)."""
+    parts = parse_field(field)
+    out = _copy(raw)
+    node = out
+    for i, part in enumerate(parts):
+        last = i == len(parts) - 1
+        if isinstance(part, str) and isinstance(node, list) and len(node) == 1:
+            node = node[0]  # interpolator.x on a single interpolator
+        if isinstance(part, int):
+            if not isinstance(node, list) or not 0 <= part < len(node):
+                raise IndexError(f"index [{part}] out of range")
+        elif not isinstance(node, dict) or part not in node:
+            raise KeyError(part)
+        if last:
+            node[part] = value
+        else:
+            if node[part] is None:
+                raise KeyError(part)
+            node = node[part]
+    return out
+
+
+def expand(cfg: ExperimentConfig, file: str | Path) -> list[Point]:
+    """All points of ``cfg.sweep`` (grid: every combination, first field slowest; list: zipped).
+
+    Raises:
+        ConfigError: a swept field the config does not have, or list sweeps of unequal lengths.
+    """
+    sweep = cfg.sweep
+    if sweep is None:
+        raise ConfigError(f"{file}: no [sweep] table; add [sweep.parameters] with the fields to sweep")
+    values = sweep.values()
+    fields = list(values)
+    if sweep.mode == "list":
+        lengths = {k: len(v) for k, v in values.items()}
+        if len(set(lengths.values())) != 1:
+            raise ConfigError(f"{file}: key 'sweep.parameters': list sweeps need equal lengths, got {lengths}")
+        combos = list(zip(*values.values()))
+    else:
+        combos = list(itertools.product(*values.values()))
+    base = cfg.model_dump(mode="json", exclude={"sweep"}, exclude_none=True)
+    for f in fields:  # a field that does not exist is an error of the config, not of a point
+        try:
+            set_field(base, f, values[f][0])
+        except ValueError as e:
+            raise ConfigError(f"{file}: key 'sweep.parameters.\"{f}\"': {e}") from None
+        except (KeyError, IndexError) as e:
+            raise ConfigError(f"{file}: key 'sweep.parameters.\"{f}\"': the config has no field {f!r} "
+                              f"({e.args[0] if e.args else e}); fields are written as in the config, "
+                              "e.g. 'interpolator.delays_ms[0]'") from None
+    points = []
+    for i, combo in enumerate(combos):
+        raw = base
+        for f, v in zip(fields, combo):
+            raw = set_field(raw, f, v)
+        point_values = dict(zip(fields, combo))
+        try:
+            points.append(Point(i, point_values, validate(raw, file)))
+        except ConfigError as e:
+            points.append(Point(i, point_values, None, f"ConfigError: {e}"))
+    return points
+
+
+def _copy(x):
+    if isinstance(x, dict):
+        return {k: _copy(v) for k, v in x.items()}
+    if isinstance(x, list):
+        return [_copy(v) for v in x]
+    return x
