@@ -29,7 +29,7 @@ from __future__ import annotations
 import difflib
 import tomllib
 from pathlib import Path
-from typing import Annotated, Literal, Union
+from typing import Annotated, Literal, Union, get_args
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
@@ -288,17 +288,26 @@ def _describe(err: dict, file: Path, single_interpolator: bool) -> str:
 
 def _suggest(loc: tuple) -> str:
     """`` did you mean 'x'?`` for an unknown key close to a known one of the same table."""
-    model = ExperimentConfig
+    models = [ExperimentConfig]
     for part in loc[:-1]:
-        field = model.model_fields.get(part) if isinstance(part, str) else None
-        if field is None:
+        if not isinstance(part, str):
             continue
-        ann = field.annotation
-        candidates = [a for a in getattr(ann, "__args__", (ann,)) if isinstance(a, type) and issubclass(a, BaseModel)]
-        if candidates:
-            model = candidates[0]
-    close = difflib.get_close_matches(str(loc[-1]), list(model.model_fields), n=1, cutoff=0.6)
+        tagged = [m for m in models if "kind" in m.model_fields and part in get_args(m.model_fields["kind"].annotation)]
+        if tagged:  # a discriminated-union tag (interpolator kind)
+            models = tagged
+            continue
+        field = next((m.model_fields[part] for m in models if part in m.model_fields), None)
+        models = _models_in(field.annotation) if field is not None else models
+    known = [k for m in models for k in m.model_fields]
+    close = difflib.get_close_matches(str(loc[-1]), known, n=1, cutoff=0.6)
     return f" did you mean '{close[0]}'?" if close else ""
+
+
+def _models_in(annotation) -> list[type[BaseModel]]:
+    """Pydantic models inside an annotation (through Optional, list, Union, Annotated)."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return [annotation]
+    return [m for a in get_args(annotation) for m in _models_in(a)]
 
 
 def build_path(cfg: PathConfig, base: Path) -> tuple[Polyline, np.ndarray | None]:

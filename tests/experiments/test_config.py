@@ -32,7 +32,7 @@ def write(tmp_path, text, name="exp.toml"):
 @pytest.mark.parametrize(
     "edit, match",
     [
-        (("tolerance_um = 100.0", "tolerence_um = 100.0"), r"key 'interpolator.tolerence_um': unknown key \(typo\?\)"),
+        (("tolerance_um = 100.0", "tolerence_um = 100.0"), r"key 'interpolator.tolerence_um': unknown key \(typo\? did you mean 'tolerance_um'\?\)"),
         (("feed_mm_per_s = 200.0", 'feed_mm_per_s = "fast"'), r"key 'interpolator.feed_mm_per_s': .*number.*'fast'"),
         (("feed_mm_per_s = 200.0", "feed_mm_per_s = -1.0"), r"key 'interpolator.feed_mm_per_s': .*greater than 0"),
         (("delays_ms = [50.0, 30.0]", "delays_ms = [50.0, 0.0]"), r"delays_ms\[1\] must be > 0 ms"),

@@ -1,0 +1,131 @@
+"""Sweeps: expansion, the vmap fast path against the general path, resume, failing points, Dask."""
+
+import json
+
+import numpy as np
+import pytest
+
+from research.errors import ConfigError
+from research.experiments import sweep_general
+from research.experiments.config import load_config
+from research.experiments.sweep import format_sweep, run_sweep
+from research.experiments.sweep_points import expand, set_field
+
+BASE = """
+name = "sw"
+reproduces = "test"
+[path]
+name = "diamond"
+[interpolator]
+feed_mm_per_s = 250.0
+delays_ms = [148.0, 89.0]
+tolerance_um = 500.0
+[drive]
+modes = [{axis = "x", frequency_hz = 11.4}, {axis = "y", frequency_hz = 6.8}]
+[output]
+figure = false
+"""
+
+
+def write(tmp_path, sweep, base=BASE, name="sw.toml"):
+    f = tmp_path / name
+    f.write_text(base + sweep)
+    return f
+
+
+def quiet(f, tmp_path, **kw):
+    return run_sweep(f, cache_dir=tmp_path / "cache", figures_dir=tmp_path / "figs", log=lambda s: None,
+                     show_progress=False, **kw)
+
+
+def test_expand_grid_and_list(tmp_path):
+    grid = write(tmp_path, '[sweep]\n[sweep.parameters]\n"interpolator.delays_ms[0]" = [100.0, 148.0]\n'
+                           '"drive.modes[1].frequency_hz" = {start = 6.0, stop = 8.0, num = 3}\n')
+    cfg, _ = load_config(grid)
+    pts = expand(cfg, grid)
+    assert len(pts) == 6 and pts[-1].values == {"interpolator.delays_ms[0]": 148.0, "drive.modes[1].frequency_hz": 8.0}
+    assert pts[-1].config.drive.modes[1].frequency_hz == 8.0 and pts[-1].config.interpolators[0].delays_ms == [148.0, 89.0]
+    lst = write(tmp_path, '[sweep]\nmode = "list"\n[sweep.parameters]\n"interpolator.tolerance_um" = [1.0, 2.0]\n'
+                          '"interpolator.feed_mm_per_s" = [100.0, 200.0]\n', name="l.toml")
+    cfg, _ = load_config(lst)
+    assert [p.values["interpolator.feed_mm_per_s"] for p in expand(cfg, lst)] == [100.0, 200.0]
+    assert set_field({"a": [{"b": 1}]}, "a.b", 2) == {"a": [{"b": 2}]}
+
+
+@pytest.mark.parametrize("sweep, match", [
+    ('"interpolator.delay_ms[0]" = [1.0]', r"sweep.parameters.*no field 'interpolator.delay_ms\[0\]'"),
+    ('"interpolator.delays_ms[5]" = [1.0]', r"no field.*index \[5\] out of range"),
+    ('"interpolator.tolerance_um" = [1.0, 2.0]\n"interpolator.feed_mm_per_s" = [1.0]', r"equal lengths"),
+])
+def test_bad_sweep_fields_name_file_and_key(tmp_path, sweep, match):
+    mode = 'mode = "list"\n' if "equal" in match else ""
+    f = write(tmp_path, f"[sweep]\n{mode}[sweep.parameters]\n{sweep}\n")
+    with pytest.raises(ConfigError, match=match) as e:
+        quiet(f, tmp_path)
+    assert str(f) in str(e.value)
+
+
+def test_vmap_sweep_records_failures_resumes_and_matches_general_path(tmp_path):
+    f = write(tmp_path, '[sweep]\n[sweep.parameters]\n"interpolator.delays_ms[0]" = [120.0, 148.0, -5.0]\n'
+                        '"interpolator.tolerance_um" = [100.0, 500.0]\n')
+    res = quiet(f, tmp_path)
+    assert res.stats["points"] == 6 and res.stats["ok"] == 4 and res.stats["fast"] == 4
+    bad = [r for r in res.rows if r["status"] != "ok"]
+    assert len(bad) == 2 and all("delays_ms[0] must be > 0 ms" in r["error"] for r in bad)
+    ok = [r for r in res.rows if r["status"] == "ok"]
+    assert all(r["source"] == "vmap" and r["max_corner_error"] == pytest.approx(r["interpolator.tolerance_um"] * 1e-3) for r in ok)
+    assert all(np.isfinite(r["d_cycle_time/d_T1"]) and np.isfinite(r["d_residual_vibration/d_T2"]) for r in ok)
+    assert res.base_sensitivities["d_max_corner_error/d_eps"] == pytest.approx(1.0)
+    table = json.loads(res.table_file.read_text())
+    assert len(table["rows"]) == 6
+    with np.load(res.table_file.with_name("table.npz")) as npz:
+        assert npz["ok"].sum() == 4 and npz["cycle_time"].shape == (6,)
+    again = quiet(f, tmp_path)  # everything from the store
+    assert again.stats["computed"] == 0 and again.stats["cached"] == 4
+    assert [r.get("cycle_time") for r in again.rows] == [r.get("cycle_time") for r in res.rows]
+    # the general path (exact planner, sampled residual vibration) agrees with the closed forms
+    general = quiet(f, tmp_path, engine="serial")
+    for a, b in zip(res.rows, general.rows):
+        if a["status"] == "ok":
+            assert b["source"] == "general"
+            assert b["cycle_time"] == pytest.approx(a["cycle_time"], abs=1e-12)
+            assert b["max_corner_error"] == pytest.approx(a["max_corner_error"], rel=1e-6)
+            assert b["residual_vibration"] == pytest.approx(a["residual_vibration"], rel=2e-3)  # Ts = 1 ms trapezoid
+    assert "from the store" in format_sweep(general)
+
+
+def test_interrupted_general_sweep_resumes_and_failing_point_goes_on(tmp_path, monkeypatch):
+    base = BASE.replace('[path]\nname = "diamond"', '[path]\npoints_mm = [[0.0, 0.0], [30.0, 0.0], [30.0, 30.0]]')
+    # points_mm[1][0] = 0 makes a zero-length segment: that point fails when it runs, not at validation
+    f = write(tmp_path, '[sweep]\n[sweep.parameters]\n"path.points_mm[1][0]" = [0.0, 10.0, 20.0, 40.0]\n', base=base)
+    real, calls = sweep_general.point_task, []
+
+    def interrupted(cfg, base_dir):
+        calls.append(cfg)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(cfg, base_dir)
+
+    monkeypatch.setattr(sweep_general, "point_task", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        quiet(f, tmp_path, engine="serial")
+    monkeypatch.setattr(sweep_general, "point_task", real)
+    res = quiet(f, tmp_path, engine="serial")
+    assert res.stats["cached"] == 2 and res.stats["computed"] == 2  # the two finished points were kept
+    first = res.rows[0]
+    assert first["status"] == "error" and "PathError" in first["error"]
+    assert [r["status"] for r in res.rows[1:]] == ["ok"] * 3
+    assert quiet(f, tmp_path, engine="serial", retry_failed=True).stats["computed"] == 1
+
+
+def test_dask_local_cluster(tmp_path):
+    f = write(tmp_path, '[sweep]\nengine = "dask"\n[sweep.parameters]\n"interpolator.tolerance_um" = [100.0, 300.0]\n')
+    res = quiet(f, tmp_path, workers=1)  # one worker process: the LocalCluster path at the least start-up cost
+    assert res.stats["ok"] == 2 and all(r["source"] == "general" for r in res.rows)
+    assert res.rows[1]["max_corner_error"] == pytest.approx(0.3, rel=1e-6)
+
+
+def test_vmap_engine_refuses_general_fields(tmp_path):
+    f = write(tmp_path, '[sweep]\nengine = "vmap"\n[sweep.parameters]\n"interpolator.sample_period_ms" = [1.0, 2.0]\n')
+    with pytest.raises(ConfigError, match="sweep.engine"):
+        quiet(f, tmp_path)
