@@ -10,17 +10,32 @@ Public API:
 - :func:`window_schedule` — which segments each window solves and commits.
 - :func:`phase_boundaries` — when a trajectory passes the vertices of a path (used to map warm
   starts onto the phase grid).
+- :func:`optimize_feedrate` — B-spline feed-rate scheduling along 5-axis paths under axis v/a/j
+  limits (Sencer 2009 thesis ch 3, issue 8); :func:`constant_feed`, :func:`reference_ocp`,
+  :func:`axis_feed_limits`, :func:`table31_limits`, :class:`FeedrateResult`.
 """
 
 from research.optimal._warm import phase_boundaries
 from research.optimal._windowing import WindowReport, window_schedule
+from research.optimal.feedrate import (
+    FeedrateResult,
+    axis_feed_limits,
+    constant_feed,
+    optimize_feedrate,
+    table31_limits,
+)
 from research.optimal.time_optimal import TimeOptimalResult, Verification, time_optimal
 
 __all__ = [
+    "FeedrateResult",
     "TimeOptimalResult",
     "Verification",
     "WindowReport",
+    "axis_feed_limits",
+    "constant_feed",
+    "optimize_feedrate",
     "phase_boundaries",
+    "table31_limits",
     "time_optimal",
     "window_schedule",
 ]
