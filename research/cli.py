@@ -89,8 +89,8 @@ def _figures(args) -> int:
         manifest.append({
             "name": name,
             "reproduces": module.REPRODUCES,
-            # the experiment config the figure is made from; None: its parameters are in the module
-            "config": getattr(module, "CONFIG", None),
+            # the experiment config the figure is made from (a module CONFIG), else its parameters' module
+            "config": getattr(module, "CONFIG", None) or f"{module.__name__} (module constants)",
             "module": module.__name__,
             "files": [Path(f).name for f in files],
             "fast": bool(args.fast),

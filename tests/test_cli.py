@@ -1,11 +1,20 @@
-"""The command line: the README's main job and figure regeneration (fast mode)."""
+"""The command line: the README's main job, sweeps, and figure regeneration (fast mode).
+
+The manifest smoke test runs two light figures through the CLI; every registered figure's fast mode
+is covered by its own test (so pytest-xdist spreads them), each under its module's ``fast`` path.
+"""
 
 import json
 import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
+from research.figures import registry
+
 REPO = Path(__file__).resolve().parents[1]
+LIGHT = ["sencer2015_fig3_fir_spectrum", "dimarco2015_fig3_sigmoid_startup"]
 
 
 def test_run_default_experiment(tmp_path):
@@ -20,15 +29,47 @@ def test_run_default_experiment(tmp_path):
     assert (tmp_path / "figs" / "sencer2015_diamond.png").exists()
 
 
+def test_run_twice_is_served_from_the_store(tmp_path, capsys):
+    from research.cli import main
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('name = "c"\nreproduces = "-"\n[path]\nname = "corner90"\n[output]\nfigure = false\n')
+    args = ["run", str(cfg), "--cache", str(tmp_path / "cache")]
+    assert main(args) == 0 and "computing" in capsys.readouterr().out
+    assert main(args) == 0 and "(cached)" in capsys.readouterr().out
+
+
+def test_sweep_command(tmp_path, capsys):
+    from research.cli import main
+
+    cfg = tmp_path / "s.toml"
+    cfg.write_text('name = "s"\nreproduces = "-"\n[path]\nname = "diamond"\n[sweep]\n[sweep.parameters]\n'
+                   '"interpolator.tolerance_um" = [100.0, 200.0, 400.0]\n')
+    assert main(["sweep", str(cfg), "--cache", str(tmp_path / "c"), "--figures", str(tmp_path / "f"), "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    assert "3 points, 3 ok, 0 failed" in out and "d_cycle_time/d_T1" in out
+    assert (tmp_path / "f" / "s.png").stat().st_size > 10_000
+    assert (tmp_path / "c" / "sweeps" / "s" / "table.npz").exists()
+
+
 def test_figures_fast_writes_manifest(tmp_path):
     from research.cli import main
 
-    assert main(["figures", "--fast", "--out", str(tmp_path)]) == 0
+    assert main(["figures", "--fast", "--out", str(tmp_path)] + [a for n in LIGHT for a in ("--only", n)]) == 0
     manifest = json.loads((tmp_path / "manifest.json").read_text())
-    assert {m["name"] for m in manifest} >= {"sencer2015_fig3_fir_spectrum", "sencer2015_fig4_fir_cornering"}
+    assert [m["name"] for m in manifest] == LIGHT
     for m in manifest:
+        assert m["reproduces"] and m["config"] and m["fast"]
         for f in m["files"]:
             assert (tmp_path / f).stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("name", [n for n in registry() if n not in LIGHT])
+def test_each_figure_fast(tmp_path, name):
+    module = registry()[name]
+    assert module.REPRODUCES
+    files = module.make_figure(tmp_path, fast=True)
+    assert files and all(Path(f).stat().st_size > 10_000 for f in files)
 
 
 def test_errors_exit_2_with_message(tmp_path, capsys):
@@ -39,3 +80,4 @@ def test_errors_exit_2_with_message(tmp_path, capsys):
     assert main(["run", str(bad)]) == 2
     assert "key 'interpolator.feed': unknown key" in capsys.readouterr().err
     assert main(["figures", "--only", "nope"]) == 2
+    assert main(["sweep", str(bad)]) == 2
