@@ -104,7 +104,7 @@ def run_sweep(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_CACHE,
                                        with_sensitivities=cfg.sweep.sensitivities, progress=bar.update)
         bar.update(-len(redo))
         for i, r in fast_rows.items():
-            rows[i] = {"status": "ok", "error": None, "source": "vmap"} | r
+            rows[i] = {"status": "ok", "error": None, "source": "vmap"} | _chosen(r, cfg)
         general += redo
         cached_rows = len(st["cached"] & set(fast_rows))
         stats["cached"] += cached_rows
@@ -113,7 +113,7 @@ def run_sweep(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_CACHE,
         if redo:
             log(f"{len(redo)} points outside the closed forms' domain (block shorter than the filter): general path")
         if cfg.sweep.sensitivities:
-            base_sens = _base_sensitivities(cfg, base_dir, store)
+            base_sens = _chosen(_base_sensitivities(cfg, base_dir, store), cfg)
     tasks = []
     for p in general:
         key = config_key(p.config, base_dir)
@@ -146,6 +146,16 @@ def run_sweep(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_CACHE,
         figure_file = plot_sweep(result, Path(figures_dir) / f"{cfg.name}.png")
         result = SweepResult(cfg, result.fields, table, stats, table_file, figure_file, base_sens)
     return result
+
+
+def _chosen(row: dict, cfg: ExperimentConfig) -> dict:
+    """The metrics (and their derivatives) the config asks for; residual vibration only with modes."""
+    wanted = set(cfg.metrics) if cfg.metrics is not None else None
+    if not (cfg.drive and cfg.drive.modes):
+        wanted = (wanted if wanted is not None else {k.split("/")[0].removeprefix("d_").split(".")[0] for k in row}) - {"residual_vibration"}
+    if wanted is None:
+        return row
+    return {k: v for k, v in row.items() if k.split("/")[0].removeprefix("d_").split(".")[0] in wanted}
 
 
 def _row(record: dict, source: str) -> dict:
