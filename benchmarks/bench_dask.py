@@ -31,7 +31,7 @@ import research  # noqa: F401
 from research.experiments.config import validate
 from research.experiments.runner import config_key
 from research.experiments.store import ResultStore
-from research.experiments.sweep_general import point_task, run_general
+from research.experiments.sweep_general import ONE_THREAD, point_task, run_general
 
 TARGET = 1.7
 
@@ -66,7 +66,8 @@ def main() -> None:
         t_serial = time.perf_counter() - t0
 
         t0 = time.perf_counter()
-        cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True, dashboard_address=None)
+        cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                               env=ONE_THREAD)
         client = Client(cluster)
         client.gather([client.submit(point_task, warm, str(tmp), pure=False) for _ in range(args.workers)])
         t_start = time.perf_counter() - t0

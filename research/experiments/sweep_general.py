@@ -17,6 +17,11 @@ from pathlib import Path
 
 from research.experiments.store import ResultStore
 
+#: environment of LocalCluster workers: one point per worker on one core, no BLAS / XLA thread pools
+#: competing with the other workers
+ONE_THREAD = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+              "XLA_FLAGS": "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"}
+
 
 def point_task(config_json: dict, base_dir: str) -> dict:
     """Evaluate one point on a worker: ``{"status": "ok", ...record}`` or ``{"status": "error", "error": ...}``.
@@ -64,7 +69,7 @@ def run_general(tasks: list[tuple[int, str, dict]], base_dir: str | Path, store:
     cluster = None
     if scheduler is None:
         n = max(1, min(workers or os.cpu_count() or 1, len(tasks)))
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None, env=ONE_THREAD)
     client = Client(scheduler if scheduler is not None else cluster)
     try:
         futures = {client.submit(point_task, cfg, base_dir, pure=False): (index, key) for index, key, cfg in tasks}
