@@ -13,7 +13,7 @@ Example:
     >>> import tempfile
     >>> store = ResultStore(tempfile.mkdtemp())
     >>> k = result_key({"a": 1})
-    >>> store.put(k, {"cycle_time": 1.5})
+    >>> _ = store.put(k, {"cycle_time": 1.5})
     >>> store.get(k).record["cycle_time"]
     1.5
 """
