@@ -22,6 +22,7 @@ from research.optimal.feedrate import (
     axis_feed_limits,
     constant_feed,
     optimize_feedrate,
+    reference_ocp,
     table31_limits,
 )
 from research.optimal.time_optimal import TimeOptimalResult, Verification, time_optimal
@@ -35,6 +36,7 @@ __all__ = [
     "constant_feed",
     "optimize_feedrate",
     "phase_boundaries",
+    "reference_ocp",
     "table31_limits",
     "time_optimal",
     "window_schedule",

@@ -102,7 +102,7 @@ def solve_window(data: WindowData, options: dict | None = None) -> WindowSolutio
     rows.append(f / F)
     lower.append(np.full(data.checks.size, data.feed_min / F))
     upper.append(np.ones(data.checks.size))
-    g = ca.vertcat(*rows)
+    g = ca.densify(ca.vertcat(*rows))
     if data.objective == "time":
         J = ca.dot(ca.DM(data.weights), 1.0 / ca.mtimes(_dm(G), fw))
     else:

@@ -8,11 +8,14 @@ points, ``n - 3`` spans of ``Delta s = L / (n - 3)``). Its time derivatives foll
 Rest ends. A feed profile that is polynomial in ``s`` cannot leave ``s = 0`` from rest in finite
 time: with ``f(0) = 0``, ``f ~ f_s(0) s`` and ``t = int ds / f`` diverges (a jerk-limited start has
 ``f ~ s^(2/3)``). The thesis' eq 3.35 sets ``f_0 = f_init = 0``, which only works with a discrete
-time sum. Here the spline lives on ``[s_r, S - s_r]`` with ``f_0 = f_1 = f_b`` (and ``f_(n-2) =
-f_(n-1) = f_b``), i.e. a small *rest feed* ``f_b`` with zero path acceleration (clamped ends), and
-the first and last ``s_r`` mm are a time-domain ramp: constant jerk ``+J_r`` then ``-J_r`` from rest to
-``f_b`` (``s_r = f_b sqrt(f_b / J_r)``, duration ``2 sqrt(f_b / J_r)``). Position, velocity and
-acceleration are continuous at the joints; the jerk jumps (it is bounded on both sides).
+time sum. Here the first and last ``s_r`` mm are a time-domain ramp of constant path jerk from rest
+(:class:`RestRamp`; the stop is its mirror image), and the spline lives on ``[s_r, S - s_r]`` with
+its two end control points fixed so that feed and path acceleration match the ramp at the joints.
+Position, velocity and acceleration are continuous there; the jerk jumps (it is bounded on both
+sides). The ramp feed is chosen as high as the axis limits allow near the ends (``feedrate.py``),
+so that the spline never has to accelerate from a crawl, where ``int ds / f`` is most sensitive to a
+shape that a polynomial in ``s`` cannot follow; the cost against the path-parametrized OCP is
+measured in the tests.
 """
 
 from __future__ import annotations
@@ -37,10 +40,12 @@ def clamped_knots(n: int, s0: float, s1: float) -> np.ndarray:
 
 
 def basis(knots: np.ndarray, s, nu: int = 0) -> np.ndarray:
-    """``d^nu N_i,3 / ds^nu`` at ``s`` (eq 3.32, 3.37 through scipy), dense ``(len(s), n)``."""
+    """``d^nu N_i,3 / ds^nu`` at ``s`` (eq 3.32, 3.37 through scipy), dense ``(len(s), n)``; ``s`` is
+    clipped to the spline's domain (rounding at the ends)."""
     n = knots.size - 4
-    return np.asarray(BSpline(knots, np.eye(n), 3, extrapolate=False).derivative(nu)(np.asarray(s, dtype=np.float64)) if nu
-                      else BSpline(knots, np.eye(n), 3, extrapolate=False)(np.asarray(s, dtype=np.float64)))
+    s = np.clip(np.asarray(s, dtype=np.float64), knots[3], knots[-4])
+    spline = BSpline(knots, np.eye(n), 3, extrapolate=False)
+    return np.asarray(spline.derivative(nu)(s) if nu else spline(s))
 
 
 def span_points(knots: np.ndarray, spans: np.ndarray, per_span) -> np.ndarray:
@@ -64,28 +69,41 @@ def gauss_nodes(knots: np.ndarray, spans: np.ndarray, order: int = 3) -> tuple[n
 
 @dataclass(frozen=True)
 class RestRamp:
-    """Jerk-limited start from rest to the rest feed ``f_b`` [mm/s] with tangential jerk ``J_r``
-    [mm/s^3]: ``s(t)`` piecewise cubic, zero acceleration at both ends."""
+    """Jerk-limited start from rest to the ramp feed ``f_r`` [mm/s] with path jerk ``J_r`` [mm/s^3].
+
+    ``accelerating=False``: S-curve, jerk ``+J_r`` then ``-J_r``, zero path acceleration at the joint
+    (duration ``2 sqrt(f_r / J_r)``, length ``f_r sqrt(f_r / J_r)``). ``accelerating=True``: jerk
+    ``+J_r`` only, ``s = J_r t^3 / 6`` up to ``t_r = sqrt(2 f_r / J_r)`` (length ``J_r t_r^3 / 6``); the
+    joint has path acceleration ``J_r t_r``, i.e. ``f_s = 2 / t_r``. The second is what a time-optimal
+    start does, so the spline takes over while still accelerating.
+    """
 
     feed: float
     jerk: float
-
-    @property
-    def half(self) -> float:
-        return float(np.sqrt(self.feed / self.jerk))
+    accelerating: bool = True
 
     @property
     def duration(self) -> float:
-        """``2 sqrt(f_b / J_r)`` [s]."""
-        return 2 * self.half
+        """Ramp time [s]."""
+        k = 2.0 if self.accelerating else 1.0
+        return float(np.sqrt(k * self.feed / self.jerk)) * (1.0 if self.accelerating else 2.0)
 
     @property
     def length(self) -> float:
-        """``f_b sqrt(f_b / J_r)`` [mm]."""
-        return self.feed * self.half
+        """Ramp length ``s_r`` [mm]."""
+        return float(self.profile().evaluate_numpy(np.array([self.duration]), 0)[0, 0])
+
+    def end_controls(self, knots: np.ndarray) -> tuple[float, float]:
+        """``(f_0, f_1)`` of a clamped cubic feed spline (``f_s = 3 (f_1 - f_0) / Delta s`` at its
+        start) that joins the ramp with continuous feed and path acceleration."""
+        slope = 2.0 / self.duration if self.accelerating else 0.0
+        return self.feed, self.feed + slope * (knots[4] - knots[3]) / 3
 
     def profile(self) -> PiecewisePolynomial:
-        T, J = self.half, self.jerk
+        J = self.jerk
+        if self.accelerating:
+            return PiecewisePolynomial(np.array([0.0, self.duration]), np.array([[[0.0], [0.0], [0.0], [J / 6]]]))
+        T = self.duration / 2
         v1, a1, s1 = J * T * T / 2, J * T, J * T**3 / 6
         coeffs = np.array([[0.0, 0.0, 0.0, J / 6], [s1, v1, a1 / 2, -J / 6]])[:, :, None]
         return PiecewisePolynomial(np.array([0.0, T, 2 * T]), coeffs)

@@ -8,9 +8,9 @@ mapped to axis positions ``Q(s)`` of an A/C table-tilting machine by the inverse
 - :func:`optimize_feedrate`: the thesis' method. The feed ``f(s)`` is a cubic B-spline in arc length
   (eq 3.31-3.38); its control points are optimized by IPOPT (CasADi) for minimum time (eq 3.30 /
   3.58) under every axis' velocity, acceleration and jerk limit (eq 3.39-3.56) and a feed cap
-  (eq 3.57), over the whole path or in overlapping windows (§3.5). Rest ends are jerk-limited ramps
-  to a small rest feed (see ``_feedrate_spline``: a feed polynomial in ``s`` cannot start from rest in
-  finite time).
+  (eq 3.57), over the whole path or in overlapping windows (§3.5). Rest ends are constant-jerk
+  ramps in time joined to the spline (see ``_feedrate_spline``: a feed polynomial in ``s`` cannot
+  start from rest in finite time).
 - :func:`reference_ocp`: a direct path-parametrized optimal-control problem in time (states ``s, s',
   s''``, control ``s'''``) to compare against.
 - :func:`constant_feed`: the constant-feed baseline (thesis: 15 mm/s, 20.18 s).
@@ -23,7 +23,7 @@ and a dense check of all limits (:class:`LimitCheck`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.interpolate import BSpline
@@ -41,6 +41,7 @@ from research.optimal._feedrate_check import (
     check,
     limit_ratios,
 )
+from research.optimal._feedrate_ocp import solve_ocp
 from research.optimal._feedrate_spline import (
     FeedTimeLaw,
     RestRamp,
@@ -57,10 +58,11 @@ from research.optimal._feedrate_windows import (
 )
 from research.paths.kinematics5 import TableTiltingAC
 from research.paths.pose_spline import PoseSpline
+from research.piecewise import PiecewisePolynomial
 from research.trajectory import Trajectory
 
 __all__ = ["Binding", "FeedWindowReport", "FeedrateResult", "LimitCheck", "axis_feed_limits", "constant_feed",
-           "optimize_feedrate", "table31_limits"]
+           "optimize_feedrate", "reference_ocp", "table31_limits"]
 
 #: Table 3.1 A / C jerk as printed ([deg/s^3]); read here as rad/s^3, see :func:`table31_limits`
 TABLE31_ROTARY_JERK = (250.0, 200.0)
@@ -99,7 +101,10 @@ class FeedrateResult:
         status, iterations, solve_time [s], build_time [s]: solver outcome (summed over windows).
         windows: window reports (B-spline method).
         knots, control_points: the feed B-spline ``f(s)`` (B-spline method).
-        rest_feed: feed at the joints of the rest ramps [mm/s].
+        rest_feed: creep feed at the ends of non-final windows [mm/s].
+        ramp: the constant-jerk start / stop ramps.
+        path_states: ``(4, N)`` path position ``s`` and its first three time derivatives at the
+            trajectory's sample times [mm, mm/s^k].
     """
 
     trajectory: Trajectory
@@ -117,6 +122,8 @@ class FeedrateResult:
     knots: np.ndarray | None = field(default=None, repr=False)
     control_points: np.ndarray | None = field(default=None, repr=False)
     rest_feed: float = 0.0
+    ramp: RestRamp | None = None
+    path_states: np.ndarray | None = field(default=None, repr=False)
 
     def binding_summary(self) -> str:
         """One line per binding stretch, e.g. ``"  34.1- 36.0 mm  x jerk (1.000)"``."""
@@ -134,6 +141,7 @@ class _Problem:
     checks_per_span: int
     form: str
     objective: str
+    ends: tuple[float, float]  # (f_0, f_1) joining the ramps
 
     @property
     def n(self) -> int:
@@ -159,6 +167,7 @@ def optimize_feedrate(
     window: int | None = None,
     overlap: int | None = None,
     rest_feed: float = 1.0,
+    ramp: str = "s-curve",
     constraint_form: str = "per_axis",
     objective: str = "time",
     sample_period: float = 1e-3,
@@ -179,8 +188,11 @@ def optimize_feedrate(
         window: control points per window (``None``: the whole path in one NLP; thesis: about 20).
         overlap: control points of look-ahead re-solved by the next window (>= 4; default: the
             braking distance from ``F`` under the path's tangential limits, plus 4).
-        rest_feed: feed ``f_b`` at the joints of the jerk-limited rest ramps [mm/s] (also the
-            terminal creep of non-final windows); must be feasible everywhere on the path.
+        rest_feed: creep feed ``f_b`` [mm/s] at the end of every non-final window (zero path
+            acceleration there, see ``_feedrate_windows``); must be feasible everywhere on the path.
+        ramp: start / stop joined to the spline at zero path acceleration (``"s-curve"``, robust)
+            or while still accelerating (``"accelerating"``: closer to the time optimum; falls back
+            to ``"s-curve"`` when the spline's first spans cannot follow it); see ``_feedrate_spline``.
         constraint_form: ``"per_axis"`` (eq 3.41/3.46/3.53) or ``"combined"`` (eq 3.43/3.49/3.56).
         objective: ``"time"`` (``int ds / f``, eq 3.30) or ``"sum"`` (``max sum f_i``, eq 3.58).
         sample_period: ``Ts`` of the returned trajectory [s].
@@ -207,29 +219,41 @@ def optimize_feedrate(
                              f"got {constraint_form!r}, {objective!r}")
     if not (np.isfinite(rest_feed) and 0 < rest_feed < feed):
         raise ParameterError(f"rest_feed must be in (0, feed = {feed}) mm/s, got {rest_feed!r}")
-    ramp = _rest_ramp(path, machine, limits, float(rest_feed))
-    knots = clamped_knots(n, ramp.length, S - ramp.length)
-    problem = _Problem(path, machine, limits, float(feed), knots, float(rest_feed), int(checks_per_span),
-                       constraint_form, objective)
     if overlap is None:
-        overlap = int(np.ceil(_braking_distance(path, machine, limits, feed) / (knots[4] - knots[3]))) + 4
+        overlap = int(np.ceil(_braking_distance(path, machine, limits, feed) / (S / (n - 3)))) + 4
     if window is not None and not (isinstance(window, (int, np.integer)) and 4 <= overlap < window):
         raise ParameterError(f"need 4 <= overlap < window (control points), got window {window!r}, overlap {overlap!r}")
+    if ramp not in ("s-curve", "accelerating"):
+        raise ParameterError(f"ramp must be 's-curve' or 'accelerating', got {ramp!r}")
     schedule = feed_window_schedule(n, window, int(overlap))
-    values = _warm_start(problem)
-    try:
-        values, reports, _ = solve_passes(problem, values, schedule, refinements, tolerance, solver_options)
-    except WindowFailed as exc:
-        raise _failure(exc, problem) from None
+    args = (path, machine, limits, float(rest_feed), float(feed))
+    ramps = [_rest_ramp(*args, None, accelerating=False)]
+    if ramp == "accelerating":
+        # closer to the optimum, but the first spans may be unable to follow the joint (coarse knots,
+        # curved ends): then the S-curve joint, whose constant-feed warm start is feasible
+        ramps = [_rest_ramp(*args, S / (n - 3), accelerating=True), _rest_ramp(*args, None, accelerating=True)] + ramps
+    failed = []
+    for ramp_used in ramps:
+        knots = clamped_knots(n, ramp_used.length, S - ramp_used.length)
+        problem = _Problem(path, machine, limits, float(feed), knots, float(rest_feed), int(checks_per_span),
+                           constraint_form, objective, ramp_used.end_controls(knots))
+        try:
+            values, reports, _ = solve_passes(problem, _warm_start(problem), schedule, refinements, tolerance,
+                                              solver_options)
+            break
+        except WindowFailed as exc:
+            failed.append(exc)
+    else:
+        raise _failure(failed[-1], problem) from None
     spline = BSpline(knots, values, 3, extrapolate=False)
-    law = FeedTimeLaw(spline, ramp, S)
+    law = FeedTimeLaw(spline, ramp_used, S)
     result = _result(path, machine, limits, feed, law.states, law.duration, sample_period,
-                     "bspline" if len(schedule) == 1 else "bspline-windowed", _dense_s(knots, ramp, S))
+                     "bspline" if len(schedule) == 1 else "bspline-windowed", _dense_s(knots, ramp_used, S))
     statuses = [r.status for r in reports]
     return _replace(result, status=next((s for s in statuses if s != "Solve_Succeeded"), "Solve_Succeeded"),
                     iterations=sum(r.iterations for r in reports), solve_time=sum(r.solve_time for r in reports),
                     build_time=sum(r.build_time for r in reports), windows=tuple(reports), knots=knots,
-                    control_points=values, rest_feed=float(rest_feed))
+                    control_points=values, rest_feed=float(rest_feed), ramp=ramp_used)
 
 
 def constant_feed(path: PoseSpline, limits: AxisLimits, feed: float, *, machine: TableTiltingAC | None = None,
@@ -258,6 +282,57 @@ def constant_feed(path: PoseSpline, limits: AxisLimits, feed: float, *, machine:
                    None, times=np.linspace(0.0, T, max(4001, int(T / 1e-3) + 1)), cap=False)
 
 
+def reference_ocp(path: PoseSpline, limits: AxisLimits, feed: float, *, machine: TableTiltingAC | None = None,
+                  intervals: int = 200, checks: int = 1, warm_start: FeedrateResult | None = None,
+                  sample_period: float = 1e-3, solver_options: dict | None = None) -> FeedrateResult:
+    """Minimum-time motion along ``path`` from the direct path-parametrized OCP (states: ``s`` and
+    its first two time derivatives; control: the third; see ``_feedrate_ocp``), the reference for
+    :func:`optimize_feedrate`.
+
+    Args:
+        intervals: ``N`` equal time intervals (piecewise-constant path jerk).
+        checks: extra constraint points inside each interval.
+        warm_start: a schedule along the same path (default: :func:`optimize_feedrate` with one
+            control point per 3 mm).
+
+    Returns:
+        A :class:`FeedrateResult` with ``method = "ocp"``; ``check`` samples 16 points per interval.
+
+    Raises:
+        ParameterError: malformed arguments; InfeasibleProblem: ``feed <= 0`` or IPOPT fails.
+    """
+    machine = machine or TableTiltingAC()
+    _check_args(path, limits, feed, sample_period)
+    if not (isinstance(intervals, (int, np.integer)) and intervals >= 4 and isinstance(checks, (int, np.integer)) and checks >= 0):
+        raise ParameterError(f"need intervals >= 4 and checks >= 0, got {intervals!r}, {checks!r}")
+    if warm_start is None:
+        warm_start = optimize_feedrate(path, limits, feed, machine=machine,
+                                       control_points=max(12, int(np.ceil(path.length / 3)) + 3), refinements=1)
+    ws_t = np.asarray(warm_start.trajectory.t)
+    nodes = np.linspace(0.0, warm_start.cycle_time, intervals + 1)
+    guess = np.vstack([np.interp(nodes, ws_t, x) for x in warm_start.path_states])
+    guess[:, -1] = [path.length, 0.0, 0.0, 0.0]
+    T, X, U, stats = solve_ocp(path, machine, limits, float(feed), int(intervals), guess, warm_start.cycle_time,
+                               int(checks), options=solver_options)
+    if not stats["success"]:
+        err = InfeasibleProblem(f"reference OCP: IPOPT stopped with status {stats['status']!r} after "
+                                f"{stats['iterations']} iterations ({intervals} intervals)")
+        err.status, err.constraint, err.iterations = stats["status"], "ocp", stats["iterations"]
+        raise err
+    h = T / intervals
+    coeffs = np.stack([X[0, :-1], X[1, :-1], X[2, :-1] / 2, U / 6], axis=1)[:, :, None]
+    pp = PiecewisePolynomial(np.arange(intervals + 1) * h, coeffs)
+
+    def states(t):
+        t = np.clip(np.asarray(t, dtype=np.float64), 0.0, T)
+        return tuple(pp.evaluate_numpy(t, nu)[:, 0] for nu in range(4))
+
+    dense = (np.arange(intervals)[:, None] * h + h * np.linspace(0, 1, 17)[None, :]).ravel()
+    result = _result(path, machine, limits, feed, states, T, sample_period, "ocp", None, times=np.unique(dense))
+    return _replace(result, status=stats["status"], iterations=stats["iterations"], solve_time=stats["solve_time"],
+                    build_time=stats["build_time"])
+
+
 # -- shared helpers -----------------------------------------------------------------------------
 def _result(path, machine, limits, feed, states, duration, Ts, method, s_dense, times=None, cap=True) -> FeedrateResult:
     """Trajectory at ``Ts``, dense check on ``s_dense`` (points in ``s``) or ``times``."""
@@ -272,6 +347,7 @@ def _result(path, machine, limits, feed, states, duration, Ts, method, s_dense, 
     ratios = limit_ratios(v, a, j, limits)
     return FeedrateResult(
         trajectory=traj, cycle_time=float(duration), method=method, s=_frozen(ds[0]), feed=_frozen(ds[1]),
+        path_states=_frozen(np.vstack(st)),
         check=check(v, a, j, ds[1], limits, feed if cap else None),
         binding=binding_intervals(ds[0], ratios, ds[1] / feed if cap else None),
     )
@@ -287,13 +363,20 @@ def _times_of(states, s_dense, duration) -> np.ndarray:
 def _dense_s(knots, ramp: RestRamp, S: float) -> np.ndarray:
     spans = np.arange(knots.size - 7)
     inner = span_points(knots, spans, DENSE)
-    r = np.linspace(0.0, ramp.length, 33)
+    r = ramp.profile().evaluate_numpy(np.linspace(0.0, ramp.duration, 65), 0)[:, 0]
     return np.unique(np.concatenate([r, inner, S - r[::-1]]))
 
 
-def _rest_ramp(path, machine, limits: AxisLimits, rest_feed: float) -> RestRamp:
-    """Rest ramp with half the tangential jerk and acceleration the axes allow near the ends; the
-    rest feed itself must be feasible along the whole path (it is the windows' terminal creep)."""
+def _rest_ramp(path, machine, limits: AxisLimits, rest_feed: float, feed: float, spacing: float | None,
+               accelerating: bool) -> RestRamp:
+    """The start / stop ramps (``_feedrate_spline``): path jerk ``J_r`` the smallest ``j_i / |Q_s,i|``
+    over the first and last 0.5 mm; ramp feed ``f_r`` the smallest of ``F / 2``, half the envelope of
+    eq 3.42/3.50/3.54 over the first and last 10 mm, the feed that keeps the ramp's peak acceleration
+    within 90 % of ``a_i / |Q_s,i|`` and, if ``spacing`` is given, the feed at which the ramp
+    is a third of a knot span long (``spacing`` [mm]; shorter ramps leave more to the spline, which
+    then follows the optimal start closely, measured against the OCP); both scaled down until a dense
+    check of the ramps gives at most 99 % of every limit. First checks that the creep ``rest_feed``
+    is feasible everywhere (raises :class:`InfeasibleProblem` where it is not)."""
     S = path.length
     s = np.linspace(0.0, S, max(4001, int(S / 0.05)))
     env = axis_feed_limits(path, limits, s, machine)
@@ -302,16 +385,33 @@ def _rest_ramp(path, machine, limits: AxisLimits, rest_feed: float) -> RestRamp:
         if lim[k, i] < 2 * rest_feed:
             err = InfeasibleProblem(
                 f"feed optimization: the {AXES[i]} {kind} limit allows at most {lim[k, i]:.4g} mm/s at s = {s[k]:.4g} mm "
-                f"(eq 3.42/3.50/3.54), below twice the rest feed {rest_feed:g} mm/s that the start, the stop and the "
-                "window ends creep at; raise the limits or lower rest_feed")
+                f"(eq 3.42/3.50/3.54), below twice the rest feed {rest_feed:g} mm/s that the window ends creep "
+                "at; raise the limits or lower rest_feed")
             err.constraint, err.axis, err.s = kind, AXES[i], float(s[k])
             raise err
-    ends = (s <= 2.0) | (s >= S - 2.0)
-    qs = np.abs(path.axis_derivatives(machine, s[ends]).Q_s).max(axis=0)
+    ends = (s <= min(10.0, S / 4)) | (s >= S - min(10.0, S / 4))
+    envelope = min(float(e[ends].min()) for e in env.values())
+    tips = (s <= min(0.5, S / 8)) | (s >= S - min(0.5, S / 8))  # the dense check below scales J down
+    qs = np.abs(path.axis_derivatives(machine, s[tips]).Q_s).max(axis=0)
     with np.errstate(divide="ignore"):
-        J = 0.5 * float(np.min(limits.jerk / qs))
-        J = min(J, float(np.min((0.5 * limits.acceleration / qs) ** 2)) / rest_feed)
-    return RestRamp(rest_feed, J)
+        J, A = float(np.min(limits.jerk / qs)), 0.9 * float(np.min(limits.acceleration / qs))
+    short = np.inf if spacing is None else 0.5 * J * (2 * spacing / J) ** (2 / 3)  # s_r = spacing / 3
+    f = max(rest_feed, min(0.5 * feed, 0.5 * envelope, A * A / (2 * J) if accelerating else A * A / J, short))
+    for _ in range(20):
+        ramp = RestRamp(f, J, accelerating)
+        if ramp.length > S / 8:
+            f *= 0.5
+            continue
+        tau = np.linspace(0.0, ramp.duration, 201)
+        st = [ramp.profile().evaluate_numpy(tau, nu)[:, 0] for nu in range(4)]
+        worst = 0.0
+        for sign, origin in ((1.0, 0.0), (-1.0, S)):  # the stop ramp is the mirror image
+            _, v, a, j = axis_motion(path, machine, origin + sign * st[0], st[1], sign * st[2], st[3])
+            worst = max(worst, float(limit_ratios(v, a, j, limits).max()))
+        if worst <= 0.99:
+            return ramp
+        J, f = J * 0.99 / worst, max(rest_feed, f * 0.99 / worst)
+    return ramp
 
 
 def _braking_distance(path, machine, limits, feed) -> float:
@@ -324,17 +424,19 @@ def _braking_distance(path, machine, limits, feed) -> float:
 
 
 def _warm_start(problem: _Problem) -> np.ndarray:
-    """Control values: a third of the envelope of eq 3.42/3.50/3.54 (and the cap) around each
-    control point, the two end points at the rest feed."""
+    """Control values: the ramp feed, lowered to half the envelope of eq 3.42/3.50/3.54 (and
+    the cap) within two knot spans of each control point; a constant feed below the envelope is
+    feasible, so this is close to a feasible point. The four end values join the ramps."""
     kn, n = problem.knots, problem.n
     s = span_points(kn, np.arange(n - 3), 4)
     env = axis_feed_limits(problem.path, problem.limits, s, problem.machine)
     low = np.minimum.reduce([e.min(axis=1) for e in env.values()] + [np.full(s.size, problem.feed)])
     greville = np.array([kn[i + 1:i + 4].mean() for i in range(n)])
     h = kn[4] - kn[3]
-    vals = np.array([low[np.abs(s - g) <= 2 * h].min() for g in greville]) / 3
-    vals = np.maximum(vals, problem.rest_feed)
-    vals[[0, 1, -2, -1]] = problem.rest_feed
+    vals = np.array([low[np.abs(s - g) <= 2 * h].min() for g in greville]) / 2
+    vals = np.clip(vals, problem.rest_feed, problem.ends[1])
+    vals[[0, 1]] = problem.ends
+    vals[[-1, -2]] = problem.ends
     return vals
 
 
@@ -368,8 +470,6 @@ def _check_args(path, limits, feed, sample_period) -> None:
 
 
 def _replace(result: FeedrateResult, **kw) -> FeedrateResult:
-    from dataclasses import replace
-
     return replace(result, **kw)
 
 

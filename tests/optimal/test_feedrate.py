@@ -8,7 +8,12 @@ import numpy as np
 import pytest
 
 from research.errors import InfeasibleProblem, ParameterError, PathError
-from research.optimal import constant_feed, optimize_feedrate, table31_limits
+from research.optimal import (
+    constant_feed,
+    optimize_feedrate,
+    reference_ocp,
+    table31_limits,
+)
 from research.optimal._feedrate_spline import RestRamp
 from research.paths.five_axis_library import (
     BLADE_LENGTH,
@@ -29,7 +34,7 @@ def helix():
 
 @pytest.fixture(scope="module")
 def helix_result(helix):
-    return optimize_feedrate(helix, LIM, 150.0, control_points=24)
+    return optimize_feedrate(helix, LIM, 150.0, control_points=40)
 
 
 # -- path derivatives (eq 3.27-3.28) ----------------------------------------------------------------
@@ -78,18 +83,18 @@ def test_binding_is_reported(helix_result):
 
 
 def test_windowed_matches_whole_path(helix, helix_result):
-    # look-ahead 12 control points = 32 mm, about the 41 mm braking distance from 150 mm/s: the
-    # terminal creep of the first window costs 0.1 % here (0.3 % with 10, 2 % with 6)
-    w = optimize_feedrate(helix, LIM, 150.0, control_points=24, window=18, overlap=12)
+    # look-ahead 18 control points = 29 mm, below the 41 mm braking distance from 150 mm/s but the
+    # feed here stays below 90 mm/s: the first window's terminal creep costs 0.5 % (measured)
+    w = optimize_feedrate(helix, LIM, 150.0, control_points=40, window=30, overlap=18)
     assert w.method == "bspline-windowed" and len({r.first for r in w.windows}) >= 2
     assert w.check.worst_ratio <= 1.0 + 2e-3
-    assert w.cycle_time == pytest.approx(helix_result.cycle_time, rel=0.005)
+    assert w.cycle_time == pytest.approx(helix_result.cycle_time, rel=0.01)
 
 
 def test_optimized_beats_constant_conservative_feed(helix, helix_result):
     c = constant_feed(helix, LIM, 15.0)
     assert c.check.worst_ratio < 1.0
-    assert helix_result.cycle_time < 0.6 * c.cycle_time  # 2.38 s against 4.37 s on this 63 mm path
+    assert helix_result.cycle_time < 0.35 * c.cycle_time  # 1.39 s against 4.37 s on this 63 mm path
 
 
 # -- thesis §3.6 numbers ----------------------------------------------------------------------------
@@ -105,14 +110,32 @@ def test_constant_feed_15_mm_s_on_300_mm_path():
     assert c150.check.worst_ratio > 1.5
 
 
-def test_rest_ramp_is_jerk_limited():
-    r = RestRamp(2.0, 500.0)
+@pytest.mark.parametrize("accelerating", [True, False])
+def test_rest_ramp_joins_the_spline(accelerating):
+    r = RestRamp(2.0, 500.0, accelerating)
     pp = r.profile()
-    t = np.linspace(0, r.duration, 101)
-    assert pp.evaluate_numpy(np.array([r.duration]), 0)[0, 0] == pytest.approx(r.length)
-    assert pp.evaluate_numpy(np.array([r.duration]), 1)[0, 0] == pytest.approx(2.0)
-    assert abs(pp.evaluate_numpy(np.array([r.duration]), 2)[0, 0]) < 1e-12
-    assert np.abs(pp.evaluate_numpy(t, 3)).max() <= 500.0 + 1e-9
+    end = np.array([r.duration])
+    assert pp.evaluate_numpy(end, 0)[0, 0] == pytest.approx(r.length)
+    assert pp.evaluate_numpy(end, 1)[0, 0] == pytest.approx(2.0)
+    assert np.abs(pp.evaluate_numpy(np.linspace(0, r.duration, 101), 3)).max() <= 500.0 + 1e-9
+    # the clamped spline's f_s = 3 (f_1 - f_0) / ds equals s'' / s' of the ramp at the joint
+    knots = np.array([0.0] * 4 + [0.3, 0.6, 0.9] + [1.2] * 4)
+    f0, f1 = r.end_controls(knots)
+    slope = pp.evaluate_numpy(end, 2)[0, 0] / pp.evaluate_numpy(end, 1)[0, 0]
+    assert 3 * (f1 - f0) / 0.3 == pytest.approx(slope, abs=1e-12)
+
+
+def test_close_to_the_reference_ocp(helix, helix_result):
+    """The B-spline schedule against the direct path-parametrized OCP on the same path and limits
+    (the yardstick, up to its time grid). Measured on this 63 mm path, dominated by its start and
+    stop: OCP 1.201 s; accelerating joint 1.216 s (+1.3 %); S-curve joint 1.387 s (+15 %)."""
+    acc = optimize_feedrate(helix, LIM, 150.0, control_points=40, ramp="accelerating")
+    assert acc.ramp.accelerating and acc.check.worst_ratio <= 1.0 + 2e-3
+    ocp = reference_ocp(helix, LIM, 150.0, intervals=60, warm_start=acc)
+    assert ocp.status == "Solve_Succeeded"
+    assert ocp.check.worst_ratio <= 1.0 + 2e-3
+    assert ocp.cycle_time <= acc.cycle_time <= 1.03 * ocp.cycle_time
+    assert acc.cycle_time < helix_result.cycle_time <= 1.2 * ocp.cycle_time
 
 
 # -- bad input ---------------------------------------------------------------------------------------
