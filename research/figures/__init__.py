@@ -18,6 +18,7 @@ FIGURE_MODULES = (
     "research.figures.prevost2012_fig6",
     "research.figures.contour_sencer2009_fig4_6",
     "research.figures.identification_ch6",
+    "research.figures.sencer2009_fig3_11",
 )
 
 
