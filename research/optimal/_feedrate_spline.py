@@ -115,12 +115,13 @@ class FeedTimeLaw:
 
     Attributes:
         spline: the feed B-spline ``f(s)`` on ``[s_r, S - s_r]`` [mm/s].
-        ramp: the rest ramps (the stop ramp is the start ramp reversed in time).
+        start, stop: the rest ramps (the stop ramp is run backwards in time from the path end).
         length: ``S`` [mm].
     """
 
     spline: BSpline
-    ramp: RestRamp
+    start: RestRamp
+    stop: RestRamp
     length: float
 
     def _table(self) -> tuple[np.ndarray, np.ndarray]:
@@ -139,7 +140,7 @@ class FeedTimeLaw:
     @property
     def duration(self) -> float:
         """Cycle time ``T_Sigma`` [s]: two ramps and ``int ds / f`` over the spline (Gauss)."""
-        return 2 * self.ramp.duration + self.spline_duration
+        return self.start.duration + self.stop.duration + self.spline_duration
 
     def _cached(self):
         if not hasattr(self, "_tab"):
@@ -157,19 +158,19 @@ class FeedTimeLaw:
         """``(s, s', s'', s''')`` at times ``t`` [s] (clipped to ``[0, duration]``)."""
         t = np.clip(np.atleast_1d(np.asarray(t, dtype=np.float64)), 0.0, self.duration)
         out = [np.zeros_like(t) for _ in range(4)]
-        Tr, T = self.ramp.duration, self.duration
-        ramp = self.ramp.profile()
-        start, stop = t <= Tr, t >= T - Tr
+        Tr, Te, T = self.start.duration, self.stop.duration, self.duration
+        first, last = self.start.profile(), self.stop.profile()
+        start, stop = t <= Tr, t >= T - Te
         mid = ~(start | stop)
         for nu in range(4):
-            out[nu][start] = ramp.evaluate_numpy(t[start], nu)[:, 0]
-        # stop ramp: s(t) = S - r(T - t) => s' = r'(T - t), s'' = -r''(T - t), s''' = r'''(T - t)
+            out[nu][start] = first.evaluate_numpy(t[start], nu)[:, 0]
+        # stop ramp run backwards: s(t) = S - r(T - t), s' = r'(T - t), s'' = -r''(T - t), s''' = r'''(T - t)
         if stop.any():
             tau = T - t[stop]
-            out[0][stop] = self.length - ramp.evaluate_numpy(tau, 0)[:, 0]
-            out[1][stop] = ramp.evaluate_numpy(tau, 1)[:, 0]
-            out[2][stop] = -ramp.evaluate_numpy(tau, 2)[:, 0]
-            out[3][stop] = ramp.evaluate_numpy(tau, 3)[:, 0]
+            out[0][stop] = self.length - last.evaluate_numpy(tau, 0)[:, 0]
+            out[1][stop] = last.evaluate_numpy(tau, 1)[:, 0]
+            out[2][stop] = -last.evaluate_numpy(tau, 2)[:, 0]
+            out[3][stop] = last.evaluate_numpy(tau, 3)[:, 0]
         if mid.any():
             out[0][mid], *rest = self._spline_states(t[mid] - Tr)
             for nu in range(1, 4):

@@ -62,8 +62,10 @@ def feed_window_schedule(n: int, window: int | None, overlap: int) -> list[tuple
 
 
 class WindowFailed(Exception):
-    def __init__(self, solution: WindowSolution, first: int, stop: int):
-        self.solution, self.first, self.stop = solution, first, stop
+    """A window NLP failed; ``solution.values`` holds IPOPT's last point over ``columns``."""
+
+    def __init__(self, solution: WindowSolution, first: int, stop: int, columns: np.ndarray):
+        self.solution, self.first, self.stop, self.columns = solution, first, stop, columns
         super().__init__(solution.status)
 
 
@@ -87,7 +89,7 @@ def solve_passes(problem, values: np.ndarray, schedule, refinements: int, tolera
             data = _window(problem, values, first, stop, last, per_span)
             sol = solve_window(data, options)
             if not sol.success:
-                raise WindowFailed(sol, first, stop)
+                raise WindowFailed(sol, first, stop, data.columns)
             # committed part and look-ahead (the warm start of the next window) alike
             values[data.columns[data.free]] = sol.values[data.free]
             reports.append(FeedWindowReport(first, stop, stop if last else commit, sol.status, sol.iterations,

@@ -102,7 +102,7 @@ class FeedrateResult:
         windows: window reports (B-spline method).
         knots, control_points: the feed B-spline ``f(s)`` (B-spline method).
         rest_feed: creep feed at the ends of non-final windows [mm/s].
-        ramp: the constant-jerk start / stop ramps.
+        ramps: the start and stop ramps (:class:`RestRamp`, B-spline method).
         path_states: ``(4, N)`` path position ``s`` and its first three time derivatives at the
             trajectory's sample times [mm, mm/s^k].
     """
@@ -122,7 +122,7 @@ class FeedrateResult:
     knots: np.ndarray | None = field(default=None, repr=False)
     control_points: np.ndarray | None = field(default=None, repr=False)
     rest_feed: float = 0.0
-    ramp: RestRamp | None = None
+    ramps: tuple[RestRamp, RestRamp] | None = None
     path_states: np.ndarray | None = field(default=None, repr=False)
 
     def binding_summary(self) -> str:
@@ -141,7 +141,8 @@ class _Problem:
     checks_per_span: int
     form: str
     objective: str
-    ends: tuple[float, float]  # (f_0, f_1) joining the ramps
+    start_ends: tuple[float, float]  # (f_0, f_1) joining the start ramp
+    stop_ends: tuple[float, float]  # (f_(n-1), f_(n-2)) joining the stop ramp
 
     @property
     def n(self) -> int:
@@ -226,34 +227,43 @@ def optimize_feedrate(
     if ramp not in ("s-curve", "accelerating"):
         raise ParameterError(f"ramp must be 's-curve' or 'accelerating', got {ramp!r}")
     schedule = feed_window_schedule(n, window, int(overlap))
-    args = (path, machine, limits, float(rest_feed), float(feed))
-    ramps = [_rest_ramp(*args, None, accelerating=False)]
+    s_env = np.linspace(0.0, S, max(4001, int(S / 0.05)))
+    env = axis_feed_limits(path, limits, s_env, machine)
+    _check_creep(s_env, env, float(rest_feed))
+    args = (path, machine, limits, float(rest_feed), float(feed), s_env, env)
+    # per end (start, stop): the joints to try, closest to the optimum first; the S-curve joint
+    # always works (its constant-feed warm start is feasible)
+    options = [[_rest_ramp(*args, end, None, False)] for end in (0, 1)]
     if ramp == "accelerating":
-        # closer to the optimum, but the first spans may be unable to follow the joint (coarse knots,
-        # curved ends): then the S-curve joint, whose constant-feed warm start is feasible
-        ramps = [_rest_ramp(*args, S / (n - 3), accelerating=True), _rest_ramp(*args, None, accelerating=True)] + ramps
-    failed = []
-    for ramp_used in ramps:
-        knots = clamped_knots(n, ramp_used.length, S - ramp_used.length)
+        options = [[_rest_ramp(*args, end, S / (n - 3), True), _rest_ramp(*args, end, None, True)] + options[end]
+                   for end in (0, 1)]
+    level = [0, 0]
+    while True:
+        ramps = (options[0][level[0]], options[1][level[1]])
+        knots = clamped_knots(n, ramps[0].length, S - ramps[1].length)
         problem = _Problem(path, machine, limits, float(feed), knots, float(rest_feed), int(checks_per_span),
-                           constraint_form, objective, ramp_used.end_controls(knots))
+                           constraint_form, objective, ramps[0].end_controls(knots), ramps[1].end_controls(knots))
         try:
             values, reports, _ = solve_passes(problem, _warm_start(problem), schedule, refinements, tolerance,
                                               solver_options)
             break
         except WindowFailed as exc:
-            failed.append(exc)
-    else:
-        raise _failure(failed[-1], problem) from None
+            stepped = False
+            for end in _failed_ends(problem, exc):  # the first spans could not follow this joint
+                if level[end] + 1 < len(options[end]):
+                    level[end] += 1
+                    stepped = True
+            if not stepped:
+                raise _failure(exc, problem) from None
     spline = BSpline(knots, values, 3, extrapolate=False)
-    law = FeedTimeLaw(spline, ramp_used, S)
+    law = FeedTimeLaw(spline, ramps[0], ramps[1], S)
     result = _result(path, machine, limits, feed, law.states, law.duration, sample_period,
-                     "bspline" if len(schedule) == 1 else "bspline-windowed", _dense_s(knots, ramp_used, S))
+                     "bspline" if len(schedule) == 1 else "bspline-windowed", _dense_s(knots, ramps, S))
     statuses = [r.status for r in reports]
     return _replace(result, status=next((s for s in statuses if s != "Solve_Succeeded"), "Solve_Succeeded"),
                     iterations=sum(r.iterations for r in reports), solve_time=sum(r.solve_time for r in reports),
                     build_time=sum(r.build_time for r in reports), windows=tuple(reports), knots=knots,
-                    control_points=values, rest_feed=float(rest_feed), ramp=ramp_used)
+                    control_points=values, rest_feed=float(rest_feed), ramps=ramps)
 
 
 def constant_feed(path: PoseSpline, limits: AxisLimits, feed: float, *, machine: TableTiltingAC | None = None,
@@ -360,26 +370,16 @@ def _times_of(states, s_dense, duration) -> np.ndarray:
     return np.interp(s_dense, s, t)
 
 
-def _dense_s(knots, ramp: RestRamp, S: float) -> np.ndarray:
+def _dense_s(knots, ramps, S: float) -> np.ndarray:
     spans = np.arange(knots.size - 7)
     inner = span_points(knots, spans, DENSE)
-    r = ramp.profile().evaluate_numpy(np.linspace(0.0, ramp.duration, 65), 0)[:, 0]
-    return np.unique(np.concatenate([r, inner, S - r[::-1]]))
+    r0, r1 = (r.profile().evaluate_numpy(np.linspace(0.0, r.duration, 65), 0)[:, 0] for r in ramps)
+    return np.unique(np.concatenate([r0, inner, S - r1[::-1]]))
 
 
-def _rest_ramp(path, machine, limits: AxisLimits, rest_feed: float, feed: float, spacing: float | None,
-               accelerating: bool) -> RestRamp:
-    """The start / stop ramps (``_feedrate_spline``): path jerk ``J_r`` the smallest ``j_i / |Q_s,i|``
-    over the first and last 0.5 mm; ramp feed ``f_r`` the smallest of ``F / 2``, half the envelope of
-    eq 3.42/3.50/3.54 over the first and last 10 mm, the feed that keeps the ramp's peak acceleration
-    within 90 % of ``a_i / |Q_s,i|`` and, if ``spacing`` is given, the feed at which the ramp
-    is a third of a knot span long (``spacing`` [mm]; shorter ramps leave more to the spline, which
-    then follows the optimal start closely, measured against the OCP); both scaled down until a dense
-    check of the ramps gives at most 99 % of every limit. First checks that the creep ``rest_feed``
-    is feasible everywhere (raises :class:`InfeasibleProblem` where it is not)."""
-    S = path.length
-    s = np.linspace(0.0, S, max(4001, int(S / 0.05)))
-    env = axis_feed_limits(path, limits, s, machine)
+def _check_creep(s, env: dict[str, np.ndarray], rest_feed: float) -> None:
+    """The creep ``rest_feed`` must be feasible everywhere (with a factor 2 to spare): it is the
+    terminal feed of every non-final window. Raises :class:`InfeasibleProblem` naming where not."""
     for kind, lim in env.items():
         k, i = np.unravel_index(np.argmin(lim), lim.shape)
         if lim[k, i] < 2 * rest_feed:
@@ -389,29 +389,53 @@ def _rest_ramp(path, machine, limits: AxisLimits, rest_feed: float, feed: float,
                 "at; raise the limits or lower rest_feed")
             err.constraint, err.axis, err.s = kind, AXES[i], float(s[k])
             raise err
-    ends = (s <= min(10.0, S / 4)) | (s >= S - min(10.0, S / 4))
-    envelope = min(float(e[ends].min()) for e in env.values())
-    tips = (s <= min(0.5, S / 8)) | (s >= S - min(0.5, S / 8))  # the dense check below scales J down
-    qs = np.abs(path.axis_derivatives(machine, s[tips]).Q_s).max(axis=0)
+
+
+def _rest_ramp(path, machine, limits: AxisLimits, rest_feed: float, feed: float, s, env, end: int,
+               spacing: float | None, accelerating: bool) -> RestRamp:
+    """The start (``end = 0``) or stop (``end = 1``) ramp (``_feedrate_spline``): path jerk ``J_r``
+    the smallest ``j_i / |Q_s,i|`` over the 0.5 mm at that end; ramp feed ``f_r`` the smallest of
+    ``F / 2``, half the envelope of eq 3.42/3.50/3.54 over the 10 mm at that end, the feed that keeps
+    the ramp's peak acceleration within 90 % of ``a_i / |Q_s,i|`` and, if ``spacing`` is given, the
+    feed at which the ramp is a third of a knot span long (``spacing`` [mm]; shorter ramps leave more
+    to the spline, which then follows the optimal start closely, measured against the OCP); both
+    scaled down until a dense check of the ramp gives at most 99 % of every limit."""
+    S = path.length
+    dist = s if end == 0 else S - s
+    near = dist <= min(10.0, S / 4)
+    envelope = min(float(e[near].min()) for e in env.values())
+    qs = np.abs(path.axis_derivatives(machine, s[dist <= min(0.5, S / 8)]).Q_s).max(axis=0)
     with np.errstate(divide="ignore"):
         J, A = float(np.min(limits.jerk / qs)), 0.9 * float(np.min(limits.acceleration / qs))
     short = np.inf if spacing is None else 0.5 * J * (2 * spacing / J) ** (2 / 3)  # s_r = spacing / 3
     f = max(rest_feed, min(0.5 * feed, 0.5 * envelope, A * A / (2 * J) if accelerating else A * A / J, short))
+    sign, origin = (1.0, 0.0) if end == 0 else (-1.0, S)  # the stop ramp runs backwards from S
     for _ in range(20):
         ramp = RestRamp(f, J, accelerating)
         if ramp.length > S / 8:
             f *= 0.5
             continue
-        tau = np.linspace(0.0, ramp.duration, 201)
-        st = [ramp.profile().evaluate_numpy(tau, nu)[:, 0] for nu in range(4)]
-        worst = 0.0
-        for sign, origin in ((1.0, 0.0), (-1.0, S)):  # the stop ramp is the mirror image
-            _, v, a, j = axis_motion(path, machine, origin + sign * st[0], st[1], sign * st[2], st[3])
-            worst = max(worst, float(limit_ratios(v, a, j, limits).max()))
+        st = [ramp.profile().evaluate_numpy(np.linspace(0.0, ramp.duration, 201), nu)[:, 0] for nu in range(4)]
+        _, v, a, j = axis_motion(path, machine, origin + sign * st[0], st[1], sign * st[2], st[3])
+        worst = float(limit_ratios(v, a, j, limits).max())
         if worst <= 0.99:
             return ramp
         J, f = J * 0.99 / worst, max(rest_feed, f * 0.99 / worst)
     return ramp
+
+
+def _failed_ends(problem: _Problem, exc: WindowFailed) -> list[int]:
+    """Which ends' joints to give up after a failed window: where the failed point violates the
+    limits by more than 1 % within 10 knot spans of the start (0) or of the end (1); both when the
+    violation is elsewhere."""
+    values = _warm_start(problem)
+    values[exc.columns] = exc.solution.values
+    kn = problem.knots
+    s = span_points(kn, np.arange(kn.size - 7), 8)
+    bad = s[problem.ratios(s, values) > 1.01]
+    h = kn[4] - kn[3]
+    ends = [e for e, hit in enumerate((bad <= kn[3] + 10 * h, bad >= kn[-4] - 10 * h)) if hit.any()]
+    return ends or [0, 1]
 
 
 def _braking_distance(path, machine, limits, feed) -> float:
@@ -434,9 +458,9 @@ def _warm_start(problem: _Problem) -> np.ndarray:
     greville = np.array([kn[i + 1:i + 4].mean() for i in range(n)])
     h = kn[4] - kn[3]
     vals = np.array([low[np.abs(s - g) <= 2 * h].min() for g in greville]) / 2
-    vals = np.clip(vals, problem.rest_feed, problem.ends[1])
-    vals[[0, 1]] = problem.ends
-    vals[[-1, -2]] = problem.ends
+    vals = np.clip(vals, problem.rest_feed, max(problem.start_ends[1], problem.stop_ends[1]))
+    vals[[0, 1]] = problem.start_ends
+    vals[[-1, -2]] = problem.stop_ends
     return vals
 
 

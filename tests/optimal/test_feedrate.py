@@ -9,6 +9,7 @@ import pytest
 
 from research.errors import InfeasibleProblem, ParameterError, PathError
 from research.optimal import (
+    axis_feed_limits,
     constant_feed,
     optimize_feedrate,
     reference_ocp,
@@ -130,7 +131,7 @@ def test_close_to_the_reference_ocp(helix, helix_result):
     (the yardstick, up to its time grid). Measured on this 63 mm path, dominated by its start and
     stop: OCP 1.201 s; accelerating joint 1.216 s (+1.3 %); S-curve joint 1.387 s (+15 %)."""
     acc = optimize_feedrate(helix, LIM, 150.0, control_points=40, ramp="accelerating")
-    assert acc.ramp.accelerating and acc.check.worst_ratio <= 1.0 + 2e-3
+    assert all(r.accelerating for r in acc.ramps) and acc.check.worst_ratio <= 1.0 + 2e-3
     ocp = reference_ocp(helix, LIM, 150.0, intervals=60, warm_start=acc)
     assert ocp.status == "Solve_Succeeded"
     assert ocp.check.worst_ratio <= 1.0 + 2e-3
@@ -163,3 +164,43 @@ def test_infeasible_limits_and_feed(helix):
         optimize_feedrate(helix, LIM, 0.0)
     with pytest.raises(ParameterError):
         optimize_feedrate(helix, table31_limits(), 150.0, window=10, overlap=12)
+
+
+def test_kinematic_singularity_raises_path_error():
+    th = np.linspace(-0.3, 0.3, 41)  # the tool axis tilts through vertical: a = 0, c undefined
+    tip = np.column_stack([10 * th, np.zeros_like(th) + 5.0, np.zeros_like(th)])
+    O = np.column_stack([np.sin(th), np.zeros_like(th), np.cos(th)])
+    p = PoseSpline.from_poses(tip, O)
+    with pytest.raises(PathError, match="singularity"):
+        p.axis_derivatives(TableTiltingAC(), np.linspace(0.0, p.length, 201))
+
+
+def test_c_axis_is_unwrapped_on_the_blade_path():
+    p = blade_flank_path(301)
+    d = p.axis_derivatives(TableTiltingAC(), np.linspace(0.0, p.length, 3001))
+    c = d.Q[:, 4]
+    assert np.abs(np.diff(c)).max() < 0.05  # no 2 pi jumps; C sweeps more than a turn
+    assert c.max() - c.min() > 2 * np.pi
+
+
+def test_envelope_bounds_the_optimized_feed(helix, helix_result):
+    """Fig 3.10: each axis' limits reflected on the feed (eq 3.42, 3.50, 3.54) are upper bounds of
+    any feasible feed; eq 3.42 is exactly v_i / |Q_s,i|."""
+    s = np.asarray(helix_result.s)
+    env = axis_feed_limits(helix, LIM, s)
+    d = helix.axis_derivatives(TableTiltingAC(), s)
+    assert np.allclose(env["velocity"], LIM.velocity / np.abs(d.Q_s))
+    bound = np.minimum.reduce([e.min(axis=1) for e in env.values()])
+    assert np.all(np.asarray(helix_result.feed) <= bound * (1 + 2e-3))
+
+
+def test_thesis_combined_constraints_and_sum_objective(helix, helix_result):
+    """Eq 3.49/3.56 combine the axes conservatively (triangle inequality, max of normalized
+    partials), so the schedule is feasible and no faster; the eq 3.58 surrogate (max sum f_i) gives
+    nearly the minimum time on this path."""
+    comb = optimize_feedrate(helix, LIM, 150.0, control_points=40, constraint_form="combined")
+    assert comb.check.worst_ratio <= 1.0 + 2e-3
+    assert comb.cycle_time >= helix_result.cycle_time * (1 - 1e-6)
+    surrogate = optimize_feedrate(helix, LIM, 150.0, control_points=40, objective="sum")
+    assert surrogate.check.worst_ratio <= 1.0 + 2e-3
+    assert surrogate.cycle_time == pytest.approx(helix_result.cycle_time, rel=0.05)
