@@ -69,7 +69,10 @@ class WindowData:
 
 @dataclass(frozen=True)
 class WindowSolution:
-    values: np.ndarray  # (m,) control values over ``columns``
+    """IPOPT's outcome for one window: control values over ``columns`` [mm/s] (fixed ones unchanged),
+    status, iterations, solve / build wall time [s] and the objective (``T`` [s] or the surrogate)."""
+
+    values: np.ndarray
     status: str
     success: bool
     iterations: int

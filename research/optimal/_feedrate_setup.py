@@ -23,6 +23,10 @@ from research.paths.pose_spline import PoseSpline
 
 @dataclass(frozen=True)
 class Problem:
+    """One feed optimization: path, kinematics, limits, feed cap ``F`` [mm/s], the feed knot vector,
+    the creep ``rest_feed`` [mm/s], check points per span, constraint form, objective and the fixed
+    control values joining the start and stop ramps."""
+
     path: PoseSpline
     machine: TableTiltingAC
     limits: AxisLimits
@@ -43,6 +47,7 @@ class Problem:
         return self.path.axis_derivatives(self.machine, s)
 
     def ratios(self, s, values) -> np.ndarray:
+        """Largest limit ratio (axes and feed cap) at ``s`` [mm] for control values ``values``."""
         f, f1, f2 = (basis(self.knots, s, nu) @ values for nu in range(3))
         _, v, a, j = axis_motion(self.path, self.machine, s, f, f * f1, f * (f1 * f1 + f * f2))
         return np.maximum(limit_ratios(v, a, j, self.limits).max(axis=(1, 2)), f / self.feed)

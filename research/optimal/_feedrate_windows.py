@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from research.optimal._feedrate_nlp import WindowData, WindowSolution, solve_window
-from research.optimal._feedrate_spline import basis, gauss_nodes, span_points
+from research.optimal._feedrate_spline import gauss_nodes, span_points
 
 DENSE = 32  # verification points per knot span
 
@@ -136,7 +136,3 @@ def span_worst(problem, values: np.ndarray) -> np.ndarray:
     np.maximum.at(worst, span[on_knot] - 1, ratios[on_knot])
     return worst
 
-
-def feed_states(knots: np.ndarray, values: np.ndarray, s: np.ndarray):
-    """``f, f_s, f_ss`` at ``s`` for control values ``values``."""
-    return tuple(basis(knots, s, nu) @ values for nu in range(3))

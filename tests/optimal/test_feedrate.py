@@ -129,7 +129,7 @@ def test_rest_ramp_joins_the_spline(accelerating):
 def test_close_to_the_reference_ocp(helix, helix_result):
     """The B-spline schedule against the direct path-parametrized OCP on the same path and limits
     (the yardstick, up to its time grid). Measured on this 63 mm path, dominated by its start and
-    stop: OCP 1.201 s; accelerating joint 1.216 s (+1.3 %); S-curve joint 1.387 s (+15 %)."""
+    stop: OCP 1.201 s; accelerating joint 1.216 s (+1.2 %); S-curve joint 1.387 s (+15 %)."""
     acc = optimize_feedrate(helix, LIM, 150.0, control_points=40, ramp="accelerating")
     assert all(r.accelerating for r in acc.ramps) and acc.check.worst_ratio <= 1.0 + 2e-3
     ocp = reference_ocp(helix, LIM, 150.0, intervals=60, warm_start=acc)
