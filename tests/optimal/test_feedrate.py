@@ -204,3 +204,13 @@ def test_thesis_combined_constraints_and_sum_objective(helix, helix_result):
     surrogate = optimize_feedrate(helix, LIM, 150.0, control_points=40, objective="sum")
     assert surrogate.check.worst_ratio <= 1.0 + 2e-3
     assert surrogate.cycle_time == pytest.approx(helix_result.cycle_time, rel=0.05)
+
+
+def test_table31_limits_units():
+    """Table 3.1 in mm and rad; A / C jerk 250 / 200 read as rad/s^3 (literal deg/s^3 on request)."""
+    lim = table31_limits()
+    assert lim.velocity.tolist()[:3] == [250.0] * 3 and lim.acceleration[0] == 2000.0 and lim.jerk[0] == 3000.0
+    assert np.degrees(lim.velocity[3:]) == pytest.approx([166.0, 290.0])
+    assert np.degrees(lim.acceleration[3:]) == pytest.approx([2500.0, 2000.0])
+    assert lim.jerk[3:] == pytest.approx([250.0, 200.0])
+    assert np.degrees(table31_limits("deg").jerk[3:]) == pytest.approx([250.0, 200.0])
