@@ -42,7 +42,8 @@ def max_contour_error(traj: Trajectory, path: Polyline, candidates: int = 16) ->
     peaks = _top_local_extrema(d, candidates)
     t = np.asarray(traj.t)
     lo, hi = t[np.maximum(peaks - 1, 0)], t[np.minimum(peaks + 1, d.size - 1)]
-    best = _golden_min(lambda s: -path.distance(traj.evaluate(s)), lo, hi)
+    f = traj.evaluator()
+    best = _golden_min(lambda s: -path.distance(f(s)), lo, hi)
     return float(max(d.max(), -best.min()))
 
 
@@ -64,7 +65,8 @@ def corner_errors(traj: Trajectory, path: Polyline, candidates: int = 8) -> np.n
     t = np.asarray(traj.t)
     lo, hi = t[np.maximum(idx - 1, 0)], t[np.minimum(idx + 1, q.shape[0] - 1)]
     target = np.repeat(vertices[:, None, :], k, axis=1)
-    refined = _golden_min(lambda s: np.linalg.norm(traj.evaluate(s) - target, axis=-1), lo, hi)
+    f = traj.evaluator()
+    refined = _golden_min(lambda s: np.linalg.norm(f(s) - target, axis=-1), lo, hi)
     return np.minimum(d, refined).min(axis=1)
 
 
@@ -78,14 +80,15 @@ def peak_axis_values(traj: Trajectory, nu: int) -> np.ndarray:
     peak = samples.max(axis=0)
     if traj.exact is None:
         return peak
-    breaks = np.asarray(traj.exact.breaks)
+    f = traj.evaluator()
+    breaks = f.breaks
     # both one-sided values at each break: derivatives of order >= degree jump there
     eps = 1e-12 * max(1.0, float(breaks[-1]))
-    at_breaks = np.abs(np.concatenate([traj.evaluate(breaks - eps, nu), traj.evaluate(breaks + eps, nu)]))
+    at_breaks = np.abs(np.concatenate([f(breaks - eps, nu), f(breaks + eps, nu)]))
     peak = np.maximum(peak, at_breaks.max(axis=0))
     # a jump in the derivative below (e.g. the acceleration of a single FIR filter) makes this one
     # a Dirac impulse: report it as unbounded rather than as the zero seen between the jumps
-    below = traj.evaluate(breaks + eps, nu - 1) - traj.evaluate(breaks - eps, nu - 1)
+    below = f(breaks + eps, nu - 1) - f(breaks - eps, nu - 1)
     scale = np.abs(np.asarray((traj.q, traj.v, traj.a, traj.j)[nu - 1])).max(axis=0)
     jumps = np.abs(below).max(axis=0) > 1e-6 * np.maximum(scale, 1e-300)
     peak = np.where(jumps, np.inf, peak)
@@ -93,7 +96,7 @@ def peak_axis_values(traj: Trajectory, nu: int) -> np.ndarray:
     for a in range(samples.shape[1]):
         peaks = _top_local_extrema(samples[:, a], 4)
         lo, hi = t[np.maximum(peaks - 1, 0)], t[np.minimum(peaks + 1, t.size - 1)]
-        best = _golden_min(lambda s: -np.abs(traj.evaluate(s, nu)[..., a]), lo, hi)
+        best = _golden_min(lambda s: -np.abs(f(s, nu)[..., a]), lo, hi)
         peak[a] = max(peak[a], -best.min())
     return peak
 
@@ -106,7 +109,8 @@ def peak_feed(traj: Trajectory) -> float:
     peaks = _top_local_extrema(f, 8)
     t = np.asarray(traj.t)
     lo, hi = t[np.maximum(peaks - 1, 0)], t[np.minimum(peaks + 1, f.size - 1)]
-    best = _golden_min(lambda s: -np.linalg.norm(traj.evaluate(s, 1), axis=-1), lo, hi)
+    ev = traj.evaluator()
+    best = _golden_min(lambda s: -np.linalg.norm(ev(s, 1), axis=-1), lo, hi)
     return float(max(f.max(), -best.min()))
 
 

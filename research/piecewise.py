@@ -20,6 +20,7 @@ derivatives are zero: motion profiles start and end at rest.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from functools import partial
 
 import equinox as eqx
@@ -148,8 +149,32 @@ class PiecewisePolynomial(eqx.Module):
     def evaluate_numpy(self, t, nu: int = 0, snap: float = 0.0) -> np.ndarray:
         """:meth:`__call__` in NumPy, for concrete arrays: no JAX compilation or dispatch, which
         is cheaper for small or one-off evaluations. ``t`` of any shape ``S``; returns ``S + (A,)``.
-        A break less than ``snap`` [s] after a time counts as at it (that time takes the next piece)."""
-        breaks, coeffs = np.asarray(self.breaks), np.asarray(self.coeffs)
+        A break less than ``snap`` [s] after a time counts as at it (that time takes the next piece).
+        For many calls on one polynomial, build :meth:`numpy_evaluator` once."""
+        return self.numpy_evaluator()(t, nu, snap)
+
+    def numpy_evaluator(self) -> "NumpyPiecewise":
+        """The same function on NumPy copies of the breaks and coefficients (see :class:`NumpyPiecewise`)."""
+        return NumpyPiecewise(np.asarray(self.breaks, dtype=np.float64), np.asarray(self.coeffs, dtype=np.float64))
+
+
+@dataclass(frozen=True)
+class NumpyPiecewise:
+    """A :class:`PiecewisePolynomial` held as NumPy arrays, evaluated with NumPy only: for loops that
+    evaluate one profile many times (golden-section refinements in :mod:`research.metrics`), where
+    the per-call cost of a JAX module's attribute access dominates.
+
+    Attributes:
+        breaks: ``(K + 1,)`` [s]; coeffs: ``(K, d + 1, A)`` ascending local coefficients.
+    """
+
+    breaks: np.ndarray
+    coeffs: np.ndarray
+
+    def __call__(self, t, nu: int = 0, snap: float = 0.0) -> np.ndarray:
+        """Value (``nu = 0``) or ``nu``-th derivative at ``t`` of any shape ``S``; returns ``S + (A,)``
+        (arguments as :meth:`PiecewisePolynomial.evaluate_numpy`)."""
+        breaks, coeffs = self.breaks, self.coeffs
         t = np.asarray(t, dtype=np.float64)
         flat = t.reshape(-1)
         K, deg = coeffs.shape[0], coeffs.shape[1] - 1

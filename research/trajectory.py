@@ -141,9 +141,18 @@ class Trajectory(eqx.Module):
         Exact when the producer stored an analytic profile; otherwise a cubic Hermite interpolant of
         the sampled ``(x, x')`` pair for the requested order (accurate to O(Ts^4) for smooth motion).
         """
-        t = np.asarray(t, dtype=np.float64)
+        return self.evaluator()(t, nu)
+
+    def evaluator(self):
+        """``f(t, nu=0)`` equal to :meth:`evaluate`, with its set-up done once: for callers that
+        evaluate the same trajectory many times (e.g. :mod:`research.metrics`)."""
         if self.exact is not None:
-            return self.exact.evaluate_numpy(t, nu)
+            return self.exact.numpy_evaluator()
+        return self._sampled
+
+    def _sampled(self, t, nu: int = 0) -> np.ndarray:
+        """Cubic Hermite interpolation of the samples (no exact profile)."""
+        t = np.asarray(t, dtype=np.float64)
         if nu > 2:
             raise ParameterError("without an exact profile, derivatives above 2 (jerk) are not interpolated")
         pairs = (self.q, self.v, self.a, self.j)
