@@ -23,6 +23,7 @@ import numpy as np
 
 from research.optimal._feedrate_nlp import WindowData, WindowSolution, solve_window
 from research.optimal._feedrate_spline import gauss_nodes, span_points
+from research.optimal._windowing import window_schedule
 
 DENSE = 32  # verification points per knot span
 
@@ -49,16 +50,9 @@ class FeedWindowReport:
 
 
 def feed_window_schedule(n: int, window: int | None, overlap: int) -> list[tuple[int, int, int]]:
-    """``(first, stop, committed_stop)`` over the free control points ``[2, n - 2)``."""
-    lo, hi = 2, n - 2
-    if window is None or window >= hi - lo:
-        return [(lo, hi, hi)]
-    out, first = [], lo
-    while first + window < hi:
-        out.append((first, first + window, first + window - overlap))
-        first += window - overlap
-    out.append((first, hi, hi))
-    return out
+    """``(first, stop, committed_stop)`` over the free control points ``[2, n - 2)``: the schedule of
+    :func:`research.optimal._windowing.window_schedule`, shifted past the two fixed points at each end."""
+    return [(first + 2, stop + 2, committed + 2) for first, stop, committed in window_schedule(n - 4, window, overlap)]
 
 
 class WindowFailed(Exception):
