@@ -10,6 +10,7 @@ import numpy as np
 from research.limits import AxisLimits
 from research.paths.kinematics5 import TableTiltingAC
 from research.paths.pose_spline import PoseSpline
+from research.optimal._arrays import frozen
 
 AXES = ("x", "y", "z", "a", "c")
 KINDS = ("velocity", "acceleration", "jerk")
@@ -71,7 +72,7 @@ def limit_ratios(v, a, j, limits: AxisLimits) -> np.ndarray:
 def check(v, a, j, sd, limits: AxisLimits, feed: float | None) -> LimitCheck:
     r = limit_ratios(v, a, j, limits).max(axis=0)
     fr = float(np.max(sd) / feed) if feed else float("nan")
-    return LimitCheck(_frozen(r[0]), _frozen(r[1]), _frozen(r[2]), fr, int(np.shape(v)[0]))
+    return LimitCheck(frozen(r[0]), frozen(r[1]), frozen(r[2]), fr, int(np.shape(v)[0]))
 
 
 @dataclass(frozen=True)
@@ -130,9 +131,3 @@ def axis_feed_limits(path: PoseSpline, limits: AxisLimits, s, machine: TableTilt
             "acceleration": np.sqrt(limits.acceleration / np.abs(d.Q_ss)),
             "jerk": np.cbrt(limits.jerk / np.abs(d.Q_sss)),
         }
-
-
-def _frozen(x) -> np.ndarray:
-    x = np.array(x, dtype=np.float64)
-    x.setflags(write=False)
-    return x

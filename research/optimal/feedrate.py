@@ -31,6 +31,7 @@ from scipy.interpolate import BSpline
 from research.errors import InfeasibleProblem, ParameterError
 from research.interpolators.scurve import scurve_profile
 from research.limits import AxisLimits
+from research.optimal._arrays import frozen
 from research.optimal._feedrate_check import (
     AXES,
     Binding,
@@ -337,8 +338,8 @@ def _result(path, machine, limits, feed, states, duration, Ts, method, s_dense, 
     _, v, a, j = axis_motion(path, machine, *ds)
     ratios = limit_ratios(v, a, j, limits)
     return FeedrateResult(
-        trajectory=traj, cycle_time=float(duration), method=method, s=_frozen(ds[0]), feed=_frozen(ds[1]),
-        path_states=_frozen(np.vstack(st)),
+        trajectory=traj, cycle_time=float(duration), method=method, s=frozen(ds[0]), feed=frozen(ds[1]),
+        path_states=frozen(np.vstack(st)),
         check=check(v, a, j, ds[1], limits, feed if cap else None),
         binding=binding_intervals(ds[0], ratios, ds[1] / feed if cap else None),
     )
@@ -389,9 +390,3 @@ def _check_args(path, limits, feed, sample_period) -> None:
 
 def _replace(result: FeedrateResult, **kw) -> FeedrateResult:
     return replace(result, **kw)
-
-
-def _frozen(x) -> np.ndarray:
-    x = np.array(x, dtype=np.float64)
-    x.setflags(write=False)
-    return x

@@ -37,6 +37,7 @@ from research.interpolators.scurve import (
     scurve_profile,
 )
 from research.limits import AxisLimits
+from research.optimal._arrays import frozen
 from research.optimal._ocp import Geometry, PhaseGrid, ProblemSpec, flow
 from research.optimal._warm import grid_from_trajectory
 from research.optimal._windowing import (
@@ -199,7 +200,7 @@ def time_optimal(
     trajectory = _trajectory(solution, N, path.axes, sample_period)
     return TimeOptimalResult(
         trajectory=trajectory,
-        phase_durations=_frozen(solution.durations),
+        phase_durations=frozen(solution.durations),
         status=status,
         iterations=int(sum(r.iterations for r in reports)),
         solve_time=float(sum(r.solve_time for r in reports)),
@@ -235,9 +236,9 @@ def verify(grid: PhaseGrid, intervals: int, path: Polyline, limits: AxisLimits, 
     return Verification(
         max_deviation=dev,
         deviation_ratio=dev / tolerance if tolerance > 0 else (0.0 if dev == 0 else np.inf),
-        velocity_ratio=_frozen(peak(v) / limits.velocity),
-        acceleration_ratio=_frozen(peak(a) / limits.acceleration),
-        jerk_ratio=_frozen(peak(grid.jerks) / limits.jerk),
+        velocity_ratio=frozen(peak(v) / limits.velocity),
+        acceleration_ratio=frozen(peak(a) / limits.acceleration),
+        jerk_ratio=frozen(peak(grid.jerks) / limits.jerk),
         feed_ratio=float(np.linalg.norm(v, axis=1).max() / feed) if feed is not None else float("nan"),
     )
 
@@ -279,7 +280,7 @@ def _exact_stop(path, limits, feed, intervals, sample_period) -> TimeOptimalResu
     _, Ta, Tv = scurve_phases(path.lengths, vmax, along[:, 1], along[:, 2])
     durations = 2 * Ta + Tv
     return TimeOptimalResult(
-        trajectory=traj, phase_durations=_frozen(durations), status="exact stop", iterations=0,
+        trajectory=traj, phase_durations=frozen(durations), status="exact stop", iterations=0,
         solve_time=0.0, build_time=0.0, windows=(), intervals_per_segment=intervals, tolerance=0.0,
         verification=_verify_sampled(traj, path, limits, feed),
     )
@@ -292,9 +293,9 @@ def _verify_sampled(traj: Trajectory, path: Polyline, limits: AxisLimits, feed) 
     dev = float(path.distance(q).max())
     return Verification(
         max_deviation=dev, deviation_ratio=0.0 if dev < 1e-9 else np.inf,
-        velocity_ratio=_frozen(np.abs(v).max(0) / limits.velocity),
-        acceleration_ratio=_frozen(np.abs(a).max(0) / limits.acceleration),
-        jerk_ratio=_frozen(np.abs(j).max(0) / limits.jerk),
+        velocity_ratio=frozen(np.abs(v).max(0) / limits.velocity),
+        acceleration_ratio=frozen(np.abs(a).max(0) / limits.acceleration),
+        jerk_ratio=frozen(np.abs(j).max(0) / limits.jerk),
         feed_ratio=float(np.linalg.norm(v, axis=1).max() / feed) if feed is not None else float("nan"),
     )
 
@@ -302,12 +303,6 @@ def _verify_sampled(traj: Trajectory, path: Polyline, limits: AxisLimits, feed) 
 def _scurve_feed(limits: AxisLimits, feed) -> float:
     """Feed for the S-curve warm start: ``F``, or one above every tangential velocity limit."""
     return float(feed) if feed is not None else float(np.sqrt(limits.n_axes) * limits.velocity.max() * (1 + 1e-9))
-
-
-def _frozen(x) -> np.ndarray:
-    x = np.array(x, dtype=np.float64)
-    x.setflags(write=False)
-    return x
 
 
 def _infeasible(exc: WindowFailure, path: Polyline) -> InfeasibleProblem:
