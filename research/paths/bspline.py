@@ -18,10 +18,9 @@ import numpy as np
 from scipy.interpolate import BSpline
 
 from research.errors import PathError
+from research.paths._arc_length import ArcLength
 from research.paths.polyline import DEFAULT_AXES, Polyline
 
-_GAUSS_NODES, _GAUSS_WEIGHTS = np.polynomial.legendre.leggauss(12)
-_SUBDIVISIONS = 8  # quadrature sub-intervals per knot span
 
 
 @dataclass(frozen=True, eq=False)
@@ -129,54 +128,27 @@ class BSplinePath:
         return cross / np.maximum(np.linalg.norm(d1, axis=1), 1e-300) ** 3
 
     # -- arc length --------------------------------------------------------------------------------
-    def _breaks(self) -> np.ndarray:
-        u0, u1 = self.domain
-        k = np.unique(self.knots[(self.knots >= u0) & (self.knots <= u1)])
-        return np.unique(np.concatenate([np.linspace(a, b, _SUBDIVISIONS + 1) for a, b in zip(k[:-1], k[1:])]))
-
-    def _cumulative(self) -> tuple[np.ndarray, np.ndarray]:
-        """Quadrature break points and the arc length at each [mm]."""
-        if "cumulative" not in self._cache:
-            b = self._breaks()
-            a, h = b[:-1], np.diff(b)
-            nodes = a[:, None] + 0.5 * h[:, None] * (_GAUSS_NODES[None, :] + 1.0)
-            pieces = 0.5 * h * (self.speed(nodes.ravel()).reshape(nodes.shape) @ _GAUSS_WEIGHTS)
-            self._cache["cumulative"] = (b, np.concatenate([[0.0], np.cumsum(pieces)]))
-        return self._cache["cumulative"]
+    def _arc(self) -> ArcLength:
+        """Gauss-Legendre table: 12 nodes on 8 sub-intervals of every knot span."""
+        if "arc" not in self._cache:
+            u0, u1 = self.domain
+            self._cache["arc"] = ArcLength.build(self.knots[(self.knots >= u0) & (self.knots <= u1)], self.speed,
+                                                 order=12, subdivisions=8)
+        return self._cache["arc"]
 
     @property
     def length(self) -> float:
         """Total arc length [mm] (Gauss-Legendre, 12 nodes on 8 sub-intervals of every knot span)."""
-        return float(self._cumulative()[1][-1])
+        return self._arc().total
 
     def arc_length(self, u) -> np.ndarray:
         """Arc length ``s(u) = int_{U_p}^{u} |C'|`` [mm] at parameters ``u``, shape ``(len(u),)``."""
-        b, s = self._cumulative()
-        u = np.clip(np.atleast_1d(np.asarray(u, dtype=np.float64)), b[0], b[-1])
-        i = np.clip(np.searchsorted(b, u, side="right") - 1, 0, b.size - 2)
-        a, h = b[i], u - b[i]
-        nodes = a[:, None] + 0.5 * h[:, None] * (_GAUSS_NODES[None, :] + 1.0)
-        partial = 0.5 * h * (self.speed(nodes.ravel()).reshape(nodes.shape) @ _GAUSS_WEIGHTS)
-        return s[i] + partial
+        return self._arc()(u)
 
     def parameter_at(self, s) -> np.ndarray:
         """Inverse of :meth:`arc_length`: the parameter ``u`` at arc length ``s`` [mm] (clipped to
         ``[0, length]``); Newton on ``s(u) - s``, safeguarded by the quadrature brackets."""
-        b, cum = self._cumulative()
-        s = np.clip(np.atleast_1d(np.asarray(s, dtype=np.float64)), 0.0, cum[-1])
-        i = np.clip(np.searchsorted(cum, s, side="right") - 1, 0, b.size - 2)
-        lo, hi = b[i], b[i + 1]
-        frac = (s - cum[i]) / np.maximum(cum[i + 1] - cum[i], 1e-300)
-        u = lo + frac * (hi - lo)
-        for _ in range(30):
-            f = self.arc_length(u) - s
-            step = f / np.maximum(self.speed(u), 1e-300)
-            u_new = np.clip(u - step, lo, hi)
-            if np.max(np.abs(u_new - u)) < 1e-15:
-                u = u_new
-                break
-            u = u_new
-        return u
+        return self._arc().inverse(s)
 
     # -- discretization and projection --------------------------------------------------------------
     def sample(self, n: int) -> tuple[np.ndarray, np.ndarray]:

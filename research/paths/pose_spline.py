@@ -16,7 +16,6 @@ undefined) raise :class:`~research.errors.PathError` with the parameter and tip 
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -27,10 +26,9 @@ import numpy as np
 from scipy.interpolate import BSpline, make_interp_spline
 
 from research.errors import PathError
+from research.paths._arc_length import ArcLength
 from research.paths.kinematics5 import FiveAxisPath, TableTiltingAC
 
-_GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(8)
-_SUB = 4  # quadrature sub-intervals per knot span
 _CHUNK = 2048  # rows per compiled kinematics call
 CUSP_TURN = np.radians(30.0)  # largest tangent turn between neighbouring quadrature nodes
 
@@ -127,60 +125,37 @@ class PoseSpline:
         u0, u1 = self.domain
         return np.asarray(self._derivative(m)(np.clip(np.atleast_1d(np.asarray(u, dtype=np.float64)), u0, u1)))
 
-    def _nodes(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Quadrature breaks, Gauss nodes ``(B - 1, 8)`` and weights (scaled) over the domain."""
-        if "nodes" not in self._cache:
+    def _arc(self) -> ArcLength:
+        """Tool-tip arc-length table: Gauss-Legendre, 8 nodes on 4 sub-intervals per knot span."""
+        if "arc" not in self._cache:
             u0, u1 = self.domain
-            k = np.unique(self.spline.t[(self.spline.t >= u0) & (self.spline.t <= u1)])
-            b = np.unique(np.concatenate([np.linspace(a, c, _SUB + 1) for a, c in itertools.pairwise(k)]))
-            h = np.diff(b)
-            nodes = b[:-1, None] + 0.5 * h[:, None] * (_GAUSS_X[None, :] + 1.0)
-            self._cache["nodes"] = (b, nodes, 0.5 * h[:, None] * _GAUSS_W[None, :])
-        return self._cache["nodes"]
+            t = self.spline.t
+            self._cache["arc"] = ArcLength.build(t[(t >= u0) & (t <= u1)], self._tip_speed, order=8, subdivisions=4)
+        return self._cache["arc"]
 
-    def _cumulative(self) -> tuple[np.ndarray, np.ndarray]:
-        if "cum" not in self._cache:
-            b, nodes, w = self._nodes()
-            speed = np.linalg.norm(self.pose(nodes.ravel(), 1)[:, :3], axis=1).reshape(nodes.shape)
-            self._cache["cum"] = (b, np.concatenate([[0.0], np.cumsum(np.sum(speed * w, axis=1))]))
-        return self._cache["cum"]
+    def _tip_speed(self, u) -> np.ndarray:
+        """``|dP/du|`` [mm per unit parameter]."""
+        return np.linalg.norm(self.pose(u, 1)[:, :3], axis=1)
 
     @property
     def length(self) -> float:
         """Tool-tip arc length ``S_Sigma`` [mm] (Gauss-Legendre, 8 nodes on 4 sub-intervals per span)."""
-        return float(self._cumulative()[1][-1])
+        return self._arc().total
 
     def arc_length(self, u) -> np.ndarray:
         """Tip arc length ``s(u)`` [mm]."""
-        b, cum = self._cumulative()
-        u = np.clip(np.atleast_1d(np.asarray(u, dtype=np.float64)), b[0], b[-1])
-        i = np.clip(np.searchsorted(b, u, side="right") - 1, 0, b.size - 2)
-        h = u - b[i]
-        nodes = b[i, None] + 0.5 * h[:, None] * (_GAUSS_X[None, :] + 1.0)
-        speed = np.linalg.norm(self.pose(nodes.ravel(), 1)[:, :3], axis=1).reshape(nodes.shape)
-        return cum[i] + 0.5 * h * (speed @ _GAUSS_W)
+        return self._arc()(u)
 
     def parameter_at(self, s) -> np.ndarray:
         """Inverse of :meth:`arc_length`: ``u(s)`` for ``s`` in ``[0, length]`` [mm] (Newton on the
         quadrature, bracketed by the quadrature breaks; converges to ~1e-13 mm)."""
-        b, cum = self._cumulative()
-        s = np.clip(np.atleast_1d(np.asarray(s, dtype=np.float64)), 0.0, cum[-1])
-        i = np.clip(np.searchsorted(cum, s, side="right") - 1, 0, b.size - 2)
-        lo, hi = b[i], b[i + 1]
-        u = lo + (s - cum[i]) / np.maximum(cum[i + 1] - cum[i], 1e-300) * (hi - lo)
-        for _ in range(20):
-            step = (self.arc_length(u) - s) / np.linalg.norm(self.pose(u, 1)[:, :3], axis=1)
-            u = np.clip(u - step, lo, hi)
-            if np.max(np.abs(step), initial=0.0) < 1e-14 * max(1.0, hi[-1]):
-                break
-        return u
+        return self._arc().inverse(s)
 
     def _check_geometry(self) -> None:
         """Cusp / zero-tangent check on the quadrature nodes: the tip speed ``|P_u|`` must stay
         away from zero and the tangent must not turn by more than 30 deg between neighbouring nodes
         (a spline through a cusp either stops there or turns back in a tiny loop)."""
-        _, nodes, _ = self._nodes()
-        u = nodes.ravel()
+        u = self._arc().nodes.ravel()
         d1 = self.pose(u, 1)
         speed = np.linalg.norm(d1[:, :3], axis=1)
         scale = float(np.median(speed))
