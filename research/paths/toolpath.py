@@ -1,0 +1,385 @@
+"""`ToolPath`: a tool path of straight (G01) and circular (G02/G03) blocks, end to end [mm].
+
+What a CAM program describes and a controller interpolates: lines and arcs, the arcs kept as arcs
+(not chords) so an interpolator can treat them as curves. An arc block is a circle about an axis
+``n`` (unit normal of its plane, the motion counter-clockwise about ``n``: ``G3`` in G17 has
+``n = +z``, ``G2`` has ``n = -z``), swept through ``Phi > 0`` rad, possibly helical (a linear
+displacement along ``n``) and possibly a spiral (start and end radius differ, the radius blended
+linearly in angle, as LinuxCNC does for arcs whose end radius is within its tolerance)::
+
+    P(phi) = c + (a0 + (a1 - a0) phi / Phi) n + (r0 + (r1 - r0) phi / Phi) (cos phi e1 + sin phi e2)
+
+with ``e1`` the in-plane unit vector from the centre to the start, ``e2 = n x e1``, ``a0, a1`` the
+axial offsets of start and end from the centre, ``0 <= phi <= Phi``.
+
+Paths of 2 axes may hold arcs (their plane is the xy plane); 1-axis paths hold lines only.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from research.errors import PathError
+from research.paths.polyline import DEFAULT_AXES, Polyline
+
+_GAUSS = np.polynomial.legendre.leggauss(8)
+_QUAD_ANGLE = 0.25 * np.pi  # Gauss-Legendre sub-interval of a spiral / helix length [rad]
+
+
+@dataclass(frozen=True, eq=False)
+class ToolPath:
+    """Blocks ``0 .. M-1``; block ``k`` runs from ``ends[k - 1]`` (``start`` for ``k = 0``) to ``ends[k]``.
+
+    Args:
+        start: ``(d,)`` start point [mm], ``d`` in 1..3.
+        ends: ``(M, d)`` end point of every block [mm].
+        centers: ``(M, d)`` arc centres [mm] (any value, e.g. NaN, for lines); ``None``: all lines.
+        normals: ``(M, 3)`` arc axes (unit vectors; motion counter-clockwise about them) or ``None``.
+        sweeps: ``(M,)`` swept angle [rad]: 0 for a line, ``> 0`` for an arc (``2 pi k`` for ``k``
+            full turns); ``None``: all lines.
+        axes: axis names (default ``x, y, z`` cut to ``d``).
+
+    Raises:
+        PathError: bad shapes, non-finite coordinates, a zero-length block, an arc of zero radius,
+            or an arc whose end point is not where its centre, axis and sweep put it (beyond
+            ``1e-6 * radius + 1e-9`` mm).
+
+    Example:
+        >>> p = ToolPath.from_polyline(Polyline([[0, 0], [10, 0]])).then_arc([10, 10], [10, 5], ccw=True)
+        >>> [round(float(x), 6) for x in p.lengths], p.is_arc.tolist()
+        [10.0, 15.707963], [False, True]
+    """
+
+    start: np.ndarray
+    ends: np.ndarray
+    centers: np.ndarray | None = None
+    normals: np.ndarray | None = None
+    sweeps: np.ndarray | None = None
+    axes: tuple[str, ...] = ()
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def __post_init__(self):
+        start = np.array(self.start, dtype=np.float64).reshape(-1)
+        ends = np.array(self.ends, dtype=np.float64)
+        d = start.shape[0]
+        if not 1 <= d <= 3 or ends.ndim != 2 or ends.shape[1] != d or ends.shape[0] < 1:
+            raise PathError(f"ToolPath needs start (d,) and ends (M, d) with M >= 1, d in 1..3; got {start.shape}, {ends.shape}")
+        M = ends.shape[0]
+        sweeps = np.zeros(M) if self.sweeps is None else np.array(self.sweeps, dtype=np.float64).reshape(-1)
+        if sweeps.shape != (M,) or not np.all(np.isfinite(sweeps)) or np.any(sweeps < 0):
+            raise PathError(f"ToolPath.sweeps must be (M,) = ({M},) finite angles >= 0 rad, got {np.asarray(self.sweeps)!r}")
+        arc = sweeps > 0
+        if arc.any() and d == 1:
+            raise PathError("ToolPath: a 1-axis path cannot hold arcs")
+        centers = np.full((M, d), np.nan) if self.centers is None else np.array(self.centers, dtype=np.float64)
+        normals = np.full((M, 3), np.nan) if self.normals is None else np.array(self.normals, dtype=np.float64)
+        if centers.shape != (M, d) or normals.shape != (M, 3):
+            raise PathError(f"ToolPath.centers must be (M, d) = ({M}, {d}) and normals (M, 3); got {centers.shape}, {normals.shape}")
+        for name, a in (("start", start[None]), ("ends", ends), ("centers", centers[arc]), ("normals", normals[arc])):
+            bad = ~np.isfinite(a)
+            if bad.any():
+                i = int(np.argwhere(bad)[0, 0])
+                raise PathError(f"ToolPath.{name} has a non-finite value in row {i if name != 'centers' and name != 'normals' else int(np.flatnonzero(arc)[i])}")
+        starts = np.vstack([start[None], ends[:-1]])
+        geo = {}
+        if arc.any():
+            k = np.flatnonzero(arc)
+            n = normals[k]
+            norm = np.linalg.norm(n, axis=1)
+            if np.any(np.abs(norm - 1.0) > 1e-9):
+                raise PathError(f"ToolPath arc normal of block {int(k[np.argmax(np.abs(norm - 1.0))])} is not a unit vector")
+            if d == 2 and np.any(np.abs(n[:, 2]) != 1.0):
+                raise PathError("ToolPath: arcs of a 2-axis path must have normals (0, 0, +-1)")
+            geo = _arc_geometry(_lift(starts[k]), _lift(ends[k]), _lift(centers[k]), n, sweeps[k])
+            bad = geo["r0"] <= 1e-9
+            if bad.any():
+                raise PathError(f"ToolPath arc block {int(k[np.argmax(bad)])} has zero radius (centre on its start point)")
+            miss = np.linalg.norm(geo["end_error"], axis=1)
+            allowed = 1e-6 * np.maximum(geo["r0"], geo["r1"]) + 1e-9
+            if np.any(miss > allowed):
+                i = int(np.argmax(miss - allowed))
+                raise PathError(f"ToolPath arc block {int(k[i])}: the end point is {miss[i]:.3g} mm from where its "
+                                "centre, axis and sweep put it; expected a consistent arc")
+            geo["index"] = k
+        chord = np.linalg.norm(ends - starts, axis=1)
+        lengths = chord.copy()
+        if arc.any():
+            lengths[arc] = geo["length"]
+        scale = max(1.0, float(np.max(np.abs(np.vstack([start[None], ends])))))
+        zero = np.flatnonzero(lengths <= 1e-12 * scale)
+        if zero.size:
+            raise PathError(f"ToolPath block {int(zero[0])} has zero length (at {starts[zero[0]].tolist()})")
+        axes = tuple(self.axes) or DEFAULT_AXES[:d]
+        if len(axes) != d:
+            raise PathError(f"ToolPath has {d} coordinates per point but axes {axes}")
+        for name, a in (("start", start), ("ends", ends), ("centers", centers), ("normals", normals), ("sweeps", sweeps)):
+            a.setflags(write=False)
+            object.__setattr__(self, name, a)
+        object.__setattr__(self, "axes", axes)
+        self._cache.update(geo=geo, lengths=lengths, starts=starts)
+
+    # -- construction ------------------------------------------------------------------------
+    @staticmethod
+    def from_polyline(path: Polyline) -> "ToolPath":
+        """The same path with every segment a line block."""
+        return ToolPath(path.points[0], path.points[1:], axes=path.axes)
+
+    def then_arc(self, end, center, *, ccw: bool, turns: int = 0, normal=None) -> "ToolPath":
+        """This path with one more arc block from its end point to ``end`` about ``center`` [mm].
+
+        ``ccw``: counter-clockwise about ``normal`` (default ``+z``, the G17 plane); ``turns``
+        extra full turns. An ``end`` equal to the current end point is a full circle.
+        """
+        d = self.dim
+        n = np.array([0.0, 0.0, 1.0] if normal is None else normal, dtype=np.float64)
+        n = n / np.linalg.norm(n) * (1.0 if ccw else -1.0)
+        s, e, c = _lift(self.ends[-1][None]), _lift(np.asarray(end, float).reshape(1, d)), _lift(np.asarray(center, float).reshape(1, d))
+        e1, e2 = s - c, e - c
+        e1 -= np.sum(e1 * n) * n
+        e2 -= np.sum(e2 * n) * n
+        ang = np.arctan2(np.sum(np.cross(e1, e2) * n), np.sum(e1 * e2)) % (2 * np.pi)
+        if ang <= 1e-12:
+            ang = 2 * np.pi if turns == 0 or ang <= 1e-12 else ang
+        sweep = float(ang) + 2 * np.pi * turns
+        return ToolPath(self.start, np.vstack([self.ends, np.asarray(end, float).reshape(1, d)]),
+                        np.vstack([self.centers, np.asarray(center, float).reshape(1, d)]),
+                        np.vstack([self.normals, n[None]]), np.concatenate([self.sweeps, [sweep]]), self.axes)
+
+    # -- geometry ----------------------------------------------------------------------------
+    @property
+    def dim(self) -> int:
+        return self.start.shape[0]
+
+    @property
+    def n_blocks(self) -> int:
+        return self.ends.shape[0]
+
+    @property
+    def is_arc(self) -> np.ndarray:
+        """``(M,)`` True for arc blocks."""
+        return self.sweeps > 0
+
+    @property
+    def starts(self) -> np.ndarray:
+        """``(M, d)`` start point of every block [mm]."""
+        return self._cache["starts"]
+
+    @property
+    def lengths(self) -> np.ndarray:
+        """``(M,)`` block lengths [mm] (arcs: exact for circles and helices, quadrature for spirals)."""
+        return self._cache["lengths"]
+
+    @property
+    def length(self) -> float:
+        return float(self.lengths.sum())
+
+    @property
+    def radii(self) -> np.ndarray:
+        """``(M,)`` smallest radius of each arc block [mm], ``inf`` for lines."""
+        r = np.full(self.n_blocks, np.inf)
+        g = self._cache["geo"]
+        if g:
+            r[g["index"]] = np.minimum(g["r0"], g["r1"])
+        return r
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """``(M - 1, d)`` junction points between consecutive blocks [mm]."""
+        return self.ends[:-1]
+
+    def tangents(self) -> tuple[np.ndarray, np.ndarray]:
+        """Unit tangents ``(M, d)`` at the start and at the end of every block."""
+        chord = self.ends - self.starts
+        t_in = chord / np.linalg.norm(chord, axis=1, keepdims=True).clip(1e-300)
+        t_out = t_in.copy()
+        g = self._cache["geo"]
+        if g:
+            k = g["index"]
+            for phi, out in ((np.zeros(k.size), t_in), (g["sweep"], t_out)):
+                v = _arc_eval(g, phi, 1)
+                out[k] = (v / np.linalg.norm(v, axis=1, keepdims=True))[:, : self.dim]
+        return t_in, t_out
+
+    def turning_angles(self) -> np.ndarray:
+        """``(M - 1,)`` angle between the end tangent of block ``k`` and the start tangent of ``k + 1`` [rad]."""
+        t_in, t_out = self.tangents()
+        a, b = t_out[:-1], t_in[1:]
+        dot = np.sum(a * b, axis=1)
+        cross = np.linalg.norm(b - a * dot[:, None], axis=1)
+        return np.arctan2(cross, dot)
+
+    def arc_points(self, block: int, phi) -> np.ndarray:
+        """Points ``P(phi)`` of arc block ``block`` at angles ``phi`` [rad] from its start, ``(N, d)``."""
+        g = self._arc_rows(np.array([block]))
+        phi = np.asarray(phi, dtype=np.float64).reshape(-1)
+        return _arc_eval(_take(g, np.zeros(phi.size, dtype=np.int64)), phi, 0)[:, : self.dim]
+
+    def arc_derivatives(self, block: int, phi, order: int) -> np.ndarray:
+        """``d^order P / d phi^order`` of arc block ``block`` at ``phi`` [mm / rad^order], ``(N, d)``."""
+        g = self._arc_rows(np.array([block]))
+        phi = np.asarray(phi, dtype=np.float64).reshape(-1)
+        return _arc_eval(_take(g, np.zeros(phi.size, dtype=np.int64)), phi, order)[:, : self.dim]
+
+    def _arc_rows(self, blocks: np.ndarray) -> dict:
+        g = self._cache["geo"]
+        where = {int(k): i for i, k in enumerate(g.get("index", []))}
+        rows = [where.get(int(b), -1) for b in blocks]
+        if min(rows) < 0:
+            raise PathError(f"ToolPath block {int(blocks[rows.index(-1)])} is not an arc")
+        return _take(g, np.asarray(rows))
+
+    def to_polyline(self, chord_tolerance: float = 1e-3) -> tuple[Polyline, np.ndarray]:
+        """Chords through every block: arcs cut into equal angles with sagitta <= ``chord_tolerance`` [mm].
+
+        Returns:
+            ``(polyline, block)``: the chords and the block index of every chord ``(M_chords,)``.
+        """
+        pts, owner = [self.start[None]], []
+        g = self._cache["geo"]
+        row = {int(k): i for i, k in enumerate(g.get("index", []))}
+        for k in range(self.n_blocks):
+            if k in row:
+                r = max(g["r0"][row[k]], g["r1"][row[k]])
+                step = min(4.0 * np.arcsin(np.sqrt(min(chord_tolerance / (2.0 * r), 1.0))), 0.5 * np.pi)
+                n = max(1, int(np.ceil(g["sweep"][row[k]] / step)))
+                phi = g["sweep"][row[k]] * np.arange(1, n + 1) / n
+                p = self.arc_points(k, phi)
+                p[-1] = self.ends[k]
+                pts.append(p)
+                owner += [k] * n
+            else:
+                pts.append(self.ends[k][None])
+                owner.append(k)
+        return Polyline(np.vstack(pts), self.axes), np.asarray(owner, dtype=np.int64)
+
+    # -- distance ----------------------------------------------------------------------------
+    def distance(self, query) -> np.ndarray:
+        """Distance [mm] from each query point ``(N, d)`` to the path, ``(N,)``: exact for lines and
+        planar arcs, three safeguarded Newton steps in the angle for helices and spirals (below
+        1 nm for pitches and radius changes of CAM programs)."""
+        q = np.asarray(query, dtype=np.float64).reshape(-1, self.dim)
+        if not np.all(np.isfinite(q)):
+            raise PathError("ToolPath.distance: query points contain NaN or inf")
+        tree, owner, h = self._tree()
+        _, nearest = tree.query(q)
+        best = self._block_distance(q, owner[nearest])
+        candidates = tree.query_ball_point(q, best + 0.5 * h + 1e-12)
+        lens = np.fromiter((len(c) for c in candidates), dtype=np.int64, count=len(candidates))
+        rows = np.repeat(np.arange(len(q)), lens)
+        if rows.size:
+            blocks = owner[np.concatenate([np.asarray(c, dtype=np.int64) for c in candidates])]
+            pair = np.unique(rows * self.n_blocks + blocks)
+            rows, blocks = pair // self.n_blocks, pair % self.n_blocks
+            np.minimum.at(best, rows, self._block_distance(q[rows], blocks))
+        return best
+
+    def _block_distance(self, q: np.ndarray, blocks: np.ndarray) -> np.ndarray:
+        a, b = self.starts[blocks], self.ends[blocks]
+        ab = b - a
+        u = np.clip(np.sum((q - a) * ab, axis=1) / np.sum(ab * ab, axis=1), 0.0, 1.0)
+        out = np.linalg.norm(q - (a + u[:, None] * ab), axis=1)
+        arc = self.is_arc[blocks]
+        if arc.any():
+            g = self._arc_rows(blocks[arc])
+            out[arc] = _arc_distance(g, _lift(q[arc]))
+        return out
+
+    def _tree(self):
+        if "tree" not in self._cache:
+            h = float(np.median(self.lengths))
+            pieces = np.maximum(1, np.ceil(self.lengths / h).astype(np.int64))
+            owner = np.repeat(np.arange(self.n_blocks), pieces)
+            first = np.repeat(np.cumsum(pieces) - pieces, pieces)
+            frac = (np.arange(owner.size) - first + 0.5) / pieces[owner]
+            centres = self.starts[owner] + frac[:, None] * (self.ends[owner] - self.starts[owner])
+            arc = self.is_arc[owner]
+            if arc.any():
+                g = self._arc_rows(owner[arc])
+                centres[arc] = _arc_eval(g, frac[arc] * g["sweep"], 0)[:, : self.dim]
+            # a sample point is within half an arc-length step (<= h / 2) of every point it stands for
+            step = self.lengths[owner] / pieces[owner]
+            self._cache["tree"] = (cKDTree(centres), owner, float(step.max()))
+        return self._cache["tree"]
+
+
+def _lift(p: np.ndarray) -> np.ndarray:
+    """Pad points ``(N, d)`` to 3 coordinates."""
+    return np.pad(p, ((0, 0), (0, 3 - p.shape[1])))
+
+
+def _take(g: dict, rows: np.ndarray) -> dict:
+    return {k: v[rows] for k, v in g.items() if k not in ("index", "end_error")}
+
+
+def _arc_geometry(s, e, c, n, sweep) -> dict:
+    """Frame, radii, axial offsets and length of arcs (all arrays ``(K, ...)``)."""
+    rs, re = s - c, e - c
+    a0, a1 = np.sum(rs * n, axis=1), np.sum(re * n, axis=1)
+    p0 = rs - a0[:, None] * n
+    r0 = np.linalg.norm(p0, axis=1)
+    e1 = p0 / np.maximum(r0, 1e-300)[:, None]
+    e2 = np.cross(n, e1)
+    r1 = np.linalg.norm(re - a1[:, None] * n, axis=1)
+    g = dict(c=c, n=n, e1=e1, e2=e2, r0=r0, r1=r1, a0=a0, a1=a1, sweep=sweep)
+    g["end_error"] = _arc_eval(g, sweep, 0) - e
+    # length: closed form for constant radius, Gauss-Legendre otherwise
+    pitch = (a1 - a0) / sweep
+    length = np.sqrt(r0**2 + pitch**2) * sweep
+    spiral = np.abs(r1 - r0) > 1e-12 * np.maximum(r0, 1.0)
+    for i in np.flatnonzero(spiral):
+        m = max(1, int(np.ceil(sweep[i] / _QUAD_ANGLE)))
+        x, w = _GAUSS
+        lo = sweep[i] * np.arange(m) / m
+        phi = (lo[:, None] + 0.5 * sweep[i] / m * (x[None, :] + 1.0)).ravel()
+        gi = _take({k: v for k, v in g.items()}, np.full(phi.size, i))
+        length[i] = 0.5 * sweep[i] / m * np.sum(np.tile(w, m) * np.linalg.norm(_arc_eval(gi, phi, 1), axis=1))
+    g["length"] = length
+    return g
+
+
+def _arc_eval(g: dict, phi: np.ndarray, order: int) -> np.ndarray:
+    """``d^order P / d phi^order`` (3-D) at ``phi`` for arc rows ``g`` (one row per ``phi``)."""
+    sweep = g["sweep"]
+    dr, da = (g["r1"] - g["r0"]) / sweep, (g["a1"] - g["a0"]) / sweep
+    r = g["r0"] + dr * phi
+    cos, sin = np.cos(phi)[:, None], np.sin(phi)[:, None]
+    e1, e2, n = g["e1"], g["e2"], g["n"]
+    # d^k/dphi^k of (cos e1 + sin e2) = rotation by k * 90 deg
+    rot = [(cos, sin), (-sin, cos), (-cos, -sin), (sin, -cos)]
+
+    def ring(k):
+        a, b = rot[k % 4]
+        return a * e1 + b * e2
+
+    if order == 0:
+        return g["c"] + (g["a0"] + da * phi)[:, None] * n + r[:, None] * ring(0)
+    # Leibniz on r(phi) * ring(phi): r is linear
+    out = r[:, None] * ring(order) + order * dr[:, None] * ring(order - 1)
+    if order == 1:
+        out = out + da[:, None] * n
+    return out
+
+
+def _arc_distance(g: dict, q: np.ndarray) -> np.ndarray:
+    """Distance from ``q`` (3-D, one per row of ``g``) to the arcs: projection angle, clamped to the
+    sweep, then safeguarded Newton on ``|P(phi) - q|^2`` (exact in one step for planar circles)."""
+    rel = q - g["c"]
+    x, y = np.sum(rel * g["e1"], axis=1), np.sum(rel * g["e2"], axis=1)
+    base = np.arctan2(y, x) % (2 * np.pi)
+    sweep = g["sweep"]
+    # candidate angles: every turn of the projection inside the sweep, and both ends
+    turns = int(np.ceil(np.max(sweep) / (2 * np.pi))) + 1
+    cands = [np.zeros_like(base), sweep] + [np.clip(base + 2 * np.pi * k, 0.0, sweep) for k in range(turns)]
+    best = np.full(q.shape[0], np.inf)
+    for phi in cands:
+        for _ in range(3):
+            e = _arc_eval(g, phi, 0) - q
+            d1, d2 = _arc_eval(g, phi, 1), _arc_eval(g, phi, 2)
+            slope = np.sum(e * d1, axis=1)
+            curv = np.sum(d1 * d1, axis=1) + np.sum(e * d2, axis=1)
+            phi = np.clip(np.where(curv > 0, phi - slope / np.where(curv > 0, curv, 1.0), phi), 0.0, sweep)
+        best = np.minimum(best, np.linalg.norm(_arc_eval(g, phi, 0) - q, axis=1))
+    return best
