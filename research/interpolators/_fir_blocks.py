@@ -1,0 +1,140 @@
+"""Velocity pulses of line and arc blocks, and the exact FIR-filtered profile built from them.
+
+Sencer 2015 eq 5 turns a G01 block into a rectangular velocity pulse ``F u`` of length
+``T_v = L / F``. An arc block (beyond the paper) is the same pulse with a turning direction: the
+input position runs along the arc at constant angular rate, ``phi(t) = Phi t / T_v``, so its
+velocity is ``P'(phi) Phi / T_v``. Its components are sinusoids, which a piecewise polynomial
+cannot hold exactly; each arc is cut into sub-arcs of at most :data:`SUB_ARC` rad and ``dP/du``
+(``u`` the fraction of the block) is interpolated at :data:`DEGREE` + 1 Chebyshev nodes per
+sub-arc, with the constant term corrected so that every sub-arc integrates exactly to its chord:
+positions never drift. The interpolation error of a degree-5 fit over pi/8 is about
+``(pi/16)^6 / (6! 2^5) = 2.5e-9`` of the arc speed, so a 100 mm arc is reproduced to well under a
+nanometre, and the filtered profile stays exact for that polynomial input.
+
+The pulse table (one row per piece: block, gap or motion, geometric coefficients) depends on the
+geometry only; feeds and overlaps scale it to time in :func:`build_profile` (jitted, shapes
+bucketed so paths of similar size share compiled code).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from research.paths.toolpath import ToolPath
+from research.piecewise import PiecewisePolynomial, bucket_size
+
+#: largest sub-arc angle of one polynomial velocity piece [rad]
+SUB_ARC = np.pi / 8
+#: degree of the polynomial velocity of an arc piece
+DEGREE = 5
+
+
+@dataclass(frozen=True)
+class PulseTable:
+    """Velocity pieces of a tool path in block-fraction units, padded to bucketed sizes.
+
+    Attributes:
+        block: ``(P,)`` block of each piece (``M_pad`` for padding).
+        gap: ``(P,)`` True for the dwell piece after a block (its length is that corner's gap).
+        fraction: ``(P,)`` share of the block's pulse time ``T_v`` taken by a motion piece.
+        geo: ``(P, DEGREE + 1 or 1, d)`` coefficients of ``dP/du`` [mm] in powers of the local block
+            fraction ``u'`` (motion pieces; 0 for gaps and padding).
+        n_blocks: real blocks ``M``; ``m_pad``: padded block count.
+    """
+
+    block: np.ndarray
+    gap: np.ndarray
+    fraction: np.ndarray
+    geo: np.ndarray
+    n_blocks: int
+    m_pad: int
+
+    @staticmethod
+    def from_path(path: ToolPath) -> "PulseTable":
+        M, d = path.n_blocks, path.dim
+        arc = path.is_arc
+        deg = DEGREE if arc.any() else 0
+        n_sub = np.ones(M, dtype=np.int64)
+        n_sub[arc] = np.maximum(1, np.ceil(path.sweeps[arc] / SUB_ARC)).astype(np.int64)
+        # layout per block: its motion pieces, then its gap piece (the last block has none)
+        per_block = n_sub + 1
+        per_block[-1] -= 1
+        P = int(per_block.sum())
+        first = np.concatenate([[0], np.cumsum(per_block)[:-1]])
+        block = np.repeat(np.arange(M), per_block)
+        local = np.arange(P) - first[block]
+        gap = local == n_sub[block]
+        fraction = np.where(gap, 0.0, 1.0 / n_sub[block])
+        geo = np.zeros((P, deg + 1, d))
+        lines = ~arc[block] & ~gap
+        geo[lines, 0, :] = (path.ends - path.starts)[block[lines]]  # dP/du = L u for a line
+        for k in np.flatnonzero(arc):
+            rows = first[k] + np.arange(n_sub[k])
+            geo[rows] = _arc_pieces(path, int(k), int(n_sub[k]))
+        Pp, Mp = bucket_size(P), bucket_size(M)
+        pad = Pp - P
+        return PulseTable(
+            np.concatenate([block, np.full(pad, Mp)]), np.concatenate([gap, np.ones(pad, bool)]),
+            np.concatenate([fraction, np.zeros(pad)]), np.concatenate([geo, np.zeros((pad,) + geo.shape[1:])]),
+            M, Mp,
+        )
+
+
+def _arc_pieces(path: ToolPath, k: int, n: int) -> np.ndarray:
+    """``(n, DEGREE + 1, d)`` coefficients of ``dP/du`` on the ``n`` equal sub-arcs of arc ``k``,
+    in powers of ``u' = u - u_i`` (block fraction ``u = phi / Phi``)."""
+    sweep = float(path.sweeps[k])
+    h = 1.0 / n
+    x = 0.5 * (1.0 - np.cos(np.pi * (np.arange(DEGREE + 1) + 0.5) / (DEGREE + 1)))  # Chebyshev nodes in [0, 1]
+    vander = np.vander(x, DEGREE + 1, increasing=True)
+    out = np.empty((n, DEGREE + 1, path.dim))
+    ends = path.arc_points(k, sweep * h * np.arange(n + 1))
+    ends[0], ends[-1] = path.starts[k], path.ends[k]
+    for i in range(n):
+        u = h * (i + x)
+        vel = path.arc_derivatives(k, sweep * u, 1) * sweep  # dP/du
+        b = np.linalg.solve(vander, vel)  # coefficients in x = u' / h
+        # exact chord: integral over the piece = h * sum b_m / (m + 1)
+        b[0] += (ends[i + 1] - ends[i]) / h - np.sum(b / np.arange(1, DEGREE + 2)[:, None], axis=0)
+        out[i] = b / h ** np.arange(DEGREE + 1)[:, None]
+    return out
+
+
+@jax.jit
+def build_profile(start, geo, block, gap, fraction, pulse_times, gaps, delays):
+    """Schedule the pulses and filter them exactly.
+
+    Args:
+        start: ``(d,)`` start point [mm]; ``geo, block, gap, fraction``: a :class:`PulseTable`.
+        pulse_times: ``(M_pad,)`` pulse length ``T_v`` of each block [s] (padding: any positive value).
+        gaps: ``(M_pad,)`` dwell after each block [s], ``T_d - T_k`` (0 after the last and on padding).
+        delays: ``(n,)`` filter delays [s].
+
+    Returns:
+        ``(block_starts (M_pad,), position PiecewisePolynomial, centre (M_pad,))``: the start of each
+        block's pulse, the exact position, and the time at which the averaging window is centred on
+        each corner's gap (the bisector point of eq 13/14).
+    """
+    Tv = jnp.concatenate([pulse_times, jnp.ones(1)])
+    gp = jnp.concatenate([gaps, jnp.zeros(1)])
+    durations = jnp.where(gap, gp[block], fraction * Tv[block])
+    breaks = jax.lax.cummax(jnp.concatenate([jnp.zeros(1), jnp.cumsum(durations)]))
+    powers = jnp.arange(geo.shape[1], dtype=jnp.float64)
+    scale = Tv[block][:, None] ** -(powers[None, :] + 1.0)  # d/dt = (1 / T_v) d/du, u' = tau / T_v
+    coeffs = jnp.where(gap[:, None, None], 0.0, geo * scale[:, :, None])
+    velocity = PiecewisePolynomial(breaks, coeffs)
+    for i in range(delays.shape[0]):
+        velocity = velocity.moving_average(delays[i])
+    position = velocity.antiderivative(start)
+    M = pulse_times.shape[0]
+    # start of every block = break at its first piece; the first piece of block k is the first row with block == k
+    first = jnp.searchsorted(block, jnp.arange(M), side="left")
+    starts = breaks[first]
+    ends = starts + pulse_times
+    Td = jnp.sum(delays)
+    centre = ends + 0.5 * gaps + 0.5 * Td
+    return starts, position, centre

@@ -1,0 +1,177 @@
+"""Look-ahead feeds for FIR cornering of arcs and chains of short blocks (beyond Sencer 2015).
+
+The paper bounds the error of one corner between two long blocks (eq 13/14). On CAM programs the
+averaging window ``T_d`` spans many blocks, and what it averages is the path itself. Two closed
+forms of the FIR chain's kernel give feeds that keep the tolerance there:
+
+* **Arcs** (eq 8): a constant-speed circular motion of radius ``R`` at feed ``F`` comes out of the
+  chain as a circle of radius ``R prod_i sinc(Omega T_i / 2)``, ``Omega = F / R``, with
+  ``sinc(x) = sin(x) / x``. The radial error ``R (1 - prod sinc)`` rises with ``F``; the arc's feed
+  is the largest one that keeps it within the tolerance (:func:`arc_feed_caps`).
+* **Chains of short blocks**: with full overlap and a constant feed ``F`` the input position runs
+  the path at ``F`` and each direction change ``du_i`` (at arc length ``s_i``) is a velocity step
+  ``F du_i``. The output, taken at the instant the window is centred on a vertex at ``s_j``, is
+  displaced from that vertex by exactly (superposition of eq 13/14's bisector term)::
+
+      d_j(F) = F sum_i du_i H2(T_d / 2 - |s_i - s_j| / F),   |s_i - s_j| < F T_d / 2,
+
+  with ``H2`` the second integral of the chain's impulse response (``_fir_chain``). For one
+  isolated corner this is eq 13/14 at full overlap; for a circle tessellated into chords it is the
+  sinc shrink above (to the chord error); for chords that zigzag about a smooth curve (rounded
+  CAM coordinates) the alternating ``du_i`` cancel, which the per-corner rule cannot see.
+  ``|d_j|`` bounds the distance from the vertex to the trajectory; the largest feed with
+  ``|d_j(F)| <= eps`` is found by bisection (:func:`chain_feeds`), each evaluation ``O(2^n)`` per
+  vertex through prefix sums of ``du_i s_i^m`` (``H2`` is a truncated power of degree ``n + 1``).
+
+Where a single sharp corner needs a slow-down, the paper's dwell (partial overlap, eq 13/14) is
+cheaper; :func:`plan_corners` picks per corner the option of lower estimated time. Everything is
+verified on the exact profile afterwards (``fir``), so these feeds are a starting point whose
+quality sets the cycle time, not the tolerance.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+
+from research.interpolators._fir_chain import kernel_second_integral
+
+_BISECTION_STEPS = 48  # feed resolution F_max / 2^48
+
+
+def _subsets(delays: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Sums ``sigma_S`` and signs ``(-1)^|S|`` over all subsets of the filters."""
+    sums, signs = [], []
+    for pick in itertools.product((0, 1), repeat=delays.size):
+        sums.append(float(np.dot(pick, delays)))
+        signs.append((-1.0) ** sum(pick))
+    return np.asarray(sums), np.asarray(signs)
+
+
+def arc_feed_caps(radii: np.ndarray, delays: np.ndarray, tolerance: np.ndarray, feed: np.ndarray) -> np.ndarray:
+    """Largest feed ``<= feed`` [mm/s] whose steady radial error ``R (1 - prod sinc(F T_i / 2R))``
+    (eq 8) is at most ``tolerance`` [mm]; ``feed`` where ``radii`` is ``inf`` (lines).
+
+    Example (Sencer-style 60/30 ms filters, R = 20 mm, eps = 50 um; small-angle form
+    ``F ~ sqrt(24 R eps / sum T_i^2) = 73.0 mm/s``):
+        >>> round(float(arc_feed_caps(np.array([20.0]), np.array([0.06, 0.03]), np.array([0.05]), np.array([150.0]))[0]), 1)
+        73.0
+    """
+    r = np.asarray(radii, dtype=np.float64)
+    d = np.asarray(delays, dtype=np.float64)
+    out = np.array(np.broadcast_to(feed, r.shape), dtype=np.float64)
+    arc = np.isfinite(r)
+    if not arc.any():
+        return out
+    R, eps, hi = r[arc], np.broadcast_to(tolerance, r.shape)[arc], out[arc]
+
+    def error(F):
+        x = F[:, None] * d[None, :] / (2.0 * R[:, None])
+        return R * (1.0 - np.prod(np.sinc(x / np.pi), axis=1))
+
+    # the shrink is monotone while the argument stays below pi (the first zero of sinc)
+    hi = np.minimum(hi, 2.0 * np.pi * R / d.max())
+    ok = error(hi) <= eps
+    lo = np.where(ok, hi, 0.0)
+    top = hi.copy()
+    for _ in range(_BISECTION_STEPS):
+        mid = 0.5 * (lo + top)
+        good = error(mid) <= eps
+        lo = np.where(ok, lo, np.where(good, mid, lo))
+        top = np.where(ok | good, top, mid)
+    out[arc] = lo
+    return out
+
+
+class ChainError:
+    """``|d_j(F)|`` of the module docstring for query points on one turn list.
+
+    Args:
+        s: ``(T,)`` arc length of every direction change [mm], non-decreasing.
+        du: ``(T, d)`` direction change ``u_{i+1} - u_i`` there.
+        delays: filter delays [s].
+    """
+
+    def __init__(self, s: np.ndarray, du: np.ndarray, delays: np.ndarray):
+        self.delays = np.sort(np.asarray(delays, dtype=np.float64))[::-1]
+        self.p = self.delays.size + 1
+        self.Td = float(self.delays.sum())
+        self.norm = 1.0 / (math.factorial(self.p) * float(np.prod(self.delays)))
+        sums, signs = _subsets(self.delays)
+        keep = sums < 0.5 * self.Td
+        self.rho, self.sign = 0.5 * self.Td - sums[keep], signs[keep]
+        self.origin = 0.5 * (float(s[0]) + float(s[-1])) if s.size else 0.0
+        self.s = np.asarray(s, dtype=np.float64) - self.origin
+        du = np.asarray(du, dtype=np.float64)
+        # prefix sums of du * s^m, m = 0 .. p
+        self.prefix = [np.vstack([np.zeros((1, du.shape[1])), np.cumsum(du * (self.s ** m)[:, None], axis=0)])
+                       for m in range(self.p + 1)]
+        self.binom = [math.comb(self.p, m) for m in range(self.p + 1)]
+
+    def __call__(self, s_query: np.ndarray, feed: np.ndarray) -> np.ndarray:
+        """``|d_j|`` [mm] at arc lengths ``s_query`` [mm] for feeds ``feed`` [mm/s] (both ``(J,)``)."""
+        q = np.asarray(s_query, dtype=np.float64) - self.origin
+        F = np.asarray(feed, dtype=np.float64)
+        total = np.zeros((q.size, self.prefix[0].shape[1]))
+        at = np.searchsorted(self.s, q, side="left")
+        for rho, sign in zip(self.rho, self.sign):
+            R = F * rho
+            b = np.searchsorted(self.s, q + R, side="left")
+            a = np.searchsorted(self.s, q - R, side="right")
+            right, left = R + q, R - q
+            for m in range(self.p + 1):
+                c = self.binom[m]
+                pr, pl = self.prefix[m][b] - self.prefix[m][at], self.prefix[m][at] - self.prefix[m][a]
+                total += sign * c * (((-1.0) ** m * right ** (self.p - m))[:, None] * pr + (left ** (self.p - m))[:, None] * pl)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            scale = np.where(F > 0, F ** (1 - self.p), 0.0) * self.norm
+        return np.linalg.norm(total, axis=1) * scale
+
+    def largest_feed(self, s_query: np.ndarray, feed_max: np.ndarray, tolerance: np.ndarray) -> np.ndarray:
+        """Largest feed ``<= feed_max`` found by bisection with ``|d_j| <= tolerance`` kept at the
+        lower end (0 is always feasible: ``d_j -> 0`` as ``F -> 0``)."""
+        hi = np.asarray(feed_max, dtype=np.float64).copy()
+        tol = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), hi.shape)
+        ok = self(s_query, hi) <= tol
+        lo = np.where(ok, hi, 0.0)
+        todo = np.flatnonzero(~ok)
+        if todo.size:
+            sq, l, h, t = s_query[todo], lo[todo], hi[todo], tol[todo]
+            for _ in range(_BISECTION_STEPS):
+                mid = 0.5 * (l + h)
+                good = self(sq, mid) <= t
+                l, h = np.where(good, mid, l), np.where(good, h, mid)
+            lo[todo] = l
+        return lo
+
+
+def isolated_full_overlap_feed(du_norm: np.ndarray, delays: np.ndarray, tolerance: np.ndarray) -> np.ndarray:
+    """Feed [mm/s] at which one isolated corner with ``|du|`` keeps ``tolerance`` at full overlap:
+    ``eps / (|du| H2(T_d / 2))`` (eq 13/14 at ``T_k = T_d``); ``inf`` for no turn."""
+    d = np.asarray(delays, dtype=np.float64)
+    h_full = float(kernel_second_integral(0.5 * d.sum(), d))
+    with np.errstate(divide="ignore"):
+        return np.where(du_norm > 0, np.asarray(tolerance) / (np.maximum(du_norm, 1e-300) * h_full), np.inf)
+
+
+def range_min(first: np.ndarray, last: np.ndarray, values: np.ndarray, n: int, initial: np.ndarray) -> np.ndarray:
+    """``out[k] = min(initial[k], min{values[r] : first[r] <= k <= last[r]})`` for ``k < n``, in
+    ``O((n + R) log n)``: each range is covered by two power-of-two blocks that are pushed down."""
+    out = np.array(initial, dtype=np.float64)
+    if values.size == 0:
+        return out
+    first, last = np.clip(first, 0, n - 1), np.clip(last, 0, n - 1)
+    length = last - first + 1
+    level = np.floor(np.log2(np.maximum(length, 1))).astype(np.int64)
+    top = int(level.max())
+    table = np.full((top + 1, n), np.inf)
+    np.minimum.at(table, (level, first), values)
+    np.minimum.at(table, (level, last - (1 << level) + 1), values)
+    for lv in range(top, 0, -1):
+        half = 1 << (lv - 1)
+        row = table[lv]
+        np.minimum(table[lv - 1], row, out=table[lv - 1])
+        table[lv - 1, half:] = np.minimum(table[lv - 1, half:], row[: n - half])
+    return np.minimum(out, table[0])
