@@ -1,4 +1,4 @@
-"""Numerical constants of the G-code reader (mm)."""
+"""Numerical constants of the G-code reader (mm unless named otherwise)."""
 
 import math
 
@@ -10,3 +10,24 @@ ZERO_LENGTH_MM = 1e-9
 MAX_CHORD_ANGLE = 0.5 * math.pi
 #: An arc needing more chords than this is refused (the tolerance is unreasonably small for it).
 MAX_CHORDS_PER_ARC = 1_000_000
+#: Largest absolute coordinate, arc centre, radius or tolerance the reader accepts [mm] (1 km).
+#: Beyond it float64 leaves too few digits for the 1e-9 mm resolution of the path model (the
+#: zero-length test of :class:`~research.paths.polyline.Polyline` is ``1e-12 * max |coordinate|``).
+MAX_COORDINATE_MM = 1e6
+#: Largest feed an ``F`` word may give [mm/min] (100 km/min, far above any machine).
+MAX_FEED_MM_PER_MIN = 1e8
+
+# LinuxCNC rs274ngc defaults (src/emc/rs274ngc/interp_internal.hh), used by interp_arc.cc
+# arc_data_ijk / arc_data_r:
+#: ``CENTER_ARC_RADIUS_TOLERANCE_MM = 2 * 0.01 * sqrt(2)`` mm: largest difference of the start and
+#: end radius of a centre-format (I/J/K) arc under G21 ("any valid arc whose end points and/or
+#: centre were rounded to 0.01 mm is accepted").
+CENTER_ARC_RADIUS_TOLERANCE_MM = 2 * 0.01 * math.sqrt(2)
+#: ``CENTER_ARC_RADIUS_TOLERANCE_INCH = 2 * 0.001 * sqrt(2)`` in: the same under G20 (in inches).
+CENTER_ARC_RADIUS_TOLERANCE_INCH = 2 * 0.001 * math.sqrt(2)
+#: ``SPIRAL_RELATIVE_TOLERANCE = 0.001``: the radius difference may also be at most 0.1 % of the
+#: larger radius (both limits must hold).
+SPIRAL_RELATIVE_TOLERANCE = 0.001
+#: ``RADIUS_TOLERANCE_MM = 0.00005 in * 25.4`` = 0.00127 mm: an arc radius below this is a
+#: zero-radius arc, and an ``R`` may be this much shorter than half the chord.
+RADIUS_TOLERANCE_MM = 0.00005 * MM_PER_INCH

@@ -1,4 +1,4 @@
-"""The G-code interpreter: modal state, accepted and refused codes, arcs to chords.
+"""The G-code interpreter: modal state, accepted and refused codes, arcs to chords and arc blocks.
 
 Private to :mod:`research.paths.gcode`; see its docstring for the accepted language.
 """
@@ -6,22 +6,32 @@ Private to :mod:`research.paths.gcode`; see its docstring for the accepted langu
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 
 from research.errors import ParameterError
 from research.paths._gcode_constants import (
+    CENTER_ARC_RADIUS_TOLERANCE_INCH,
+    CENTER_ARC_RADIUS_TOLERANCE_MM,
     MAX_CHORD_ANGLE,
     MAX_CHORDS_PER_ARC,
+    MAX_COORDINATE_MM,
+    MAX_FEED_MM_PER_MIN,
     MM_PER_INCH,
+    RADIUS_TOLERANCE_MM,
     ZERO_LENGTH_MM,
 )
 
-# key = round(10 * code): G1 -> 10, G90.1 -> 901
+_MAXC = MAX_COORDINATE_MM
+_NAN = float("nan")
+_ZERO2 = ZERO_LENGTH_MM * ZERO_LENGTH_MM
+
+# key = 10 * code: G1 -> 10, G90.1 -> 901 (see _code_key)
 _MOTION = {0: 0, 10: 1, 20: 2, 30: 3, 800: None}
 _G_ACCEPT = {
     **{k: "motion" for k in _MOTION},
-    170: "plane",
+    170: "plane", 180: "plane", 190: "plane",
     200: "units", 210: "units",
     900: "distance", 910: "distance",
     901: "arc_distance", 911: "arc_distance",
@@ -31,37 +41,62 @@ _G_ACCEPT = {
     610: "path_mode", 611: "path_mode", 640: "path_mode",
     940: "feed_mode",
 }
+# plane key -> (first axis, second axis, normal axis) indices into (x, y, z); G3 is counter-clockwise
+# from the first towards the second axis, i.e. about +normal axis (RS274/NGC: G17 XY about +Z,
+# G18 ZX about +Y, G19 YZ about +X)
+_PLANES = {170: (0, 1, 2), 180: (2, 0, 1), 190: (1, 2, 0)}
+_PLANE_NAME = {170: "G17 (XY)", 180: "G18 (ZX)", 190: "G19 (YZ)"}
+_CUT = "expand the cycle into G0/G1 moves"
 _G_REFUSE = {
     40: "G4 (dwell) is not supported: the program model has no pauses",
-    180: "G18 (XZ plane) is not supported: arcs only in the G17 (XY) plane",
-    190: "G19 (YZ plane) is not supported: arcs only in the G17 (XY) plane",
+    50: "G5 (cubic spline) is not supported: only lines and circular arcs",
+    51: "G5.1 (quadratic spline) is not supported: only lines and circular arcs",
+    52: "G5.2 (NURBS) is not supported: only lines and circular arcs",
+    70: "G7 (lathe diameter mode) is not supported",
+    80: "G8 (lathe radius mode) is not supported",
+    100: "G10 (set offsets / tool table) is not supported",
+    171: "G17.1 (UV plane) is not supported: only the G17, G18, G19 planes",
+    181: "G18.1 (WU plane) is not supported: only the G17, G18, G19 planes",
+    191: "G19.1 (VW plane) is not supported: only the G17, G18, G19 planes",
     280: "G28 (return to home) is not supported: the machine home position is unknown",
     300: "G30 (return to secondary home) is not supported",
+    330: "G33 (spindle-synchronized motion) is not supported",
     410: "G41 (cutter compensation left) is not supported: post-process with compensation off (G40)",
+    411: "G41.1 (dynamic cutter compensation left) is not supported: post-process with compensation off (G40)",
     420: "G42 (cutter compensation right) is not supported: post-process with compensation off (G40)",
-    430: "G43 (tool length offset) is not supported: only G49 (offset off) is accepted",
+    421: "G42.1 (dynamic cutter compensation right) is not supported: post-process with compensation off (G40)",
+    430: "G43 (tool length compensation) is not supported: only G49 (offset off) is accepted",
+    431: "G43.1 (dynamic tool length compensation) is not supported: only G49 (offset off) is accepted",
+    432: "G43.2 (additional tool length offset) is not supported: only G49 (offset off) is accepted",
     530: "G53 (machine coordinates) is not supported",
-    730: "canned cycle G73 is not supported: expand the cycle into G0/G1 moves",
-    760: "canned cycle G76 is not supported: expand the cycle into G0/G1 moves",
-    **{10 * c: f"canned cycle G{c} is not supported: expand the cycle into G0/G1 moves" for c in range(81, 90)},
+    730: f"canned cycle G73 is not supported: {_CUT}",
+    760: f"canned cycle G76 is not supported: {_CUT}",
+    **{10 * c: f"canned cycle G{c} is not supported: {_CUT}" for c in range(81, 90)},
     920: "G92 (coordinate system offset) is not supported",
     930: "G93 (inverse-time feed) is not supported: only G94 (feed per minute)",
     950: "G95 (feed per revolution) is not supported: only G94 (feed per minute)",
+    980: "G98 (canned cycle return level) is not supported: canned cycles are refused",
+    990: "G99 (canned cycle return level) is not supported: canned cycles are refused",
 }
 _M_ACCEPT = {2: "end", 30: "end", 3: "spindle", 4: "spindle", 5: "spindle", 6: "tool_change",
              7: "coolant", 8: "coolant", 9: "coolant"}
+_M_REFUSE = {
+    98: "unsupported M-code M98 (subroutine call): not supported: expand subroutines in the CAM post-processor",
+    99: "unsupported M-code M99 (subroutine return): not supported: expand subroutines in the CAM post-processor",
+}
 _LETTER_REFUSE = {
     **{c: f"{c} (extra axis) is not supported: only X, Y, Z" for c in "ABCUVW"},
-    "K": "K (Z centre offset) is only used in the G18/G19 planes, which are not supported",
-    "D": "D (cutter radius offset) is not supported: G41/G42 are refused",
-    "H": "H (tool length offset) is not supported: G43 is refused",
-    "P": "P (dwell / cycle parameter) is not supported: G4, G64 P and canned cycles are refused",
-    "Q": "Q (cycle parameter) is not supported: canned cycles are refused",
+    "D": "D (cutter radius offset) is not supported: cutter compensation G41/G42 is refused",
+    "H": "H (tool length offset) is not supported: tool length compensation G43 is refused",
     "L": "L (repeat count / G10 parameter) is not supported",
 }
-_ACCEPTED_LETTERS = frozenset("GMNOFSTXYZIJR")
-_ACCEPTED_G_TEXT = "G0 G1 G2 G3 G80 G17 G20 G21 G40 G49 G54-G59 G61 G61.1 G64 G90 G91 G90.1 G91.1 G94"
+_ACCEPTED_LETTERS = frozenset("GMNOFSTXYZIJKRPQ")
+_ACCEPTED_G_TEXT = ("G0 G1 G2 G3 G80 G17 G18 G19 G20 G21 G40 G49 G54-G59 G61 G61.1 G64 G90 G91 G90.1 "
+                    "G91.1 G94")
 _ACCEPTED_M_TEXT = "M2 M3 M4 M5 M6 M7 M8 M9 M30"
+# code text: optional '+', leading zeros, 1-4 digits, optionally '.' and one digit (trailing zeros ok)
+_CODE_TEXT = re.compile(r"\+?0*([0-9]{1,4})(?:\.([0-9]?)0*)?")
+_INT_TEXT = re.compile(r"\+?[0-9]{1,15}")
 
 
 class _LineError(Exception):
@@ -73,34 +108,106 @@ class _LineError(Exception):
 
 
 def _check_positive(name: str, value) -> float:
-    v = float(value)
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"parse_gcode: {name} must be a finite number > 0, got {value!r}") from None
     if not (math.isfinite(v) and v > 0):
         raise ParameterError(f"parse_gcode: {name} must be a finite number > 0, got {value!r}")
     return v
 
 
-class _Interpreter:
-    """Modal state machine; ``line(words, lineno)`` executes one block."""
+def _short(num: str) -> str:
+    return num if len(num) <= 24 else f"{num[:12]}...({len(num)} characters)"
 
-    def __init__(self, chord_tolerance, rapid_feed_mm_s, initial_feed_mm_s, start, arc_radius_tolerance):
+
+def _value(letter: str, num: str, k: int, scale: float = 1.0, bound: float = _MAXC, what: str = "coordinate") -> float:
+    """``float(num) * scale``, refused unless finite with ``|value| <= bound`` [mm]."""
+    v = float(num) * scale
+    if not -bound <= v <= bound:
+        raise _LineError(f"{letter}{_short(num)}: expected a finite {what} of at most {bound:g} mm in size", k)
+    return v
+
+
+class _Interpreter:
+    """Modal state machine; ``line(words, lineno)`` executes one block, ``simple(...)`` a plain move."""
+
+    def __init__(self, chord_tolerance, rapid_feed_mm_s, initial_feed_mm_s, start, arc_radius_tolerance,
+                 arc_relative_tolerance):
         self.tol = chord_tolerance
-        self.arc_tol = arc_radius_tolerance
+        self.arc_tol = arc_radius_tolerance  # mm, or None: LinuxCNC's (unit dependent)
+        self.arc_rel = arc_relative_tolerance
         self.rapid_feed = rapid_feed_mm_s
         self.feed = initial_feed_mm_s  # mm/s or None
-        self.pos = list(start)  # commanded position [mm]
+        self.pos = tuple(start)  # commanded position [mm]
         self.last = tuple(start)  # last emitted vertex [mm]
         self.scale = 1.0  # mm per program unit
         self.absolute = True
         self.arc_absolute = False
+        self.plane = 170
+        self.path_tol = _NAN  # G64 P tolerance [mm] in force (NaN: none given, 0 under G61/G61.1)
         self.motion = None  # 0, 1, 2, 3 or None
         self.ended = 0  # line of M2/M30, 0 while running
-        # output
+        # output: one vertex and one (feed, rapid, line, block, tolerance) row per chord
         self.points = [tuple(start)]
-        self.feeds: list[float] = []
-        self.rapid: list[bool] = []
-        self.lines: list[int] = []
+        self.meta: list[tuple] = []
+        self.nblocks = 0
+        self.arcs: list[tuple] = []  # (block, centre (3,), normal (3,), sweep)
         self.no_motion: list[int] = []
-        self._keys: dict[str, int | None] = {}  # G-code number text -> _code_key
+        self._keys: dict[str, int | None] = {}  # code number text -> _code_key
+
+    # -- a plain G0/G1 line (fast path) -------------------------------------------------------
+    def simple(self, g, x, y, z, f, lineno) -> bool:
+        """Execute ``[N] [G0|G1] [X] [Y] [Z] [F]`` (already matched as text); False: let ``line`` do it
+        (anything unusual, including every error, goes through the general path)."""
+        motion = self.motion if g is None else (1 if g == "1" else 0)
+        if f is not None:
+            fv = float(f) * self.scale
+            if not 0.0 < fv <= MAX_FEED_MM_PER_MIN:
+                return False
+        if x is None and y is None and z is None:
+            if g is not None:
+                self.motion = motion
+            if f is not None:
+                self.feed = fv / 60.0
+            return True
+        if self.ended or motion is None or motion > 1:
+            return False
+        s = self.scale
+        px, py, pz = self.pos
+        if self.absolute:
+            if x is not None:
+                px = float(x) * s
+            if y is not None:
+                py = float(y) * s
+            if z is not None:
+                pz = float(z) * s
+        else:
+            if x is not None:
+                px += float(x) * s
+            if y is not None:
+                py += float(y) * s
+            if z is not None:
+                pz += float(z) * s
+        if not (-_MAXC <= px <= _MAXC and -_MAXC <= py <= _MAXC and -_MAXC <= pz <= _MAXC):
+            return False
+        if motion == 1 and f is None and self.feed is None:
+            return False
+        self.motion = motion
+        if f is not None:
+            self.feed = fv / 60.0
+        t = self.pos = (px, py, pz)
+        lx, ly, lz = self.last
+        dx, dy, dz = px - lx, py - ly, pz - lz
+        if dx * dx + dy * dy + dz * dz <= _ZERO2:
+            self.no_motion.append(lineno)
+            return True
+        self.points.append(t)
+        self.last = t
+        self.meta.append((self.feed if motion else self.rapid_feed, motion == 0, lineno, self.nblocks,
+                          self.path_tol))
+        self.nblocks += 1
+        return True
 
     # -- one block ---------------------------------------------------------------------------
     def line(self, words, lineno):
@@ -120,11 +227,11 @@ class _Interpreter:
                     raise _LineError(f"{letter} given twice on one line (first at word {vals[letter][1] + 1}); "
                                      f"expected each letter at most once", k)
                 vals[letter] = (num, k)
-            elif refused is None:  # reported after the G-codes: "G4 P1" names G4, not P
+            elif refused is None:  # reported after the G-codes: "G41 D1" names G41, not D
                 refused = _LineError(_LETTER_REFUSE[letter], k) if letter in _LETTER_REFUSE else _LineError(
-                    f"unknown word letter {letter!r}; expected one of G M N O F S T X Y Z I J R", k)
+                    f"unknown word letter {letter!r}; expected one of G M N O F S T X Y Z I J K R P Q", k)
 
-        # G codes, at most one per modal group
+        # G codes, at most one per modal group; G80 with a motion code: the motion code wins (LinuxCNC)
         groups = {}
         motion_word = None
         keys = self._keys
@@ -136,11 +243,16 @@ class _Interpreter:
             if kind is None:
                 if key in _G_REFUSE:
                     raise _LineError(_G_REFUSE[key], k)
-                raise _LineError(f"unsupported G-code G{num}; expected one of {_ACCEPTED_G_TEXT}", k)
+                raise _LineError(f"unsupported G-code G{_short(num)}; expected one of {_ACCEPTED_G_TEXT}", k)
             if kind in groups:
                 other = groups[kind][0]
-                what = "two motion G-codes" if kind == "motion" else f"two G-codes of the {kind.replace('_', ' ')} group"
-                raise _LineError(f"{what} on one line (G{_fmt_key(other)} and G{num}); expected at most one", k)
+                if kind == "motion" and 800 in (key, other) and key != other:
+                    if key == 800:
+                        continue
+                else:
+                    what = "two motion G-codes" if kind == "motion" else \
+                        f"two G-codes of the {kind.replace('_', ' ')} group"
+                    raise _LineError(f"{what} on one line (G{_fmt_key(other)} and G{num}); expected at most one", k)
             groups[kind] = (key, k)
             if kind == "motion":
                 motion_word = k
@@ -152,45 +264,72 @@ class _Interpreter:
             key = _code_key(num)
             kind = _M_ACCEPT.get(key // 10) if key is not None and key % 10 == 0 else None
             if kind is None:
-                raise _LineError(f"unsupported M-code M{num}; expected one of {_ACCEPTED_M_TEXT}", k)
+                if key is not None and key % 10 == 0 and key // 10 in _M_REFUSE:
+                    raise _LineError(_M_REFUSE[key // 10], k)
+                raise _LineError(f"unsupported M-code M{_short(num)}; expected one of {_ACCEPTED_M_TEXT}", k)
             if kind in m_groups:
                 raise _LineError(f"two {kind.replace('_', ' ')} M-codes on one line; expected at most one", k)
             m_groups[kind] = k
             m_end = m_end or kind == "end"
 
         if vals:
-            for letter in "NT":
+            for letter, what in (("N", "line number"), ("T", "tool number"), ("O", "program number")):
                 if letter in vals:
                     num, k = vals[letter]
-                    v = float(num)
-                    if not (v >= 0 and v == int(v) and "." not in num):
-                        raise _LineError(f"{letter}{num}: expected a non-negative integer", k)
-            if "O" in vals:
-                num, k = vals["O"]
-                if "." in num or float(num) < 0:
-                    raise _LineError(f"O{num}: expected a non-negative integer program number", k)
+                    if not _INT_TEXT.fullmatch(num):
+                        raise _LineError(f"{letter}{_short(num)}: expected a non-negative integer {what} "
+                                         "(at most 15 digits)", k)
             if "S" in vals:
                 num, k = vals["S"]
-                if float(num) < 0:
-                    raise _LineError(f"S{num}: expected a spindle speed >= 0", k)
+                v = float(num)
+                if not 0.0 <= v < math.inf:
+                    raise _LineError(f"S{_short(num)}: expected a finite spindle speed >= 0", k)
 
-        # modes, in RS274/NGC order: units, then feed, then distance modes, then motion
+        # modes, in RS274/NGC order: units, feed, path control, distance modes, plane, motion
         if "units" in groups:
             self.scale = MM_PER_INCH if groups["units"][0] == 200 else 1.0
         if "F" in vals:
             num, k = vals["F"]
-            f = float(num)
-            if not f > 0:
-                raise _LineError(f"F{num}: expected a feed > 0 (per minute)", k)
-            self.feed = f * self.scale / 60.0
+            f = float(num) * self.scale
+            if not 0.0 < f <= MAX_FEED_MM_PER_MIN:
+                raise _LineError(f"F{_short(num)}: expected a feed > 0 (per minute) of at most "
+                                 f"{MAX_FEED_MM_PER_MIN:g} mm/min", k)
+            self.feed = f / 60.0
+        g64 = "path_mode" in groups and groups["path_mode"][0] == 640
+        if "Q" in vals:
+            num, k = vals["Q"]
+            if not g64:
+                raise _LineError("Q word with no G64 to use it: Q (naive-CAM tolerance) is only read with G64 "
+                                 "(canned cycles and other Q uses are not supported)", k)
+            _value("Q", num, k, self.scale, what="tolerance")
+            if float(num) < 0:
+                raise _LineError(f"G64 Q{_short(num)}: expected a tolerance >= 0", k)
+        if "path_mode" in groups:
+            key = groups["path_mode"][0]
+            if key != 640:
+                self.path_tol = 0.0
+            elif "P" in vals:
+                num, k = vals["P"]
+                p = _value("P", num, k, self.scale, what="tolerance")
+                if p < 0:
+                    raise _LineError(f"G64 P{_short(num)}: expected a blend tolerance >= 0", k)
+                self.path_tol = p
+            else:
+                self.path_tol = _NAN
         if "distance" in groups:
             self.absolute = groups["distance"][0] == 900
         if "arc_distance" in groups:
             self.arc_absolute = groups["arc_distance"][0] == 901
+        if "plane" in groups:
+            self.plane = groups["plane"][0]
         if "motion" in groups:
             self.motion = _MOTION[groups["motion"][0]]
 
-        if not _AXIS_LETTERS.isdisjoint(vals):
+        moves = not _AXIS_LETTERS.isdisjoint(vals)
+        if "P" in vals and not g64 and not (moves and self.motion in (2, 3) and not self.ended):
+            raise _LineError("P word with no G2/G3 or G64 to use it; expected P only as G64 P<tolerance> or "
+                             "G2/G3 P<turns> (G4 dwell and canned cycles are not supported)", vals["P"][1])
+        if moves:
             if self.ended:
                 raise _LineError(f"motion after the program end (M2/M30 on line {self.ended}); "
                                  "expected no axis words after it", _first_axis(vals))
@@ -207,6 +346,9 @@ class _Interpreter:
                                      vals[letter][1])
                 self._linear(vals, lineno, motion_word)
             else:
+                if g64 and "P" in vals:
+                    raise _LineError("P used by both G64 (tolerance) and G2/G3 (turns) on one line; expected "
+                                     "G64 P on a line of its own", vals["P"][1])
                 self._arc(vals, lineno, motion_word)
         if m_end:
             self.ended = lineno
@@ -219,9 +361,11 @@ class _Interpreter:
             if letter in vals:
                 num, k = vals[letter]
                 v = float(num) * s
-                t[i] = v if self.absolute else t[i] + v
-                if not math.isfinite(t[i]):
-                    raise _LineError(f"{letter}{num[:20]}: expected a finite coordinate", k)
+                v = v if self.absolute else t[i] + v
+                if not -_MAXC <= v <= _MAXC:
+                    raise _LineError(f"{letter}{_short(num)}: expected a finite coordinate with the position "
+                                     f"inside +-{_MAXC:g} mm", k)
+                t[i] = v
         return t
 
     def _feed_for(self, rapid, vals, motion_word):
@@ -246,72 +390,94 @@ class _Interpreter:
         t = (target[0], target[1], target[2])
         self.points.append(t)
         self.last = t
-        self.feeds.append(feed)
-        self.rapid.append(rapid)
-        self.lines.append(lineno)
+        self.meta.append((feed, rapid, lineno, self.nblocks, self.path_tol))
+        self.nblocks += 1
 
     def _arc(self, vals, lineno, motion_word):
         where = _first_axis(vals) if motion_word is None else motion_word
         cw = self.motion == 2
         name = "G2" if cw else "G3"
-        has_ij = "I" in vals or "J" in vals
+        a, b, c = _PLANES[self.plane]
+        pname = _PLANE_NAME[self.plane]
+        la, lb, lc = "IJK"[a], "IJK"[b], "IJK"[c]
+        if lc in vals:
+            raise _LineError(f"{lc} given for an arc in the {pname} plane; expected the centre words {la} and "
+                             f"{lb} (or R)", vals[lc][1])
+        has_ij = la in vals or lb in vals
         if has_ij and "R" in vals:
-            raise _LineError(f"{name} with both I/J and R; expected either the centre (I, J) or the radius R",
-                             vals["R"][1])
+            raise _LineError(f"{name} with both {la}/{lb} and R; expected either the centre ({la}, {lb}) or the "
+                             "radius R", vals["R"][1])
         if not has_ij and "R" not in vals:
-            raise _LineError(f"{name} without I/J or R; expected the arc centre (I, J) or radius (R)", where)
+            raise _LineError(f"{name} without {la}/{lb} or R; expected the arc centre ({la}, {lb}) or radius (R) "
+                             f"in the {pname} plane", where)
+        turns = 1
+        if "P" in vals:
+            num, k = vals["P"]
+            p = float(num)
+            if not (math.isfinite(p) and abs(p - round(p)) <= 1e-3 and 1 <= round(p) <= MAX_CHORDS_PER_ARC):
+                raise _LineError(f"{name} P{_short(num)}: expected the number of turns, an integer >= 1 "
+                                 "(LinuxCNC: P1 is the plain arc, P2 one extra full turn)", k)
+            turns = int(round(p))
         feed = self._feed_for(False, vals, where)
         s = self.scale
-        sx, sy, sz = self.pos
-        ex, ey, ez = self._target(vals)
-        chord = math.hypot(ex - sx, ey - sy)
+        st = self.last  # the arc starts at the last emitted vertex (within ZERO_LENGTH_MM of the position)
+        su, sv = st[a], st[b]
+        e = self._target(vals)
+        eu, ev = e[a], e[b]
+        chord = math.hypot(eu - su, ev - sv)
+        rtol = RADIUS_TOLERANCE_MM
         if has_ij:
-            ij_word = vals["I"][1] if "I" in vals else vals["J"][1]
-            if self.arc_absolute and not ("I" in vals and "J" in vals):
-                raise _LineError(f"{name} under G90.1 (absolute arc centre) without both I and J; expected both "
-                                 "centre coordinates I and J", ij_word)
-            i = float(vals["I"][0]) * s if "I" in vals else 0.0
-            j = float(vals["J"][0]) * s if "J" in vals else 0.0
-            cx, cy = (i, j) if self.arc_absolute else (sx + i, sy + j)
-            if not (math.isfinite(cx) and math.isfinite(cy)):
-                raise _LineError(f"{name} centre is not finite; expected finite I and J", ij_word)
-            r0 = math.hypot(sx - cx, sy - cy)
-            r1 = math.hypot(ex - cx, ey - cy)
-            if r0 <= ZERO_LENGTH_MM:
-                raise _LineError(f"{name} centre coincides with the start point (radius 0); expected I/J "
-                                 "pointing from the start to the centre", ij_word)
-            allowed = max(self.arc_tol, 1e-6 * r0)
-            if abs(r1 - r0) > allowed:
+            ij_word = vals[la][1] if la in vals else vals[lb][1]
+            if self.arc_absolute and not (la in vals and lb in vals):
+                raise _LineError(f"{name} under G90.1 (absolute arc centre) without both {la} and {lb}; expected "
+                                 f"both centre coordinates {la} and {lb}", ij_word)
+            i = _value(la, vals[la][0], vals[la][1], s, what="centre") if la in vals else 0.0
+            j = _value(lb, vals[lb][0], vals[lb][1], s, what="centre") if lb in vals else 0.0
+            cu, cv = (i, j) if self.arc_absolute else (self.pos[a] + i, self.pos[b] + j)
+            if not (abs(cu) <= 2 * _MAXC and abs(cv) <= 2 * _MAXC):
+                raise _LineError(f"{name} centre ({cu:.6g}, {cv:.6g}) mm is not finite or too far away; expected "
+                                 f"a centre inside +-{_MAXC:g} mm", ij_word)
+            r0 = math.hypot(su - cu, sv - cv)
+            r1 = math.hypot(eu - cu, ev - cv)
+            if r0 < rtol or r1 < rtol:
+                raise _LineError(f"{name} is a zero-radius arc (radius 0): start radius {r0:.6g} mm, end radius "
+                                 f"{r1:.6g} mm, below {rtol:g} mm (LinuxCNC RADIUS_TOLERANCE); expected "
+                                 f"{la}/{lb} pointing from the start to the centre", ij_word)
+            err = abs(r1 - r0)
+            if self.arc_tol is not None:
+                allowed = self.arc_tol
+            else:
+                allowed = CENTER_ARC_RADIUS_TOLERANCE_INCH * MM_PER_INCH if s != 1.0 else CENTER_ARC_RADIUS_TOLERANCE_MM
+            if err > allowed or err > self.arc_rel * max(r0, r1):
                 raise _LineError(
-                    f"{name} end point is not on the arc: start radius {r0:.6g} mm, end radius {r1:.6g} mm "
-                    f"differ by {abs(r1 - r0):.3g} mm > {allowed:.3g} mm; expected consistent X/Y and I/J", ij_word)
+                    f"{name} end point is not on the arc: start radius {r0:.6g} mm and end radius {r1:.6g} mm "
+                    f"differ by {err:.3g} mm, more than {allowed:.3g} mm or {100 * self.arc_rel:g} % of the "
+                    f"radius; expected consistent end point and {la}/{lb}", ij_word)
             full = chord <= ZERO_LENGTH_MM
         else:
             rnum, rk = vals["R"]
-            r = float(rnum) * s
-            if not math.isfinite(r):
-                raise _LineError(f"{name} R{rnum[:20]}: expected a finite radius", rk)
+            r = _value("R", rnum, rk, s, what="radius")
             if chord <= ZERO_LENGTH_MM:
-                raise _LineError(f"{name} with R and end point == start point (in XY) is undefined; "
-                                 "expected I/J for a full circle", rk)
-            if abs(r) <= ZERO_LENGTH_MM:
-                raise _LineError(f"{name} R{rnum}: expected a non-zero radius", rk)
+                raise _LineError(f"{name} with R and end point == start point (in the {pname} plane) is "
+                                 f"undefined; expected {la}/{lb} for a full circle", rk)
+            if abs(r) < rtol:
+                raise _LineError(f"{name} R{_short(rnum)}: a zero-radius arc; expected |R| >= {rtol:g} mm", rk)
             half = 0.5 * chord
-            allowed = max(self.arc_tol, 1e-6 * abs(r))
-            if half > abs(r) + allowed:
-                raise _LineError(f"{name} R{rnum}: radius {abs(r):.6g} mm is smaller than half the chord "
-                                 f"{half:.6g} mm; expected |R| >= half the distance start-end", rk)
+            if half > abs(r) + rtol:
+                raise _LineError(f"{name} R{_short(rnum)}: radius {abs(r):.6g} mm is smaller than half the chord "
+                                 f"{half:.6g} mm (by more than {rtol:g} mm); expected |R| >= half the distance "
+                                 "start-end", rk)
             h = math.sqrt(max(r * r - half * half, 0.0))
-            ux, uy = (ex - sx) / chord, (ey - sy) / chord
+            ux, uy = (eu - su) / chord, (ev - sv) / chord
             # centre left of the chord for a CCW arc <= 180 deg, right for CW; R < 0 flips it
             side = (1.0 if not cw else -1.0) * (1.0 if r > 0 else -1.0)
-            cx = 0.5 * (sx + ex) - side * h * uy
-            cy = 0.5 * (sy + ey) + side * h * ux
-            r0 = math.hypot(sx - cx, sy - cy)
-            r1 = math.hypot(ex - cx, ey - cy)
+            cu = 0.5 * (su + eu) - side * h * uy
+            cv = 0.5 * (sv + ev) + side * h * ux
+            r0 = math.hypot(su - cu, sv - cv)
+            r1 = math.hypot(eu - cu, ev - cv)
             full = False
-        a0 = math.atan2(sy - cy, sx - cx)
-        a1 = math.atan2(ey - cy, ex - cx)
+        a0 = math.atan2(sv - cv, su - cu)
+        a1 = math.atan2(ev - cv, eu - cu)
         two_pi = 2.0 * math.pi
         if full:
             sweep = two_pi
@@ -319,6 +485,7 @@ class _Interpreter:
             sweep = (a0 - a1) % two_pi if cw else (a1 - a0) % two_pi
             if sweep <= 0.0:  # same ray, radii within tolerance: treat as a full turn
                 sweep = two_pi
+        sweep += two_pi * (turns - 1)
         # sagitta r (1 - cos(dtheta / 2)) <= tol  <=>  dtheta <= 2 acos(1 - tol / r) = 4 asin(sqrt(tol / (2 r)))
         rmax = max(r0, r1)
         dmax = 4.0 * math.asin(math.sqrt(min(self.tol / (2.0 * rmax), 1.0)))
@@ -330,12 +497,13 @@ class _Interpreter:
         k = np.arange(1, n + 1, dtype=np.float64) / n
         ang = a0 + (-sweep if cw else sweep) * k
         rad = r0 + (r1 - r0) * k
+        sw, ew = st[c], e[c]
         pts = np.empty((n, 3))
-        pts[:, 0] = cx + rad * np.cos(ang)
-        pts[:, 1] = cy + rad * np.sin(ang)
-        pts[:, 2] = sz + (ez - sz) * k
-        pts[-1] = (ex, ey, ez)
-        self.pos = [ex, ey, ez]
+        pts[:, a] = cu + rad * np.cos(ang)
+        pts[:, b] = cv + rad * np.sin(ang)
+        pts[:, c] = sw + (ew - sw) * k
+        pts[-1] = e
+        self.pos = e
         seg = np.diff(np.vstack([self.last, pts]), axis=0)
         short = np.einsum("ij,ij->i", seg, seg) <= ZERO_LENGTH_MM * ZERO_LENGTH_MM
         if short.any():  # tiny arcs only: merge chords shorter than ZERO_LENGTH_MM
@@ -352,14 +520,17 @@ class _Interpreter:
                 return
         self.points.extend(map(tuple, pts.tolist()))
         self.last = tuple(pts[-1].tolist())
-        n = len(pts)
-        self.feeds.extend([feed] * n)
-        self.rapid.extend([False] * n)
-        self.lines.extend([lineno] * n)
+        centre = [0.0, 0.0, 0.0]
+        centre[a], centre[b], centre[c] = cu, cv, sw
+        normal = [0.0, 0.0, 0.0]
+        normal[c] = -1.0 if cw else 1.0
+        self.arcs.append((self.nblocks, centre, normal, sweep))
+        self.meta.extend([(feed, False, lineno, self.nblocks, self.path_tol)] * len(pts))
+        self.nblocks += 1
 
 
-_AXIS_LETTERS = frozenset("XYZIJR")
-_ARC_LETTERS = frozenset("IJR")
+_AXIS_LETTERS = frozenset("XYZIJKR")
+_ARC_LETTERS = frozenset("IJKR")
 
 
 def _first_axis(vals) -> int:
@@ -368,10 +539,12 @@ def _first_axis(vals) -> int:
 
 
 def _code_key(num: str):
-    """round(10 * code) for codes with at most one decimal (G1, G01, G90.1), else None."""
-    v = float(num) * 10.0
-    key = round(v)
-    return key if abs(v - key) < 1e-6 and key >= 0 else None
+    """``10 * code`` for a G/M number written with at most one decimal digit (G1, G01, G90.1, G1.0; trailing
+    zeros are fine, ``G1.00000001`` is not), from the text alone (no float rounding); else None."""
+    m = _CODE_TEXT.fullmatch(num)
+    if m is None:
+        return None
+    return int(m.group(1)) * 10 + int(m.group(2) or 0)
 
 
 def _fmt_key(key: int) -> str:

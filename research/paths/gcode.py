@@ -47,9 +47,15 @@ import numpy as np
 
 from research.errors import GCodeError, ParameterError, PathError
 from research.paths._gcode_constants import (  # noqa: F401  (public constants)
+    CENTER_ARC_RADIUS_TOLERANCE_INCH,
+    CENTER_ARC_RADIUS_TOLERANCE_MM,
     MAX_CHORD_ANGLE,
     MAX_CHORDS_PER_ARC,
+    MAX_COORDINATE_MM,
+    MAX_FEED_MM_PER_MIN,
     MM_PER_INCH,
+    RADIUS_TOLERANCE_MM,
+    SPIRAL_RELATIVE_TOLERANCE,
     ZERO_LENGTH_MM,
 )
 from research.paths._gcode_interpreter import (
@@ -59,37 +65,60 @@ from research.paths._gcode_interpreter import (
 )
 from research.paths._gcode_writer import to_gcode
 from research.paths.polyline import Polyline
+from research.paths.toolpath import ToolPath
 
 __all__ = ["GCodeProgram", "parse_gcode", "read_gcode", "to_gcode"]
 
-# One token per match. Groups: 1 letter, 2 number (a word), 3 newline, 4 '%', 5 anything illegal.
+# One token per match within a line. Groups: 1 letter, 2 number (a word), 3 '%', 4 anything illegal.
 # Whitespace and well-formed comments match with all groups empty and are skipped. A word whose
 # number is followed by another digit or '.' ("X1.2.3") does not match the word branch, so its
-# letter falls through to group 5 and is diagnosed there.
+# letter falls through to group 4 and is diagnosed there.
 _TOKEN = re.compile(
     r"[ \t]*([A-Za-z])[ \t]*([-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+))(?![0-9.])"
-    r"|(\n)"
     r"|[ \t]+|\([^()\n]*\)|;[^\n]*"
     r"|(%)"
     r"|(.)"
 )
-
+# The commonest CAM line, "[N..] [G0|G1] [X..] [Y..] [Z..] [F..]" without comments, is matched whole
+# and executed without tokenizing (_Interpreter.simple); anything else goes through _TOKEN.
+_NUM = r"([-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+))[ \t]*"
+_SIMPLE = re.compile(
+    r"[ \t]*(?:[Nn][ \t]*[0-9]{1,15}[ \t]*)?(?:[Gg][ \t]*0*([01])(?:\.0*)?[ \t]*)?"
+    rf"(?:[Xx][ \t]*{_NUM})?(?:[Yy][ \t]*{_NUM})?(?:[Zz][ \t]*{_NUM})?(?:[Ff][ \t]*{_NUM})?"
+)
+_OWORD = re.compile(r"[ \t]*(?:[Nn][ \t]*[0-9]+[ \t]*)?([Oo])[ \t]*(<[^>\n]*>?|[0-9]+)[ \t]*([A-Za-z]*)")
+_OWORD_KEYWORDS = frozenset("sub endsub call return if elseif else endif do while endwhile repeat endrepeat "
+                            "break continue".split())
 
 
 @dataclass(frozen=True, eq=False)
 class GCodeProgram:
-    """A G-code program as straight segments with feeds.
+    """A G-code program as blocks (lines and arcs kept as arcs) and as straight chords with feeds.
 
     Attributes:
         polyline: ``(M + 1, 3)`` vertices [mm], axes ``x, y, z``; the first vertex is the start
-            position, arcs are already broken into chords.
-        feeds: ``(M,)`` feed of each segment [mm/s] (``F`` words are mm/min, or in/min under
+            position, arcs are broken into chords (chord error at most ``chord_tolerance``).
+        feeds: ``(M,)`` feed of each chord [mm/s] (``F`` words are mm/min, or in/min under
             ``G20``, converted; ``G0`` segments get ``rapid_feed / 60``).
         rapid: ``(M,)`` bool, True for ``G0`` segments.
         lines: ``(M,)`` 1-based source line of each segment (all chords of an arc share its line).
         source: file name or ``"<string>"``.
         no_motion_lines: 1-based lines whose axis words left the position unchanged (moves shorter
-            than :data:`ZERO_LENGTH_MM`); they produce no segment.
+            than :data:`ZERO_LENGTH_MM`); they produce no segment and no block.
+        blocks: :class:`~research.paths.toolpath.ToolPath` with one block per ``G0``/``G1`` move and
+            per ``G2``/``G3`` arc (circular, helical or spiral, in any of the G17/G18/G19 planes, arcs
+            counter-clockwise about ``blocks.normals[k]``: ``G3`` has ``+z`` in G17, ``+y`` in G18,
+            ``+x`` in G19, ``G2`` the opposite); ``blocks.start`` is ``polyline.points[0]``.
+        block_feeds: ``(B,)`` feed of each block [mm/s].
+        block_rapid: ``(B,)`` bool, True for ``G0`` blocks.
+        block_lines: ``(B,)`` 1-based source line of each block.
+        block_tolerance: ``(B,)`` path tolerance in force for the block [mm]: the ``G64 P`` value,
+            0 under ``G61``/``G61.1``, NaN where none was given (``G64`` without ``P``, or no
+            path-control word yet).
+        segment_block: ``(M,)`` block of every chord of ``polyline``.
+
+    ``blocks`` and the ``block_*`` arrays may be left out (``None``) when building a program by hand:
+    they are then one line block per polyline segment with NaN tolerance.
 
     Example:
         >>> prog = parse_gcode("G21 G90\\nG1 X10 F600\\nY5\\nG0 Z2")
@@ -97,6 +126,11 @@ class GCodeProgram:
         [[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [10.0, 5.0, 0.0], [10.0, 5.0, 2.0]]
         >>> prog.feeds.tolist(), prog.rapid.tolist(), prog.lines.tolist()
         ([10.0, 10.0, 250.0], [False, False, True], [2, 3, 4])
+        >>> arc = parse_gcode("G64 P0.01\\nG1 X10 F600\\nG3 X0 Y10 I-10")
+        >>> arc.blocks.is_arc.tolist(), arc.block_lines.tolist(), arc.block_tolerance.tolist()
+        ([False, True], [2, 3], [0.01, 0.01])
+        >>> round(float(arc.blocks.lengths[1]), 9), arc.blocks.normals[1].tolist()
+        (15.707963268, [0.0, 0.0, 1.0])
     """
 
     polyline: Polyline
@@ -105,6 +139,12 @@ class GCodeProgram:
     lines: np.ndarray
     source: str = "<string>"
     no_motion_lines: tuple[int, ...] = ()
+    blocks: ToolPath | None = None
+    block_feeds: np.ndarray | None = None
+    block_rapid: np.ndarray | None = None
+    block_lines: np.ndarray | None = None
+    block_tolerance: np.ndarray | None = None
+    segment_block: np.ndarray | None = None
 
     def __post_init__(self):
         m = self.polyline.n_segments
@@ -115,11 +155,37 @@ class GCodeProgram:
             a.setflags(write=False)
             object.__setattr__(self, name, a)
         object.__setattr__(self, "no_motion_lines", tuple(int(i) for i in self.no_motion_lines))
+        if self.blocks is None:
+            object.__setattr__(self, "blocks", ToolPath.from_polyline(self.polyline))
+            defaults = dict(block_feeds=self.feeds, block_rapid=self.rapid, block_lines=self.lines,
+                            block_tolerance=np.full(m, np.nan), segment_block=np.arange(m))
+            for name, value in defaults.items():
+                if getattr(self, name) is None:
+                    object.__setattr__(self, name, value)
+        nb = self.blocks.n_blocks
+        for name, dtype, shape in (("block_feeds", np.float64, nb), ("block_rapid", bool, nb),
+                                   ("block_lines", np.int64, nb), ("block_tolerance", np.float64, nb),
+                                   ("segment_block", np.int64, m)):
+            if getattr(self, name) is None:
+                raise PathError(f"GCodeProgram.{name} is required with blocks")
+            a = np.array(getattr(self, name), dtype=dtype)
+            if a.shape != (shape,):
+                raise PathError(f"GCodeProgram.{name} must have shape ({shape},), got {a.shape}")
+            a.setflags(write=False)
+            object.__setattr__(self, name, a)
+        sb = self.segment_block
+        if m and (sb[0] != 0 or sb[-1] != nb - 1 or np.any(np.diff(sb) < 0) or np.any(np.diff(sb) > 1)):
+            raise PathError("GCodeProgram.segment_block must run from block 0 to the last block in order")
 
     @property
     def n_segments(self) -> int:
         """Number of segments ``M``."""
         return self.polyline.n_segments
+
+    @property
+    def n_blocks(self) -> int:
+        """Number of blocks ``B`` (moves and arcs)."""
+        return self.blocks.n_blocks
 
     @property
     def nominal_durations(self) -> np.ndarray:
@@ -132,23 +198,49 @@ class GCodeProgram:
         return self.polyline.lengths / self.feeds
 
 
-
-def _diagnose_bad_char(line_text: str, column: int) -> str:
-    """Explain the illegal character at 1-based ``column`` of ``line_text``."""
+def _diagnose_bad_char(line_text: str, column: int) -> tuple[str, int]:
+    """Explain the illegal character at 1-based ``column`` of ``line_text``; returns (message, column)."""
+    o = _OWORD.match(line_text)
+    if o is not None and (o.group(2).startswith("<") or o.group(3).lower() in _OWORD_KEYWORDS) \
+            and o.start(1) < column + len(o.group(3)):
+        what = f"{o.group(1)}{o.group(2)} {o.group(3)}".strip()
+        return (f"O-word subroutines/control flow ({what}) are not supported; expected plain G-code "
+                "(expand subroutines, loops and conditions in the CAM post-processor)", o.start(1) + 1)
     c = line_text[column - 1]
     rest = line_text[column:]
     if c.isascii() and c.isalpha():
+        inner = re.match(r"[ \t]*[-+]?[ \t]*", rest)
+        at = column + inner.end()
+        nxt = line_text[at:at + 1]
+        if nxt in ("#", "[") or re.match(r"[A-Za-z]+[ \t]*\[", line_text[at:]):
+            return _diagnose_bad_char(line_text, at + 1 + (0 if nxt in ("#", "[") else line_text[at:].index("[")))
         m = re.match(r"[ \t]*([-+0-9.]*)", rest)
         got = m.group(1) if m else ""
-        return (f"word {c}{got!s} has no valid number: expected a number after {c} like 12, -0.5 or .25"
-                if got else f"letter {c!r} is not followed by a number; expected e.g. {c.upper()}10")
+        return ((f"word {c}{got!s} has no valid number: expected a number after {c} like 12, -0.5 or .25"
+                 if got else f"letter {c!r} is not followed by a number; expected e.g. {c.upper()}10"), column)
+    if c == "#":
+        m = re.match(r"#[ \t]*(?:<[^>]*>?|[0-9]*)", line_text[column - 1:])
+        return (f"parameters ({m.group(0)[:24]}) are not supported; expected plain numbers (no # parameters "
+                "or expressions)", column)
+    if c == "[":
+        depth, end = 0, len(line_text)
+        for i in range(column - 1, len(line_text)):
+            depth += {"[": 1, "]": -1}.get(line_text[i], 0)
+            if depth == 0:
+                end = i + 1
+                break
+        snippet = line_text[column - 1:end]
+        snippet = snippet if len(snippet) <= 24 else snippet[:21] + "..."
+        return f"expressions [..] are not supported (found {snippet}); expected plain numbers", column
+    if c == "/":
+        return "block delete '/' is not supported; expected the line without '/'", column
     if c == "(":
         if "(" in rest.split(")", 1)[0]:
-            return "nested '(' inside a comment; expected comments without parentheses inside"
-        return "comment '(' is not closed on this line; expected ')'"
+            return "nested '(' inside a comment; expected comments without parentheses inside", column
+        return "comment '(' is not closed on this line; expected ')'", column
     if c == ")":
-        return "')' without an opening '('; expected a comment like (text)"
-    return f"unexpected character {c!r}; expected a word (letter and number), a comment or a line end"
+        return "')' without an opening '('; expected a comment like (text)", column
+    return f"unexpected character {c!r}; expected a word (letter and number), a comment or a line end", column
 
 
 def _word_column(line_text: str, word: int) -> int:
@@ -170,37 +262,63 @@ def parse_gcode(
     rapid_feed: float = 15000.0,
     initial_feed: float | None = None,
     start=(0.0, 0.0, 0.0),
-    arc_radius_tolerance: float = 1e-3,
+    arc_radius_tolerance: float | None = None,
+    arc_relative_tolerance: float = SPIRAL_RELATIVE_TOLERANCE,
 ) -> GCodeProgram:
-    """Read a G-code program into straight segments with feeds.
+    """Read a G-code program into blocks (lines and arcs) and straight chords with feeds.
 
     Args:
         text: the program.
         source: name used in error messages and stored in the result.
-        chord_tolerance: largest chord error (sagitta) of the chords replacing an arc [mm]. An arc
-            of radius ``r`` is cut into equal chords of angle at most
+        chord_tolerance: largest chord error (sagitta) of the chords replacing an arc in
+            ``polyline`` [mm]. An arc of radius ``r`` is cut into equal chords of angle at most
             ``2 acos(1 - tol / r)`` (computed as ``4 asin(sqrt(tol / (2 r)))``) and at most 90 deg.
+            ``blocks`` keeps the arcs exact.
         rapid_feed: feed given to ``G0`` segments [mm/min].
         initial_feed: feed in effect before the first ``F`` word [mm/min]; ``None`` makes a
             ``G1``/``G2``/``G3`` before any ``F`` an error.
         start: start position ``(x, y, z)`` [mm] (first vertex of the polyline).
-        arc_radius_tolerance: an arc whose start and end radii (from the centre) differ by more than
-            ``max(arc_radius_tolerance, 1e-6 r)`` [mm] is an error (with ``R``: ``|R|`` shorter than
-            half the chord by more than that). Within it, the radius is blended linearly along the
-            arc so the arc ends exactly at the programmed point.
+        arc_radius_tolerance: largest difference of the start and end radius of a centre-format
+            arc [mm]. ``None`` (default) uses LinuxCNC's default (rs274ngc ``interp_internal.hh``,
+            checked in ``interp_arc.cc`` ``arc_data_ijk``): ``CENTER_ARC_RADIUS_TOLERANCE_MM =
+            2 * 0.01 * sqrt(2) = 0.0283`` mm under G21 and ``CENTER_ARC_RADIUS_TOLERANCE_INCH =
+            2 * 0.001 * sqrt(2) = 0.00283`` in (0.0718 mm) under G20.
+        arc_relative_tolerance: the radius difference must also be at most this fraction of the
+            larger radius (LinuxCNC ``SPIRAL_RELATIVE_TOLERANCE = 0.001``, 0.1 %). An arc beyond
+            either limit is a :class:`GCodeError` naming both radii; within them the radius is
+            blended linearly along the arc (a spiral, as LinuxCNC does), so the arc ends exactly at
+            the programmed point.
 
     Semantics worth knowing:
 
-    * Within one line the units word applies first, then ``F``, then ``G90``/``G91``, then motion
-      (so ``G20 F10 G1 X1`` is 10 in/min). An ``F`` value is converted to mm/s when it is read; a
+    * Within one line the units word applies first, then ``F``, then ``G61``/``G64``, then
+      ``G90``/``G91``, the plane, then motion (so ``G20 F10 G1 X1`` is 10 in/min and
+      ``G20 G64 P0.001`` is 0.0254 mm). An ``F`` value is converted to mm/s when it is read; a
       later ``G20``/``G21`` without a new ``F`` keeps that physical feed.
-    * ``I``/``J`` are offsets from the arc start (``G91.1``, the default) or absolute centre
-      coordinates under ``G90.1``; ``G91`` does not affect them. ``R < 0`` selects the arc > 180 deg.
-      ``G2``/``G3`` with ``I``/``J`` and the end equal to the start in XY is a full circle (a helix
-      if ``Z`` changes).
+    * Arcs: in G17 the centre words are ``I``/``J`` (X/Y), in G18 ``K``/``I`` (Z/X), in G19
+      ``J``/``K`` (Y/Z); the off-plane centre word (``K`` in G17, ``J`` in G18, ``I`` in G19) is an
+      error, as in LinuxCNC. The words are offsets from the arc start (``G91.1``, the default) or
+      absolute centre coordinates under ``G90.1``; ``G91`` does not affect them. ``R < 0`` selects
+      the arc > 180 deg; ``R`` may be up to ``RADIUS_TOLERANCE_MM`` = 0.00127 mm (LinuxCNC's
+      ``RADIUS_TOLERANCE_INCH * 25.4``) shorter than half the chord. A radius below 0.00127 mm is
+      a zero-radius arc (an error). The axis normal to the plane moves linearly with the angle
+      (a helix). ``G2``/``G3`` with the end equal to the start in the plane and a centre is a full
+      circle; with ``R`` it is an error. ``P<n>`` (an integer >= 1, LinuxCNC semantics) is the
+      number of turns: P1 is the plain arc, each further unit one more full turn.
+    * ``G64 P<tol>`` sets the blend tolerance (``block_tolerance``) of the following blocks, in
+      program units; a ``Q`` with it (LinuxCNC's naive-CAM tolerance) is accepted and ignored.
+      ``G61``/``G61.1`` (exact path / exact stop) set it to 0, ``G64`` without ``P`` to NaN (no
+      tolerance given). ``G64 P0`` is kept as 0.
+    * ``G80`` on a line with a motion code is ignored (the motion code wins, as in LinuxCNC); alone
+      it cancels the motion mode.
     * A move ending within :data:`ZERO_LENGTH_MM` of the last polyline vertex produces no segment;
       its line goes to ``no_motion_lines``. The commanded position still follows the program
-      exactly, so the next real move ends where the program says.
+      exactly, so the next real move ends where the program says. An arc starts at the last
+      vertex (which may differ from the commanded position by less than ``ZERO_LENGTH_MM``).
+    * Every number is checked after scaling: coordinates, centres, radii and tolerances must be
+      finite and within :data:`MAX_COORDINATE_MM` (1e6 mm), feeds finite, > 0 and at most
+      :data:`MAX_FEED_MM_PER_MIN`. A segment shorter than ``1e-12 * max |coordinate|`` (the
+      resolution of :class:`Polyline`) is an error naming its line.
     * Columns in error messages are 1-based character positions in the line.
 
     Returns:
@@ -217,75 +335,92 @@ def parse_gcode(
         ([0.0, 10.0, 0.0], 3, 20.0)
     """
     tol = _check_positive("chord_tolerance", chord_tolerance)
-    arc_tol = _check_positive("arc_radius_tolerance", arc_radius_tolerance)
+    arc_tol = None if arc_radius_tolerance is None else _check_positive("arc_radius_tolerance", arc_radius_tolerance)
+    arc_rel = _check_positive("arc_relative_tolerance", arc_relative_tolerance)
     rapid = _check_positive("rapid_feed", rapid_feed) / 60.0
     feed0 = None if initial_feed is None else _check_positive("initial_feed", initial_feed) / 60.0
-    st = np.asarray(start, dtype=np.float64).reshape(-1)
-    if st.shape != (3,) or not np.all(np.isfinite(st)):
-        raise ParameterError(f"parse_gcode: start must be 3 finite numbers (x, y, z) [mm], got {start!r}")
+    try:
+        st = np.asarray(start, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        raise ParameterError(f"parse_gcode: start must be 3 finite numbers (x, y, z) [mm], got {start!r}") from None
+    if st.shape != (3,) or not np.all(np.abs(st) <= MAX_COORDINATE_MM):
+        raise ParameterError(f"parse_gcode: start must be 3 finite numbers (x, y, z) within +-{MAX_COORDINATE_MM:g} "
+                             f"mm, got {start!r}")
     if not isinstance(text, str):
         raise GCodeError(f"expected the program as str, got {type(text).__name__}", source=source, line=0, column=0)
     if "\r" in text:
         text = text.replace("\r\n", "\n").replace("\r", "\n")
 
-    it = _Interpreter(tol, rapid, feed0, tuple(st.tolist()), arc_tol)
+    it = _Interpreter(tol, rapid, feed0, tuple(st.tolist()), arc_tol, arc_rel)
     line_fn = it.line
-    lineno = 1
-    words: list[tuple[str, str]] = []
-    pct = False
+    simple_fn = it.simple
+    simple_match = _SIMPLE.fullmatch
+    tokens = _TOKEN.findall
+    all_lines = text.split("\n")
 
-    def fail(message, word=None, group=None):
-        line_text = text.split("\n")[lineno - 1]
-        if group is not None:
-            column = next(m.start(group) + 1 for m in _TOKEN.finditer(line_text) if m.group(group))
-            message = message or _diagnose_bad_char(line_text, column)
-        else:
-            column = _word_column(line_text, word)
+    def fail(lineno, message, column):
         raise GCodeError(message, source=source, line=lineno, column=column) from None
 
-    def block():
+    for lineno, line_text in enumerate(all_lines, 1):
+        m = simple_match(line_text)
+        if m is not None and simple_fn(*m.groups(), lineno):
+            continue
+        words = []
+        pct = 0
+        for letter, num, percent, bad in tokens(line_text):
+            if letter:
+                words.append((letter, num))
+            elif bad:
+                column = next(t.start(4) + 1 for t in _TOKEN.finditer(line_text) if t.group(4))
+                fail(lineno, *_diagnose_bad_char(line_text, column))
+            elif percent:
+                pct = pct or 1
         if pct and words:
-            fail("'%' program delimiter must be alone on its line; expected no words with it", group=4)
+            column = next(t.start(3) + 1 for t in _TOKEN.finditer(line_text) if t.group(3))
+            fail(lineno, "'%' program delimiter must be alone on its line; expected no words with it", column)
         if words:
             try:
                 line_fn(words, lineno)
             except _LineError as e:
-                fail(e.message, e.word)
+                fail(lineno, e.message, _word_column(line_text, e.word))
 
-    for letter, num, nl, percent, bad in _TOKEN.findall(text):
-        if letter:
-            words.append((letter, num))
-        elif nl:
-            if words:
-                block()
-                words = []
-            pct = False
-            lineno += 1
-        elif bad:
-            fail("", group=5)
-        elif percent:
-            pct = True
-            if words:
-                block()
-    if words:
-        block()
-
+    lineno = len(all_lines)
     if len(it.points) < 2:
         raise GCodeError(
             f"program has no motion ({len(it.no_motion)} line(s) with axis words left the position unchanged); "
             "expected at least one G0/G1/G2/G3 move", source=source, line=lineno, column=1)
     pts = np.asarray(it.points, dtype=np.float64)
-    lines = np.asarray(it.lines, dtype=np.int64)
+    meta = np.asarray(it.meta, dtype=np.float64).reshape(-1, 5)
+    feeds, rap, lines = meta[:, 0], meta[:, 1] != 0, meta[:, 2].astype(np.int64)
+    seg_block, tols = meta[:, 3].astype(np.int64), meta[:, 4]
+    # Polyline's zero-length rule is relative (1e-12 * max |coordinate|); name the line it rejects
+    lengths = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    scale = max(1.0, float(np.max(np.abs(pts))))
+    short = np.flatnonzero(lengths <= 1e-12 * scale)
+    if short.size:
+        k = int(short[0])
+        raise GCodeError(f"move of {lengths[k]:.3g} mm is below the path resolution 1e-12 * {scale:.6g} mm "
+                         f"(the largest coordinate of the program) = {1e-12 * scale:.3g} mm; expected a longer "
+                         "move or smaller coordinates", source=source, line=int(lines[k]), column=1)
+    poly = Polyline(pts)
+    first = np.flatnonzero(np.diff(seg_block, prepend=-1))
+    last = np.append(first[1:] - 1, len(seg_block) - 1)
+    nb = first.size
+    centers = np.full((nb, 3), np.nan)
+    normals = np.full((nb, 3), np.nan)
+    sweeps = np.zeros(nb)
+    for k, centre, normal, sweep in it.arcs:
+        centers[k], normals[k], sweeps[k] = centre, normal, sweep
+    block_lines = lines[first]
     try:
-        poly = Polyline(pts)
-    except PathError as e:
-        # only for extreme coordinates: Polyline's zero-length test scales with max |coordinate|
-        lengths = np.linalg.norm(np.diff(pts, axis=0), axis=1)
-        bad = int(np.argmin(lengths)) if np.all(np.isfinite(pts)) else int(np.argwhere(~np.isfinite(pts))[0, 0]) - 1
-        raise GCodeError(f"segment from this line is unusable: {e}", source=source,
-                         line=int(lines[max(bad, 0)]), column=1) from None
-    return GCodeProgram(poly, np.asarray(it.feeds), np.asarray(it.rapid, dtype=bool), lines, source,
-                        tuple(it.no_motion))
+        blocks = ToolPath(pts[0], pts[last + 1], centers, normals, sweeps)
+    except PathError as e:  # not expected: the interpreter checks arcs first
+        m = re.search(r"block (\d+)", str(e))
+        bad = int(m.group(1)) if m else 0
+        raise GCodeError(f"block from this line is unusable: {e}", source=source,
+                         line=int(block_lines[min(bad, nb - 1)]), column=1) from None
+    return GCodeProgram(poly, feeds, rap, lines, source, tuple(it.no_motion), blocks, feeds[first], rap[first],
+                        block_lines, tols[first], seg_block)
 
 
 def read_gcode(path: str | PathLike, **kwargs) -> GCodeProgram:

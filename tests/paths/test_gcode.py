@@ -209,13 +209,23 @@ def test_g90_1_absolute_centre_and_g20_arc():
     np.testing.assert_allclose(np.linalg.norm(inch[:, :2], axis=1), 25.4, atol=1e-9)
 
 
-def test_arc_radius_tolerance_is_documented_value():
-    # end radius 10.0005 vs start radius 10: within the 1e-3 mm default, blended to end exactly
-    prog = parse_gcode("G0 X10\nG3 X0 Y10.0005 I-10 F60")
-    np.testing.assert_array_equal(pts(prog)[-1], [0, 10.0005, 0])
-    with pytest.raises(GCodeError, match=r"<string>:2:15: G3 end point is not on the arc"):
-        parse_gcode("G0 X10\nG3 X0 Y10.002 I-10 F60")
-    parse_gcode("G0 X10\nG3 X0 Y10.002 I-10 F60", arc_radius_tolerance=0.01)
+def test_arc_radius_tolerance_is_linuxcnc_default():
+    """Default end-radius rule = LinuxCNC rs274ngc (interp_arc.cc arc_data_ijk): refused when
+    |r1 - r0| > CENTER_ARC_RADIUS_TOLERANCE_MM = 2 * 0.01 * sqrt(2) mm or > 0.1 % of max(r0, r1).
+    At r = 50: 0.02 mm (0.04 %) is accepted and blended to end exactly, 0.03 mm is not (0.0283 mm limit)."""
+    prog = parse_gcode("G0 X50\nG3 X0 Y50.02 I-50 F60")
+    np.testing.assert_array_equal(pts(prog)[-1], [0, 50.02, 0])
+    with pytest.raises(GCodeError, match=r"<string>:2:14: G3 end point is not on the arc: start radius 50 mm and "
+                                         r"end radius 50.03 mm"):
+        parse_gcode("G0 X50\nG3 X0 Y50.03 I-50 F60")
+    parse_gcode("G0 X50\nG3 X0 Y50.03 I-50 F60", arc_radius_tolerance=0.05)
+    # the relative 0.1 % part: r = 5 allows only 0.005 mm
+    with pytest.raises(GCodeError, match="0.1 %"):
+        parse_gcode("G0 X5\nG3 X0 Y5.006 I-5 F60")
+    parse_gcode("G0 X5\nG3 X0 Y5.004 I-5 F60")
+    # an explicit absolute tolerance replaces LinuxCNC's (here stricter)
+    with pytest.raises(GCodeError, match="not on the arc"):
+        parse_gcode("G0 X10\nG3 X0 Y10.002 I-10 F60", arc_radius_tolerance=1e-3)
 
 
 def test_arc_feeds_and_lines():
@@ -233,9 +243,9 @@ BAD = [
     ("F100\nG1 X1 (unclosed", 2, 7, "not closed"),
     ("G0 X1 (a (b) c)", 1, 7, "nested"),
     ("G0 X1 )", 1, 7, "')'"),
-    ("G0 X1 # 3", 1, 7, "unexpected character"),
-    ("G0 X1\n  G18", 2, 3, "G18"),
-    ("G19 G0 X1", 1, 1, "G19"),
+    ("G0 X1 # 3", 1, 7, "parameters (# 3) are not supported"),  # was "unexpected character" before #-diagnosis
+    ("G0 X1\n  G18.1", 2, 3, "G18.1"),  # G18 / G19 are accepted since arcs work in all three planes
+    ("G19.1 G0 X1", 1, 1, "G19.1"),
     ("G0 X1\nG41 D1 X2", 2, 1, "G41"),
     ("G42 X2", 1, 1, "G42"),
     ("G43 H1", 1, 1, "G43"),
