@@ -81,8 +81,8 @@ _G_REFUSE = {
 _M_ACCEPT = {2: "end", 30: "end", 3: "spindle", 4: "spindle", 5: "spindle", 6: "tool_change",
              7: "coolant", 8: "coolant", 9: "coolant"}
 _M_REFUSE = {
-    98: "unsupported M-code M98 (subroutine call): not supported: expand subroutines in the CAM post-processor",
-    99: "unsupported M-code M99 (subroutine return): not supported: expand subroutines in the CAM post-processor",
+    98: "unsupported M-code M98 (subroutine call); expected plain G-code (expand subroutines in the CAM post-processor)",
+    99: "unsupported M-code M99 (subroutine return); expected plain G-code (expand subroutines in the CAM post-processor)",
 }
 _LETTER_REFUSE = {
     **{c: f"{c} (extra axis) is not supported: only X, Y, Z" for c in "ABCUVW"},
@@ -467,7 +467,8 @@ class _Interpreter:
                 raise _LineError(f"{name} R{_short(rnum)}: radius {abs(r):.6g} mm is smaller than half the chord "
                                  f"{half:.6g} mm (by more than {rtol:g} mm); expected |R| >= half the distance "
                                  "start-end", rk)
-            h = math.sqrt(max(r * r - half * half, 0.0))
+            # LinuxCNC arc_data_r: a half chord within 1e-12 of |R| is a semicircle (no sqrt of rounding noise)
+            h = 0.0 if half >= abs(r) * (1.0 - 1e-12) else math.sqrt(r * r - half * half)
             ux, uy = (eu - su) / chord, (ev - sv) / chord
             # centre left of the chord for a CCW arc <= 180 deg, right for CW; R < 0 flips it
             side = (1.0 if not cw else -1.0) * (1.0 if r > 0 else -1.0)

@@ -229,7 +229,10 @@ def _diagnose_bad_char(line_text: str, column: int) -> tuple[str, int]:
             if depth == 0:
                 end = i + 1
                 break
-        snippet = line_text[column - 1:end]
+        begin = column - 1
+        while begin > 0 and line_text[begin - 1].isascii() and line_text[begin - 1].isalpha():
+            begin -= 1  # include a function name: sin[30]
+        snippet = line_text[begin if begin < column - 1 and column - 1 - begin > 1 else column - 1:end]
         snippet = snippet if len(snippet) <= 24 else snippet[:21] + "..."
         return f"expressions [..] are not supported (found {snippet}); expected plain numbers", column
     if c == "/":
