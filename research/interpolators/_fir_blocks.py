@@ -43,6 +43,7 @@ class PulseTable:
         fraction: ``(P,)`` share of the block's pulse time ``T_v`` taken by a motion piece.
         geo: ``(P, DEGREE + 1 or 1, d)`` coefficients of ``dP/du`` [mm] in powers of the local block
             fraction ``u'`` (motion pieces; 0 for gaps and padding).
+        role: ``(P,)`` 0 / 1 / 2 for the head / body / tail piece of a line, -1 otherwise.
         n_blocks: real blocks ``M``; ``m_pad``: padded block count.
     """
 
@@ -50,6 +51,7 @@ class PulseTable:
     gap: np.ndarray
     fraction: np.ndarray
     geo: np.ndarray
+    role: np.ndarray
     n_blocks: int
     m_pad: int
 
@@ -58,7 +60,9 @@ class PulseTable:
         M, d = path.n_blocks, path.dim
         arc = path.is_arc
         deg = DEGREE if arc.any() else 0
-        n_sub = np.ones(M, dtype=np.int64)
+        # a line is three collinear pieces (head, body, tail) whose shares and feeds the planner
+        # sets, so a long line can slow down only where a curved window reaches into it
+        n_sub = np.full(M, 3, dtype=np.int64)
         n_sub[arc] = np.maximum(1, np.ceil(path.sweeps[arc] / SUB_ARC)).astype(np.int64)
         # layout per block: its motion pieces, then its gap piece (the last block has none)
         per_block = n_sub + 1
@@ -69,9 +73,10 @@ class PulseTable:
         local = np.arange(P) - first[block]
         gap = local == n_sub[block]
         fraction = np.where(gap, 0.0, 1.0 / n_sub[block])
+        role = np.where(gap | arc[block], -1, local)  # 0 head, 1 body, 2 tail of a line; -1 otherwise
         geo = np.zeros((P, deg + 1, d))
         lines = ~arc[block] & ~gap
-        geo[lines, 0, :] = (path.ends - path.starts)[block[lines]]  # dP/du = L u for a line
+        geo[lines, 0, :] = (path.ends - path.starts)[block[lines]]  # dP/du = L u for a line (any share)
         for k in np.flatnonzero(arc):
             rows = first[k] + np.arange(n_sub[k])
             geo[rows] = _arc_pieces(path, int(k), int(n_sub[k]))
@@ -80,8 +85,20 @@ class PulseTable:
         return PulseTable(
             np.concatenate([block, np.full(pad, Mp)]), np.concatenate([gap, np.ones(pad, bool)]),
             np.concatenate([fraction, np.zeros(pad)]), np.concatenate([geo, np.zeros((pad,) + geo.shape[1:])]),
-            M, Mp,
+            np.concatenate([role, np.full(pad, -1)]), M, Mp,
         )
+
+    def pieces(self, head: np.ndarray, tail: np.ndarray, factor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Shares and feed factors of every piece for line heads / tails of shares ``head``,
+        ``tail`` ``(M,)`` and feed factors ``factor`` ``(M, 3)`` (head, body, tail; arcs take the body's)."""
+        frac = self.fraction.copy()
+        blk = np.minimum(self.block, self.n_blocks - 1)
+        r = self.role
+        frac[r == 0] = head[blk[r == 0]]
+        frac[r == 1] = 1.0 - head[blk[r == 1]] - tail[blk[r == 1]]
+        frac[r == 2] = tail[blk[r == 2]]
+        f = factor[blk, np.where(r < 0, 1, r)]
+        return np.where(self.block < self.n_blocks, frac, 0.0), np.where(self.block < self.n_blocks, f, 1.0)
 
 
 def _arc_pieces(path: ToolPath, k: int, n: int) -> np.ndarray:
@@ -105,36 +122,37 @@ def _arc_pieces(path: ToolPath, k: int, n: int) -> np.ndarray:
 
 
 @jax.jit
-def build_profile(start, geo, block, gap, fraction, pulse_times, gaps, delays):
+def build_profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
     """Schedule the pulses and filter them exactly.
 
     Args:
         start: ``(d,)`` start point [mm]; ``geo, block, gap, fraction``: a :class:`PulseTable`.
-        pulse_times: ``(M_pad,)`` pulse length ``T_v`` of each block [s] (padding: any positive value).
+        fraction: ``(P,)`` share of its block's length taken by each piece.
+        piece_tv: ``(P,)`` ``L / F`` of each piece's block length at that piece's feed [s] (the
+            pulse length the whole block would take at it; padding: any positive value).
         gaps: ``(M_pad,)`` dwell after each block [s], ``T_d - T_k`` (0 after the last and on padding).
         delays: ``(n,)`` filter delays [s].
 
     Returns:
-        ``(block_starts (M_pad,), position PiecewisePolynomial, centre (M_pad,))``: the start of each
-        block's pulse, the exact position, and the time at which the averaging window is centred on
-        each corner's gap (the bisector point of eq 13/14).
+        ``(block_starts (M_pad,), block_ends (M_pad,), position PiecewisePolynomial, centre (M_pad,))``:
+        the start and end of each block's pulse, the exact position, and the time at which the
+        averaging window is centred on each corner's gap (the bisector point of eq 13/14).
     """
-    Tv = jnp.concatenate([pulse_times, jnp.ones(1)])
     gp = jnp.concatenate([gaps, jnp.zeros(1)])
-    durations = jnp.where(gap, gp[block], fraction * Tv[block])
+    durations = jnp.where(gap, gp[block], fraction * piece_tv)
     breaks = jax.lax.cummax(jnp.concatenate([jnp.zeros(1), jnp.cumsum(durations)]))
     powers = jnp.arange(geo.shape[1], dtype=jnp.float64)
-    scale = Tv[block][:, None] ** -(powers[None, :] + 1.0)  # d/dt = (1 / T_v) d/du, u' = tau / T_v
+    scale = piece_tv[:, None] ** -(powers[None, :] + 1.0)  # d/dt = (1 / T_v) d/du, u' = tau / T_v
     coeffs = jnp.where(gap[:, None, None], 0.0, geo * scale[:, :, None])
     velocity = PiecewisePolynomial(breaks, coeffs)
     for i in range(delays.shape[0]):
         velocity = velocity.moving_average(delays[i])
     position = velocity.antiderivative(start)
-    M = pulse_times.shape[0]
-    # start of every block = break at its first piece; the first piece of block k is the first row with block == k
+    M = gaps.shape[0]
+    # start of every block = break at its first piece, end = break at its gap piece
     first = jnp.searchsorted(block, jnp.arange(M), side="left")
     starts = breaks[first]
-    ends = starts + pulse_times
+    ends = breaks[jnp.searchsorted(block, jnp.arange(M), side="right")] - gaps
     Td = jnp.sum(delays)
     centre = ends + 0.5 * gaps + 0.5 * Td
-    return starts, position, centre
+    return starts, ends, position, centre

@@ -112,6 +112,10 @@ class ChainError:
 
     def __call__(self, s_query: np.ndarray, feed: np.ndarray) -> np.ndarray:
         """``|d_j|`` [mm] at arc lengths ``s_query`` [mm] for feeds ``feed`` [mm/s] (both ``(J,)``)."""
+        return np.linalg.norm(self.displacement(s_query, feed), axis=1)
+
+    def displacement(self, s_query: np.ndarray, feed: np.ndarray) -> np.ndarray:
+        """``d_j`` ``(J, d)`` [mm] at arc lengths ``s_query`` [mm] for feeds ``feed`` [mm/s]."""
         q = np.asarray(s_query, dtype=np.float64) - self.origin
         F = np.asarray(feed, dtype=np.float64)
         total = np.zeros((q.size, self.prefix[0].shape[1]))
@@ -127,7 +131,7 @@ class ChainError:
                 total += sign * c * (((-1.0) ** m * right ** (self.p - m))[:, None] * pr + (left ** (self.p - m))[:, None] * pl)
         with np.errstate(divide="ignore", invalid="ignore"):
             scale = np.where(F > 0, F ** (1 - self.p), 0.0) * self.norm
-        return np.linalg.norm(total, axis=1) * scale
+        return total * scale[:, None]
 
     def largest_feed(self, s_query: np.ndarray, feed_max: np.ndarray, tolerance: np.ndarray) -> np.ndarray:
         """Largest feed ``<= feed_max`` found by bisection with ``|d_j| <= tolerance`` kept at the
@@ -160,9 +164,11 @@ def range_min(first: np.ndarray, last: np.ndarray, values: np.ndarray, n: int, i
     """``out[k] = min(initial[k], min{values[r] : first[r] <= k <= last[r]})`` for ``k < n``, in
     ``O((n + R) log n)``: each range is covered by two power-of-two blocks that are pushed down."""
     out = np.array(initial, dtype=np.float64)
+    first, last = np.clip(first, 0, n - 1), np.clip(last, 0, n - 1)
+    keep = first <= last  # empty ranges cover nothing
+    first, last, values = first[keep], last[keep], np.asarray(values)[keep]
     if values.size == 0:
         return out
-    first, last = np.clip(first, 0, n - 1), np.clip(last, 0, n - 1)
     length = last - first + 1
     level = np.floor(np.log2(np.maximum(length, 1))).astype(np.int64)
     top = int(level.max())

@@ -1,32 +1,40 @@
 """FIR-filter trajectory generation with tolerance-bounded corner overlap (Sencer 2015).
 
-Data flow, one G01 segment ``k`` at a time (Sencer, Ishizaki, Shamoto, CIRP Annals 64, 2015):
+Data flow, one block ``k`` at a time (Sencer, Ishizaki, Shamoto, CIRP Annals 64, 2015):
 
-1. Each segment becomes a rectangular axis-velocity pulse ``F_k u_k`` of length
-   ``T_v,k = L_k / F_k`` (eq 5).
+1. Each G01 block becomes a rectangular axis-velocity pulse ``F_k u_k`` of length
+   ``T_v,k = L_k / F_k`` (eq 5); an arc block the same pulse with a turning direction
+   (``_fir_blocks``).
 2. The pulse train goes through a chain of n moving-average filters with delays ``T_i``
    (eq 1-6), which makes velocity trapezoidal (n = 1), jerk-limited (n = 2), ...
-3. Segment ``k + 1`` starts ``T_d - T_k`` after segment ``k``'s pulse ends: ``T_k = 0`` is an exact
+3. Block ``k + 1`` starts ``T_d - T_k`` after block ``k``'s pulse ends: ``T_k = 0`` is an exact
    stop, ``T_k = T_d`` full overlap (eq 11). ``T_k`` comes from the cornering tolerance (eq 13/14,
    :func:`overlap_time`).
 4. The filtered profile is piecewise polynomial, so it is built exactly (``PiecewisePolynomial``)
-   in O(segments * 2^n), and sampled at ``Ts`` in O(samples): no convolution, no rounding of
-   ``T_i`` to the sample grid. Cycle time and corner errors are smooth in ``T_i`` and ``jax.grad``
-   goes through them.
+   and sampled at ``Ts``: no convolution, no rounding of ``T_i`` to the sample grid. Cycle time and
+   corner errors are smooth in ``T_i`` and ``jax.grad`` goes through them.
 
-Short segments (beyond the paper, which assumes ``T_v > T_d``): when a segment is shorter than
-the averaging window, the windows of neighbouring corners overlap and eq 13/14 no longer bound the
-error. Rule used here ("verified overlap"): start from eq 13/14, compute every corner's exact
-error on the actual profile (distance from the vertex to the trajectory, local search around the
-bisector time), shrink each violating overlap by ``(eps / error)^(1/(n+1))`` (the small-overlap
-scaling of ``H2``) for a few rounds, then set any corner still violating to an exact stop. An exact
-stop puts the corner vertex on the trajectory whatever the neighbours do, so the loop ends, and
-every corner holds its tolerance. Feed is never changed.
+CAM programs (beyond the paper, which assumes every block longer than the window ``T_d``):
+
+* **Arcs** keep their feed below the eq 8 bound on the radial shrink of a filtered circle
+  (``_fir_feed.arc_feed_caps``).
+* **Look-ahead** (``refine=True``): corners that eq 13/14 rounds with a dwell keep it when that is
+  cheaper than slowing down; every other vertex runs at full overlap with the largest feed whose
+  windowed displacement ``|d_j(F)|`` (``_fir_feed``: all the direction changes inside the window,
+  with their cancellation) stays within the tolerance; the block feeds are the minimum over the
+  windows that cover them.
+* **Verification and repair**: the exact profile is checked at every vertex (distance from the
+  vertex to the trajectory) and between vertices (distance from the trajectory, sampled every
+  ``check_period``, to the programmed path). A violating dwell corner has its overlap shrunk by
+  ``(eps / error)^(1/(n+1))`` (the small-overlap scaling of ``H2``), a violating full-overlap
+  vertex slows the blocks of its window by ``sqrt(eps / error)`` (the error of a chain is
+  quadratic in feed); after :data:`_SCALING_ROUNDS` rounds a vertex still violating becomes an exact
+  stop, which puts it on the trajectory whatever its neighbours do. Deviations inside an arc slow
+  that arc. At most :data:`MAX_ROUNDS` rounds; the rounds needed are reported in
+  :attr:`FIRPlan.rounds`.
 """
 
 from __future__ import annotations
-
-from functools import partial
 
 import equinox as eqx
 import jax
@@ -34,34 +42,44 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from research.errors import ParameterError
-from research.interpolators._fir_chain import check_delays
-from research.interpolators._fir_limits import corner_peak_ratios, feed_caps
+from research.errors import ConvergenceError, ParameterError, PathError
+from research.interpolators._fir_blocks import PulseTable, build_profile
+from research.interpolators._fir_chain import check_delays, kernel_second_integral
+from research.interpolators._fir_feed import ChainError, arc_feed_caps, range_min
+from research.interpolators._fir_limits import arc_limit_caps, corner_peak_ratios, feed_caps
 from research.interpolators._fir_overlap import overlap_time
+from research.interpolators._fir_verify import corner_distances, path_deviations
 from research.limits import AxisLimits
 from research.paths.polyline import Polyline
-from research.piecewise import PiecewisePolynomial, bucket_size
+from research.paths.toolpath import ToolPath
+from research.piecewise import NumpyPiecewise
 from research.trajectory import Trajectory
 
-_SCALING_ROUNDS = 6  # refinement rounds that shrink overlaps before violators are set to exact stops
-_LIMIT_ROUNDS = 16  # the same for corners that break axis limits
-_GRID = 9  # grid points per corner window for the corner-error search
-_NEWTON_STEPS = 4
+_SCALING_ROUNDS = 6  # rounds that shrink overlaps / feeds before violators become exact stops
+_LIMIT_ROUNDS = 16  # the same for corners that break axis limits (15 % overlap steps)
+#: hard bound on verification rounds: the scaling rounds, the limit rounds, one exact-stop round
+#: and rounds that slow arcs whose own deviation exceeds the tolerance (geometric, <= 0.7 a round)
+MAX_ROUNDS = _LIMIT_ROUNDS + 24
+CHECK_PERIOD = 2.5e-4  # default spacing [s] of the path-deviation check
 
 
 class FIRPlan(eqx.Module):
     """The timing of every block and the exact filtered profile.
 
     Attributes:
-        start_times: ``(M,)`` start of each segment's velocity pulse [s].
+        start_times: ``(M,)`` start of each block's velocity pulse [s].
         pulse_times: ``(M,)`` pulse lengths ``T_v,k = L_k / F_k`` [s] (eq 5).
         overlaps: ``(M - 1,)`` overlap ``T_k`` at each corner [s] (eq 11), ``0 <= T_k <= T_d``.
-        feeds: ``(M,)`` commanded feed per segment [mm/s].
+        feeds: ``(M,)`` planned feed per block [mm/s] (the commanded feed, or less where arcs,
+            windows of short blocks or axis limits need it).
         delays: ``(n,)`` filter delays ``T_i`` [s].
         position: exact position profile [mm].
         corner_times: ``(M - 1,)`` time [s] at which the averaging window is centred on each
             corner's gap (the bisector point of eq 13/14).
         vertices: ``(M - 1, d)`` corner vertices [mm].
+        path_deviation: largest distance [mm] from the checked trajectory samples to the path
+            (NaN when the plan was not verified).
+        rounds: verification rounds used (0 without refinement).
         axes: axis names.
     """
 
@@ -70,9 +88,11 @@ class FIRPlan(eqx.Module):
     overlaps: Array
     feeds: Array
     delays: Array
-    position: PiecewisePolynomial
+    position: object
     corner_times: Array
     vertices: Array
+    path_deviation: float = eqx.field(static=True)
+    rounds: int = eqx.field(static=True)
     axes: tuple[str, ...] = eqx.field(static=True)
 
     @property
@@ -84,12 +104,7 @@ class FIRPlan(eqx.Module):
     def corner_errors(self) -> Array:
         """``(M - 1,)`` distance [mm] from each corner vertex to the trajectory (exact profile,
         searched around :attr:`corner_times`; never optimistic)."""
-        C = self.vertices.shape[0]
-        pad = bucket_size(C) - C
-        centre = jnp.concatenate([self.corner_times, jnp.zeros(pad)])
-        vertices = jnp.concatenate([self.vertices, jnp.zeros((pad, self.vertices.shape[1]))])
-        real = jnp.arange(C + pad) < C
-        return _corner_errors(self.position, vertices, centre, 0.5 * jnp.sum(self.delays), real)[:C]
+        return corner_distances(self.position, self.vertices, self.corner_times, 0.5 * jnp.sum(self.delays))
 
     def trajectory(self, sample_period: float = 1e-3) -> Trajectory:
         """Sample the exact profile at the interpolation period ``Ts`` [s]."""
@@ -98,18 +113,17 @@ class FIRPlan(eqx.Module):
         return Trajectory.from_piecewise(self.position, sample_period, self.axes)
 
 
-def fir_interpolate(
-    path: Polyline, feed, delays, tolerance: float, sample_period: float = 1e-3, *, refine: bool = True
-) -> Trajectory:
+def fir_interpolate(path, feed, delays, tolerance, sample_period: float = 1e-3, *, refine: bool = True) -> Trajectory:
     """FIR trajectory along ``path`` with every corner rounded within ``tolerance``.
 
     Args:
-        path: G01 tool path [mm].
-        feed: commanded feed ``F`` [mm/s], scalar or one per segment.
+        path: :class:`Polyline` (G01 blocks) or :class:`ToolPath` (lines and arcs) [mm].
+        feed: commanded feed ``F`` [mm/s], scalar or one per block.
         delays: FIR delays ``T_1 .. T_n`` [s] (any order; n >= 1).
-        tolerance: cornering tolerance ``epsilon`` [mm], >= 0 (0 = exact stop at every corner).
+        tolerance: cornering tolerance ``epsilon`` [mm], >= 0, scalar or one per block (a vertex
+            takes the smaller of its two blocks'); 0 = exact stop at every corner.
         sample_period: interpolation period ``Ts`` [s].
-        refine: apply the short-segment rule (module docstring); ``False`` uses eq 13/14 alone.
+        refine: look-ahead and verification (module docstring); ``False`` uses eq 13/14 alone.
 
     Returns:
         The sampled :class:`Trajectory`, with the exact profile attached.
@@ -123,143 +137,234 @@ def fir_interpolate(
     return plan_fir(path, feed, delays, tolerance, refine=refine).trajectory(sample_period)
 
 
-def plan_fir(path: Polyline, feed, delays, tolerance, *, refine: bool = True, limits: AxisLimits | None = None) -> FIRPlan:
-    """Overlap times, schedule and exact profile; see :func:`fir_interpolate` for the arguments.
+def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: AxisLimits | None = None,
+             check_period: float = CHECK_PERIOD) -> FIRPlan:
+    """Feeds, overlap times, schedule and exact profile; see :func:`fir_interpolate` for the arguments.
 
     Args:
         limits: per-axis limits to hold as well (beyond the paper, see ``_fir_limits``): each
             block's feed is capped so that it keeps them alone, and the overlap of any corner whose
             exact peaks break them is shrunk, down to an exact stop if need be.
+        check_period: spacing [s] of the trajectory samples whose distance to the path is checked.
 
-    Differentiable with ``jax.grad`` with respect to ``feed``, ``delays`` and ``tolerance`` (not
-    under ``jax.jit`` when ``refine`` is on: the refinement loop stops on concrete values; not
-    with ``limits``, whose peaks are found in NumPy).
+    Differentiable with ``jax.grad`` / ``jax.jacfwd`` with respect to ``feed``, ``delays`` and
+    ``tolerance``: the discrete choices (which corners dwell, which feeds a window lowers, which
+    corners stop) are made on the primal values and held fixed. Not under ``jax.jit`` with
+    ``refine`` or ``limits``, which decide on concrete values.
+
+    Raises:
+        ParameterError: a bad feed, delay or tolerance (naming which), a tolerance of 0 on an arc.
+        ConvergenceError: the verification did not settle within :data:`MAX_ROUNDS` rounds.
     """
-    if not isinstance(path, Polyline):
-        raise ParameterError(f"path must be a Polyline, got {type(path).__name__}")
-    _check_concrete(delays, feed, tolerance, path.n_segments)
-    M = path.n_segments
-    pad = bucket_size(M) - M  # similar paths share compiled code
+    tp = _as_toolpath(path)
+    M = tp.n_blocks
+    _check_inputs(delays, feed, tolerance, M)
+    table = _pulse_table(tp)
+    Mp = table.m_pad
     delays = jnp.asarray(delays, dtype=jnp.float64).reshape(-1)
-    feeds = jnp.broadcast_to(jnp.asarray(feed, dtype=jnp.float64), (M,))
+    feeds_cmd = jnp.broadcast_to(jnp.asarray(feed, dtype=jnp.float64), (M,))
+    tol_block = jnp.broadcast_to(jnp.asarray(tolerance, dtype=jnp.float64), (M,))
+    tol_vertex = jnp.minimum(tol_block[:-1], tol_block[1:])
+    d_np, F_np, tb_np = (np.asarray(_primal(x), dtype=np.float64) for x in (delays, feeds_cmd, tol_block))
+    tv_np = np.minimum(tb_np[:-1], tb_np[1:])
+    Td_np = float(d_np.sum())
+    t_in, t_out = tp.tangents()
+
+    # feed factors (NumPy, decided on primal values): (M, 3) for the head, body and tail of each block
+    base = _arc_factor(tp, d_np, tb_np, F_np)
     if limits is not None:
-        if limits.n_axes != path.dim:
-            raise ParameterError(f"limits have {limits.n_axes} axes but the path has {path.dim}")
-        feeds = jnp.minimum(feeds, feed_caps(path.lengths, path.directions, np.asarray(delays), limits))
-    tolerance = jnp.asarray(tolerance, dtype=jnp.float64)
-    # padding segments have zero length and full overlap: they add neither motion nor time
-    points = jnp.concatenate([jnp.asarray(path.points), jnp.repeat(jnp.asarray(path.points[-1:]), pad, axis=0)])
-    u = jnp.concatenate([jnp.asarray(path.directions), jnp.zeros((pad, path.dim))])
-    feeds_p = jnp.concatenate([feeds, jnp.ones(pad)])
-    pulse_times = jnp.concatenate([jnp.asarray(path.lengths), jnp.zeros(pad)]) / feeds_p
-    real = jnp.arange(M + pad - 1) < M - 1
+        if limits.n_axes != tp.dim:
+            raise ParameterError(f"limits have {limits.n_axes} axes but the path has {tp.dim}")
+        caps = np.where(tp.is_arc, arc_limit_caps(tp.radii, d_np, limits), feed_caps(tp.lengths, t_in, d_np, limits))
+        base = np.minimum(base, caps / F_np)
+    factor = np.repeat(base[:, None], 3, axis=1)
+    head, tail = np.zeros(M), np.zeros(M)
+    full = np.zeros(M - 1, dtype=bool)
+    others = np.zeros(M - 1)  # tolerance taken by the other direction changes of a dwell corner's window
+    if refine and M > 1:
+        factor, head, tail, full, others = _look_ahead(tp, F_np, base, d_np, tv_np, t_in, t_out)
+    shrink = np.ones(M - 1)
+    lengths_p = jnp.asarray(np.concatenate([tp.lengths, np.ones(Mp - M + 1)]))
+    feeds_p = jnp.concatenate([feeds_cmd, jnp.ones(Mp - M + 1)])
+    blk = jnp.asarray(table.block)
 
-    vertices = points[1:-1]
-    half_window = 0.5 * jnp.sum(delays)
-    overlaps = _initial_overlaps(u, feeds_p, delays, tolerance, real)
-    starts, position, centre = _build(points, u, feeds_p, pulse_times, delays, overlaps)
-    if (refine or limits is not None) and M > 1:
-        limit = tolerance * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
-        for round_ in range(_LIMIT_ROUNDS + M):
-            errors = _corner_errors(position, vertices, centre, half_window, real) if refine else jnp.zeros(M + pad - 1)
-            too_fast = _limit_violations(position, starts, pulse_times, delays, limits, M, pad)
-            if not (bool(jnp.any(errors > limit)) or too_fast.any()):
+    def schedule(factor, head, tail, full, shrink):
+        frac, piece_factor = table.pieces(head, tail, factor)
+        piece_tv = lengths_p[blk] / (feeds_p[blk] * jnp.asarray(piece_factor))
+        f_in, f_out = feeds_cmd * jnp.asarray(factor[:, 0]), feeds_cmd * jnp.asarray(factor[:, 2])
+        dF = _safe_norm(f_in[1:, None] * jnp.asarray(t_in[1:]) - f_out[:-1, None] * jnp.asarray(t_out[:-1]))
+        Td = jnp.sum(delays)
+        overlaps = jnp.where(jnp.asarray(full), Td, overlap_time(tol_vertex - others, dF, delays)) * jnp.asarray(shrink)
+        gaps = jnp.concatenate([Td - overlaps, jnp.zeros(Mp - M + 1)])
+        starts, ends, position, centre = build_profile(
+            jnp.asarray(tp.start), jnp.asarray(table.geo), blk, jnp.asarray(table.gap), jnp.asarray(frac), piece_tv, gaps, delays)
+        return feeds_cmd * jnp.asarray(factor[:, 1]), overlaps, ends[:M] - starts[:M], starts[:M], position, centre[: M - 1]
+
+    state = schedule(factor, head, tail, full, shrink)
+    rounds, deviation = 0, float("nan")
+    if (refine or limits is not None) and M >= 1:
+        cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
+        limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
+        for rounds in range(1, MAX_ROUNDS + 1):
+            feeds, overlaps, pulse, starts, position, centre = state
+            pos_np = NumpyPiecewise(np.asarray(_primal(position.breaks)), np.asarray(_primal(position.coeffs)))
+            starts_np, centre_np = np.asarray(_primal(starts)), np.asarray(_primal(centre))
+            errors = np.array(_primal(corner_distances(position, jnp.asarray(tp.vertices), centre, 0.5 * jnp.sum(delays)))) if refine and M > 1 else np.zeros(M - 1)
+            viol = errors > limit_v
+            arc_slow = np.zeros(M)
+            if refine:
+                deviation, at_vertex, at_block = path_deviations(pos_np, tp, starts_np, centre_np, Td_np, tb_np, check_period)
+                for j, e in at_vertex.items():
+                    viol[j], errors[j] = True, max(errors[j], e)
+                for k, e in at_block.items():
+                    arc_slow[k] = e
+            too_fast = _limit_violations(pos_np, starts_np, np.asarray(_primal(pulse)), Td_np, limits, M)
+            if not (viol.any() or too_fast.any() or arc_slow.any()):
                 break
-            overlaps = _refine_overlaps(overlaps, errors, tolerance, limit, delays.shape[0], round_ < _SCALING_ROUNDS)
+            if rounds == MAX_ROUNDS:
+                raise ConvergenceError(
+                    f"plan_fir: {int(viol.sum())} vertices, {int((arc_slow > 0).sum())} arcs and {int(too_fast.sum())} "
+                    f"corners still violate after {MAX_ROUNDS} rounds", residual=float(np.max(errors - limit_v, initial=0.0)),
+                    steps=rounds)
+            late = rounds > _SCALING_ROUNDS
+            n_f = d_np.size
+            for j in np.flatnonzero(viol):
+                ratio = tv_np[j] / errors[j]
+                if late:
+                    shrink[j] = 0.0  # exact stop: the vertex is on the trajectory
+                elif full[j]:  # slow the window's blocks: the error of a chain is quadratic in feed
+                    half = 0.5 * Td_np * F_np[j] * factor[j, 2]
+                    lo = max(int(np.searchsorted(cum, cum[j + 1] - half, side="right")) - 1, 0)
+                    hi = min(int(np.searchsorted(cum, cum[j + 1] + half, side="left")), M)
+                    factor[lo:max(hi, j + 2)] *= 0.98 * np.sqrt(ratio)
+                else:
+                    shrink[j] *= min(0.98 * ratio ** (1.0 / (n_f + 1)), 1.0)
+            for k in np.flatnonzero(arc_slow):
+                factor[k] *= min(0.98 * np.sqrt(tb_np[k] / arc_slow[k]), 0.98)
             if too_fast.any():  # shrink by 15 % a round, then exact stops
-                overlaps = jnp.where(too_fast, overlaps * (0.85 if round_ < _LIMIT_ROUNDS else 0.0), overlaps)
-            starts, position, centre = _build(points, u, feeds_p, pulse_times, delays, overlaps)
-    return FIRPlan(
-        starts[:M], pulse_times[:M], overlaps[: M - 1], feeds, delays, position, centre[: M - 1],
-        jnp.asarray(path.corners), path.axes,
-    )
+                shrink = np.where(too_fast, shrink * (0.85 if rounds <= _LIMIT_ROUNDS else 0.0), shrink)
+            state = schedule(factor, head, tail, full, shrink)
+    feeds, overlaps, pulse, starts, position, centre = state
+    return FIRPlan(starts, pulse, overlaps, feeds, delays, position, centre, jnp.asarray(tp.vertices),
+                   float(deviation), int(rounds), tp.axes)
 
 
-def _limit_violations(position, starts, pulse_times, delays, limits, M: int, pad: int) -> np.ndarray:
-    """Corners (padded length) whose window ``[end of block k, start of block k+1 + T_d]`` holds a
-    velocity, acceleration or jerk above ``limits``."""
-    flags = np.zeros(M + pad - 1, dtype=bool)
-    if limits is None:
-        return flags
-    s, e = np.asarray(starts)[:M], np.asarray(starts + pulse_times)[:M]
-    ratios = corner_peak_ratios(position, e[:-1], s[1:] + float(jnp.sum(delays)), limits)
-    flags[: M - 1] = ratios > 1.0 + 1e-9
-    return flags
+def _as_toolpath(path) -> ToolPath:
+    if isinstance(path, ToolPath):
+        return path
+    if isinstance(path, Polyline):
+        cache = path._tree  # Polyline's private cache dict: one ToolPath per polyline
+        if "toolpath" not in cache:
+            cache["toolpath"] = ToolPath.from_polyline(path)
+        return cache["toolpath"]
+    raise ParameterError(f"path must be a Polyline or a ToolPath, got {type(path).__name__}")
 
 
-@jax.jit
-def _initial_overlaps(u, feeds, delays, tolerance, real):
-    """Eq 13/14 overlap per corner from ``|F+ u+ - F- u-|``; padding corners get full overlap."""
-    speed_change = _safe_norm(feeds[1:, None] * u[1:] - feeds[:-1, None] * u[:-1])
-    return jnp.where(real, overlap_time(tolerance, speed_change, delays), jnp.sum(delays))
+def _pulse_table(tp: ToolPath) -> PulseTable:
+    cache = tp._cache
+    if "pulse_table" not in cache:
+        cache["pulse_table"] = PulseTable.from_path(tp)
+    return cache["pulse_table"]
 
 
-@partial(jax.jit, static_argnums=(4, 5))
-def _refine_overlaps(overlaps, errors, tolerance, limit, n_filters: int, scale: bool):
-    """One round of the short-segment rule: shrink (or, late, zero) every violating overlap."""
-    violated = errors > limit
-    if not scale:
-        return jnp.where(violated, 0.0, overlaps)
-    ratio = tolerance / jnp.where(violated, errors, 1.0)
-    shrink = jnp.clip(0.98 * ratio ** (1.0 / (n_filters + 1)), 0.0, 1.0)
-    return jnp.where(violated, overlaps * shrink, overlaps)
+def _arc_factor(tp: ToolPath, delays, tol_block, feeds) -> np.ndarray:
+    """Feed factors from the eq 8 radial error of each arc block (1 on lines)."""
+    arc = tp.is_arc
+    if not arc.any():
+        return np.ones(tp.n_blocks)
+    zero = arc & (tol_block <= 0)
+    if zero.any():
+        raise ParameterError(f"block {int(np.argmax(zero))} is an arc with tolerance 0: an FIR chain shrinks every "
+                             "arc it averages (eq 8), so an arc needs a tolerance > 0 mm")
+    caps = arc_feed_caps(tp.radii, delays, tol_block, feeds)
+    return caps / feeds
 
 
-@jax.jit
-def _build(points, u, feeds, pulse_times, delays, overlaps):
-    """Schedule the pulses and filter them exactly; also returns each corner's bisector time."""
-    Td = jnp.sum(delays)
-    gaps = Td - overlaps
-    starts = jnp.concatenate([jnp.zeros(1), jnp.cumsum(pulse_times[:-1] + gaps)])
-    ends = starts + pulse_times
-    # break points s_0, s_0 + T_v0, s_1, ...; cummax removes 1-ulp inversions when a gap is 0
-    breaks = jax.lax.cummax(jnp.stack([starts, ends], axis=1).reshape(-1))
-    values = jnp.zeros((breaks.shape[0] - 1, u.shape[1])).at[0::2].set(feeds[:, None] * u)
-    velocity = PiecewisePolynomial.from_steps(breaks, values)
-    for i in range(delays.shape[0]):
-        velocity = velocity.moving_average(delays[i])
-    position = velocity.antiderivative(points[0])
-    # the bisector point of corner k: averaging window centred on the gap after pulse k
-    centre = ends[:-1] + 0.5 * gaps + 0.5 * Td
-    return starts, position, centre
+def _look_ahead(tp: ToolPath, F_cmd, base, delays, tol_v, t_in, t_out):
+    """Feed factors ``(M, 3)`` (head, body, tail), head and tail shares ``(M,)`` and full-overlap
+    flags ``(M - 1,)`` from the look-ahead rule (``_fir_feed``)."""
+    M = tp.n_blocks
+    Td = float(delays.sum())
+    F = F_cmd * base
+    du = t_in[1:] - t_out[:-1]
+    s_v = np.cumsum(tp.lengths)[:-1]
+    Fv = np.minimum(F[:-1], F[1:])
+    dF = np.linalg.norm(F[1:, None] * t_in[1:] - F[:-1, None] * t_out[:-1], axis=1)
+    h_full = float(kernel_second_integral(0.5 * Td, delays))
+    arc_turns = _arc_turns(tp, float(np.min(tol_v, initial=np.inf))) if tp.is_arc.any() else (np.zeros(0), np.zeros((0, tp.dim)))
+
+    def chain(keep):
+        s_t, du_t = np.concatenate([s_v[keep], arc_turns[0]]), np.concatenate([du[keep], arc_turns[1]])
+        order = np.argsort(s_t, kind="stable")
+        return ChainError(s_t[order], du_t[order], delays)
+
+    every = chain(np.ones(M - 1, dtype=bool))
+    d_all = every.displacement(s_v, Fv)
+    # what the other direction changes in the window add at full overlap: eq 13/14's dwell gets the
+    # rest of the tolerance (triangle inequality), and is valid only where some is left
+    budget = tol_v - np.linalg.norm(d_all - Fv[:, None] * du * h_full, axis=1)
+    need = np.linalg.norm(d_all, axis=1) > tol_v
+    Tk = np.asarray(overlap_time(np.maximum(budget, 0.0), dF, delays))
+    f_w = np.where(need, every.largest_feed(s_v, Fv, tol_v), Fv)
+    # dwell where it costs less than the slow-down: T_d - T_k < T_d (1 - f / F)
+    gap = need & (budget > 0) & (Tk < Td * (1 - 1e-12)) & (Tk >= Td * f_w / Fv)
+    query = np.flatnonzero(~gap)
+    f = chain(~gap).largest_feed(s_v[query], Fv[query], tol_v[query])
+    # the estimate holds a constant feed through the window: a vertex between blocks of different
+    # feeds (a line entering a slower arc) gets the lower one on both sides of it
+    slow = f < np.maximum(F[:-1], F[1:])[query] * (1 - 1e-12)
+    j, f = query[slow], f[slow]
+    lo, hi = s_v[j] - 0.5 * Td * f, s_v[j] + 0.5 * Td * f
+    cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
+    L = tp.lengths
+    # blocks inside a window run at its feed; a window reaching into a block slows its head or tail
+    first, last = np.searchsorted(cum, lo, side="left"), np.searchsorted(cum, hi, side="right") - 2
+    body = range_min(first, last, f, M, F)
+    k_r = np.clip(np.searchsorted(cum, hi, side="right") - 1, 0, M - 1)  # block holding the window's right end
+    k_l = np.clip(np.searchsorted(cum, lo, side="right") - 1, 0, M - 1)
+    head_len, tail_len = np.zeros(M), np.zeros(M)
+    head_f, tail_f = F.copy(), F.copy()
+    inside_r, inside_l = hi < cum[k_r + 1], lo > cum[k_l]
+    np.maximum.at(head_len, k_r[inside_r], hi[inside_r] - cum[k_r[inside_r]])
+    np.minimum.at(head_f, k_r[inside_r], f[inside_r])
+    np.maximum.at(tail_len, k_l[inside_l], cum[k_l[inside_l] + 1] - lo[inside_l])
+    np.minimum.at(tail_f, k_l[inside_l], f[inside_l])
+    head_f, tail_f = np.minimum(head_f, body), np.minimum(tail_f, body)
+    whole = tp.is_arc | (head_len + tail_len >= L)
+    merged = np.minimum(np.minimum(head_f, tail_f), body)
+    head_f, body, tail_f = (np.where(whole, merged, x) for x in (head_f, body, tail_f))
+    head = np.where(whole | tp.is_arc, 0.0, head_len / L)
+    tail = np.where(whole | tp.is_arc, 0.0, tail_len / L)
+    factor = np.stack([head_f, body, tail_f], axis=1) / F_cmd[:, None]
+    return factor, head, tail, ~gap, np.where(gap, tol_v - np.maximum(budget, 0.0), 0.0)
 
 
-@jax.jit
-def _corner_errors(position, vertices, centre, half_window, real):
-    """:func:`corner_distances` on padded corners; 0 on the padding."""
-    return jnp.where(real, corner_distances(position, vertices, centre, half_window), 0.0)
+def _arc_turns(tp: ToolPath, tol: float):
+    """Arc length and direction change of the interior chord vertices of every arc block."""
+    chords, owner = tp.to_polyline(max(min(tol, 1e-2) * 1e-2, 1e-6))
+    inner = np.flatnonzero(owner[1:] == owner[:-1])  # chord vertex inside one block
+    inner = inner[tp.is_arc[owner[inner]]]
+    u = chords.directions
+    return chords.arc_length[inner + 1], u[inner + 1] - u[inner]
 
 
-def corner_distances(position: PiecewisePolynomial, vertices: Array, centre: Array, half_window: Array) -> Array:
-    """Distance from each vertex to the profile, searched in ``centre +- half_window`` [s].
+def _limit_violations(pos_np, starts, pulse_times, Td, limits, M: int) -> np.ndarray:
+    """Corners whose window ``[end of block k, start of block k+1 + T_d]`` holds a velocity,
+    acceleration or jerk above ``limits``."""
+    if limits is None or M < 2:
+        return np.zeros(max(M - 1, 0), dtype=bool)
+    e = starts + pulse_times
+    return corner_peak_ratios(pos_np, e[:-1], starts[1:] + Td, limits) > 1.0 + 1e-9
 
-    A grid of 9 points finds the basin; safeguarded Newton steps on ``|p(t) - V|^2`` (exact
-    derivatives of the profile) refine it. Any point of the trajectory gives an upper bound on the
-    true distance, so the result is never optimistic.
-    """
-    if vertices.shape[0] == 0:
-        return jnp.zeros(0)
-    offsets = jnp.linspace(-1.0, 1.0, _GRID)
-    grid = centre[:, None] + half_window * offsets[None, :]  # (C, G)
-    p = position(grid)
-    d2 = jnp.sum((p - vertices[:, None, :]) ** 2, axis=-1)
-    best = jnp.argmin(d2, axis=1)
-    t = jnp.take_along_axis(grid, best[:, None], axis=1)[:, 0]
-    step = half_window * (offsets[1] - offsets[0])
-    lo, hi = t - step, t + step
 
-    def newton(_, t):
-        p, v, a = position.derivatives(t, 3)
-        e = p - vertices
-        slope = jnp.sum(e * v, axis=1)
-        curvature = jnp.sum(v * v, axis=1) + jnp.sum(e * a, axis=1)
-        t_new = jnp.where(curvature > 0, t - slope / jnp.where(curvature > 0, curvature, 1.0), t)
-        return jnp.clip(t_new, lo, hi)
-
-    t = jax.lax.fori_loop(0, _NEWTON_STEPS, newton, t)
-    squared = jnp.minimum(jnp.sum((position(t) - vertices) ** 2, axis=1), jnp.min(d2, axis=1))
-    positive = squared > 0
-    return jnp.where(positive, jnp.sqrt(jnp.where(positive, squared, 1.0)), 0.0)
+def _primal(x):
+    """The primal value of a JAX AD tracer (decisions are made on it); the value itself otherwise."""
+    while isinstance(x, jax.core.Tracer):
+        if not hasattr(x, "primal"):
+            raise ParameterError("plan_fir with refine or limits decides on concrete values and cannot run under "
+                                 "jax.jit; call it outside jit (jax.grad and jax.jacfwd work)")
+        x = x.primal
+    return x
 
 
 def _safe_norm(x: Array) -> Array:
@@ -269,25 +374,25 @@ def _safe_norm(x: Array) -> Array:
     return jnp.where(positive, jnp.sqrt(jnp.where(positive, s, 1.0)), 0.0)
 
 
-def _check_concrete(delays, feed, tolerance, n_segments: int) -> None:
-    """Domain checks on concrete inputs (skipped for JAX tracers)."""
-    if any(isinstance(x, jax.core.Tracer) for x in (delays, feed, tolerance)):
-        return
+def _check_inputs(delays, feed, tolerance, n_blocks: int) -> None:
+    """Domain checks on the primal values."""
+    delays, feed, tolerance = (_primal(x) for x in (delays, feed, tolerance))
     check_delays(delays)
     f = np.asarray(feed, dtype=np.float64)
-    if f.ndim > 1 or (f.ndim == 1 and f.shape[0] != n_segments):
-        raise ParameterError(f"feed must be a scalar or one value per segment ({n_segments}), got shape {f.shape}")
+    if f.ndim > 1 or (f.ndim == 1 and f.shape[0] != n_blocks):
+        raise ParameterError(f"feed must be a scalar or one value per segment ({n_blocks}), got shape {f.shape}")
     bad = ~(np.isfinite(f) & (f > 0))
     if bad.any():
         where = "" if f.ndim == 0 else f" on segment {int(np.argmax(bad))}"
         raise ParameterError(f"feed F must be finite and > 0 mm/s{where}, got {np.ravel(f)[np.argmax(np.ravel(bad))]!r}")
     tol = np.asarray(tolerance, dtype=np.float64)
-    if tol.ndim != 0 or not (np.isfinite(tol) and tol >= 0):
-        raise ParameterError(f"cornering tolerance epsilon must be a finite scalar >= 0 mm, got {tolerance!r}")
+    if tol.ndim > 1 or (tol.ndim == 1 and tol.shape[0] != n_blocks) or not np.all(np.isfinite(tol) & (tol >= 0)):
+        raise ParameterError(f"cornering tolerance epsilon must be a finite scalar >= 0 mm (or one per block, "
+                             f"{n_blocks}), got {tolerance!r}")
 
 
 def fir_by_convolution(plan: FIRPlan, path: Polyline, sample_period: float) -> tuple[np.ndarray, np.ndarray]:
-    """Straightforward discrete implementation of the same schedule, as a reference.
+    """Straightforward discrete implementation of the same schedule, as a reference (lines only).
 
     The unfiltered pulse train is sampled as exact cell averages over ``[i Ts, (i+1) Ts)``; each
     filter is an ``np.convolve`` with the ``m + 1`` taps ``[1/2, 1, ..., 1, 1/2] / m``,
@@ -298,6 +403,8 @@ def fir_by_convolution(plan: FIRPlan, path: Polyline, sample_period: float) -> t
     Returns:
         ``(t, q)``: grid times [s] and positions ``(N, d)`` [mm].
     """
+    if not isinstance(path, Polyline):
+        raise PathError("fir_by_convolution takes a Polyline (G01 blocks only)")
     taps = np.asarray(plan.delays) / sample_period
     if not np.allclose(taps, np.round(taps), rtol=0, atol=1e-6):
         raise ParameterError(f"fir_by_convolution needs delays that are multiples of Ts = {sample_period} s")
