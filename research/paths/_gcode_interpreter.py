@@ -25,6 +25,7 @@ from research.paths._gcode_constants import (
 
 _MAXC = MAX_COORDINATE_MM
 _NAN = float("nan")
+_MAXF = MAX_FEED_MM_PER_MIN * (1 + 1e-12)  # a feed written back by to_gcode (x 60 / 60) may gain an ulp
 _ZERO2 = ZERO_LENGTH_MM * ZERO_LENGTH_MM
 
 # key = 10 * code: G1 -> 10, G90.1 -> 901 (see _code_key)
@@ -163,7 +164,7 @@ class _Interpreter:
         motion = self.motion if g is None else (1 if g == "1" else 0)
         if f is not None:
             fv = float(f) * self.scale
-            if not 0.0 < fv <= MAX_FEED_MM_PER_MIN:
+            if not 0.0 < fv <= _MAXF:
                 return False
         if x is None and y is None and z is None:
             if g is not None:
@@ -291,7 +292,7 @@ class _Interpreter:
         if "F" in vals:
             num, k = vals["F"]
             f = float(num) * self.scale
-            if not 0.0 < f <= MAX_FEED_MM_PER_MIN:
+            if not 0.0 < f <= _MAXF:
                 raise _LineError(f"F{_short(num)}: expected a feed > 0 (per minute) of at most "
                                  f"{MAX_FEED_MM_PER_MIN:g} mm/min", k)
             self.feed = f / 60.0
