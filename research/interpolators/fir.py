@@ -181,14 +181,11 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     head, tail = np.zeros(M), np.zeros(M)
     full = np.zeros(M - 1, dtype=bool)
     others = np.zeros(M - 1)  # tolerance taken by the other direction changes of a dwell corner's window
-    if refine and M > 1:
-        factor, head, tail, full, others = _look_ahead(tp, F_np, base, d_np, tv_np, t_in, t_out)
-    shrink = np.ones(M - 1)
     lengths_p = jnp.asarray(np.concatenate([tp.lengths, np.ones(Mp - M + 1)]))
     feeds_p = jnp.concatenate([feeds_cmd, jnp.ones(Mp - M + 1)])
     blk = jnp.asarray(table.block)
 
-    def schedule(factor, head, tail, full, shrink):
+    def schedule(factor, head, tail, full, shrink, others):
         frac, piece_factor = table.pieces(head, tail, factor)
         piece_tv = lengths_p[blk] / (feeds_p[blk] * jnp.asarray(piece_factor))
         f_in, f_out = feeds_cmd * jnp.asarray(factor[:, 0]), feeds_cmd * jnp.asarray(factor[:, 2])
@@ -200,50 +197,62 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             jnp.asarray(tp.start), jnp.asarray(table.geo), blk, jnp.asarray(table.gap), jnp.asarray(frac), piece_tv, gaps, delays)
         return feeds_cmd * jnp.asarray(factor[:, 1]), overlaps, ends[:M] - starts[:M], starts[:M], position, centre[: M - 1]
 
-    state = schedule(factor, head, tail, full, shrink)
-    rounds, deviation = 0, float("nan")
-    if (refine or limits is not None) and M >= 1:
-        cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
-        limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
-        for rounds in range(1, MAX_ROUNDS + 1):
-            feeds, overlaps, pulse, starts, position, centre = state
-            pos_np = NumpyPiecewise(np.asarray(_primal(position.breaks)), np.asarray(_primal(position.coeffs)))
-            starts_np, centre_np = np.asarray(_primal(starts)), np.asarray(_primal(centre))
-            errors = np.array(_primal(corner_distances(position, jnp.asarray(tp.vertices), centre, 0.5 * jnp.sum(delays)))) if refine and M > 1 else np.zeros(M - 1)
-            viol = errors > limit_v
-            arc_slow = np.zeros(M)
-            if refine:
-                deviation, at_vertex, at_block = path_deviations(pos_np, tp, starts_np, centre_np, Td_np, tb_np, check_period)
-                for j, e in at_vertex.items():
-                    viol[j], errors[j] = True, max(errors[j], e)
-                for k, e in at_block.items():
-                    arc_slow[k] = e
-            too_fast = _limit_violations(pos_np, starts_np, np.asarray(_primal(pulse)), Td_np, limits, M)
-            if not (viol.any() or too_fast.any() or arc_slow.any()):
-                break
-            if rounds == MAX_ROUNDS:
-                raise ConvergenceError(
-                    f"plan_fir: {int(viol.sum())} vertices, {int((arc_slow > 0).sum())} arcs and {int(too_fast.sum())} "
-                    f"corners still violate after {MAX_ROUNDS} rounds", residual=float(np.max(errors - limit_v, initial=0.0)),
-                    steps=rounds)
-            late = rounds > _SCALING_ROUNDS
-            n_f = d_np.size
-            for j in np.flatnonzero(viol):
-                ratio = tv_np[j] / errors[j]
-                if late:
-                    shrink[j] = 0.0  # exact stop: the vertex is on the trajectory
-                elif full[j]:  # slow the window's blocks: the error of a chain is quadratic in feed
-                    half = 0.5 * Td_np * F_np[j] * factor[j, 2]
-                    lo = max(int(np.searchsorted(cum, cum[j + 1] - half, side="right")) - 1, 0)
-                    hi = min(int(np.searchsorted(cum, cum[j + 1] + half, side="left")), M)
-                    factor[lo:max(hi, j + 2)] *= 0.98 * np.sqrt(ratio)
-                else:
-                    shrink[j] *= min(0.98 * ratio ** (1.0 / (n_f + 1)), 1.0)
-            for k in np.flatnonzero(arc_slow):
-                factor[k] *= min(0.98 * np.sqrt(tb_np[k] / arc_slow[k]), 0.98)
-            if too_fast.any():  # shrink by 15 % a round, then exact stops
-                shrink = np.where(too_fast, shrink * (0.85 if rounds <= _LIMIT_ROUNDS else 0.0), shrink)
-            state = schedule(factor, head, tail, full, shrink)
+    def settle(factor, head, tail, full, others):
+        """Verify and repair one candidate plan; returns ``(state, rounds, deviation)``."""
+        factor, shrink = factor.copy(), np.ones(M - 1)
+        state = schedule(factor, head, tail, full, shrink, others)
+        rounds, deviation = 0, float("nan")
+        if (refine or limits is not None) and M >= 1:
+            cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
+            limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
+            for rounds in range(1, MAX_ROUNDS + 1):
+                feeds, overlaps, pulse, starts, position, centre = state
+                pos_np = NumpyPiecewise(np.asarray(_primal(position.breaks)), np.asarray(_primal(position.coeffs)))
+                starts_np, centre_np = np.asarray(_primal(starts)), np.asarray(_primal(centre))
+                errors = np.array(_primal(corner_distances(position, jnp.asarray(tp.vertices), centre, 0.5 * jnp.sum(delays)))) if refine and M > 1 else np.zeros(M - 1)
+                viol = errors > limit_v
+                arc_slow = np.zeros(M)
+                if refine:
+                    deviation, at_vertex, at_block = path_deviations(pos_np, tp, starts_np, centre_np, Td_np, tb_np, check_period)
+                    for j, e in at_vertex.items():
+                        viol[j], errors[j] = True, max(errors[j], e)
+                    for k, e in at_block.items():
+                        arc_slow[k] = e
+                too_fast = _limit_violations(pos_np, starts_np, np.asarray(_primal(pulse)), Td_np, limits, M)
+                if not (viol.any() or too_fast.any() or arc_slow.any()):
+                    break
+                if rounds == MAX_ROUNDS:
+                    raise ConvergenceError(
+                        f"plan_fir: {int(viol.sum())} vertices, {int((arc_slow > 0).sum())} arcs and {int(too_fast.sum())} "
+                        f"corners still violate after {MAX_ROUNDS} rounds", residual=float(np.max(errors - limit_v, initial=0.0)),
+                        steps=rounds)
+                late = rounds > _SCALING_ROUNDS
+                n_f = d_np.size
+                for j in np.flatnonzero(viol):
+                    ratio = tv_np[j] / errors[j]
+                    if late:
+                        shrink[j] = 0.0  # exact stop: the vertex is on the trajectory
+                    elif full[j]:  # slow the window's blocks: the error of a chain is quadratic in feed
+                        half = 0.5 * Td_np * F_np[j] * factor[j, 2]
+                        lo = max(int(np.searchsorted(cum, cum[j + 1] - half, side="right")) - 1, 0)
+                        hi = min(int(np.searchsorted(cum, cum[j + 1] + half, side="left")), M)
+                        factor[lo:max(hi, j + 2)] *= 0.98 * np.sqrt(ratio)
+                    else:
+                        shrink[j] *= min(0.98 * ratio ** (1.0 / (n_f + 1)), 1.0)
+                for k in np.flatnonzero(arc_slow):
+                    factor[k] *= min(0.98 * np.sqrt(tb_np[k] / arc_slow[k]), 0.98)
+                if too_fast.any():  # shrink by 15 % a round, then exact stops
+                    shrink = np.where(too_fast, shrink * (0.85 if rounds <= _LIMIT_ROUNDS else 0.0), shrink)
+                state = schedule(factor, head, tail, full, shrink, others)
+        return state, rounds, deviation
+
+    candidates = [(factor, head, tail, full, others)]
+    if refine and M > 1:
+        candidates = [_look_ahead(tp, F_np, base, d_np, tv_np, t_in, t_out, rule) for rule in ("budget", "isolated")]
+        if np.array_equal(candidates[0][3], candidates[1][3]) and np.array_equal(candidates[0][4], candidates[1][4]):
+            candidates = candidates[:1]
+    results = [settle(*c) for c in candidates]
+    state, rounds, deviation = min(results, key=lambda r: float(_primal(r[0][4].end - r[0][4].start)))
     feeds, overlaps, pulse, starts, position, centre = state
     return FIRPlan(starts, pulse, overlaps, feeds, delays, position, centre, jnp.asarray(tp.vertices),
                    float(deviation), int(rounds), tp.axes)
@@ -280,9 +289,15 @@ def _arc_factor(tp: ToolPath, delays, tol_block, feeds) -> np.ndarray:
     return caps / feeds
 
 
-def _look_ahead(tp: ToolPath, F_cmd, base, delays, tol_v, t_in, t_out):
-    """Feed factors ``(M, 3)`` (head, body, tail), head and tail shares ``(M,)`` and full-overlap
-    flags ``(M - 1,)`` from the look-ahead rule (``_fir_feed``)."""
+def _look_ahead(tp: ToolPath, F_cmd, base, delays, tol_v, t_in, t_out, rule: str):
+    """Feed factors ``(M, 3)`` (head, body, tail), head and tail shares ``(M,)``, full-overlap
+    flags ``(M - 1,)`` and the tolerance other turns take at dwell corners ``(M - 1,)``.
+
+    ``rule`` decides where eq 13/14's dwell may replace a slow-down: ``"budget"`` gives the dwell
+    what the other direction changes of its window leave of the tolerance at full overlap
+    (triangle inequality; right for curves cut into chords), ``"isolated"`` gives it the whole
+    tolerance (right for isolated corners and for zigzags whose neighbours dwell too). Both are
+    verified; the faster plan is kept."""
     M = tp.n_blocks
     Td = float(delays.sum())
     F = F_cmd * base
@@ -304,10 +319,18 @@ def _look_ahead(tp: ToolPath, F_cmd, base, delays, tol_v, t_in, t_out):
     # rest of the tolerance (triangle inequality), and is valid only where some is left
     budget = tol_v - np.linalg.norm(d_all - Fv[:, None] * du * h_full, axis=1)
     need = np.linalg.norm(d_all, axis=1) > tol_v
+    if rule == "isolated":
+        budget = tol_v.copy()
     Tk = np.asarray(overlap_time(np.maximum(budget, 0.0), dF, delays))
     f_w = np.where(need, every.largest_feed(s_v, Fv, tol_v), Fv)
-    # dwell where it costs less than the slow-down: T_d - T_k < T_d (1 - f / F)
-    gap = need & (budget > 0) & (Tk < Td * (1 - 1e-12)) & (Tk >= Td * f_w / Fv)
+    # dwell where it costs less than the slow-down: T_d - T_k against the time lost on the stretch
+    # the vertex's window slows, f T_d, or its share of the blocks when neighbouring windows join
+    L = tp.lengths
+    stretch = np.minimum(f_w * Td, 0.5 * (L[:-1] + L[1:]))
+    with np.errstate(divide="ignore"):
+        slow_cost = stretch * (1.0 / np.maximum(f_w, 1e-300) - 1.0 / Fv)
+    gap = need & (budget > 0) & (Tk < Td * (1 - 1e-12)) & (Td - Tk <= slow_cost)
+    gap |= need & (f_w <= 0)  # no feed keeps a turn within a zero tolerance: exact stop
     query = np.flatnonzero(~gap)
     f = chain(~gap).largest_feed(s_v[query], Fv[query], tol_v[query])
     # the estimate holds a constant feed through the window: a vertex between blocks of different
@@ -336,7 +359,7 @@ def _look_ahead(tp: ToolPath, F_cmd, base, delays, tol_v, t_in, t_out):
     head = np.where(whole | tp.is_arc, 0.0, head_len / L)
     tail = np.where(whole | tp.is_arc, 0.0, tail_len / L)
     factor = np.stack([head_f, body, tail_f], axis=1) / F_cmd[:, None]
-    return factor, head, tail, ~gap, np.where(gap, tol_v - np.maximum(budget, 0.0), 0.0)
+    return factor, head, tail, ~gap, np.where(gap, np.clip(tol_v - budget, 0.0, tol_v), 0.0)
 
 
 def _arc_turns(tp: ToolPath, tol: float):
