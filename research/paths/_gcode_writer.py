@@ -1,4 +1,5 @@
-"""G-code writer: a polyline as a G21/G90 program that :func:`parse_gcode` reads back exactly."""
+"""G-code writer: a polyline, or a program's blocks with its arcs, as a G21/G90 program that
+:func:`parse_gcode` reads back (polylines bit-exactly)."""
 
 from __future__ import annotations
 
@@ -14,8 +15,15 @@ def _num(v: float) -> str:
     return np.format_float_positional(v, unique=True, trim="-")
 
 
-def to_gcode(polyline, feeds_mm_per_min, rapid=None, *, line_numbers: bool = False) -> str:
+def to_gcode(polyline, feeds_mm_per_min=None, rapid=None, *, line_numbers: bool = False) -> str:
     """Write a polyline as a G21/G90 program of ``G1`` (and ``G0``) lines, one segment per line.
+
+    Given a :class:`~research.paths.gcode.GCodeProgram` instead (and no feeds or rapid flags),
+    writes its blocks: lines as ``G0``/``G1``, arcs as ``G2``/``G3`` in the G17/G18/G19 plane of
+    their axis with ``G91.1`` centre offsets and ``P`` for extra turns, ``F`` from ``block_feeds``,
+    and ``G64 P`` / ``G64`` / ``G61`` whenever ``block_tolerance`` changes. Reading it back gives the
+    same block ends (exactly), feeds, rapid flags and tolerances, and centres and sweeps within
+    float rounding (the centre is written as an offset from the start).
 
     Coordinates are written with the shortest decimal that reads back as the same float, so
     ``parse_gcode(text, start=P0)`` returns exactly the same vertices (``P0`` = first vertex padded
@@ -48,6 +56,12 @@ def to_gcode(polyline, feeds_mm_per_min, rapid=None, *, line_numbers: bool = Fal
         M30
         %
     """
+    if hasattr(polyline, "blocks") and hasattr(polyline, "block_tolerance"):
+        if feeds_mm_per_min is not None or rapid is not None:
+            raise ParameterError("to_gcode: a GCodeProgram carries its own feeds and rapid flags; pass neither")
+        return _blocks_to_gcode(polyline, line_numbers)
+    if feeds_mm_per_min is None:
+        raise ParameterError("to_gcode: feeds_mm_per_min is required for a polyline")
     poly = polyline if isinstance(polyline, Polyline) else Polyline(np.asarray(polyline, dtype=np.float64))
     m = poly.n_segments
     idx = []
@@ -98,6 +112,10 @@ def to_gcode(polyline, feeds_mm_per_min, rapid=None, *, line_numbers: bool = Fal
             words.append(f"F{_num(feed)}")
         prev = p
         out.append(" ".join(words))
+    return _finish(out, line_numbers)
+
+
+def _finish(out: list[str], line_numbers: bool) -> str:
     out += ["M30", "%"]
     if line_numbers:
         n = 0
@@ -106,3 +124,65 @@ def to_gcode(polyline, feeds_mm_per_min, rapid=None, *, line_numbers: bool = Fal
                 n += 10
                 out[i] = f"N{n} {line}"
     return "\n".join(out) + "\n"
+
+
+# normal axis -> (plane word, first axis, second axis)
+_PLANE_OF = {2: ("G17", 0, 1), 1: ("G18", 2, 0), 0: ("G19", 1, 2)}
+
+
+def _blocks_to_gcode(prog, line_numbers: bool) -> str:
+    b = prog.blocks
+    if b.dim != 3 or tuple(a.lower() for a in b.axes) != ("x", "y", "z"):
+        raise ParameterError(f"to_gcode: blocks with axes {b.axes} cannot be written; expected x, y, z")
+    p0 = b.start
+    out = ["%", f"(research.paths.gcode.to_gcode: start X{_num(p0[0])} Y{_num(p0[1])} Z{_num(p0[2])})",
+           "G21 G90 G91.1 G94"]
+    mode = plane = feed = None
+    tol = "unset"
+    prev = p0
+    for k in range(b.n_blocks):
+        e = b.ends[k]
+        words = []
+        t = prog.block_tolerance[k]
+        t_key = "nan" if np.isnan(t) else float(t)
+        if t_key != tol:
+            out.append("G64" if t_key == "nan" else f"G64 P{_num(t)}")
+            tol = t_key
+        if b.sweeps[k] > 0:
+            n = b.normals[k]
+            axis = int(np.argmax(np.abs(n)))
+            if abs(abs(n[axis]) - 1.0) > 1e-12:
+                raise ParameterError(f"to_gcode: arc block {k} turns about {n.tolist()}; only arcs about the x, "
+                                     "y or z axis (G17/G18/G19) can be written")
+            g_plane, a, c2 = _PLANE_OF[axis]
+            if g_plane != plane:
+                words.append(g_plane)
+                plane = g_plane
+            g = 3 if n[axis] > 0 else 2
+            turns = max(1, int(np.ceil(b.sweeps[k] / (2 * np.pi) - 1e-9)))
+            centre = b.centers[k]
+            words.append(f"G{g}")
+            mode = g
+            for i, letter in enumerate("XYZ"):
+                if e[i] != prev[i]:
+                    words.append(f"{letter}{_num(e[i])}")
+            for i in (a, c2):
+                words.append(f"{'IJK'[i]}{_num(centre[i] - prev[i])}")
+            if turns > 1:
+                words.append(f"P{turns}")
+        else:
+            g = 0 if prog.block_rapid[k] else 1
+            if g != mode:
+                words.append(f"G{g}")
+                mode = g
+            for i, letter in enumerate("XYZ"):
+                if e[i] != prev[i]:
+                    words.append(f"{letter}{_num(e[i])}")
+        if not prog.block_rapid[k]:
+            f = float(prog.block_feeds[k]) * 60.0
+            if f != feed:
+                words.append(f"F{_num(f)}")
+                feed = f
+        prev = e
+        out.append(" ".join(words))
+    return _finish(out, line_numbers)

@@ -1,40 +1,63 @@
-"""G-code reader and writer: RS274/NGC-style CAM output to a :class:`Polyline` with per-segment feeds.
+"""G-code reader and writer: the plain RS274/NGC subset of CAM post-processors and LinuxCNC's own
+trajectory-planner tests, read into tool-path blocks (lines and arcs kept as arcs) and chords.
 
-The reader turns a program into the straight segments the interpolators work on: ``G0``/``G1``
-moves become one segment each, ``G2``/``G3`` arcs (``G17`` plane, ``I``/``J`` centre or ``R``
-radius, optionally helical) become chords whose chord error is at most ``chord_tolerance``. All
-lengths inside are mm and feeds mm/s; ``F`` words are read as mm/min (in/min under ``G20``).
+The reader gives both views of a program: :attr:`GCodeProgram.blocks`, a
+:class:`~research.paths.toolpath.ToolPath` with one block per ``G0``/``G1`` move and per ``G2``/``G3``
+arc (circular, helical or spiral, in the G17, G18 or G19 plane, with per-block feed, rapid flag,
+source line and ``G64 P`` tolerance), and :attr:`GCodeProgram.polyline`, the straight segments the
+polyline interpolators work on (arcs as chords whose chord error is at most ``chord_tolerance``,
+``segment_block`` maps each chord to its block). All lengths inside are mm and feeds mm/s; ``F``
+words are read as mm/min (in/min under ``G20``).
 
-Tokenizing is one regular expression over the whole text (no per-character Python loop), so
+Plain ``[N] [G0|G1] [X] [Y] [Z] [F]`` lines are matched whole by one regular expression and executed
+directly; every other line is tokenized by one regular expression (no per-character Python loop), so
 ordinary CAM output with 10^5 short ``G1`` lines is read in well under a second.
 
-Accepted words (anything else is a :class:`~research.errors.GCodeError` naming line and column):
+Accepted words (anything else is a :class:`~research.errors.GCodeError` naming file, line and column):
 
 * ``G0 G1 G2 G3`` motion (modal: a line with only coordinates continues the last motion mode),
-  ``G80`` (cancel motion mode / canned cycle);
-* ``G17`` (XY plane), ``G20``/``G21`` (inch / mm), ``G90``/``G91`` (absolute / incremental
-  ``X Y Z``), ``G90.1``/``G91.1`` (absolute / incremental ``I J``; incremental is the default);
-* harmless modal codes that do not change the geometry this reader produces: ``G40`` (cutter
-  compensation off), ``G49`` (tool length offset off), ``G54``-``G59`` (work offsets: the program
-  frame is taken as the work frame), ``G61``, ``G61.1``, ``G64`` (path-control mode without ``P``/``Q``),
-  ``G94`` (feed per minute, the only feed mode supported);
+  ``G80`` (cancel motion mode; on a line with a motion code it is ignored, as LinuxCNC does);
+* ``G17 G18 G19`` (XY, ZX, YZ arc planes, centre words ``I J`` / ``K I`` / ``J K``),
+  ``G20``/``G21`` (inch / mm), ``G90``/``G91`` (absolute / incremental ``X Y Z``),
+  ``G90.1``/``G91.1`` (absolute / incremental arc centres; incremental is the default);
+* path control: ``G64 P<tol>`` (blend tolerance of the following blocks, ``block_tolerance``),
+  ``G64 P<tol> Q<tol>`` (Q, LinuxCNC's naive-CAM tolerance, is accepted and ignored), ``G64``
+  without ``P`` (no tolerance given: NaN), ``G61``/``G61.1`` (exact path / exact stop: tolerance 0);
+* harmless modal codes that do not change the geometry: ``G40`` (cutter compensation off), ``G49``
+  (tool length offset off), ``G54``-``G59`` (work offsets: the program frame is taken as the work
+  frame), ``G94`` (feed per minute, the only feed mode supported);
 * ``M2 M30`` (program end: motion after them is an error), ``M3 M4 M5`` (spindle), ``M6``
   (tool change), ``M7 M8 M9`` (coolant);
-* ``N`` (line number, must be a non-negative integer, otherwise ignored), ``O`` (program number,
+* ``N`` (line number), ``O`` (program number; both non-negative integers of at most 15 digits,
   ignored), ``S`` (spindle speed >= 0, ignored), ``T`` (tool number, non-negative integer, ignored),
-  ``F`` (feed > 0, modal), ``X Y Z I J R``;
+  ``F`` (feed > 0, modal), ``X Y Z``, ``I J K R`` (arc centre / radius), ``P`` (``G64`` tolerance,
+  or number of turns of ``G2``/``G3``: an integer >= 1, P1 the plain arc, as LinuxCNC), ``Q`` (with
+  ``G64`` only);
 * comments ``( ... )`` (not nested, closed on the same line) and ``; ...`` to the end of the line,
   ``%`` delimiter lines, blank lines, upper or lower case, words with or without spaces
   (``G1X10Y5F600``).
 
-Refused with a specific message: ``G18``/``G19`` (arcs only in G17), ``G41``/``G42`` (cutter
-compensation), ``G43`` (tool length offset), ``G4`` (dwell: the program model has no pauses),
-``G28``/``G30``/``G53``/``G92`` (machine / coordinate-system moves), ``G73``, ``G76``, ``G81``-``G89``
-(canned cycles), ``G93``/``G95`` (inverse-time / per-revolution feed), every other G or M code, the
-letters ``A B C U V W`` (extra axes), ``K`` (only used in G18/G19), ``D H`` (tool offsets),
-``P Q L`` (dwell / cycle parameters), every other letter; two G-codes of one modal group on one
-line (e.g. two motion codes), a letter given twice on one line, a malformed number (``X1.2.3``,
-``X``), an unclosed or nested ``(``, a stray character (``/`` block delete, ``#`` parameters ...).
+Arc end radius: as LinuxCNC's rs274ngc (``interp_arc.cc`` ``arc_data_ijk`` with the defaults of
+``interp_internal.hh``): start and end radius may differ by at most ``CENTER_ARC_RADIUS_TOLERANCE_MM
+= 2 * 0.01 * sqrt(2) = 0.0283`` mm (G21; under G20 ``2 * 0.001 * sqrt(2)`` in = 0.0718 mm) and at most
+0.1 % (``SPIRAL_RELATIVE_TOLERANCE``) of the larger radius; such arcs become spiral blocks. Radii
+below ``RADIUS_TOLERANCE_MM`` = 0.00127 mm are zero-radius arcs (refused).
+
+Refused with a message naming the feature: O-word subroutines and control flow (``o100 sub``,
+``o<name> call``, ``if``, ``while`` ...), ``M98``/``M99``, ``#`` parameters (``#1``, ``#<name>``),
+expressions ``[...]`` and functions (``sin[30]``), ``/`` block delete; ``G17.1 G18.1 G19.1`` (UVW
+planes), ``G41 G42 G41.1 G42.1`` (cutter compensation), ``G43 G43.1 G43.2`` (tool length
+compensation), ``G4`` (dwell: the program model has no pauses), ``G5 G5.1 G5.2`` (splines),
+``G28 G30 G53 G92`` (machine / coordinate-system moves), ``G73 G76 G81``-``G89 G98 G99`` (canned
+cycles), ``G93 G95`` (inverse-time / per-revolution feed), every other G or M code (a code with more
+than one decimal digit such as ``G1.00000001`` is not read as ``G1``); the letters ``A B C U V W``
+(extra axes), ``D H`` (tool offsets), ``L``, every other letter; the off-plane centre word (``K`` in
+G17, ``J`` in G18, ``I`` in G19), ``P`` or ``Q`` with nothing to use them; two G-codes of one modal
+group on one line (e.g. two motion codes), a letter given twice on one line, a malformed number
+(``X1.2.3``, ``X``), a number that is not finite or beyond the bounds (coordinates, centres, radii
+and tolerances within :data:`MAX_COORDINATE_MM` = 1e6 mm after scaling, feeds at most
+:data:`MAX_FEED_MM_PER_MIN`), an arc beyond the radius tolerance (naming both radii), a full circle
+with ``R``, an unclosed or nested ``(``, any other stray character.
 """
 
 from __future__ import annotations

@@ -42,8 +42,21 @@ ODD = st.sampled_from(
      ";tail", "%", "/", "\u00e9", "\t", "N10", "T1", "S100", "O1", "E5", "A1", "\x00", "\r", "X", "G", "$", "*",
      "N-1", "T1.5", "\u2028", "\x0b"])
 WORD = st.one_of(CODES, st.tuples(st.sampled_from("XYZIJKRPQFXYZXYZ"), NUMBERS).map("".join), ODD)
-LINE = st.tuples(st.lists(WORD, max_size=6), st.sampled_from([" ", "", "  "])).map(lambda t: t[1].join(t[0]))
-PROGRAM = st.tuples(st.sampled_from(["", "G21 G90 F600\n", "G20 F10\n", "G64 P0.01 F300\n"]),
+RANDOM_LINE = st.tuples(st.lists(WORD, max_size=6), st.sampled_from([" ", "", "  "])).map(lambda t: t[1].join(t[0]))
+SMALL = st.floats(-60, 60, allow_nan=False).map(lambda v: f"{v:.3f}")
+MOVE = st.tuples(st.sampled_from(["", "G0", "G1", "G01", "G80 G1"]),
+                 st.lists(st.tuples(st.sampled_from("XYZ"), SMALL).map("".join), min_size=1, max_size=3,
+                          unique_by=lambda w: w[0]),
+                 st.sampled_from(["", "F600", "F1200.5"])).map(lambda t: " ".join([t[0], *t[1], t[2]]).strip())
+# R 100 always reaches (every chord here is shorter than 200); I5 alone is a full circle in G17/G18
+ARC = st.tuples(st.sampled_from(["G2", "G3"]), st.sampled_from(["", "G17 ", "G18 ", "G19 "]),
+                st.lists(st.tuples(st.sampled_from("XYZ"), SMALL).map("".join), max_size=3, unique_by=lambda w: w[0]),
+                st.sampled_from(["R100", "R-100", "I5", "I5 P2", "R100 P3"])
+                ).map(lambda t: f"{t[1]}{t[0]} {' '.join(t[2])} {t[3]}")
+MODE = st.sampled_from(["G64 P0.01", "G64 P0.02 Q0.01", "G61", "G61.1", "G64", "G91", "G90", "G20", "G21",
+                        "G17", "G90.1", "G91.1", "M3 S1000", "(comment)", "%", "", "M2"])
+LINE = st.one_of(MOVE, MOVE, MOVE, MOVE, MOVE, ARC, ARC, MODE, RANDOM_LINE)
+PROGRAM = st.tuples(st.sampled_from(["", "G21 G90 G1 F600\n", "G20 G0 F10\n", "G64 P0.01 G1 F300\n"]),
                     st.lists(LINE, min_size=1, max_size=12)).map(lambda t: t[0] + "\n".join(t[1]))
 KWARGS = st.fixed_dictionaries({}, optional={
     "chord_tolerance": st.sampled_from([1e-3, 1e-2, 0.1, 0.0, -1.0, float("nan"), float("inf"), "x"]),
@@ -88,6 +101,13 @@ def _round_trip(prog: GCodeProgram):
     np.testing.assert_array_equal(again.polyline.points, prog.polyline.points)
     assert again.rapid.tolist() == prog.rapid.tolist()
     np.testing.assert_allclose(again.feeds[~prog.rapid], prog.feeds[~prog.rapid], rtol=1e-14)
+    # the blocks, arcs as arcs
+    blocks = parse_gcode(to_gcode(prog), start=prog.blocks.start)
+    np.testing.assert_array_equal(blocks.blocks.ends, prog.blocks.ends)
+    np.testing.assert_allclose(blocks.blocks.sweeps, prog.blocks.sweeps, rtol=1e-9, atol=1e-9)
+    np.testing.assert_array_equal(blocks.block_tolerance, prog.block_tolerance)
+    np.testing.assert_array_equal(blocks.block_rapid, prog.block_rapid)
+    np.testing.assert_allclose(blocks.block_feeds, prog.block_feeds, rtol=1e-14)
 
 
 @FUZZ

@@ -548,3 +548,13 @@ def test_hundred_thousand_short_lines_are_fast():
     assert prog.n_segments == prog.n_blocks == 100_000
     np.testing.assert_allclose(pts(prog)[-1], [1000.0, (100_000 % 7) * 0.01, 0], atol=1e-12)
     assert elapsed < 3.0, f"10^5 lines took {elapsed:.2f} s"
+
+
+def test_to_gcode_program_argument_checks():
+    prog = parse_gcode("G1 X1 F60\nG2 X2 R0.5")
+    with pytest.raises(ParameterError, match="carries its own feeds"):
+        to_gcode(prog, 600)
+    with pytest.raises(ParameterError, match="required"):
+        to_gcode(prog.polyline)
+    text = to_gcode(prog)
+    assert "G2 X2 I0.5 J0" in text and text.startswith("%\n(research.paths.gcode.to_gcode: start X0 Y0 Z0)")

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from research.errors import GCodeError, PathError
-from research.paths.gcode import GCodeProgram, parse_gcode, read_gcode
+from research.paths.gcode import GCodeProgram, parse_gcode, read_gcode, to_gcode
 from research.paths.polyline import Polyline
 
 PROGRAMS = pathlib.Path(__file__).parent / "programs"
@@ -195,3 +195,20 @@ def test_hand_built_program_gets_line_blocks():
     assert np.isnan(prog.block_tolerance).all()
     with pytest.raises(PathError):
         GCodeProgram(poly, [1.0, 2.0], [False, True], [1, 2], blocks=prog.blocks)  # block arrays missing
+
+
+@pytest.mark.parametrize("name", sorted(p.name for p in PROGRAMS.glob("*.ngc")))
+def test_programs_round_trip_through_to_gcode_with_arcs(name):
+    """to_gcode(program) writes the blocks (arcs as G2/G3 with G91.1 offsets, P turns, G64 P changes);
+    reading it back gives the same ends (exactly), tolerances, feeds, rapid flags, and sweeps/centres
+    within float rounding of the offset."""
+    prog = read(name)
+    again = parse_gcode(to_gcode(prog), start=prog.blocks.start)
+    a, b = prog.blocks, again.blocks
+    np.testing.assert_array_equal(b.ends, a.ends)
+    np.testing.assert_allclose(b.sweeps, a.sweeps, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(b.centers[b.is_arc], a.centers[a.is_arc], atol=1e-12)
+    np.testing.assert_array_equal(b.normals[b.is_arc], a.normals[a.is_arc])
+    np.testing.assert_array_equal(again.block_tolerance, prog.block_tolerance)
+    np.testing.assert_array_equal(again.block_rapid, prog.block_rapid)
+    np.testing.assert_array_equal(again.block_feeds, prog.block_feeds)
