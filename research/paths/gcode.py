@@ -455,7 +455,8 @@ def read_gcode(path: str | PathLike, **kwargs) -> GCodeProgram:
     Args:
         path: file to read; its path string becomes ``source`` in messages and the result.
         **kwargs: as :func:`parse_gcode` (``chord_tolerance`` [mm], ``rapid_feed`` [mm/min],
-            ``initial_feed`` [mm/min], ``start`` [mm]).
+            ``initial_feed`` [mm/min], ``start`` [mm], ``arc_radius_tolerance`` [mm],
+            ``arc_relative_tolerance``).
 
     Raises:
         GCodeError: the file cannot be read (line 0), or as :func:`parse_gcode`.

@@ -95,6 +95,17 @@ def _check_program(prog: GCodeProgram):
     assert np.all(np.isnan(tol) | (tol >= 0))
 
 
+def _same_without_fast_path(text: str, prog: GCodeProgram, kw: dict):
+    """A comment on every line sends it through the general tokenizer instead of the plain-line fast
+    path; the result must be the same program."""
+    slow = parse_gcode("\n".join(line + " (c)" for line in text.split("\n")), **kw)
+    np.testing.assert_array_equal(slow.polyline.points, prog.polyline.points)
+    np.testing.assert_array_equal(slow.feeds, prog.feeds)
+    np.testing.assert_array_equal(slow.lines, prog.lines)
+    np.testing.assert_array_equal(slow.block_tolerance, prog.block_tolerance)
+    assert slow.no_motion_lines == prog.no_motion_lines
+
+
 def _round_trip(prog: GCodeProgram):
     text = to_gcode(prog.polyline, prog.feeds * 60.0, prog.rapid)
     again = parse_gcode(text, start=prog.polyline.points[0])
@@ -127,6 +138,7 @@ def test_random_programs_raise_only_gcode_errors(text, kw):
         return
     assert not _bad_kwargs(kw), kw
     _check_program(prog)
+    _same_without_fast_path(text, prog, kw)
     _round_trip(prog)
 
 
@@ -189,4 +201,5 @@ def test_valid_programs_are_accepted_with_their_geometry(case):
     np.testing.assert_allclose(prog.blocks.ends, ends, atol=1e-9)
     np.testing.assert_allclose(prog.blocks.sweeps, sweeps, rtol=1e-7, atol=1e-7)
     _check_program(prog)
+    _same_without_fast_path(text, prog, {})
     _round_trip(prog)
