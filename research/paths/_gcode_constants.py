@@ -14,6 +14,8 @@ MAX_CHORDS_PER_ARC = 1_000_000
 #: Beyond it float64 leaves too few digits for the 1e-9 mm resolution of the path model (the
 #: zero-length test of :class:`~research.paths.polyline.Polyline` is ``1e-12 * max |coordinate|``).
 MAX_COORDINATE_MM = 1e6
+#: Largest number of turns ``P`` of one ``G2``/``G3`` arc (keeps the arc-length quadrature of a spiral bounded).
+MAX_ARC_TURNS = 10_000
 #: Largest feed an ``F`` word may give [mm/min] (100 km/min, far above any machine).
 MAX_FEED_MM_PER_MIN = 1e8
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import re
+from array import array
 
 import numpy as np
 
@@ -15,6 +16,7 @@ from research.paths._gcode_constants import (
     CENTER_ARC_RADIUS_TOLERANCE_INCH,
     CENTER_ARC_RADIUS_TOLERANCE_MM,
     MAX_CHORD_ANGLE,
+    MAX_ARC_TURNS,
     MAX_CHORDS_PER_ARC,
     MAX_COORDINATE_MM,
     MAX_FEED_MM_PER_MIN,
@@ -149,9 +151,11 @@ class _Interpreter:
         self.path_tol = _NAN  # G64 P tolerance [mm] in force (NaN: none given, 0 under G61/G61.1)
         self.motion = None  # 0, 1, 2, 3 or None
         self.ended = 0  # line of M2/M30, 0 while running
-        # output: one vertex and one (feed, rapid, line, block, tolerance) row per chord
-        self.points = [tuple(start)]
+        # output: the vertices (flat x, y, z), one (feed, rapid, line, tolerance) row and one chord count
+        # per block
+        self.points = array("d", start)
         self.meta: list[tuple] = []
+        self.counts = array("q")
         self.nblocks = 0
         self.arcs: list[tuple] = []  # (block, centre (3,), normal (3,), sweep)
         self.no_motion: list[int] = []
@@ -203,10 +207,10 @@ class _Interpreter:
         if dx * dx + dy * dy + dz * dz <= _ZERO2:
             self.no_motion.append(lineno)
             return True
-        self.points.append(t)
+        self.points.extend(t)
         self.last = t
-        self.meta.append((self.feed if motion else self.rapid_feed, motion == 0, lineno, self.nblocks,
-                          self.path_tol))
+        self.meta.append((self.feed if motion else self.rapid_feed, motion == 0, lineno, self.path_tol))
+        self.counts.append(1)
         self.nblocks += 1
         return True
 
@@ -389,9 +393,10 @@ class _Interpreter:
             self.no_motion.append(lineno)
             return
         t = (target[0], target[1], target[2])
-        self.points.append(t)
+        self.points.extend(t)
         self.last = t
-        self.meta.append((feed, rapid, lineno, self.nblocks, self.path_tol))
+        self.meta.append((feed, rapid, lineno, self.path_tol))
+        self.counts.append(1)
         self.nblocks += 1
 
     def _arc(self, vals, lineno, motion_word):
@@ -415,9 +420,9 @@ class _Interpreter:
         if "P" in vals:
             num, k = vals["P"]
             p = float(num)
-            if not (math.isfinite(p) and abs(p - round(p)) <= 1e-3 and 1 <= round(p) <= MAX_CHORDS_PER_ARC):
+            if not (math.isfinite(p) and abs(p - round(p)) <= 1e-3 and 1 <= round(p) <= MAX_ARC_TURNS):
                 raise _LineError(f"{name} P{_short(num)}: expected the number of turns, an integer >= 1 "
-                                 "(LinuxCNC: P1 is the plain arc, P2 one extra full turn)", k)
+                                 f"and <= {MAX_ARC_TURNS} (LinuxCNC: P1 is the plain arc, P2 one extra full turn)", k)
             turns = int(round(p))
         feed = self._feed_for(False, vals, where)
         s = self.scale
@@ -496,38 +501,38 @@ class _Interpreter:
         if n > MAX_CHORDS_PER_ARC:
             raise _LineError(f"{name} of radius {rmax:.6g} mm would need {n} chords at chord_tolerance "
                              f"{self.tol:g} mm (limit {MAX_CHORDS_PER_ARC}); expected a larger chord_tolerance", where)
+        sw, ew = st[c], e[c]
+        self.pos = e
+        # shortest chord: 2 rmin sin(step / 2) in the plane (a helix only lengthens it)
         k = np.arange(1, n + 1, dtype=np.float64) / n
         ang = a0 + (-sweep if cw else sweep) * k
         rad = r0 + (r1 - r0) * k
-        sw, ew = st[c], e[c]
-        pts = np.empty((n, 3))
-        pts[:, a] = cu + rad * np.cos(ang)
-        pts[:, b] = cv + rad * np.sin(ang)
-        pts[:, c] = sw + (ew - sw) * k
-        pts[-1] = e
-        self.pos = e
-        seg = np.diff(np.vstack([self.last, pts]), axis=0)
-        short = np.einsum("ij,ij->i", seg, seg) <= ZERO_LENGTH_MM * ZERO_LENGTH_MM
-        if short.any():  # tiny arcs only: merge chords shorter than ZERO_LENGTH_MM
+        arr = np.empty((n, 3))
+        arr[:, a] = cu + rad * np.cos(ang)
+        arr[:, b] = cv + rad * np.sin(ang)
+        arr[:, c] = sw + (ew - sw) * k
+        arr[-1] = e
+        if 2.0 * min(r0, r1) * math.sin(0.5 * sweep / n) <= 4.0 * ZERO_LENGTH_MM:
+            # tiny arcs only: merge chords shorter than ZERO_LENGTH_MM
             keep, prev = [], np.asarray(self.last)
-            for p in pts:
+            for p in arr:
                 if np.sum((p - prev) ** 2) > ZERO_LENGTH_MM * ZERO_LENGTH_MM:
                     keep.append(p)
                     prev = p
-            if keep and (keep[-1] != pts[-1]).any():
-                keep[-1] = pts[-1]
-            pts = np.asarray(keep).reshape(-1, 3)
-            if len(pts) == 0:
+            if not keep:
                 self.no_motion.append(lineno)
                 return
-        self.points.extend(map(tuple, pts.tolist()))
-        self.last = tuple(pts[-1].tolist())
+            keep[-1] = arr[-1]
+            arr = np.asarray(keep)
+        self.points.frombytes(arr.tobytes())
+        self.last = tuple(arr[-1].tolist())
         centre = [0.0, 0.0, 0.0]
         centre[a], centre[b], centre[c] = cu, cv, sw
         normal = [0.0, 0.0, 0.0]
         normal[c] = -1.0 if cw else 1.0
         self.arcs.append((self.nblocks, centre, normal, sweep))
-        self.meta.extend([(feed, False, lineno, self.nblocks, self.path_tol)] * len(pts))
+        self.meta.append((feed, False, lineno, self.path_tol))
+        self.counts.append(len(arr))
         self.nblocks += 1
 
 

@@ -62,6 +62,7 @@ with ``R``, an unclosed or nested ``(``, any other stray character.
 
 from __future__ import annotations
 
+import gc
 import re
 from dataclasses import dataclass
 from os import PathLike, fspath
@@ -72,6 +73,7 @@ from research.errors import GCodeError, ParameterError, PathError
 from research.paths._gcode_constants import (  # noqa: F401  (public constants)
     CENTER_ARC_RADIUS_TOLERANCE_INCH,
     CENTER_ARC_RADIUS_TOLERANCE_MM,
+    MAX_ARC_TURNS,
     MAX_CHORD_ANGLE,
     MAX_CHORDS_PER_ARC,
     MAX_COORDINATE_MM,
@@ -330,7 +332,8 @@ def parse_gcode(
       a zero-radius arc (an error). The axis normal to the plane moves linearly with the angle
       (a helix). ``G2``/``G3`` with the end equal to the start in the plane and a centre is a full
       circle; with ``R`` it is an error. ``P<n>`` (an integer >= 1, LinuxCNC semantics) is the
-      number of turns: P1 is the plain arc, each further unit one more full turn.
+      number of turns: P1 is the plain arc, each further unit one more full turn (at most
+      :data:`MAX_ARC_TURNS` = 10^4).
     * ``G64 P<tol>`` sets the blend tolerance (``block_tolerance``) of the following blocks, in
       program units; a ``Q`` with it (LinuxCNC's naive-CAM tolerance) is accepted and ignored.
       ``G61``/``G61.1`` (exact path / exact stop) set it to 0, ``G64`` without ``P`` to NaN (no
@@ -387,38 +390,48 @@ def parse_gcode(
     def fail(lineno, message, column):
         raise GCodeError(message, source=source, line=lineno, column=column) from None
 
-    for lineno, line_text in enumerate(all_lines, 1):
-        m = simple_match(line_text)
-        if m is not None and simple_fn(*m.groups(), lineno):
-            continue
-        words = []
-        pct = 0
-        for letter, num, percent, bad in tokens(line_text):
-            if letter:
-                words.append((letter, num))
-            elif bad:
-                column = next(t.start(4) + 1 for t in _TOKEN.finditer(line_text) if t.group(4))
-                fail(lineno, *_diagnose_bad_char(line_text, column))
-            elif percent:
-                pct = pct or 1
-        if pct and words:
-            column = next(t.start(3) + 1 for t in _TOKEN.finditer(line_text) if t.group(3))
-            fail(lineno, "'%' program delimiter must be alone on its line; expected no words with it", column)
-        if words:
-            try:
-                line_fn(words, lineno)
-            except _LineError as e:
-                fail(lineno, e.message, _word_column(line_text, e.word))
+    # the interpreter appends 10^5..10^6 small tuples and lists: the cyclic GC would rescan them over and
+    # over (quadratic time); nothing here makes reference cycles
+    gc_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        for lineno, line_text in enumerate(all_lines, 1):
+            m = simple_match(line_text)
+            if m is not None and simple_fn(*m.groups(), lineno):
+                continue
+            words = []
+            pct = 0
+            for letter, num, percent, bad in tokens(line_text):
+                if letter:
+                    words.append((letter, num))
+                elif bad:
+                    column = next(t.start(4) + 1 for t in _TOKEN.finditer(line_text) if t.group(4))
+                    fail(lineno, *_diagnose_bad_char(line_text, column))
+                elif percent:
+                    pct = pct or 1
+            if pct and words:
+                column = next(t.start(3) + 1 for t in _TOKEN.finditer(line_text) if t.group(3))
+                fail(lineno, "'%' program delimiter must be alone on its line; expected no words with it", column)
+            if words:
+                try:
+                    line_fn(words, lineno)
+                except _LineError as e:
+                    fail(lineno, e.message, _word_column(line_text, e.word))
+    finally:
+        if gc_enabled:
+            gc.enable()
 
     lineno = len(all_lines)
-    if len(it.points) < 2:
+    if len(it.points) < 6:
         raise GCodeError(
             f"program has no motion ({len(it.no_motion)} line(s) with axis words left the position unchanged); "
             "expected at least one G0/G1/G2/G3 move", source=source, line=lineno, column=1)
-    pts = np.asarray(it.points, dtype=np.float64)
-    meta = np.asarray(it.meta, dtype=np.float64).reshape(-1, 5)
-    feeds, rap, lines = meta[:, 0], meta[:, 1] != 0, meta[:, 2].astype(np.int64)
-    seg_block, tols = meta[:, 3].astype(np.int64), meta[:, 4]
+    pts = np.frombuffer(it.points, dtype=np.float64).reshape(-1, 3).copy()
+    meta = np.asarray(it.meta, dtype=np.float64).reshape(-1, 4)
+    counts = np.frombuffer(it.counts, dtype=np.int64)
+    seg_block = np.repeat(np.arange(counts.size), counts)
+    b_feeds, b_rapid, b_lines, b_tols = meta[:, 0], meta[:, 1] != 0, meta[:, 2].astype(np.int64), meta[:, 3]
+    feeds, rap, lines = b_feeds[seg_block], b_rapid[seg_block], b_lines[seg_block]
     # Polyline's zero-length rule is relative (1e-12 * max |coordinate|); name the line it rejects
     lengths = np.linalg.norm(np.diff(pts, axis=0), axis=1)
     scale = max(1.0, float(np.max(np.abs(pts))))
@@ -429,24 +442,22 @@ def parse_gcode(
                          f"(the largest coordinate of the program) = {1e-12 * scale:.3g} mm; expected a longer "
                          "move or smaller coordinates", source=source, line=int(lines[k]), column=1)
     poly = Polyline(pts)
-    first = np.flatnonzero(np.diff(seg_block, prepend=-1))
-    last = np.append(first[1:] - 1, len(seg_block) - 1)
-    nb = first.size
+    nb = counts.size
+    last = np.cumsum(counts) - 1
     centers = np.full((nb, 3), np.nan)
     normals = np.full((nb, 3), np.nan)
     sweeps = np.zeros(nb)
     for k, centre, normal, sweep in it.arcs:
         centers[k], normals[k], sweeps[k] = centre, normal, sweep
-    block_lines = lines[first]
     try:
         blocks = ToolPath(pts[0], pts[last + 1], centers, normals, sweeps)
     except PathError as e:  # not expected: the interpreter checks arcs first
         m = re.search(r"block (\d+)", str(e))
         bad = int(m.group(1)) if m else 0
         raise GCodeError(f"block from this line is unusable: {e}", source=source,
-                         line=int(block_lines[min(bad, nb - 1)]), column=1) from None
-    return GCodeProgram(poly, feeds, rap, lines, source, tuple(it.no_motion), blocks, feeds[first], rap[first],
-                        block_lines, tols[first], seg_block)
+                         line=int(b_lines[min(bad, nb - 1)]), column=1) from None
+    return GCodeProgram(poly, feeds, rap, lines, source, tuple(it.no_motion), blocks, b_feeds, b_rapid,
+                        b_lines, b_tols, seg_block)
 
 
 def read_gcode(path: str | PathLike, **kwargs) -> GCodeProgram:
