@@ -331,7 +331,7 @@ class _Interpreter:
             self.motion = _MOTION[groups["motion"][0]]
 
         moves = not _AXIS_LETTERS.isdisjoint(vals)
-        if "P" in vals and not g64 and not (moves and self.motion in (2, 3) and not self.ended):
+        if "P" in vals and not g64 and not (moves and self.motion in (2, 3)):
             raise _LineError("P word with no G2/G3 or G64 to use it; expected P only as G64 P<tolerance> or "
                              "G2/G3 P<turns> (G4 dwell and canned cycles are not supported)", vals["P"][1])
         if moves:
