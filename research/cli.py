@@ -1,5 +1,8 @@
-"""Command line: ``python -m research run CONFIG``, ``python -m research sweep CONFIG`` and
-``python -m research figures``."""
+"""Command line: ``python -m research run CONFIG``, ``python -m research sweep CONFIG``,
+``python -m research figures`` and ``python -m research store verify|gc``.
+
+Errors of the input or the file system (:class:`~research.errors.ResearchError`, any ``OSError``) print
+one line ``error: ...`` and exit with status 2; ``--debug`` prints the traceback as well."""
 
 from __future__ import annotations
 
@@ -7,6 +10,7 @@ import argparse
 import json
 import sys
 import time
+import traceback
 from pathlib import Path
 
 from research.errors import ResearchError
@@ -14,6 +18,7 @@ from research.errors import ResearchError
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m research", description=__doc__)
+    parser.add_argument("--debug", action="store_true", help="print the traceback of an error")
     sub = parser.add_subparsers(dest="command", required=True)
 
     run = sub.add_parser("run", help="run one experiment config (TOML) and save results + figure")
@@ -38,12 +43,53 @@ def main(argv: list[str] | None = None) -> int:
     figs.add_argument("--out", type=Path, default=Path("paper_figures"), help="output folder (default paper_figures)")
     figs.add_argument("--list", action="store_true", help="list the registered figures and exit")
 
+    st = sub.add_parser("store", help="check or clean the results store")
+    st_sub = st.add_subparsers(dest="action", required=True)
+    for name, text in (("verify", "check every entry against its manifest of SHA-256 checksums (exit 1 if any is bad)"),
+                       ("gc", "remove damaged entries and leftovers of interrupted writes")):
+        a = st_sub.add_parser(name, help=text)
+        a.add_argument("--cache", type=Path, default=Path(".cache/results"), help="results root (default .cache/results)")
+        if name == "gc":
+            a.add_argument("--stale-code", action="store_true", help="also remove entries of other code versions")
+            a.add_argument("--dry-run", action="store_true", help="list what would be removed, remove nothing")
+
     args = parser.parse_args(argv)
     try:
-        return {"run": _run, "sweep": _sweep, "figures": _figures}[args.command](args)
-    except ResearchError as e:
-        print(f"error: {e}", file=sys.stderr)
+        return {"run": _run, "sweep": _sweep, "figures": _figures, "store": _store}[args.command](args)
+    except (ResearchError, OSError) as e:
+        if args.debug:
+            traceback.print_exc()
+        print(f"error: {_one_line(e)}", file=sys.stderr)
         return 2
+
+
+def _one_line(e: BaseException) -> str:
+    """The message of ``e``; a plain ``OSError`` as ``<file>: <reason>`` (no traceback)."""
+    if isinstance(e, OSError) and not isinstance(e, ResearchError):
+        where = " -> ".join(str(f) for f in (e.filename, e.filename2) if f)
+        text = f"{where}: {e.strerror or e}" if where else str(e) or type(e).__name__
+        return f"{text} ({type(e).__name__}; --debug for the traceback)"
+    return str(e)
+
+
+def _store(args) -> int:
+    from research.experiments.store import gc_store, verify_store
+
+    root = args.cache / "store"
+    if args.action == "verify":
+        good, problems = verify_store(root)
+        for p in problems:
+            print(f"BAD {p.folder}: {p.reason}")
+        print(f"{root}: {good} valid entries, {len(problems)} problems")
+        return 1 if problems else 0
+    problems, stale = gc_store(root, dry_run=args.dry_run, stale_code=args.stale_code)
+    verb = "would remove" if args.dry_run else "removed"
+    for p in problems:
+        print(f"{verb} {p.folder}: {p.reason}")
+    for f in stale:
+        print(f"{verb} {f}: written by another code version")
+    print(f"{root}: {verb} {len(problems)} damaged entries or leftovers, {len(stale)} stale entries")
+    return 0
 
 
 def _run(args) -> int:

@@ -36,6 +36,11 @@ class DriveLogError(ResearchError, ValueError):
     """A drive log is unusable (NaN, non-monotonic time, missing column); names file, column, index."""
 
 
+class StoreError(ResearchError, OSError):
+    """The results store (or an output folder) cannot be read or written: full disk, no permission,
+    read-only file system, or an entry that changed under the reader; names the folder or file."""
+
+
 class InfeasibleProblem(ResearchError, RuntimeError):
     """An optimisation problem has no solution under the stated limits; carries diagnostics."""
 

@@ -6,7 +6,13 @@ turns it into a sensitivity study (:mod:`research.experiments.sweep`). Units are
 (``feed_mm_per_s``, ``delays_ms``, ``tolerance_um``, ``frequency_hz``) and converted to the
 package's mm / s on entry. Unknown keys (typos, or a unit the key does not have, e.g.
 ``feed_mm_per_min``), wrong types, out-of-range values and missing input files raise
-:class:`~research.errors.ConfigError` naming the file and the key. Every default is in the
+:class:`~research.errors.ConfigError` naming the file and the key.
+
+Validation is strict (pydantic ``strict=True``, ``allow_inf_nan=False``): numbers are finite (TOML
+``inf`` / ``nan`` are refused), nothing is coerced (a bool is not a number, ``"250"`` is not a number,
+``10.0`` is not an int; a TOML integer is fine where a float is expected), ``points_mm`` is checked at
+load (equal lengths, 1 to 3 coordinates, at least 2 points, no repeated consecutive point), and
+``name`` (a file stem) must match :data:`NAME_PATTERN`. Every default is in the
 ``Field(...)`` of its key, with its description (``ExperimentConfig.model_json_schema()`` lists them).
 
 Example (``experiments/sencer2015_diamond.toml``)::
@@ -32,9 +38,9 @@ from pathlib import Path
 from typing import Annotated, Literal, Union, get_args
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, StrictFloat, StrictInt, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from research.errors import ConfigError
+from research.errors import ConfigError, PathError
 from research.paths import PATHS, Polyline, named_path
 
 #: metric names a config may ask for (``metrics = [...]``); units in :data:`METRIC_UNITS`
@@ -50,11 +56,16 @@ METRIC_UNITS = {
     "p_error": "-",
     "dc_error": "-",
 }
+#: what ``name`` (the results folder and figure file stem) may be: starts with a letter or digit, at most 64
+#: characters of letters, digits, ``_``, ``-`` and ``.`` (so never ``..`` or a path)
+NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$"
 DRIVE_MODELS = ("ideal", "sencer2009_table6_1", "sencer2009_table6_1_ppi", "sencer2009_table6_2", "sencer2009_table6_2_pid")
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    """Base of every table: unknown keys refused, no coercion, finite numbers only."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 
 
 class PathConfig(_Strict):
@@ -73,6 +84,29 @@ class PathConfig(_Strict):
         if self.name is not None and self.name not in PATHS:
             raise ValueError(f"unknown path name {self.name!r}; expected one of {sorted(PATHS)}")
         return self
+
+    @field_validator("points_mm")
+    @classmethod
+    def _points(cls, pts):
+        """Shape, dimension and repeated points checked here, so a bad list fails at load with its index."""
+        if pts is None:
+            return pts
+        if len(pts) < 2:
+            raise ValueError(f"a polyline needs at least 2 points, got {len(pts)}")
+        dim = len(pts[0])
+        if not 1 <= dim <= 3:
+            raise ValueError(f"points_mm[0] has {dim} coordinates; expected 1 to 3 (x, y, z) per point")
+        for i, p in enumerate(pts):
+            if len(p) != dim:
+                raise ValueError(f"points_mm[{i}] has {len(p)} coordinates but points_mm[0] has {dim}; "
+                                 "every point needs the same number")
+            if i and p == pts[i - 1]:
+                raise ValueError(f"points_mm[{i}] repeats points_mm[{i - 1}] = {p} (a zero-length segment)")
+        try:
+            Polyline(pts)
+        except PathError as e:
+            raise ValueError(str(e)) from None
+        return pts
 
 
 class FIRConfig(_Strict):
@@ -146,12 +180,17 @@ class IdentificationConfig(_Strict):
 class Range(_Strict):
     """``num`` evenly spaced values from ``start`` to ``stop`` (both included)."""
 
-    start: float
-    stop: float
+    start: StrictInt | StrictFloat
+    stop: StrictInt | StrictFloat
     num: int = Field(..., ge=1)
 
-    def values(self) -> list[float]:
-        return np.linspace(self.start, self.stop, self.num).tolist()
+    def values(self) -> list[float] | list[int]:
+        """The values; ints when ``start`` and ``stop`` are ints and every value is whole (a sweep of an
+        int field such as ``identification.n_moves`` stays an int sweep)."""
+        v = np.linspace(self.start, self.stop, self.num)
+        if isinstance(self.start, int) and isinstance(self.stop, int) and np.all(v == np.round(v)):
+            return [int(x) for x in np.round(v)]
+        return v.tolist()
 
 
 class SweepConfig(_Strict):
@@ -175,7 +214,7 @@ class OutputConfig(_Strict):
 class ExperimentConfig(_Strict):
     """One study: a path, interpolator(s), a drive, identification, metrics, what it reproduces."""
 
-    name: str = Field(..., pattern=r"^[A-Za-z0-9_.-]+$", description="results and figure file stem")
+    name: str = Field(..., pattern=NAME_PATTERN, description="results and figure file stem (letters, digits, _ - .)")
     reproduces: str = Field(..., description="the paper result this experiment reproduces")
     description: str = ""
     path: PathConfig | None = Field(None, description="tool path (required unless the study is identification only)")
@@ -237,9 +276,14 @@ def load_config(file: str | Path) -> tuple[ExperimentConfig, Path]:
     """
     file = Path(file)
     try:
-        text = file.read_text()
+        data = file.read_bytes()
     except OSError as e:
         raise ConfigError(f"{file}: cannot read config ({e.strerror or e})") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = data[: e.start].count(b"\n") + 1
+        raise ConfigError(f"{file}: line {line}: not UTF-8 text (byte {data[e.start]:#04x}); save the config as UTF-8") from None
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
@@ -257,7 +301,11 @@ def validate(raw: dict, file: str | Path) -> ExperimentConfig:
         single = isinstance(raw.get("interpolator"), dict)
         raise ConfigError("\n".join(_describe(err, file, single) for err in e.errors())) from None
     for key, name in input_files(cfg).items():
-        if not (file.parent / name).is_file():
+        try:
+            found = (file.parent / name).is_file()
+        except (OSError, ValueError) as e:  # e.g. a NUL byte or an over-long name
+            raise ConfigError(f"{file}: key '{key}': not a usable file name {name!r} ({e})") from None
+        if not found:
             raise ConfigError(f"{file}: key '{key}': file not found: {file.parent / name}")
     return cfg
 
@@ -278,12 +326,30 @@ def _describe(err: dict, file: Path, single_interpolator: bool) -> str:
         loc = ["interpolator"] + [p for p in loc[1 + single_interpolator:] if p not in ("fir", "time_optimal")]
     key = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in loc).lstrip(".") or "(top level)"
     msg = err["msg"].removeprefix("Value error, ")
-    if err["type"] == "extra_forbidden":
+    kind, value = err["type"], err.get("input")
+    if kind == "extra_forbidden":
         msg = "unknown key (typo?" + _suggest(err["loc"]) + ")"
-    elif isinstance(err.get("input"), str) and err["type"].endswith(("_parsing", "_type")) and any(c.isalpha() for c in err["input"]):
-        msg += "; give a plain number, the unit is in the key name"
-    got = "" if err["type"] in ("missing", "extra_forbidden") or isinstance(err.get("input"), dict) else f" (got {err['input']!r})"
+    elif kind.startswith(("float", "int")) and isinstance(value, bool):
+        msg += "; a bool is not a number"
+    elif kind.startswith(("float", "int")) and isinstance(value, str):
+        msg += ("; give a plain number, the unit is in the key name" if any(c.isalpha() for c in value)
+                else "; give a number, not a string (no quotes)")
+    elif kind == "int_type" and isinstance(value, float):
+        msg += "; give a whole number without a decimal point"
+    elif kind == "finite_number":
+        msg += " (inf and nan are not allowed)"
+    elif kind == "list_type" and isinstance(value, (str, int, float)):
+        msg += f"; give an array, e.g. [{_toml(value)}]"
+    elif kind == "bool_type":
+        msg += "; give true or false (no quotes)"
+    shown = repr(value)
+    shown = shown if len(shown) <= 120 else shown[:100] + " ... " + shown[-15:]
+    got = "" if kind in ("missing", "extra_forbidden") or isinstance(value, dict) else f" (got {shown})"
     return f"{file}: key '{key}': {msg}{got}"
+
+
+def _toml(value) -> str:
+    return f'"{value}"' if isinstance(value, str) else str(value).lower() if isinstance(value, bool) else repr(value)
 
 
 def _suggest(loc: tuple) -> str:

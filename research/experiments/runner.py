@@ -80,6 +80,9 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
         figures_dir: where the figure goes.
         log: progress callback taking one string (``print`` by default).
         force: recompute even if the store has the result (the entry is kept; the new one is not stored).
+
+    Raises:
+        ConfigError: a bad config. StoreError: the store or an output folder cannot be written.
     """
     cfg, base = load_config(config_file)
     store = ResultStore(Path(cache_dir) / "store")
@@ -87,14 +90,14 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
     entry = None if force else store.get(key)
     want_figure = cfg.output.figure and cfg.path is not None
     log(f"[1/3] {cfg.name}: key {key[:12]} (code {code_version()}) " + ("found in the store" if entry else "computing"))
-    if entry is None or (want_figure and entry.file("figure.png") is None):
+    files: dict[str, bytes] = {}
+    if entry is None:
         ev = evaluate(cfg, base, log=lambda s: log(f"      {s}"))
         record = {
             "experiment": cfg.name, "reproduces": cfg.reproduces, "key": key, "code_version": code_version(),
             "config": cfg.model_dump(mode="json"),
             "inputs": {k: file_digest(base / f) for k, f in input_files(cfg).items()},
         } | ev.record | _legacy_view(ev.record)
-        files = {}
         runs = ev.objects.get("runs", [])
         if runs:
             buf = io.BytesIO()
@@ -102,26 +105,28 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
             files["trajectory.npz"] = buf.getvalue()
         if want_figure:
             files["figure.png"] = _figure(cfg, ev)
-        if force and store.get(key) is not None:
-            entry = None
-        else:
+        if not (force and store.get(key) is not None):  # force recomputes without touching a stored entry
             entry = store.put(key, record, ev.arrays, files)
+            record, files = entry.record, {}
         cached = False
     else:
         record, cached = entry.record, True
-        files = {}
+        if want_figure and entry.file("figure.png") is None:  # stored by a run with output.figure = false
+            ev = evaluate(cfg, base, log=lambda s: log(f"      {s}"))
+            store.add_file(key, "figure.png", _figure(cfg, ev))
+            entry, cached = store.get(key), False
     shown = ", ".join(f"{k} = {v:.6g} {record['units'][k]}" for k, v in record["scalars"].items())
     log(f"[2/3] results: {shown}")
     out = Path(cache_dir) / cfg.name
     results_file = atomic_write(out / "results.json", json.dumps(record, indent=2).encode())
-    traj = entry.file("trajectory.npz") if entry else None
-    traj_bytes = traj.read_bytes() if traj else files.get("trajectory.npz")
+    # files of a stored entry are read back through their manifest checksums (never served damaged)
+    stored = (lambda name: entry.read_bytes(name) if entry.file(name) else None) if entry else files.get
+    traj_bytes = stored("trajectory.npz")
     if traj_bytes:
         atomic_write(out / "trajectory.npz", traj_bytes)
     figure_file = None
     if want_figure:
-        png = entry.file("figure.png").read_bytes() if entry else files["figure.png"]
-        figure_file = atomic_write(Path(figures_dir) / f"{cfg.name}.png", png)
+        figure_file = atomic_write(Path(figures_dir) / f"{cfg.name}.png", stored("figure.png"))
     log(f"[3/3] {results_file}" + (f"; figure: {figure_file}" if figure_file else "") + ("; (cached)" if cached else ""))
     return RunResult(cfg, key, record, cached, results_file, figure_file)
 
