@@ -94,17 +94,20 @@ def identification_program(
         acceleration: trapezoid acceleration [mm/s^2] (thesis: 2500).
         sample_period: ``Ts`` [s] (thesis: 1 ms).
         axis: axis letter of the G-code.
+    Raises:
+        ParameterError: a negative or non-int seed or ``n_moves``, a non-finite or non-positive number, or
+            ``feed / acceleration`` not a whole number of periods.
     Returns:
         :class:`ExcitationProgram` starting at 0 mm. Targets are multiples of ``feed * Ts`` (module
         docstring); a draw closer than one grid step to the previous target is redrawn.
     """
-    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool):
-        raise ParameterError(f"identification_program: seed must be an int, got {seed!r}")
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
+        raise ParameterError(f"identification_program: seed must be an int >= 0 (numpy.random.default_rng), got {seed!r}")
     for name, v in {"travel": travel, "feed": feed, "acceleration": acceleration, "sample_period": sample_period}.items():
-        if not (np.isfinite(v) and v > 0):
-            raise ParameterError(f"identification_program: {name} must be finite and > 0, got {v!r}")
-    if n_moves < 1:
-        raise ParameterError(f"identification_program: n_moves must be >= 1, got {n_moves}")
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not (np.isfinite(v) and v > 0):
+            raise ParameterError(f"identification_program: {name} must be a finite number > 0, got {v!r}")
+    if not isinstance(n_moves, (int, np.integer)) or isinstance(n_moves, bool) or n_moves < 1:
+        raise ParameterError(f"identification_program: n_moves must be an int >= 1, got {n_moves!r}")
     step = feed * sample_period
     t1 = feed / acceleration
     if abs(t1 / sample_period - round(t1 / sample_period)) > 1e-9:

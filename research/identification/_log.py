@@ -8,7 +8,12 @@ converted to mm and time to s at this edge, so everything downstream works in mm
 Validation (each failure raises :class:`~research.errors.DriveLogError` naming file, column and sample
 index): both positions present, equal lengths, no NaN or inf, time strictly increasing, uniform sampling
 within ``uniform_rtol`` of the median period (otherwise resample explicitly with :meth:`DriveLog.resample`,
-whose method is recorded in :attr:`DriveLog.resampling`).
+whose method is recorded in :attr:`DriveLog.resampling`), and plausible units (:class:`Plausibility`: a
+position span over 10 m, a speed over 20 m/s or a sample period outside [10 us, 0.1 s] is refused with
+the likely unit mistake, um read as mm or ms read as s; pass ``plausibility=`` to override, ``None`` to
+skip). A file that cannot be parsed at all (corrupt ``.npz`` / ``.mat``, non-UTF-8 CSV, a non-numeric
+cell or column) is a :class:`~research.errors.DriveLogError` naming the file, and the line and column
+or the column name, too.
 """
 
 from __future__ import annotations
@@ -29,6 +34,59 @@ TIME_UNITS = {"s": 1.0, "ms": 1e-3}
 RESAMPLING_METHODS = ("linear", "cubic")
 #: default tolerance on sampling jitter, relative to the median sample period
 UNIFORM_RTOL = 1e-3
+#: plausibility bounds of a drive log after unit conversion (see :class:`Plausibility`)
+MAX_POSITION_SPAN_MM = 10_000.0  # 10 m: no machine axis is longer; a larger span is usually um read as mm
+MAX_SPEED_MM_PER_S = 20_000.0  # 20 m/s: beyond the fastest linear-motor axes; larger: um read as mm
+MAX_SAMPLE_PERIOD_S = 0.1  # 10 Hz: slower than any servo log; a 1 kHz log in ms read as s has Ts = 1 "s"
+MIN_SAMPLE_PERIOD_S = 1e-5  # 100 kHz: faster than servo loops log; smaller: s read as ms or us
+
+
+@dataclasses.dataclass(frozen=True)
+class Plausibility:
+    """Bounds that catch unit mistakes in a log (positions in um read as mm, time in ms read as s).
+
+    Attributes:
+        max_span_mm: largest ``max - min`` of a position column [mm].
+        max_speed_mm_per_s: largest ``|dx/dt|`` between samples of a position column [mm/s].
+        min_sample_period_s, max_sample_period_s: accepted range of the median sample period [s].
+    """
+
+    max_span_mm: float = MAX_POSITION_SPAN_MM
+    max_speed_mm_per_s: float = MAX_SPEED_MM_PER_S
+    min_sample_period_s: float = MIN_SAMPLE_PERIOD_S
+    max_sample_period_s: float = MAX_SAMPLE_PERIOD_S
+
+    def check(self, log: "DriveLog") -> None:
+        """Raise :class:`DriveLogError` naming the column and the likely unit if ``log`` is implausible."""
+        src, cols = log.source, log.columns
+        tname = cols.get("t", "t")
+        Ts = log.sample_period
+        if Ts > self.max_sample_period_s:
+            raise DriveLogError(
+                f"{src}: column {tname!r} (t): sample period {Ts:g} s is above {self.max_sample_period_s:g} s; "
+                "is the time in ms (or us) read as s? pass time_unit='ms' (or override Plausibility.max_sample_period_s)")
+        if Ts < self.min_sample_period_s:
+            raise DriveLogError(
+                f"{src}: column {tname!r} (t): sample period {Ts:g} s is below {self.min_sample_period_s:g} s; "
+                "is the time in s read as ms? pass time_unit='s' (or override Plausibility.min_sample_period_s)")
+        for role in ("reference", "actual"):
+            x, name = getattr(log, role), cols.get(role, role)
+            span = float(np.max(x) - np.min(x))
+            if span > self.max_span_mm:
+                raise DriveLogError(
+                    f"{src}: column {name!r} ({role}) spans {span:g} mm, above {self.max_span_mm:g} mm; "
+                    "are the positions in um read as mm? pass length_unit='um' (or override Plausibility.max_span_mm)")
+            speed = np.abs(np.diff(x)) / np.diff(log.t)
+            k = int(np.argmax(speed))
+            if speed[k] > self.max_speed_mm_per_s:
+                raise DriveLogError(
+                    f"{src}: column {name!r} ({role}) moves at {speed[k]:g} mm/s at sample index {k + 1}, above "
+                    f"{self.max_speed_mm_per_s:g} mm/s; are the positions in um read as mm (length_unit='um') "
+                    "or the time in s read as ms? (or override Plausibility.max_speed_mm_per_s)")
+
+
+#: the bounds every log is checked against unless told otherwise
+DEFAULT_PLAUSIBILITY = Plausibility()
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -44,10 +102,12 @@ class DriveLog:
         columns: role -> column name in the source (``{"t": "t", "reference": "qg", ...}``).
         units: role -> unit after loading (``{"t": "s", "reference": "mm", ...}``).
         resampling: ``None`` for logged samples, else the method that produced them (e.g. ``"linear"``).
-        uniform_rtol: accepted sampling jitter relative to the median period.
+        uniform_rtol: accepted sampling jitter relative to the median period (finite, >= 0).
+        plausibility: unit-plausibility bounds (:class:`Plausibility`), ``None`` to skip the check.
 
     Raises:
-        DriveLogError: unequal lengths, NaN/inf, non-increasing or non-uniform time, fewer than 3 samples.
+        DriveLogError: unequal lengths, NaN/inf, non-increasing or non-uniform time, fewer than 3 samples,
+            a bad ``uniform_rtol``, implausible units.
     """
 
     t: np.ndarray
@@ -59,8 +119,13 @@ class DriveLog:
     units: dict = dataclasses.field(default_factory=lambda: {"t": "s", "reference": "mm", "actual": "mm"})
     resampling: str | None = None
     uniform_rtol: float = UNIFORM_RTOL
+    plausibility: Plausibility | None = DEFAULT_PLAUSIBILITY
 
     def __post_init__(self):
+        rtol = self.uniform_rtol
+        if isinstance(rtol, bool) or not isinstance(rtol, (int, float, np.floating, np.integer)) or not (
+                np.isfinite(rtol) and rtol >= 0):
+            raise DriveLogError(f"{self.source}: uniform_rtol must be a finite number >= 0 (relative jitter), got {rtol!r}")
         arrays = {"t": self.t, "reference": self.reference, "actual": self.actual}
         if self.control is not None:
             arrays["control"] = self.control
@@ -68,7 +133,7 @@ class DriveLog:
         n = None
         for role, value in arrays.items():
             name = cols.get(role, role)
-            a = np.asarray(value, dtype=np.float64)
+            a = _numeric(value, f"{self.source}: column {name!r} ({role})")
             if a.ndim == 2 and 1 in a.shape:
                 a = a.reshape(-1)
             if a.ndim != 1:
@@ -109,6 +174,8 @@ class DriveLog:
             )
         object.__setattr__(self, "columns", cols)
         object.__setattr__(self, "units", dict(self.units))
+        if self.plausibility is not None:
+            self.plausibility.check(self)
 
     # -- views ---------------------------------------------------------------------------------
     @property
@@ -185,32 +252,88 @@ class DriveLog:
 
 
 # -- loading ---------------------------------------------------------------------------------------
-def _read_table(path: Path) -> dict[str, np.ndarray]:
-    """All numeric columns of a CSV (header line), ``.mat`` or ``.npz`` file as 1-D arrays by name."""
-    suffix = path.suffix.lower()
-    if suffix == ".mat":
-        from scipy.io import loadmat
+def _numeric(value, where: str) -> np.ndarray:
+    """``value`` as a float64 array; a non-numeric (text, object, complex, structured) one is a DriveLogError."""
+    a = np.asarray(value) if not isinstance(value, np.ndarray) else value
+    if a.dtype.kind not in "iuf":
+        raise DriveLogError(f"{where} holds {a.dtype} data ({a.dtype.kind!r} kind); expected real numbers")
+    return np.asarray(a, dtype=np.float64)
 
-        raw = {k: v for k, v in loadmat(str(path)).items() if not k.startswith("__")}
-    elif suffix == ".npz":
-        with np.load(path, allow_pickle=False) as z:
-            raw = {k: z[k] for k in z.files}
-    elif suffix == ".csv":
-        with open(path, encoding="utf-8") as fh:
-            header = fh.readline().strip()
-        names = [h.strip() for h in header.split(",")]
-        if not header or any(not n for n in names):
-            raise DriveLogError(f"{path}: a CSV drive log needs a header line naming every column, got {header!r}")
-        try:
-            data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-        except ValueError as exc:
-            raise DriveLogError(f"{path}: cannot read the numeric CSV body: {exc}") from None
-        if data.shape[1] != len(names):
-            raise DriveLogError(f"{path}: header names {len(names)} columns but rows have {data.shape[1]}")
-        raw = {n: data[:, i] for i, n in enumerate(names)}
-    else:
+
+def _read_table(path: Path) -> dict[str, np.ndarray]:
+    """All columns of a CSV (header line), ``.mat`` or ``.npz`` file as arrays by name.
+
+    Raises:
+        DriveLogError: the file cannot be parsed (corrupt or empty archive, non-UTF-8 or ragged CSV, a
+            non-numeric cell: named by line and column), or holds no columns.
+    """
+    suffix = path.suffix.lower()
+    if suffix not in (".mat", ".npz", ".csv"):
         raise DriveLogError(f"{path}: unknown drive-log file type {suffix!r}; expected .csv, .mat or .npz")
+    try:
+        size = path.stat().st_size
+    except OSError as e:
+        raise DriveLogError(f"{path}: cannot read ({e.strerror or e})") from None
+    if size == 0:
+        raise DriveLogError(f"{path}: the file is empty; expected a {suffix} drive log")
+    if suffix == ".csv":
+        raw = _read_csv(path)
+    else:
+        try:  # third-party parsers raise many types on damaged bytes; every one becomes a DriveLogError
+            if suffix == ".mat":
+                from scipy.io import loadmat
+
+                raw = {k: v for k, v in loadmat(str(path)).items() if not k.startswith("__")}
+            else:
+                with np.load(path, allow_pickle=False) as z:
+                    raw = {k: z[k] for k in z.files}
+        except MemoryError:
+            raise
+        except Exception as e:  # noqa: BLE001 - re-raised as this package's error, naming the file
+            kind = "MATLAB .mat" if suffix == ".mat" else "NumPy .npz"
+            raise DriveLogError(f"{path}: not a readable {kind} file ({type(e).__name__}: {e})") from None
+    if not raw:
+        raise DriveLogError(f"{path}: the file holds no columns; expected t, x_ref, x_act (or the names you pass)")
     return raw
+
+
+def _read_csv(path: Path) -> dict[str, np.ndarray]:
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as e:
+        data = path.read_bytes()
+        line = data[: e.start].count(b"\n") + 1
+        raise DriveLogError(f"{path}:{line}: not UTF-8 text (byte {data[e.start]:#04x}); save the log as UTF-8 CSV") from None
+    except OSError as e:
+        raise DriveLogError(f"{path}: cannot read ({e.strerror or e})") from None
+    lines = text.splitlines()
+    header = lines[0].strip() if lines else ""
+    names = [h.strip() for h in header.split(",")]
+    if not header or any(not n for n in names):
+        raise DriveLogError(f"{path}:1: a CSV drive log needs a header line naming every column, got {header!r}")
+    dup = next((n for i, n in enumerate(names) if n in names[:i]), None)
+    if dup is not None:
+        raise DriveLogError(f"{path}:1: column name {dup!r} appears twice in the header; names must be unique")
+    rows = []
+    for lineno, line in enumerate(lines[1:], start=2):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        cells = line.split(",")
+        if len(cells) != len(names):
+            raise DriveLogError(f"{path}:{lineno}: row has {len(cells)} values but the header names "
+                                f"{len(names)} columns {names}")
+        row = []
+        for col, cell in enumerate(cells, start=1):
+            try:
+                row.append(float(cell))
+            except ValueError:
+                raise DriveLogError(f"{path}:{lineno}:{col}: column {names[col - 1]!r}: {cell.strip()!r} is not a "
+                                    "number; expected a plain decimal number") from None
+        rows.append(row)
+    if not rows:
+        raise DriveLogError(f"{path}: the CSV has a header {names} but no data rows")
+    data = np.array(rows, dtype=np.float64)
+    return {n: data[:, i] for i, n in enumerate(names)}
 
 
 def load_drive_log(
@@ -224,6 +347,7 @@ def load_drive_log(
     time_unit: str = "s",
     control_unit: str = "V",
     uniform_rtol: float = UNIFORM_RTOL,
+    plausibility: Plausibility | None = DEFAULT_PLAUSIBILITY,
 ) -> DriveLog:
     """Read a drive log and map its columns by name.
 
@@ -235,6 +359,7 @@ def load_drive_log(
         time_unit: unit of the time column, one of ``TIME_UNITS``; converted to s.
         control_unit: unit label of the control column (not converted).
         uniform_rtol: accepted sampling jitter relative to the median period.
+        plausibility: unit-plausibility bounds (:class:`Plausibility`); ``None`` skips the check.
     Returns:
         the validated :class:`DriveLog` in s and mm.
     Raises:
@@ -256,13 +381,13 @@ def load_drive_log(
         if name not in raw:
             raise DriveLogError(f"{path}: missing column {name!r} for the {role}; the file has {sorted(raw)}")
     L, T = LENGTH_UNITS[length_unit], TIME_UNITS[time_unit]
-    cols = {role: np.asarray(raw[name], dtype=np.float64) for role, name in wanted.items()}
+    cols = {role: _numeric(raw[name], f"{path}: column {name!r} ({role})") for role, name in wanted.items()}
     units = {"t": "s", "reference": "mm", "actual": "mm"}
     if control is not None:
         units["control"] = control_unit
     return DriveLog(
         t=cols["t"] * T, reference=cols["reference"] * L, actual=cols["actual"] * L, control=cols.get("control"),
-        source=str(path), columns=wanted, units=units, uniform_rtol=uniform_rtol,
+        source=str(path), columns=wanted, units=units, uniform_rtol=uniform_rtol, plausibility=plausibility,
     )
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from research.drives import Encoder, measure, simulate
+from research.errors import DriveLogError
 from research.identification._log import DriveLog
 from research.trajectory import Trajectory
 
@@ -30,7 +31,13 @@ def synthetic_log(
     Returns:
         :class:`DriveLog` [s, mm]; the reference column is the commanded position itself (a CNC logs its
         interpolator output exactly).
+    Raises:
+        DriveLogError: ``reference`` has more than one axis (a drive log holds one; pass one axis, e.g.
+            ``Trajectory.from_positions(t, traj.q[:, [k]], axes=("x",))``).
     """
+    if reference.n_axes != 1:
+        raise DriveLogError(f"{source}: synthetic_log logs one axis but the reference has {reference.n_axes} "
+                            f"axes {tuple(reference.axes)}; pass a one-axis reference (one DriveLog per axis)")
     resp = simulate(drive, reference)
     x = np.asarray(resp.position[:, 0], dtype=np.float64)
     if encoder is not None:
