@@ -72,3 +72,92 @@ def test_gcode_path_uses_program_feeds(tmp_path):
     text = GOOD.replace('name = "corner90"', 'gcode = "part.nc"').replace("feed_mm_per_s = 200.0\n", "")
     result = run_experiment(write(tmp_path, text), cache_dir=tmp_path / "c", figures_dir=tmp_path / "f", log=lambda s: None)
     np.testing.assert_allclose(result.record["details"]["fir"]["feeds"], [20.0, 10.0])  # mm/min -> mm/s
+
+
+# -- strict configs (issue: nothing silently wrong) -------------------------------------------------------
+BASE = 'name = "t"\nreproduces = "test"\n'
+PATH = '[path]\nname = "corner90"\n'
+
+
+@pytest.mark.parametrize("table, line, match", [
+    # item 4: TOML inf / nan for constrained numbers
+    ("[interpolator]", "feed_mm_per_s = inf", r"'interpolator.feed_mm_per_s': .*finite number"),
+    ("[drive]", 'modes = [{axis = "x", frequency_hz = inf}]', r"'drive.modes\[0\].frequency_hz': .*finite number"),
+    ("[drive]", "settle_time_s = inf", r"'drive.settle_time_s': .*finite number"),
+    ("[interpolator]", "tolerance_um = nan", r"'interpolator.tolerance_um': .*finite number"),
+    ("[interpolator]", "delays_ms = [148.0, -inf]", r"'interpolator.delays_ms\[1\]': .*finite number"),
+    # item 5: no coercion
+    ("[interpolator]", "feed_mm_per_s = true", r"'interpolator.feed_mm_per_s': .*a bool is not a number"),
+    ("[identification]", "noise_um = false", r"'identification.noise_um': .*a bool is not a number"),
+    ("[interpolator]", 'feed_mm_per_s = "250"', r"'interpolator.feed_mm_per_s': .*not a string"),
+    ("[interpolator]", 'refine = "yes"', r"'interpolator.refine': .*valid boolean"),
+    ("[identification]", "n_moves = 10.0", r"'identification.n_moves': .*valid integer"),
+    ("[identification]", "seed = true", r"'identification.seed': .*valid integer"),
+])
+def test_non_finite_and_coerced_values_are_refused(tmp_path, table, line, match):
+    f = write(tmp_path, BASE + PATH + f"{table}\n{line}\n")
+    with pytest.raises(ConfigError, match=match) as e:
+        load_config(f)
+    assert str(f) in str(e.value)
+
+
+def test_toml_int_for_a_float_field_is_fine(tmp_path):
+    cfg, _ = load_config(write(tmp_path, BASE + PATH + "[interpolator]\nfeed_mm_per_s = 250\ndelays_ms = [148, 89]\n"))
+    assert cfg.interpolators[0].feed_mm_per_s == 250.0 and isinstance(cfg.interpolators[0].feed_mm_per_s, float)
+
+
+@pytest.mark.parametrize("points, match", [  # item 6
+    ("[[0, 0], [1, 0, 0]]", r"points_mm\[1\] has 3 coordinates but points_mm\[0\] has 2"),
+    ("[[0, 0, 0, 0], [1, 0, 0, 0]]", r"4 coordinates; expected 1 to 3"),
+    ("[[0, 0]]", r"at least 2 points, got 1"),
+    ("[[0, 0], [5, 0], [5, 0], [5, 5]]", r"points_mm\[2\] repeats points_mm\[1\]"),
+    ("[[0, 0], [nan, 0]]", r"'path.points_mm\[1\]\[0\]': .*finite number"),
+    ("[[0, 0], [true, 1]]", r"'path.points_mm\[1\]\[0\]': .*bool is not a number"),
+    ("[]", r"at least 2 points, got 0"),
+])
+def test_points_are_validated_at_load(tmp_path, points, match):
+    f = write(tmp_path, BASE + f"[path]\npoints_mm = {points}\n")
+    with pytest.raises(ConfigError, match=match) as e:
+        load_config(f)
+    assert str(f) in str(e.value) and "path.points_mm" in str(e.value)
+
+
+@pytest.mark.parametrize("name", ["..", ".", "../x", "a/b", ".hidden", "", "x" * 65, "a b"])
+def test_unsafe_names_are_refused(tmp_path, name):  # item 7
+    f = write(tmp_path, f'name = "{name}"\nreproduces = "-"\n' + PATH)
+    with pytest.raises(ConfigError, match=r"key 'name': String should match pattern") as e:
+        load_config(f)
+    assert str(f) in str(e.value)
+
+
+def test_dotdot_name_writes_nothing_outside_the_cache(tmp_path):  # item 7, what went wrong
+    f = write(tmp_path, 'name = ".."\nreproduces = "-"\n' + PATH + "[output]\nfigure = false\n")
+    with pytest.raises(ConfigError):
+        run_experiment(f, cache_dir=tmp_path / "cache", log=lambda s: None)
+    assert not (tmp_path / "results.json").exists() and not (tmp_path / "cache").exists()
+
+
+def test_metrics_string_gets_an_array_hint_not_a_number_hint(tmp_path):  # item 17
+    f = write(tmp_path, BASE + 'metrics = "cycle_time"\n' + PATH)
+    with pytest.raises(ConfigError, match=r"key 'metrics': Input should be a valid list; give an array") as e:
+        load_config(f)
+    assert "plain number" not in str(e.value)
+
+
+def test_non_utf8_config_and_bad_file_names(tmp_path):
+    f = tmp_path / "e.toml"
+    f.write_bytes(BASE.encode() + b'description = "caf\xe9"\n' + PATH.encode())
+    with pytest.raises(ConfigError, match=r"line 3: not UTF-8"):
+        load_config(f)
+    f = write(tmp_path, BASE + '[path]\ngcode = "a\\u0000b.nc"\n')
+    with pytest.raises(ConfigError, match=r"key 'path.gcode': "):
+        load_config(f)
+
+
+def test_int_range_sweep_of_an_int_field_stays_int(tmp_path):
+    from research.experiments.sweep_points import expand
+
+    f = write(tmp_path, BASE + '[identification]\n[sweep.parameters]\n"identification.n_moves" = {start = 10, stop = 30, num = 3}\n')
+    cfg, _ = load_config(f)
+    points = expand(cfg, f)
+    assert [p.config.identification.n_moves for p in points] == [10, 20, 30]
