@@ -6,11 +6,33 @@ Data flows one way (see ``../shared/DESIGN.md``)::
 
 Units inside the package: mm, s, rad. float64 everywhere: importing the package sets
 ``jax_enable_x64``.
+
+Compiled JAX functions are kept on disk (JAX's persistent compilation cache), so a path size seen
+once does not cost a fresh compile in a later process: in ``$RESEARCH_JAX_CACHE`` if set (``off``
+disables it), else ``~/.cache/research/jax``. Array shapes are also bucketed (16 sizes per octave,
+see :func:`research.piecewise.bucket_size`), so paths of similar size share one compiled function.
 """
+
+import os as _os
 
 import jax as _jax
 
 _jax.config.update("jax_enable_x64", True)
+
+
+def _compilation_cache() -> None:
+    where = _os.environ.get("RESEARCH_JAX_CACHE", _os.path.join(_os.path.expanduser("~"), ".cache", "research", "jax"))
+    if where.lower() in ("off", "0", "none", ""):
+        return
+    try:
+        _os.makedirs(where, exist_ok=True)
+    except OSError:  # read-only home: run without the disk cache
+        return
+    _jax.config.update("jax_compilation_cache_dir", where)
+    _jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.2)
+
+
+_compilation_cache()
 
 from research.errors import (  # noqa: E402
     ConfigError,

@@ -80,7 +80,7 @@ class PulseTable:
         for k in np.flatnonzero(arc):
             rows = first[k] + np.arange(n_sub[k])
             geo[rows] = _arc_pieces(path, int(k), int(n_sub[k]))
-        Pp, Mp = bucket_size(P), bucket_size(M)
+        Pp, Mp = bucket_size(P, 64), bucket_size(M, 16)  # small paths share one compiled build
         pad = Pp - P
         return PulseTable(
             np.concatenate([block, np.full(pad, Mp)]), np.concatenate([gap, np.ones(pad, bool)]),

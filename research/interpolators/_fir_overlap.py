@@ -71,13 +71,18 @@ def overlap_time(tolerance: Array, speed_change: Array, delays: Array) -> Array:
         second = T2 + jnp.sqrt(radicand)  # eq 14, second branch
         Tk = jnp.where(in_first, first, second)
     else:
-        Tk = 2.0 * jax.vmap(lambda target: _invert_h2(target, delays))(jnp.ravel(h)).reshape(h.shape)
+        # a zero target (zero tolerance) has its root on the bracket's end: T_k = 0 without a search
+        safe = jnp.where(h > 0, h, 0.5 * h_full)
+        Tk = 2.0 * jax.vmap(lambda target: _invert_h2(target, delays))(jnp.ravel(safe)).reshape(h.shape)
+        Tk = jnp.where(h > 0, Tk, 0.0)
     return jnp.where(turning & (h < h_full), jnp.clip(Tk, 0.0, Td), Td)
 
 
 def _invert_h2(target: Array, delays: Array) -> Array:
     """``r`` in ``[0, T_d / 2]`` with ``H2(r) = target`` (H2 is increasing: H2' = H1 >= 0)."""
     half = 0.5 * jnp.sum(delays)
+    # keep the root inside the bracket up to rounding of H2(T_d / 2)
+    target = jnp.clip(target, 0.0, kernel_second_integral(half, delays))
 
     def residual(r, args):
         return kernel_second_integral(r, delays) - target

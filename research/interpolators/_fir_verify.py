@@ -34,7 +34,7 @@ def corner_distances(position: PiecewisePolynomial, vertices: Array, centre: Arr
     C = vertices.shape[0]
     if C == 0:
         return jnp.zeros(0)
-    pad = bucket_size(C) - C
+    pad = bucket_size(C, 16) - C
     centre_p = jnp.concatenate([jnp.asarray(centre), jnp.zeros(pad)])
     vert_p = jnp.concatenate([jnp.asarray(vertices), jnp.zeros((pad, vertices.shape[1]))])
     return _corner_distances(position, vert_p, centre_p, jnp.asarray(half_window), jnp.arange(C + pad) < C)[:C]
@@ -76,7 +76,9 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
         check_period: sample spacing [s].
 
     Returns:
-        ``(max_deviation [mm], {vertex: deviation}, {block: deviation})``: violations within
+        ``(max_deviation [mm], {vertex: deviation}, {block: deviation})``; distances are upper
+        bounds (:meth:`ToolPath.distance_bound`), equal to the distance on all but crowded paths.
+        Violations within
         ``T_d / 2`` of a corner instant are charged to that corner, others to the block whose input
         the window is centred on (the inside of an arc).
     """
@@ -84,9 +86,14 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
     n = int(np.ceil((t1 - t0) / check_period)) + 1
     t = np.concatenate([t0 + np.arange(n) * check_period, centre, [t1]])
     t = np.clip(t, t0, t1)
-    dist = path.distance(position(t))
     M = path.n_blocks
     block = np.clip(np.searchsorted(starts, t - 0.5 * Td, side="right") - 1, 0, M - 1)
+    q = position(t)
+    # first the blocks the window is centred on (almost every sample is within tolerance of them),
+    # then, for the rest, the k nearest path samples as well
+    rows = np.repeat(np.arange(t.size), 3)
+    cand = np.clip(block[:, None] + np.arange(-1, 2)[None, :], 0, M - 1).ravel()
+    dist = path._block_distance(q[rows], cand).reshape(-1, 3).min(axis=1)
     limit = tol_block[block]
     near = np.full(t.size, -1)
     if M > 1:
@@ -97,6 +104,9 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
         tol_v = np.minimum(tol_block[:-1], tol_block[1:])
         limit = np.where(close, np.minimum(limit, tol_v[np.maximum(j, 0)]), limit)
     bad = dist > limit * (1.0 + 1e-9) + 1e-9
+    if bad.any():
+        dist[bad] = np.minimum(dist[bad], path.distance_bound(q[bad], near=block[bad]))
+        bad = dist > limit * (1.0 + 1e-9) + 1e-9
     at_vertex: dict[int, float] = {}
     at_block: dict[int, float] = {}
     for i in np.flatnonzero(bad):

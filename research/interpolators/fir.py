@@ -60,7 +60,7 @@ _LIMIT_ROUNDS = 16  # the same for corners that break axis limits (15 % overlap 
 #: hard bound on verification rounds: the scaling rounds, the limit rounds, one exact-stop round
 #: and rounds that slow arcs whose own deviation exceeds the tolerance (geometric, <= 0.7 a round)
 MAX_ROUNDS = _LIMIT_ROUNDS + 24
-CHECK_PERIOD = 2.5e-4  # default spacing [s] of the path-deviation check
+CHECK_PERIOD = 1e-3  # default spacing [s] of the path-deviation check: the usual interpolation period
 
 
 class FIRPlan(eqx.Module):
@@ -191,7 +191,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         f_in, f_out = feeds_cmd * jnp.asarray(factor[:, 0]), feeds_cmd * jnp.asarray(factor[:, 2])
         dF = _safe_norm(f_in[1:, None] * jnp.asarray(t_in[1:]) - f_out[:-1, None] * jnp.asarray(t_out[:-1]))
         Td = jnp.sum(delays)
-        overlaps = jnp.where(jnp.asarray(full), Td, overlap_time(tol_vertex - others, dF, delays)) * jnp.asarray(shrink)
+        overlaps = jnp.where(jnp.asarray(full), Td, overlap_time(jnp.maximum(tol_vertex - others, 0.0), dF, delays)) * jnp.asarray(shrink)
         gaps = jnp.concatenate([Td - overlaps, jnp.zeros(Mp - M + 1)])
         starts, ends, position, centre = build_profile(
             jnp.asarray(tp.start), jnp.asarray(table.geo), blk, jnp.asarray(table.gap), jnp.asarray(frac), piece_tv, gaps, delays)

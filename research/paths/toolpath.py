@@ -50,7 +50,7 @@ class ToolPath:
     Example:
         >>> p = ToolPath.from_polyline(Polyline([[0, 0], [10, 0]])).then_arc([10, 10], [10, 5], ccw=True)
         >>> [round(float(x), 6) for x in p.lengths], p.is_arc.tolist()
-        [10.0, 15.707963], [False, True]
+        ([10.0, 15.707963], [False, True])
     """
 
     start: np.ndarray
@@ -276,10 +276,33 @@ class ToolPath:
             np.minimum.at(best, rows, self._block_distance(q[rows], blocks))
         return best
 
+    def distance_bound(self, query, k: int = 8, near=None) -> np.ndarray:
+        """An upper bound [mm] on :meth:`distance`: the exact distance to the blocks owning the ``k``
+        sample points nearest to each query point, and their neighbours. Equal to the distance
+        unless a block whose samples are all farther than ``k`` others is the closest one; cheap
+        for dense paths where :meth:`distance`'s candidate balls hold thousands of blocks. What a
+        tolerance check needs: a bound below the tolerance proves the point within it.
+        ``near``: ``(N,)`` a block known to be close to each point (tried with its neighbours too)."""
+        q = np.asarray(query, dtype=np.float64).reshape(-1, self.dim)
+        tree, owner, _ = self._tree()
+        k = min(k, tree.n)
+        _, idx = tree.query(q, k=k)
+        idx = np.asarray(idx).reshape(len(q), k)
+        blocks = np.concatenate([owner[idx], np.clip(owner[idx[:, :1]] - 1, 0, None),
+                                 np.clip(owner[idx[:, :1]] + 1, None, self.n_blocks - 1)], axis=1)
+        if near is not None:
+            near = np.asarray(near, dtype=np.int64).reshape(-1, 1)
+            blocks = np.concatenate([blocks, np.clip(near + np.arange(-1, 2)[None, :], 0, self.n_blocks - 1)], axis=1)
+        rows = np.repeat(np.arange(len(q)), blocks.shape[1])
+        d = self._block_distance(q[rows], blocks.ravel()).reshape(blocks.shape)
+        return d.min(axis=1)
+
     def _block_distance(self, q: np.ndarray, blocks: np.ndarray) -> np.ndarray:
         a, b = self.starts[blocks], self.ends[blocks]
         ab = b - a
-        u = np.clip(np.sum((q - a) * ab, axis=1) / np.sum(ab * ab, axis=1), 0.0, 1.0)
+        ab2 = np.sum(ab * ab, axis=1)
+        # a full circle has a zero chord: its line distance is the distance to its start (replaced below)
+        u = np.clip(np.sum((q - a) * ab, axis=1) / np.where(ab2 > 0, ab2, 1.0), 0.0, 1.0)
         out = np.linalg.norm(q - (a + u[:, None] * ab), axis=1)
         arc = self.is_arc[blocks]
         if arc.any():
@@ -328,14 +351,19 @@ def _arc_geometry(s, e, c, n, sweep) -> dict:
     # length: closed form for constant radius, Gauss-Legendre otherwise
     pitch = (a1 - a0) / sweep
     length = np.sqrt(r0**2 + pitch**2) * sweep
-    spiral = np.abs(r1 - r0) > 1e-12 * np.maximum(r0, 1.0)
-    for i in np.flatnonzero(spiral):
-        m = max(1, int(np.ceil(sweep[i] / _QUAD_ANGLE)))
+    spiral = np.flatnonzero(np.abs(r1 - r0) > 1e-12 * np.maximum(r0, 1.0))
+    if spiral.size:  # Gauss-Legendre on sub-intervals of at most _QUAD_ANGLE, all spirals at once
+        m = np.maximum(1, np.ceil(sweep[spiral] / _QUAD_ANGLE)).astype(np.int64)
         x, w = _GAUSS
-        lo = sweep[i] * np.arange(m) / m
-        phi = (lo[:, None] + 0.5 * sweep[i] / m * (x[None, :] + 1.0)).ravel()
-        gi = _take({k: v for k, v in g.items()}, np.full(phi.size, i))
-        length[i] = 0.5 * sweep[i] / m * np.sum(np.tile(w, m) * np.linalg.norm(_arc_eval(gi, phi, 1), axis=1))
+        owner = np.repeat(spiral, m * x.size)
+        sub = np.repeat(np.concatenate([np.arange(c) for c in m]), x.size)
+        width = np.repeat(sweep[spiral] / m, m * x.size)
+        node = np.tile(x, int(m.sum()))
+        phi = width * (sub + 0.5 * (node + 1.0))
+        gi = _take(g, owner)
+        speed = np.linalg.norm(_arc_eval(gi, phi, 1), axis=1)
+        length[spiral] = np.bincount(np.searchsorted(spiral, owner), weights=0.5 * width * np.tile(w, int(m.sum())) * speed,
+                                     minlength=spiral.size)
     g["length"] = length
     return g
 
