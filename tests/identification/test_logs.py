@@ -11,6 +11,7 @@ from research.identification import (
     load_drive_log,
     save_drive_log,
 )
+from research.identification._log import Plausibility
 
 
 def _arrays(n=400):
@@ -83,3 +84,93 @@ def test_not_exciting_enough_reports_condition_number():
     ramp = 10.0 * t  # a pure ramp: x'' = x_r'' = 0 and x' = x_r' constant -> rank deficient
     with pytest.raises(DriveLogError, match=r"condition number (inf|\d)"):
         build_regression(DriveLog(t, ramp, ramp - 0.01))
+
+
+# -- readers raise only DriveLogError (issue: fuzz-proof readers) -----------------------------------------
+def _good_npz(tmp_path):
+    t, xr, x = _arrays()
+    return save_drive_log(DriveLog(t, xr, x), tmp_path / "good.npz")
+
+
+@pytest.mark.parametrize("name, content, match", [  # item 12
+    ("trunc.npz", lambda p: _good_npz(p).read_bytes()[:200], r"trunc\.npz: not a readable NumPy \.npz file"),
+    ("empty.npz", lambda p: b"", r"empty\.npz: the file is empty"),
+    ("empty.mat", lambda p: b"", r"empty\.mat: the file is empty"),
+    ("junk.mat", lambda p: b"MATLAB 5.0 MAT-file" + bytes(range(256)) * 2, r"junk\.mat: not a readable MATLAB \.mat file"),
+    ("latin1.csv", lambda p: "t,x_ref,x_act\n0,1,2 \xb5m\n".encode("latin-1"), r"latin1\.csv:2: not UTF-8"),
+    ("header.csv", lambda p: b"t,x_ref,x_act\n", r"header\.csv: the CSV has a header .* but no data rows"),
+    ("cell.csv", lambda p: b"t,x_ref,x_act\n0,1,2\n0.001,abc,2\n", r"cell\.csv:3:2: column 'x_ref': 'abc' is not a number"),
+    ("ragged.csv", lambda p: b"t,x_ref,x_act\n0,1,2\n0.001,1\n", r"ragged\.csv:3: row has 2 values but the header names 3"),
+    ("dup.csv", lambda p: b"t,x_act,x_act\n0,1,2\n", r"dup\.csv:1: column name 'x_act' appears twice"),
+])
+def test_corrupt_files_raise_drive_log_error_naming_the_file(tmp_path, name, content, match):
+    f = tmp_path / name
+    f.write_bytes(content(tmp_path))
+    with pytest.raises(DriveLogError, match=match):
+        load_drive_log(f)
+
+
+def test_object_and_text_columns_are_drive_log_errors(tmp_path):  # item 12
+    t, xr, x = _arrays()
+    np.savez(tmp_path / "text.npz", t=t, x_ref=xr.astype(str), x_act=x)
+    with pytest.raises(DriveLogError, match=r"text\.npz: column 'x_ref' \(reference\) holds <U\d+ data.*real numbers"):
+        load_drive_log(tmp_path / "text.npz")
+    scipy.io.savemat(tmp_path / "cell.mat", {"t": t[:, None], "x_ref": np.array([["a"], [1.0]], dtype=object), "x_act": x[:, None]})
+    with pytest.raises(DriveLogError, match=r"cell\.mat"):
+        load_drive_log(tmp_path / "cell.mat")
+
+
+def test_negative_seed_is_a_parameter_error():  # item 13
+    from research.errors import ParameterError
+    from research.identification import identification_program
+
+    with pytest.raises(ParameterError, match=r"seed must be an int >= 0.*-1"):
+        identification_program(-1)
+    with pytest.raises(ParameterError, match=r"n_moves must be an int >= 1"):
+        identification_program(0, n_moves=2.5)
+
+
+def test_synthetic_log_refuses_a_two_axis_reference():  # item 14
+    from research.drives import table_6_1_closed_loop
+    from research.identification import synthetic_log
+    from research.trajectory import Trajectory
+
+    t = np.arange(200) * 1e-3
+    ref = Trajectory.from_positions(t, np.column_stack([np.sin(t), np.cos(t)]), axes=("x", "y"))
+    with pytest.raises(DriveLogError, match=r"2 axes \('x', 'y'\).*one-axis reference"):
+        synthetic_log(table_6_1_closed_loop(), ref)
+
+
+@pytest.mark.parametrize("rtol", [float("nan"), float("inf"), -1e-3, "0.1", True])
+def test_uniform_rtol_must_be_finite_and_non_negative(rtol):  # item 15
+    t, xr, x = _arrays()
+    t[200:] += 3e-4  # not uniform: a NaN tolerance used to accept it
+    with pytest.raises(DriveLogError, match=r"uniform_rtol must be a finite number >= 0"):
+        DriveLog(t, xr, x, uniform_rtol=rtol)
+
+
+def test_um_read_as_mm_and_ms_read_as_s_are_refused(tmp_path):  # item 16
+    t = np.arange(2000) * 1e-3
+    xr = 50.0 * np.sin(2 * np.pi * 0.5 * t)  # +-50 mm, peak 157 mm/s
+    np.savez(tmp_path / "um.npz", t=t, x_ref=xr * 1e3, x_act=xr * 1e3)  # file in um
+    with pytest.raises(DriveLogError, match=r"column 'x_ref' \(reference\) spans 100000 mm.*length_unit='um'"):
+        load_drive_log(tmp_path / "um.npz")
+    assert load_drive_log(tmp_path / "um.npz", length_unit="um").reference == pytest.approx(xr, abs=1e-9)
+    small = 0.5 * np.sin(2 * np.pi * 5 * t)  # 1 mm span, peak 15.7 mm/s: in um read as mm, 1 m and 15.7 m/s
+    np.savez(tmp_path / "um_small.npz", t=t, x_ref=small * 1e3, x_act=small * 1e3)
+    with pytest.raises(DriveLogError, match=r"moves at .* mm/s .*um read as mm"):
+        load_drive_log(tmp_path / "um_small.npz", plausibility=Plausibility(max_speed_mm_per_s=10_000.0))
+    np.savez(tmp_path / "ms.npz", t=t * 1e3, x_ref=xr, x_act=xr)  # time in ms
+    with pytest.raises(DriveLogError, match=r"column 't' \(t\): sample period 1 s .*time_unit='ms'"):
+        load_drive_log(tmp_path / "ms.npz")
+    assert load_drive_log(tmp_path / "ms.npz", time_unit="ms").sample_period == pytest.approx(1e-3)
+    # the bounds are the caller's to move
+    assert load_drive_log(tmp_path / "ms.npz", plausibility=Plausibility(max_sample_period_s=2.0)).n_samples == 2000
+    assert load_drive_log(tmp_path / "um.npz", plausibility=None).n_samples == 2000
+
+
+def test_header_only_csv_names_the_real_problem(tmp_path):  # item 17
+    (tmp_path / "h.csv").write_text("t,x_ref,x_act\n")
+    with pytest.raises(DriveLogError, match=r"no data rows") as e:
+        load_drive_log(tmp_path / "h.csv")
+    assert "rows have" not in str(e.value)
