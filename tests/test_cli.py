@@ -81,3 +81,48 @@ def test_errors_exit_2_with_message(tmp_path, capsys):
     assert "key 'interpolator.feed': unknown key" in capsys.readouterr().err
     assert main(["figures", "--only", "nope"]) == 2
     assert main(["sweep", str(bad)]) == 2
+
+
+def test_os_error_is_one_line_and_debug_shows_the_traceback(tmp_path, capsys):
+    """An OSError (here: the output folder is a file) prints one line naming the path, exit 2; --debug adds
+    the traceback."""
+    from research.cli import main
+
+    blocker = tmp_path / "not_a_folder"
+    blocker.write_text("x")
+    assert main(["figures", "--fast", "--out", str(blocker), "--only", LIGHT[0]]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("error: ") and str(blocker) in err and "Traceback" not in err
+    assert main(["--debug", "figures", "--fast", "--out", str(blocker), "--only", LIGHT[0]]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" in err and err.strip().splitlines()[-1].startswith("error: ")
+
+
+def test_unwritable_cache_is_a_clear_store_error(tmp_path, capsys):
+    from research.cli import main
+
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('name = "c"\nreproduces = "-"\n[path]\nname = "corner90"\n[output]\nfigure = false\n')
+    (tmp_path / "cache").write_text("a file where the results root should be")
+    assert main(["run", str(cfg), "--cache", str(tmp_path / "cache")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "cannot write" in err and str(tmp_path / "cache") in err
+
+
+def test_store_verify_and_gc_commands(tmp_path, capsys):
+    from research.cli import main
+    from research.experiments import ResultStore, result_key
+
+    store = ResultStore(tmp_path / "cache" / "store")
+    good, bad = result_key({"k": 1}), result_key({"k": 2})
+    store.put(good, {"v": 1})
+    store.put(bad, {"v": 2}, {"a": [1.0, 2.0]})
+    (store.folder(bad) / "arrays.npz").write_bytes(b"PK")
+    args = ["--cache", str(tmp_path / "cache")]
+    assert main(["store", "verify", *args]) == 1
+    out = capsys.readouterr().out
+    assert f"BAD {store.folder(bad)}: arrays.npz has 2 bytes" in out and "1 valid entries, 1 problems" in out
+    assert main(["store", "gc", "--dry-run", *args]) == 0 and store.folder(bad).exists()
+    assert "would remove" in capsys.readouterr().out
+    assert main(["store", "gc", *args]) == 0 and not store.folder(bad).exists()
+    assert main(["store", "verify", *args]) == 0 and "1 valid entries, 0 problems" in capsys.readouterr().out
