@@ -38,7 +38,7 @@ import numpy as np
 
 from research.interpolators._fir_chain import kernel_second_integral
 
-_BISECTION_STEPS = 48  # feed resolution F_max / 2^48
+_BISECTION_STEPS = 24  # feed resolution (F_max - F eps / |d|) / 2^24, below 1e-7 F
 
 
 def _subsets(delays: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -134,15 +134,20 @@ class ChainError:
         return total * scale[:, None]
 
     def largest_feed(self, s_query: np.ndarray, feed_max: np.ndarray, tolerance: np.ndarray) -> np.ndarray:
-        """Largest feed ``<= feed_max`` found by bisection with ``|d_j| <= tolerance`` kept at the
-        lower end (0 is always feasible: ``d_j -> 0`` as ``F -> 0``)."""
+        """Largest feed ``<= feed_max`` with ``|d_j| <= tolerance``, by bisection that keeps the
+        tolerance at its lower end. The bracket starts at ``F eps / |d_j(F)|``, feasible whenever
+        the error grows at least linearly in feed (eq 13/14 corners: linearly; chains and arcs:
+        quadratically), else at 0 (``d_j -> 0`` as ``F -> 0``); :data:`_BISECTION_STEPS` halvings."""
         hi = np.asarray(feed_max, dtype=np.float64).copy()
         tol = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), hi.shape)
-        ok = self(s_query, hi) <= tol
+        e = self(s_query, hi)
+        ok = e <= tol
         lo = np.where(ok, hi, 0.0)
         todo = np.flatnonzero(~ok)
         if todo.size:
-            sq, l, h, t = s_query[todo], lo[todo], hi[todo], tol[todo]
+            sq, h, t = s_query[todo], hi[todo], tol[todo]
+            l = h * t / e[todo]
+            l = np.where(self(sq, l) <= t, l, 0.0)
             for _ in range(_BISECTION_STEPS):
                 mid = 0.5 * (l + h)
                 good = self(sq, mid) <= t

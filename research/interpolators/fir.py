@@ -248,9 +248,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
 
     candidates = [(factor, head, tail, full, others)]
     if refine and M > 1:
-        candidates = [_look_ahead(tp, F_np, base, d_np, tv_np, t_in, t_out, rule) for rule in ("budget", "isolated")]
-        if np.array_equal(candidates[0][3], candidates[1][3]) and np.array_equal(candidates[0][4], candidates[1][4]):
-            candidates = candidates[:1]
+        candidates = _look_ahead(tp, F_np, base, d_np, tv_np, t_in, t_out)
     results = [settle(*c) for c in candidates]
     state, rounds, deviation = min(results, key=lambda r: float(_primal(r[0][4].end - r[0][4].start)))
     feeds, overlaps, pulse, starts, position, centre = state
@@ -289,11 +287,12 @@ def _arc_factor(tp: ToolPath, delays, tol_block, feeds) -> np.ndarray:
     return caps / feeds
 
 
-def _look_ahead(tp: ToolPath, F_cmd, base, delays, tol_v, t_in, t_out, rule: str):
-    """Feed factors ``(M, 3)`` (head, body, tail), head and tail shares ``(M,)``, full-overlap
-    flags ``(M - 1,)`` and the tolerance other turns take at dwell corners ``(M - 1,)``.
+def _look_ahead(tp: ToolPath, F_cmd, base, delays, tol_v, t_in, t_out):
+    """Candidate plans, one per dwell rule, each ``(factor, head, tail, full, others)``: feed factors
+    ``(M, 3)`` (head, body, tail), head and tail shares ``(M,)``, full-overlap flags ``(M - 1,)``
+    and the tolerance other turns take at dwell corners ``(M - 1,)``.
 
-    ``rule`` decides where eq 13/14's dwell may replace a slow-down: ``"budget"`` gives the dwell
+    The rule decides where eq 13/14's dwell may replace a slow-down: ``"budget"`` gives the dwell
     what the other direction changes of its window leave of the tolerance at full overlap
     (triangle inequality; right for curves cut into chords), ``"isolated"`` gives it the whole
     tolerance (right for isolated corners and for zigzags whose neighbours dwell too). Both are
@@ -319,10 +318,21 @@ def _look_ahead(tp: ToolPath, F_cmd, base, delays, tol_v, t_in, t_out, rule: str
     # rest of the tolerance (triangle inequality), and is valid only where some is left
     budget = tol_v - np.linalg.norm(d_all - Fv[:, None] * du * h_full, axis=1)
     need = np.linalg.norm(d_all, axis=1) > tol_v
-    if rule == "isolated":
-        budget = tol_v.copy()
+    f_w = Fv.copy()
+    f_w[need] = every.largest_feed(s_v[need], Fv[need], tol_v[need])
+    out = []
+    for rule_budget in (budget, tol_v):  # "budget", then "isolated"
+        out.append(_dwell_rule(tp, F_cmd, F, Fv, dF, f_w, need, rule_budget, delays, tol_v, s_v, chain))
+    if np.array_equal(out[0][3], out[1][3]) and np.array_equal(out[0][4], out[1][4]):
+        out = out[:1]
+    return out
+
+
+def _dwell_rule(tp, F_cmd, F, Fv, dF, f_w, need, budget, delays, tol_v, s_v, chain):
+    """One candidate of :func:`_look_ahead` for the tolerance ``budget`` a dwell corner may use."""
+    M = tp.n_blocks
+    Td = float(delays.sum())
     Tk = np.asarray(overlap_time(np.maximum(budget, 0.0), dF, delays))
-    f_w = np.where(need, every.largest_feed(s_v, Fv, tol_v), Fv)
     # dwell where it costs less than the slow-down: T_d - T_k against the time lost on the stretch
     # the vertex's window slows, f T_d, or its share of the blocks when neighbouring windows join
     L = tp.lengths
@@ -332,7 +342,8 @@ def _look_ahead(tp: ToolPath, F_cmd, base, delays, tol_v, t_in, t_out, rule: str
     gap = need & (budget > 0) & (Tk < Td * (1 - 1e-12)) & (Td - Tk <= slow_cost)
     gap |= need & (f_w <= 0)  # no feed keeps a turn within a zero tolerance: exact stop
     query = np.flatnonzero(~gap)
-    f = chain(~gap).largest_feed(s_v[query], Fv[query], tol_v[query])
+    # without dwells the chain is every turn, whose feeds are already known
+    f = chain(~gap).largest_feed(s_v[query], Fv[query], tol_v[query]) if gap.any() else f_w
     # the estimate holds a constant feed through the window: a vertex between blocks of different
     # feeds (a line entering a slower arc) gets the lower one on both sides of it
     slow = f < np.maximum(F[:-1], F[1:])[query] * (1 - 1e-12)
