@@ -11,7 +11,8 @@ package's mm / s on entry. Unknown keys (typos, or a unit the key does not have,
 Validation is strict (pydantic ``strict=True``, ``allow_inf_nan=False``): numbers are finite (TOML
 ``inf`` / ``nan`` are refused), nothing is coerced (a bool is not a number, ``"250"`` is not a number,
 ``10.0`` is not an int; a TOML integer is fine where a float is expected), ``points_mm`` is checked at
-load (equal lengths, 1 to 3 coordinates, at least 2 points, no repeated consecutive point), and
+load (equal lengths, 1 to 3 coordinates, at least 2 points, no repeated consecutive point, coordinates
+within :data:`MAX_COORDINATE_MM`), and
 ``name`` (a file stem) must match :data:`NAME_PATTERN`. Every default is in the
 ``Field(...)`` of its key, with its description (``ExperimentConfig.model_json_schema()`` lists them).
 
@@ -59,6 +60,8 @@ METRIC_UNITS = {
 #: what ``name`` (the results folder and figure file stem) may be: starts with a letter or digit, at most 64
 #: characters of letters, digits, ``_``, ``-`` and ``.`` (so never ``..`` or a path)
 NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$"
+#: largest |coordinate| of ``points_mm`` [mm] (1 km: beyond any machine, and far from float overflow)
+MAX_COORDINATE_MM = 1e6
 DRIVE_MODELS = ("ideal", "sencer2009_table6_1", "sencer2009_table6_1_ppi", "sencer2009_table6_2", "sencer2009_table6_2_pid")
 
 
@@ -100,6 +103,10 @@ class PathConfig(_Strict):
             if len(p) != dim:
                 raise ValueError(f"points_mm[{i}] has {len(p)} coordinates but points_mm[0] has {dim}; "
                                  "every point needs the same number")
+            big = next((c for c in p if abs(c) > MAX_COORDINATE_MM), None)
+            if big is not None:
+                raise ValueError(f"points_mm[{i}] has a coordinate {big!r} beyond +-{MAX_COORDINATE_MM:g} mm "
+                                 "(a unit mistake? coordinates are in mm)")
             if i and p == pts[i - 1]:
                 raise ValueError(f"points_mm[{i}] repeats points_mm[{i - 1}] = {p} (a zero-length segment)")
         try:

@@ -114,6 +114,7 @@ def test_toml_int_for_a_float_field_is_fine(tmp_path):
     ("[[0, 0], [nan, 0]]", r"'path.points_mm\[1\]\[0\]': .*finite number"),
     ("[[0, 0], [true, 1]]", r"'path.points_mm\[1\]\[0\]': .*bool is not a number"),
     ("[]", r"at least 2 points, got 0"),
+    ("[[0, 0], [1e300, 0]]", r"points_mm\[1\] has a coordinate 1e\+300 beyond \+-1e\+06 mm"),
 ])
 def test_points_are_validated_at_load(tmp_path, points, match):
     f = write(tmp_path, BASE + f"[path]\npoints_mm = {points}\n")
