@@ -55,13 +55,14 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
     scalars, details, arrays, objects = {}, {}, {}, {}
     if cfg.path is not None:
         path, program_feeds = build_path(cfg.path, base)
+        blocks = _gcode_blocks(cfg.path, base)
         objects["path"] = path
         several = len(cfg.interpolators) > 1
         for ic in cfg.interpolators:
             label = ic.label or ic.kind
             prefix = f"{label}." if several else ""
             log(f"interpolator {label}: {path.n_segments} segments")
-            traj, info, plan = _interpolate(ic, path, program_feeds)
+            traj, info, plan = _interpolate(ic, path, program_feeds, blocks)
             metrics = summarize(traj, path)
             objects.setdefault("runs", []).append((label, plan, traj, metrics))
             details[label] = info | {"metrics": metrics.as_dict(), "turning_angle_deg": np.degrees(path.turning_angles).tolist()}
@@ -85,15 +86,37 @@ def _metric_name(key: str) -> str:
     return next(p for p in key.split(".") if p in METRIC_UNITS)
 
 
-def _interpolate(ic, path, program_feeds):
-    """``(trajectory, details, plan or None)`` of one interpolator config."""
+def _gcode_blocks(path_cfg, base):
+    """``(ToolPath, block feeds [mm/s], block tolerance [mm, NaN where no G64 P])`` of a G-code path
+    config, arcs kept as arcs; ``None`` for named paths and point lists."""
+    if path_cfg.gcode is None:
+        return None
+    from research.paths.gcode import read_gcode
+
+    program = read_gcode(base / path_cfg.gcode, chord_tolerance=path_cfg.chord_tolerance_um * 1e-3)
+    return program.blocks, program.block_feeds, program.block_tolerance
+
+
+def _interpolate(ic, path, program_feeds, blocks=None):
+    """``(trajectory, details, plan or None)`` of one interpolator config.
+
+    The FIR planner gets a G-code program's blocks (arcs as arcs), its F words unless the config
+    sets a feed, and its ``G64 P`` tolerances where the program gives them (the config's
+    ``tolerance_um`` elsewhere); metrics are taken against the chords (``chord_tolerance_um``)."""
     if ic.kind == "fir":
         from research.interpolators import plan_fir
 
         # an explicit feed in the config wins; otherwise a G-code program's own F words are used
         explicit = "feed_mm_per_s" in ic.model_fields_set
-        feed = program_feeds if (program_feeds is not None and not explicit) else ic.feed_mm_per_s
-        plan = plan_fir(path, feed, np.asarray(ic.delays_ms) * 1e-3, ic.tolerance_um * 1e-3, refine=ic.refine)
+        tolerance = ic.tolerance_um * 1e-3
+        if blocks is not None:
+            target, feeds, g64 = blocks
+            feed = ic.feed_mm_per_s if explicit else feeds
+            tolerance = np.where(np.isfinite(g64), g64, tolerance)
+        else:
+            target = path
+            feed = program_feeds if (program_feeds is not None and not explicit) else ic.feed_mm_per_s
+        plan = plan_fir(target, feed, np.asarray(ic.delays_ms) * 1e-3, tolerance, refine=ic.refine)
         traj = plan.trajectory(ic.sample_period_ms * 1e-3)
         info = {"feeds": np.asarray(plan.feeds).tolist(), "overlap_times": np.asarray(plan.overlaps).tolist(),
                 "corner_errors": np.asarray(plan.corner_errors).tolist()}

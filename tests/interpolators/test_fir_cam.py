@@ -166,3 +166,22 @@ def test_per_block_tolerance_g64_p():
     errors = np.asarray(plan.corner_errors)
     assert errors[0] == pytest.approx(0.2, rel=1e-3)
     assert errors[1] <= 0.01 * (1 + 1e-6)
+
+
+def test_gcode_part_config_runs_arcs_as_arcs_within_g64_tolerance(tmp_path):
+    """experiments/cam_part_arc.toml: the program's G2 reaches the planner as an arc block with the
+    program's F and G64 P0.05; the stored metrics (against 1 um chords) keep 50 um (+ 1 um chords)
+    and the arc block runs at the eq 8 feed of R 20 mm."""
+    from pathlib import Path
+
+    from research.experiments.config import load_config
+    from research.experiments.evaluate import evaluate
+
+    cfg_file = Path(__file__).parents[2] / "experiments" / "cam_part_arc.toml"
+    cfg, base = load_config(cfg_file)
+    result = evaluate(cfg, base)
+    assert result.record["scalars"]["max_corner_error"] <= 0.050 * (1 + 1e-6)
+    assert result.record["scalars"]["max_contour_error"] <= 0.051
+    feeds = result.record["details"]["fir"]["feeds"]
+    assert len(feeds) == 5  # 4 lines + 1 arc, not 83 chords
+    assert feeds[1] == pytest.approx(eq8_feed(R, DELAYS, EPS), rel=1e-6)
