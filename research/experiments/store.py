@@ -11,8 +11,8 @@ Guarantees:
 - **atomic**: an entry is written into a temporary folder next to its final place, every file and the
   folder are fsynced, then the folder is renamed into place (and the parent fsynced): after a crash or
   power loss an entry is complete or absent, never half-written.
-- **checksummed**: :meth:`ResultStore.get` verifies the manifest (every file present, same size and
-  SHA-256); an entry that fails is a miss (logged with its folder on the ``research.experiments.store``
+- **checksummed**: :meth:`ResultStore.get` verifies the manifest (its own checksum, then every file
+  present, same size and SHA-256); an entry that fails is a miss (logged with its folder on the ``research.experiments.store``
   logger), the result is recomputed and :meth:`ResultStore.put` replaces the bad entry.
 - **resumable**: a run or sweep stores every finished point or chunk as its own entry, so an
   interrupted one recomputes only what is missing.
@@ -261,6 +261,7 @@ class ResultStore:
         files = dict(entry.manifest["files"])
         files[name] = {"sha256": hashlib.sha256(data).hexdigest(), "bytes": len(data)}
         manifest = dict(entry.manifest) | {"files": files}
+        manifest["self_sha256"] = _self_digest(manifest)
         target = atomic_write(folder / name, data)
         atomic_write(folder / MANIFEST, json.dumps(manifest, indent=1, sort_keys=True).encode())
         return target
@@ -376,7 +377,13 @@ def _check_name(folder: Path, name) -> None:
 def _manifest(key: str, contents: dict[str, bytes]) -> bytes:
     files = {n: {"sha256": hashlib.sha256(d).hexdigest(), "bytes": len(d)} for n, d in contents.items()}
     doc = {"format": MANIFEST_FORMAT, "key": key, "code_version": code_version(), "files": files}
-    return json.dumps(doc, indent=1, sort_keys=True).encode()
+    return json.dumps(doc | {"self_sha256": _self_digest(doc)}, indent=1, sort_keys=True).encode()
+
+
+def _self_digest(doc: dict) -> str:
+    """SHA-256 of a manifest's canonical JSON without its own ``self_sha256`` (layout changes do not count)."""
+    body = {k: v for k, v in doc.items() if k != "self_sha256"}
+    return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()
 
 
 def _load(key: str, folder: Path) -> tuple[Entry | None, str]:
@@ -396,6 +403,8 @@ def _load(key: str, folder: Path) -> tuple[Entry | None, str]:
         if (not isinstance(files, dict) or manifest.get("key") != key or manifest.get("format") != MANIFEST_FORMAT
                 or "record.json" not in files):
             return None, f"{MANIFEST} is not a manifest of key {key[:12]}"
+        if manifest.get("self_sha256") != _self_digest(manifest):
+            return None, f"{MANIFEST} does not match its own checksum (edited or damaged)"
         record = None
         for name, meta in files.items():
             if not (isinstance(meta, dict) and isinstance(meta.get("sha256"), str) and isinstance(meta.get("bytes"), int)):

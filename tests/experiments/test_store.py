@@ -164,6 +164,8 @@ def test_manifest_lists_sha256_of_every_file(tmp_path):
     e = store.put(k, {"v": 1}, {"a": [1.0]}, {"figure.png": b"\x89PNG"})
     manifest = json.loads((e.folder / "manifest.json").read_text())
     assert set(manifest["files"]) == {"record.json", "arrays.npz", "figure.png"}
+    body = {k: v for k, v in manifest.items() if k != "self_sha256"}
+    assert manifest["self_sha256"] == hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()
     for name, meta in manifest["files"].items():
         data = (e.folder / name).read_bytes()
         assert meta == {"sha256": hashlib.sha256(data).hexdigest(), "bytes": len(data)}
