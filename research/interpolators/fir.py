@@ -340,7 +340,7 @@ def _dwell_rule(tp, F_cmd, F, Fv, dF, f_w, need, budget, delays, tol_v, s_v, cha
     with np.errstate(divide="ignore"):
         slow_cost = stretch * (1.0 / np.maximum(f_w, 1e-300) - 1.0 / Fv)
     gap = need & (budget > 0) & (Tk < Td * (1 - 1e-12)) & (Td - Tk <= slow_cost)
-    gap |= need & (f_w <= 0)  # no feed keeps a turn within a zero tolerance: exact stop
+    gap |= need & ((f_w <= 0) | (tol_v <= 0))  # no feed keeps a turn within a zero tolerance: exact stop
     query = np.flatnonzero(~gap)
     # without dwells the chain is every turn, whose feeds are already known
     f = chain(~gap).largest_feed(s_v[query], Fv[query], tol_v[query]) if gap.any() else f_w
