@@ -98,7 +98,8 @@ def _check_program(prog: GCodeProgram):
 def _same_without_fast_path(text: str, prog: GCodeProgram, kw: dict):
     """A comment on every line sends it through the general tokenizer instead of the plain-line fast
     path; the result must be the same program."""
-    slow = parse_gcode("\n".join(line + " (c)" for line in text.split("\n")), **kw)
+    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")  # the reader's own line ends
+    slow = parse_gcode("\n".join(line + " (c)" for line in lines), **kw)
     np.testing.assert_array_equal(slow.polyline.points, prog.polyline.points)
     np.testing.assert_array_equal(slow.feeds, prog.feeds)
     np.testing.assert_array_equal(slow.lines, prog.lines)
