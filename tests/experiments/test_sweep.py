@@ -96,7 +96,8 @@ def test_vmap_sweep_records_failures_resumes_and_matches_general_path(tmp_path):
 
 def test_interrupted_general_sweep_resumes_and_failing_point_goes_on(tmp_path, monkeypatch):
     base = BASE.replace('[path]\nname = "diamond"', '[path]\npoints_mm = [[0.0, 0.0], [30.0, 0.0], [30.0, 30.0]]')
-    # points_mm[1][0] = 0 makes a zero-length segment: that point fails when it runs, not at validation
+    # points_mm[1][0] = 0 repeats points_mm[0]: the strict config refuses that point when the sweep
+    # expands it (it is stored as a failed row and never reaches point_task); the others run
     f = write(tmp_path, '[sweep]\n[sweep.parameters]\n"path.points_mm[1][0]" = [0.0, 10.0, 20.0, 40.0]\n', base=base)
     real, calls = sweep_general.point_task, []
 
@@ -111,11 +112,13 @@ def test_interrupted_general_sweep_resumes_and_failing_point_goes_on(tmp_path, m
         quiet(f, tmp_path, engine="serial")
     monkeypatch.setattr(sweep_general, "point_task", real)
     res = quiet(f, tmp_path, engine="serial")
-    assert res.stats["cached"] == 2 and res.stats["computed"] == 2  # the two finished points were kept
+    assert res.stats["cached"] == 2 and res.stats["computed"] == 1  # the two finished points were kept
     first = res.rows[0]
-    assert first["status"] == "error" and "PathError" in first["error"]
+    assert first["status"] == "error" and "ConfigError" in first["error"] and "repeats" in first["error"]
     assert [r["status"] for r in res.rows[1:]] == ["ok"] * 3
-    assert quiet(f, tmp_path, engine="serial", retry_failed=True).stats["computed"] == 1
+    # a retry re-validates the refused point (still refused) and recomputes nothing else
+    retry = quiet(f, tmp_path, engine="serial", retry_failed=True)
+    assert retry.stats["computed"] == 0 and retry.rows[0]["status"] == "error"
 
 
 def test_dask_local_cluster(tmp_path):
