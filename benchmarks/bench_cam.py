@@ -64,6 +64,8 @@ from research.metrics import limit_ratios
 from research.paths import Polyline
 from research.paths.gcode import parse_gcode, to_gcode
 
+from bench_fir import Table, timed, verdict  # the benchmarks' shared table and timer (same folder)
+
 # The benchmark's settings (stated by the issue, not tuned)
 FEED = 200.0  # commanded feed F [mm/s]
 DELAYS = (0.06, 0.03)  # T1, T2 [s]
@@ -173,12 +175,6 @@ def cam30_path() -> Polyline:
 
 
 # -- helpers ---------------------------------------------------------------------------------------
-def timed(fn, *args, **kwargs):
-    t0 = time.perf_counter()
-    out = jax.block_until_ready(fn(*args, **kwargs))
-    return out, time.perf_counter() - t0
-
-
 def median_of(repeats: int, fn, *args, **kwargs):
     """``(result, median time [s])`` of ``repeats`` calls (after the caller's warm-up)."""
     times, out = [], None
@@ -197,36 +193,6 @@ def load() -> str:
 
 def progress(msg: str, t0: float) -> None:
     print(f"[{time.perf_counter() - t0:6.1f} s] {msg}  ({load()})", flush=True)
-
-
-class Table:
-    """Fixed-width text table: measurement | value | ratio / rate | target | verdict."""
-
-    def __init__(self, title: str):
-        self.title = title
-        self.rows: list = []
-
-    def row(self, name, value="", ratio="", target="", verdict=""):
-        self.rows.append((name, value, ratio, target, verdict))
-
-    def section(self, name):
-        self.rows.append((name, None, None, None, None))
-
-    def print(self):
-        head = ("measurement", "value", "ratio / rate", "target", "")
-        body = [r for r in self.rows if r[1] is not None]
-        w = [max(len(str(r[i])) for r in [head, *body]) for i in range(5)]
-        line = "-" * (sum(w) + 3 * 4)
-        print(f"\n{self.title}\n{line}")
-        print(" | ".join(h.ljust(w[i]) for i, h in enumerate(head)).rstrip())
-        print(line)
-        for r in self.rows:
-            print(r[0] if r[1] is None else " | ".join(str(c).ljust(w[i]) for i, c in enumerate(r)).rstrip())
-        print(line)
-
-
-def verdict(ok: bool) -> str:
-    return "PASS" if ok else "MISS"
 
 
 def try_plan(table: Table, label: str, *args, **kwargs):

@@ -390,7 +390,13 @@ def build_path(cfg: PathConfig, base: Path) -> tuple[Polyline, np.ndarray | None
         return named_path(cfg.name), None
     if cfg.points_mm is not None:
         return Polyline(cfg.points_mm), None
+    program = read_program(cfg, base)
+    return program.polyline, program.feeds
+
+
+def read_program(cfg: PathConfig, base: Path):
+    """The :class:`~research.paths.gcode.GCodeProgram` of a G-code path config (read relative to
+    ``base``; arcs as chords at ``chord_tolerance_um`` and as blocks)."""
     from research.paths.gcode import read_gcode
 
-    program = read_gcode(base / cfg.gcode, chord_tolerance=cfg.chord_tolerance_um * 1e-3)
-    return program.polyline, program.feeds
+    return read_gcode(base / cfg.gcode, chord_tolerance=cfg.chord_tolerance_um * 1e-3)

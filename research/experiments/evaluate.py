@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from research.experiments.config import METRIC_UNITS, ExperimentConfig, build_path
+from research.experiments.config import METRIC_UNITS, ExperimentConfig, build_path, read_program
 from research.experiments.fir_model import residual_vibration_sampled
 from research.metrics import MotionMetrics, summarize
 from research.trajectory import Trajectory
@@ -54,8 +54,12 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
     base = Path(base)
     scalars, details, arrays, objects = {}, {}, {}, {}
     if cfg.path is not None:
-        path, program_feeds = build_path(cfg.path, base)
-        blocks = _gcode_blocks(cfg.path, base)
+        if cfg.path.gcode is not None:  # one read: chords for the metrics, blocks for the FIR planner
+            program = read_program(cfg.path, base)
+            path, program_feeds = program.polyline, program.feeds
+            blocks = program.blocks, program.block_feeds, program.block_tolerance
+        else:
+            (path, program_feeds), blocks = build_path(cfg.path, base), None
         objects["path"] = path
         several = len(cfg.interpolators) > 1
         for ic in cfg.interpolators:
@@ -84,17 +88,6 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
 
 def _metric_name(key: str) -> str:
     return next(p for p in key.split(".") if p in METRIC_UNITS)
-
-
-def _gcode_blocks(path_cfg, base):
-    """``(ToolPath, block feeds [mm/s], block tolerance [mm, NaN where no G64 P])`` of a G-code path
-    config, arcs kept as arcs; ``None`` for named paths and point lists."""
-    if path_cfg.gcode is None:
-        return None
-    from research.paths.gcode import read_gcode
-
-    program = read_gcode(base / path_cfg.gcode, chord_tolerance=path_cfg.chord_tolerance_um * 1e-3)
-    return program.blocks, program.block_feeds, program.block_tolerance
 
 
 def _interpolate(ic, path, program_feeds, blocks=None):

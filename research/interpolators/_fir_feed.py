@@ -36,7 +36,6 @@ import math
 
 import numpy as np
 
-from research.interpolators._fir_chain import kernel_second_integral
 
 _ARC_STEPS = 60  # arc feeds to machine precision (cheap: one evaluation per arc and step)
 _DIRECT = 64  # windows of at most this many direction changes are summed directly
@@ -183,15 +182,6 @@ class ChainError:
                 l, h = np.where(good, mid, l), np.where(good, h, mid)
             lo[todo] = l
         return lo
-
-
-def isolated_full_overlap_feed(du_norm: np.ndarray, delays: np.ndarray, tolerance: np.ndarray) -> np.ndarray:
-    """Feed [mm/s] at which one isolated corner with ``|du|`` keeps ``tolerance`` at full overlap:
-    ``eps / (|du| H2(T_d / 2))`` (eq 13/14 at ``T_k = T_d``); ``inf`` for no turn."""
-    d = np.asarray(delays, dtype=np.float64)
-    h_full = float(kernel_second_integral(0.5 * d.sum(), d))
-    with np.errstate(divide="ignore"):
-        return np.where(du_norm > 0, np.asarray(tolerance) / (np.maximum(du_norm, 1e-300) * h_full), np.inf)
 
 
 def range_min(first: np.ndarray, last: np.ndarray, values: np.ndarray, n: int, initial: np.ndarray) -> np.ndarray:

@@ -202,7 +202,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         factor, shrink = factor.copy(), np.ones(M - 1)
         state = schedule(factor, head, tail, full, shrink, others)
         rounds, deviation = 0, float("nan")
-        if (refine or limits is not None) and M >= 1:
+        if refine or limits is not None:
             cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
             limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
             for rounds in range(1, MAX_ROUNDS + 1):
@@ -350,7 +350,6 @@ def _dwell_rule(tp, F_cmd, F, Fv, dF, f_w, need, budget, delays, tol_v, s_v, cha
     j, f = query[slow], f[slow]
     lo, hi = s_v[j] - 0.5 * Td * f, s_v[j] + 0.5 * Td * f
     cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
-    L = tp.lengths
     # blocks inside a window run at its feed; a window reaching into a block slows its head or tail
     first, last = np.searchsorted(cum, lo, side="left"), np.searchsorted(cum, hi, side="right") - 2
     body = range_min(first, last, f, M, F)

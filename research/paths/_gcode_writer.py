@@ -104,9 +104,7 @@ def to_gcode(polyline, feeds_mm_per_min=None, rapid=None, *, line_numbers: bool 
         if g != mode:
             words.append(f"G{g}")
             mode = g
-        for i, letter in enumerate("XYZ"):
-            if p[i] != prev[i]:
-                words.append(f"{letter}{_num(p[i])}")
+        words += _axis_words(p, prev)
         if g == 1 and feeds[k] != feed:
             feed = feeds[k]
             words.append(f"F{_num(feed)}")
@@ -163,9 +161,7 @@ def _blocks_to_gcode(prog, line_numbers: bool) -> str:
             centre = b.centers[k]
             words.append(f"G{g}")
             mode = g
-            for i, letter in enumerate("XYZ"):
-                if e[i] != prev[i]:
-                    words.append(f"{letter}{_num(e[i])}")
+            words += _axis_words(e, prev)
             for i in (a, c2):
                 words.append(f"{'IJK'[i]}{_num(centre[i] - prev[i])}")
             if turns > 1:
@@ -175,9 +171,7 @@ def _blocks_to_gcode(prog, line_numbers: bool) -> str:
             if g != mode:
                 words.append(f"G{g}")
                 mode = g
-            for i, letter in enumerate("XYZ"):
-                if e[i] != prev[i]:
-                    words.append(f"{letter}{_num(e[i])}")
+            words += _axis_words(e, prev)
         if not prog.block_rapid[k]:
             f = float(prog.block_feeds[k]) * 60.0
             if f != feed:
@@ -186,3 +180,8 @@ def _blocks_to_gcode(prog, line_numbers: bool) -> str:
         prev = e
         out.append(" ".join(words))
     return _finish(out, line_numbers)
+
+
+def _axis_words(end, prev) -> list[str]:
+    """``X Y Z`` words of the coordinates of ``end`` that differ from ``prev`` (modal axes)."""
+    return [f"{letter}{_num(end[i])}" for i, letter in enumerate("XYZ") if end[i] != prev[i]]
