@@ -57,3 +57,22 @@ class ConvergenceError(ResearchError, RuntimeError):
     def __init__(self, message: str, *, residual: float, steps: int, result=None):
         self.residual, self.steps, self.result = residual, steps, result
         super().__init__(message)
+
+
+class UnstableGainsError(ParameterError):
+    """A controller gain set gives an unstable closed loop (research.control); names the axis or
+    direction and the offending discrete-time eigenvalue.
+
+    Attributes:
+        where: axis (``"x"`` ... ``"c"``) or Frenet direction (``"tangent"``, ``"normal"``, ``"binormal"``).
+        eigenvalue: the closed-loop eigenvalue ``z`` with ``|z| >= 1`` (complex).
+    """
+
+    def __init__(self, message: str, *, where: str, eigenvalue: complex):
+        self.where, self.eigenvalue = where, eigenvalue
+        super().__init__(message)
+
+
+class FrenetFrameError(PathError):
+    """The Frenet frame of a tool-tip path is undefined (zero curvature or zero path speed) over a
+    stretch; names the parameter range and what was expected (research.control)."""
