@@ -100,15 +100,31 @@ def test_optimized_beats_constant_conservative_feed(helix, helix_result):
 
 # -- thesis §3.6 numbers ----------------------------------------------------------------------------
 def test_constant_feed_15_mm_s_on_300_mm_path():
-    """Thesis §3.6: at a constant 15 mm/s no drive limit is violated and T = 20.18 s on the 300 mm
-    path; at 150 mm/s the limits are violated. Tolerance 1 % on T (our path is a public stand-in;
-    the start and stop ramps depend on its geometry)."""
+    """Thesis §3.6: "If the feed is kept constant at 15 [mm/sec], none of the drive limits are
+    violated, but the machining time becomes [sec]18.20=ΣT" (the PDF text reverses the digits, as
+    in "[sec]664.4=ΣT" for 4.664 s; 18.20 s would be below L/F = 300 mm / 15 mm/s = 20 s, so the
+    printed value is 20.18 s) and "if the machine travels at 150 [mm/sec], the drive limits are
+    violated".
+
+    The thesis' 20.18 s cannot be tested here: it is L/F = 20.000 s (the stand-in path is 300 mm
+    like the thesis') plus the thesis' start and stop ramps (0.18 s), which the thesis does not
+    describe. What is tested instead, with an expected value computed independently of the code:
+    the cycle time equals L/F plus the closed-form duration of a rest-to-rest jerk-limited S-curve
+    with the ramp limits that ``constant_feed`` documents (90 % of min_i limit_i / |Q_s,i|):
+    ``2 sqrt(F/J)`` when ``F J < A^2`` (A not reached), ``F/A + A/J`` otherwise. Measured: 20.259 s
+    (ramps 0.259 s against the thesis' 0.18 s, a model difference, not a reproduction)."""
     p = blade_flank_path(301)
-    c15 = constant_feed(p, LIM, 15.0, sample_period=5e-3)
-    assert c15.cycle_time == pytest.approx(20.18, rel=0.01)
-    assert c15.check.worst_ratio < 1.0
+    F = 15.0
+    c15 = constant_feed(p, LIM, F, sample_period=5e-3)
+    qs = np.abs(p.axis_derivatives(TableTiltingAC(), np.linspace(0.0, p.length, 2001)).Q_s).max(axis=0)
+    with np.errstate(divide="ignore"):
+        A, J = 0.9 * np.min(LIM.acceleration / qs), 0.9 * np.min(LIM.jerk / qs)
+    ramps = 2 * np.sqrt(F / J) if F * J < A * A else F / A + A / J
+    assert c15.cycle_time == pytest.approx(p.length / F + ramps, abs=1e-6)
+    assert c15.cycle_time > p.length / F  # never below L/F (the thesis' 20.18 s is too)
+    assert c15.check.worst_ratio < 1.0  # "none of the drive limits are violated"
     c150 = constant_feed(p, LIM, 150.0, sample_period=5e-3)
-    assert c150.check.worst_ratio > 1.5
+    assert c150.check.worst_ratio > 1.0  # "the drive limits are violated"
 
 
 @pytest.mark.parametrize("accelerating", [True, False])
