@@ -21,6 +21,7 @@ from research.interpolators.fir import FIRPlan, fir_by_convolution, fir_interpol
 from research.interpolators.scurve import double_s, max_end_speed, scurve_interpolate, scurve_phases, scurve_profile
 from research.interpolators.sigmoid import (
     SigmoidMotion,
+    mtp_blending_baseline,
     mtp_linear_baseline,
     mtp_motion,
     sigmoid_trajectory,
@@ -42,6 +43,7 @@ __all__ = [
     "kernel_second_integral",
     "magnitude_response",
     "max_end_speed",
+    "mtp_blending_baseline",
     "mtp_linear_baseline",
     "mtp_motion",
     "overlap_time",

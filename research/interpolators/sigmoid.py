@@ -19,12 +19,27 @@ The paper's text ends after eq 7; the rest is designed here in its spirit:
   smallest lead that keeps the overshoot below ``overshoot_tol`` (bisection). The move has ended
   (cycle time) when it stays within ``settle_tol`` of the end point.
 * The exponential interpolator of Rymansaib, as the paper reviews it, is the same construction
-  with a first-order exponent, ``S = 1 - exp(-alpha t)``: it starts with a jump of acceleration
-  (``a(0) = 2 m alpha``), which is why the paper raises the order to 3 (§2.1). ``order=1`` gives it.
-* ``alpha``: the largest value whose peak |acceleration| (and |jerk| when a limit is given) stays
-  within the limits over the whole move, by bisection on ``log alpha`` with every candidate checked
-  on a dense grid; a motion whose steady part already breaks a limit (``A w^2 > a_max``) cannot be
-  fixed by any ``alpha`` and is refused.
+  with a first-order exponent, ``S = 1 - exp(-alpha t)``. What each order gives at ``t = 0`` for
+  ``x = (m t + b) S`` (Taylor expansion of ``S``; tested): order 1: ``v(0) = b alpha``,
+  ``a(0) = 2 m alpha - b alpha^2``; order 2: ``v(0) = 0``, ``a(0) = 2 b alpha``, ``j(0) = 6 m alpha``;
+  order 3: ``v(0) = a(0) = 0``, ``j(0) = 6 b alpha``. So the paper's "order ... chosen as 3 to
+  maintain a zero value at t = 0 for acceleration" (§2.1) is needed only for an offset ``b != 0``:
+  with ``b = 0`` order 2 already starts with ``a(0) = 0`` (but with a jerk step ``6 m alpha``),
+  and order 3 also starts without one. ``order=1`` gives the exponential interpolator.
+* ``alpha``: found by bisection on ``log alpha`` for the boundary between candidates whose peak
+  |acceleration| (and |jerk| when a limit is given) stays within the limits on a dense grid and
+  candidates that break them; a motion whose steady part already breaks a limit (``A w^2 > a_max``)
+  cannot be fixed by any ``alpha`` and is refused. Maximality: for a plain move (``A = 0``) the
+  startup peaks scale as ``m alpha^(1/3)`` (acceleration) and ``m alpha^(2/3)`` (jerk) (substitute
+  ``u = alpha^(1/3) t`` in eq 3), so they grow strictly with ``alpha`` and the boundary is the
+  largest feasible ``alpha`` up to the stop blend; with an oscillation the peaks are not monotone
+  in ``alpha`` in general and the returned value is the bisection boundary only (the tests check
+  that sampled larger values break a limit, not that none can pass).
+* A blending baseline for the MTP comparison (:func:`mtp_blending_baseline`): the same 16 G01
+  moves per period, linearly interpolated at their nominal feeds without stopping, then smoothed
+  by acceleration/deceleration after interpolation (two moving averages, Chen and Lee 1998, the
+  usual CNC practice the FIR interpolator of Sencer 2015 builds on), whose lengths are the
+  shortest that keep the acceleration and jerk limits.
 
 Branch conditions, counted in this code (the paper claims about 17 for a linear interpolator and
 4 for the sigmoid): evaluating a sigmoid motion takes one test per term (``t >= t_k``, 4 terms for
@@ -180,7 +195,9 @@ def mtp_motion(
             the move [mm].
 
     Returns:
-        The :class:`SigmoidMotion` with the largest ``alpha`` that keeps the limits.
+        The :class:`SigmoidMotion` at the bisection boundary of ``alpha`` between candidates that
+        keep the limits and candidates that break them (the largest feasible ``alpha`` when
+        ``A = 0``; module docstring).
 
     Raises:
         ParameterError: ``L``, ``m``, ``a_max`` not > 0, ``A < 0``, ``A > 0`` with frequency <= 0.
@@ -352,16 +369,89 @@ def mtp_linear_baseline(
     _check(length=length, feed=feed, acceleration=acceleration, jerk=jerk)
     if amplitude > 0:
         _check(frequency=frequency)
-        period = 1.0 / frequency
-        n = max(int(np.ceil(length / feed / period * moves_per_period)), 1)
-        times = np.linspace(0.0, length / feed, n + 1)
-        s = feed * times + amplitude * np.sin(2 * np.pi * frequency * times)
-        s[-1] = length
-    else:
-        times, s = np.array([0.0, length / feed]), np.array([0.0, length])
+    times, s = _mtp_moves(length, feed, amplitude, frequency, moves_per_period)
     keep = np.concatenate([[True], np.abs(np.diff(s)) > 1e-9])  # drop moves of no length
     times, s = times[keep], s[keep]
     path = Polyline(s[:, None], axes=("s",))
     feeds = np.abs(np.diff(s)) / np.diff(times)
     limits = AxisLimits.uniform(1, np.inf, acceleration, jerk)
     return scurve_interpolate(path, feeds, limits, sample_period), times
+
+
+def _mtp_moves(length, feed, amplitude, frequency, moves_per_period):
+    """End times [s] and positions [mm] of the G01 moves approximating the MTP motion (§1)."""
+    if amplitude > 0:
+        n = max(int(np.ceil(length / feed * frequency * moves_per_period)), 1)
+        times = np.linspace(0.0, length / feed, n + 1)
+        s = feed * times + amplitude * np.sin(2 * np.pi * frequency * times)
+        s[-1] = length
+    else:
+        times, s = np.array([0.0, length / feed]), np.array([0.0, length])
+    return times, s
+
+
+def _ma(x: np.ndarray, n: int) -> np.ndarray:
+    """Causal ``n``-sample moving average of a signal at rest before its first sample."""
+    c = np.cumsum(np.concatenate([np.zeros(n), x]))
+    return (c[n:] - c[:-n]) / n
+
+
+def mtp_blending_baseline(
+    length: float, feed: float, amplitude: float, frequency: float, *, acceleration: float, jerk: float,
+    moves_per_period: int = 16, sample_period: float = 1e-4,
+) -> tuple[Trajectory, tuple[float, float]]:
+    """A blending linear interpolator for the MTP move: the G01 moves of
+    :func:`mtp_linear_baseline`, each at its nominal feed with no stop between them (the velocity
+    steps from one move's feed to the next), smoothed by acceleration/deceleration after
+    interpolation: two causal moving averages of lengths ``T1`` and ``T2`` on the velocity
+    (Chen and Lee 1998). Beyond the paper (it compares only against the exact-stop interpolator).
+
+    ``T1`` is the shortest multiple of ``sample_period`` keeping ``|a| <= acceleration`` (checked on
+    the samples; ``|a| <= max |dv| / T1`` for isolated steps), ``T2`` the shortest keeping
+    ``|j| <= jerk`` (``|j| <= (max a - min a) / T2``). The motion ends ``T1 + T2`` after the last
+    move's nominal end.
+
+    Args:
+        length, feed, amplitude, frequency, acceleration, jerk, moves_per_period: as in
+            :func:`mtp_linear_baseline` [mm, mm/s, mm, Hz, mm/s^2, mm/s^3].
+        sample_period: grid of the moving averages ``Ts`` [s]; the move end times are rounded to it.
+
+    Returns:
+        ``(trajectory of the arc length s (axis "s"), (T1, T2) [s])``.
+
+    Example:
+        >>> tr, (T1, T2) = mtp_blending_baseline(10.0, 20.0, 0.2, 20.0, acceleration=5000.0, jerk=2e6)
+        >>> bool(abs(float(tr.q[-1, 0]) - 10.0) < 1e-9), bool(float(tr.duration) < 0.6)
+        (True, True)
+    """
+    _check(length=length, feed=feed, acceleration=acceleration, jerk=jerk, sample_period=sample_period)
+    if amplitude > 0:
+        _check(frequency=frequency)
+    times, s = _mtp_moves(length, feed, amplitude, frequency, moves_per_period)
+    Ts = float(sample_period)
+    k = np.rint(times / Ts).astype(int)
+    feeds = np.diff(s) / np.maximum(np.diff(k), 1) / Ts  # each move covers its length on the grid
+    steps = np.abs(np.diff(np.concatenate([[0.0], feeds, [0.0]])))
+    n1 = max(int(np.ceil(steps.max() / acceleration / Ts - 1e-9)), 1)
+
+    def signals(n1, n2):
+        n = k[-1] + n1 + n2 + 1
+        vn = np.zeros(n)
+        for i in range(feeds.size):
+            vn[k[i]:k[i + 1]] = feeds[i]
+        g = (vn - np.concatenate([np.zeros(n1), vn[:-n1]])) / (n1 * Ts)  # d/dt of the first average
+        a = _ma(g, n2)
+        j = (g - np.concatenate([np.zeros(n2), g[:-n2]])) / (n2 * Ts)
+        v = _ma(_ma(vn, n1), n2)
+        return vn, v, a, j, g
+
+    while np.abs(signals(n1, 1)[4]).max() > acceleration * (1 + 1e-12):
+        n1 += 1
+    g = signals(n1, 1)[4]
+    n2 = max(int(np.ceil((g.max() - g.min()) / jerk / Ts - 1e-9)), 1)
+    _, v, a, j, _ = signals(n1, n2)
+    # position: each velocity sample held for one period (the averages keep sum(v) Ts = L)
+    q = np.concatenate([[0.0], np.cumsum(v[:-1]) * Ts])
+    t = np.arange(v.size) * Ts
+    traj = Trajectory(t, q[:, None], v[:, None], a[:, None], j[:, None], np.float64(t[-1]), None, ("s",), Ts)
+    return traj, (n1 * Ts, n2 * Ts)
