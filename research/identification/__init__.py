@@ -1,7 +1,9 @@
 """Closed-loop feed-drive identification from logged reference and actual positions (Sencer 2009 thesis
 ch 6): drive logs, the §6.5 excitation program, least squares (eq 6.7-6.12), the constrained PSO of §6.4,
-the same bounded problem solved with optimistix, an output-error fit of the JAX closed-loop model, and fit
-reports. Units: s, mm (logs in other units are converted on loading), rad/s for pole frequencies.
+the same bounded problem solved with optimistix, an output-error fit of the JAX closed-loop model, fit
+reports, and the default method: a simulation-error fit of a chosen model structure (2nd-order P/P loop,
+eq 6.3, higher orders) that is consistent under encoder noise, with structure selection and MATLAB
+``compare`` / ``resid``-style reports. Units: s, mm (logs in other units are converted on loading), rad/s for pole frequencies.
 """
 
 from research.identification._bounded import (
@@ -11,7 +13,8 @@ from research.identification._bounded import (
     sigma_from_u,
     u_from_sigma,
 )
-from research.identification._emps import EMPS_SPLIT_S, identify_emps, load_emps
+from research.identification._compare import Z99, ResidualAnalysis, compare, residual_analysis, simulate_model
+from research.identification._emps import EMPS_SPLIT_S, emps_structures, identify_emps, load_emps
 from research.identification._excitation import (
     THESIS_PROGRAM,
     ExcitationProgram,
@@ -46,6 +49,10 @@ from research.identification._regression import (
 )
 from research.identification._report import FitReport, fit_percent, fit_report
 from research.identification._result import COEFFICIENTS, IdentifiedDrive
+from research.identification._selection import StructureSelection, aic, select_structure
+from research.identification._simulation_error import INITIAL_MODES, simulation_error_fit
+from research.identification._structure import EQ_6_3, PI5, PP2, PP4, STRUCTURES, ModelStructure, structure
+from research.identification._structure_fit import INITIAL_SAMPLES, StructureFit
 from research.identification._synthetic import synthetic_log
 from research.identification._virtual import (
     LEAD_RG,
@@ -57,9 +64,29 @@ from research.identification._virtual import (
 )
 
 __all__ = [
+    "EQ_6_3",
+    "INITIAL_MODES",
+    "INITIAL_SAMPLES",
+    "ModelStructure",
+    "PI5",
+    "PP2",
+    "PP4",
+    "ResidualAnalysis",
+    "STRUCTURES",
+    "StructureFit",
+    "StructureSelection",
+    "Z99",
+    "aic",
+    "compare",
+    "residual_analysis",
+    "select_structure",
+    "simulate_model",
+    "simulation_error_fit",
+    "structure",
     "COEFFICIENTS",
     "COLUMNS",
     "EMPS_SPLIT_S",
+    "emps_structures",
     "LEAD_RG",
     "LENGTH_UNITS",
     "MAX_CONDITION",

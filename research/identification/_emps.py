@@ -9,6 +9,8 @@ from research.identification._bounded import bounded_fit
 from research.identification._log import DriveLog, load_drive_log
 from research.identification._output_error import output_error_fit
 from research.identification._report import FitReport, fit_report
+from research.identification._selection import StructureSelection, select_structure
+from research.identification._structure import STRUCTURES
 
 #: the issue's protocol: fit on t < 12 s, validate on the held-out last 3 s of the 15 s excerpt
 EMPS_SPLIT_S = 12.0
@@ -33,3 +35,9 @@ def identify_emps(path, *, split_s: float = EMPS_SPLIT_S, max_steps: int = 60) -
     vp = bounded_fit(est)
     oe = output_error_fit(est, initial=vp, max_steps=max_steps)
     return fit_report(vp, log, windows=windows), fit_report(oe, log, windows=windows)
+
+
+def emps_structures(path, *, split_s: float = EMPS_SPLIT_S, structures=tuple(STRUCTURES)) -> StructureSelection:
+    """Every model structure fitted by simulation error on ``t < split_s`` of the EMPS log and scored on the
+    held-out rest (free run from the record's start): :func:`select_structure` on :func:`load_emps`."""
+    return select_structure(load_emps(path), split_s, structures)
