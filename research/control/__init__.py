@@ -1,0 +1,75 @@
+"""Feedback controllers beyond the drives' own loops (Sencer 2009 thesis ch 5): the SISO sliding-mode
+axis controller with disturbance adaptation (thesis [35], Table 5.2), the tool-tip contour controller
+(§5.2, eq 5.1-5.17, Table 5.3) and the orientation contour controller (§5.3, eq 5.18-5.39), run in
+closed loop on the rigid-body drives of Table 5.1 through the A/C table-tilting kinematics.
+Units: mm, s, rad; voltages in V.
+"""
+
+from research.control._gains import (
+    AXES,
+    DIRECTIONS,
+    AxisSMC,
+    ContourGains,
+    TipGains,
+    check_axis_gains,
+    check_tip_gains,
+    closed_loop_eigenvalues,
+    plant_step_matrices,
+    table_5_2,
+    table_5_3,
+)
+from research.control._loop import ClosedLoopResult, direction_inertia, simulate_closed_loop
+from research.control._plant import FiveAxisPlant, thesis_plant
+from research.control._reference import ContourReference, eq436_reference, parametric_reference
+from research.control._study import (
+    CONTROL_PERIOD,
+    FIG5_7_AXIS_PEAKS,
+    FIG5_7_CONTOUR,
+    FIG5_8_AXIS_PEAKS,
+    FIG5_10_WEIGHTS,
+    LOG_PERIOD,
+    TABLE_5_4,
+    TABLE_5_5,
+    CaseResult,
+    identify_coulomb,
+    run_case,
+    step_disturbance_peak,
+    table_5_4,
+    table_5_5,
+)
+
+__all__ = [
+    "AXES",
+    "CONTROL_PERIOD",
+    "CaseResult",
+    "FIG5_10_WEIGHTS",
+    "FIG5_7_AXIS_PEAKS",
+    "FIG5_7_CONTOUR",
+    "FIG5_8_AXIS_PEAKS",
+    "LOG_PERIOD",
+    "TABLE_5_4",
+    "TABLE_5_5",
+    "identify_coulomb",
+    "run_case",
+    "step_disturbance_peak",
+    "table_5_4",
+    "table_5_5",
+    "AxisSMC",
+    "ClosedLoopResult",
+    "ContourGains",
+    "ContourReference",
+    "DIRECTIONS",
+    "FiveAxisPlant",
+    "TipGains",
+    "check_axis_gains",
+    "check_tip_gains",
+    "closed_loop_eigenvalues",
+    "direction_inertia",
+    "eq436_reference",
+    "parametric_reference",
+    "plant_step_matrices",
+    "simulate_closed_loop",
+    "table_5_2",
+    "table_5_3",
+    "thesis_plant",
+]
