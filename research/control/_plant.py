@@ -36,7 +36,11 @@ class FiveAxisPlant(eqx.Module):
 
     def __init__(self, m, c, coulomb=0.0):
         self.m, self.c = jnp.asarray(m, dtype=jnp.float64), jnp.asarray(c, dtype=jnp.float64)
-        self.coulomb = jnp.broadcast_to(jnp.asarray(coulomb, dtype=jnp.float64), self.m.shape)
+        coulomb = jnp.asarray(coulomb, dtype=jnp.float64)
+        if coulomb.ndim and coulomb.shape != self.m.shape:
+            raise ParameterError(f"FiveAxisPlant.coulomb must be a scalar or have 5 entries (x, y, z, a, c), "
+                                 f"got shape {coulomb.shape}")
+        self.coulomb = jnp.broadcast_to(coulomb, self.m.shape)
 
     def __check_init__(self):
         if any(isinstance(x, jax.core.Tracer) for x in (self.m, self.c, self.coulomb)):

@@ -19,6 +19,7 @@ point, every rotary error is a contour error, and ``v = 0`` makes eq 5.20 give `
 
 from __future__ import annotations
 
+import functools
 from typing import Callable
 
 import equinox as eqx
@@ -72,6 +73,33 @@ def _frame_of(dP, ddP):
     return jnp.stack([t, n, jnp.cross(t, n)], axis=-1)
 
 
+@functools.partial(jax.jit, static_argnums=(0, 1, 2))
+def _geometry(tip, a, c, machine, l):
+    """``P, P_l, P_ll``, joints ``q`` and ``q_l .. q_lll``, rotary ``r_l, r_ll`` at every ``l`` (jit-cached
+    per path functions)."""
+    d = jax.jacfwd
+
+    def joints(s):
+        return machine.inverse_with_angles(tip(s), a(s), c(s))
+
+    def rot(s):
+        return jnp.stack([a(s), c(s)])
+
+    return jax.vmap(lambda s: (tip(s), d(tip)(s), d(d(tip))(s), joints(s), d(joints)(s), d(d(joints))(s),
+                               d(d(d(joints)))(s), d(rot)(s), d(d(rot))(s)))(l)
+
+
+@functools.partial(jax.jit, static_argnums=(0,))
+def _frames(tip, l):
+    """Frenet frame ``F(l)`` and ``F_l, F_ll``."""
+    d = jax.jacfwd
+
+    def frame(s):
+        return _frame_of(d(tip)(s), d(d(tip))(s))
+
+    return jax.vmap(lambda s: (frame(s), d(frame)(s), d(d(frame))(s)))(l)
+
+
 def parametric_reference(tip: Callable, a: Callable, c: Callable, l, ld, ldd, lddd, t, machine: TableTiltingAC,
                          sample_period: float, *, kappa_min: float = 1e-6) -> tuple[ContourReference, Trajectory]:
     """Reference of a path given as ``P(l)`` [mm], ``a(l)``, ``c(l)`` [rad] and a motion law ``l(t)``.
@@ -93,16 +121,7 @@ def parametric_reference(tip: Callable, a: Callable, c: Callable, l, ld, ldd, ld
         raise ParameterError(f"l, l', l'', l''' and t must have one length; got {l.size}, {ld.size}, {ldd.size}, "
                              f"{lddd.size}, {t.size}")
 
-    def joints(s):
-        return machine.inverse_with_angles(tip(s), a(s), c(s))
-
-    def rot(s):
-        return jnp.stack([a(s), c(s)])
-
-    d = jax.jacfwd
-    geo = jax.jit(jax.vmap(lambda s: (tip(s), d(tip)(s), d(d(tip))(s), joints(s), d(joints)(s), d(d(joints))(s),
-                                      d(d(d(joints)))(s), d(rot)(s), d(d(rot))(s))))
-    P, P1, P2, q, q1, q2, q3, r1, r2 = (np.asarray(x) for x in geo(jnp.asarray(l)))
+    P, P1, P2, q, q1, q2, q3, r1, r2 = (np.asarray(x) for x in _geometry(tip, a, c, machine, jnp.asarray(l)))
     speed = np.linalg.norm(P1, axis=1)
     kappa = np.linalg.norm(np.cross(P1, P2), axis=1) / np.maximum(speed, 1e-300) ** 3
     bad = (speed <= 1e-12 * max(float(speed.max()), 1.0)) | (kappa < kappa_min)
@@ -114,11 +133,7 @@ def parametric_reference(tip: Callable, a: Callable, c: Callable, l, ld, ldd, ld
             f"last at l = {l[i1]:.6g} (t = {t[i1]:.6g} s): curvature {kappa[i0]:.3g} 1/mm (need >= {kappa_min:g}) "
             f"or zero tip speed dP/dl; the tool-tip contour controller needs a curved tip path (module docstring)")
 
-    def frame(s):
-        return _frame_of(d(tip)(s), d(d(tip))(s))
-
-    fr = jax.jit(jax.vmap(lambda s: (frame(s), d(frame)(s), d(d(frame))(s))))
-    F, F1, F2 = (np.asarray(x) for x in fr(jnp.asarray(l)))
+    F, F1, F2 = (np.asarray(x) for x in _frames(tip, jnp.asarray(l)))
     norm_r = np.linalg.norm(r1, axis=1)
     moving = norm_r > 1e-12 * max(float(norm_r.max()), 1e-300)
     v_l = np.where(moving[:, None], r1 / np.where(moving, norm_r, 1.0)[:, None], 0.0)
