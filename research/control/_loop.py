@@ -59,6 +59,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 from jax import Array
+from jax.experimental.jet import jet
 
 from research.control._gains import AxisSMC, ContourGains
 from research.control._plant import FiveAxisPlant
@@ -67,6 +68,8 @@ from research.errors import ParameterError
 from research.paths.kinematics5 import TableTiltingAC
 
 Controller = Union[AxisSMC, ContourGains]
+#: control periods per scan iteration (measured in benchmarks/bench_control.py)
+UNROLL = 1
 
 
 class ClosedLoopResult(eqx.Module):
@@ -118,6 +121,13 @@ def _orientation_law(g: AxisSMC, W, m, c, r, q, qd, dh, Ieps, T):
     return u, dh, Ieps, acc + g.Ks * S / m
 
 
+def _J_xyz(q):
+    """``dP/d[x, y, z] = R(a, c)^T diag(-1, -1, 1)`` of eq 4.5 (independent of the offsets)."""
+    sa, ca, sc, cc = jnp.sin(q[3]), jnp.cos(q[3]), jnp.sin(q[4]), jnp.cos(q[4])
+    R = jnp.array([[cc, sc, 0.0], [-ca * sc, ca * cc, sa], [sa * sc, -sa * cc, ca]])
+    return R.T * jnp.array([-1.0, -1.0, 1.0])[None, :]
+
+
 def _contour_law(g: ContourGains, plant, machine, r, q, qd, dh, IF, Ieps, T):
     m, c = plant.m, plant.c
     u_r, dh_r, Ieps, alpha_r = _orientation_law(g.rotary, g.W, m[3:], c[3:], r, q[3:], qd[3:], dh[3:], Ieps, T)
@@ -125,9 +135,9 @@ def _contour_law(g: ContourGains, plant, machine, r, q, qd, dh, IF, Ieps, T):
     def tip(qq):
         return machine.forward(qq)[0]
 
-    P, Pd = jax.jvp(tip, (q,), (qd,))
-    Jdqd = jax.jvp(lambda qq: jax.jvp(tip, (qq,), (qd,))[1], (q,), (qd,))[1]  # J' q'
-    J = machine.tip_jacobian(q)
+    # one Taylor pass (jax.experimental.jet): P, P' = J q', and the part of P'' not made by the
+    # Cartesian accelerations, J' q' + J_ac alpha_ac (eq 4.10)
+    P, (Pd, P2_rest) = jet(tip, (q,), ((qd, jnp.concatenate([jnp.zeros(3), alpha_r])),))
     F, Fd, Fdd = r["F"], r["Fd"], r["Fdd"]
     e, de = r["P"] - P, r["Pd"] - Pd
     eF = F.T @ e
@@ -140,7 +150,8 @@ def _contour_law(g: ContourGains, plant, machine, r, q, qd, dh, IF, Ieps, T):
     dF = dh[:3] + T * tg.Gamma * S  # eq 5.8
     rho = 2 * Fd.T @ de + Fdd.T @ e + CP * deF + CI * eF + (tg.Ks * S + dF) / mF
     Pdd_des = r["Pdd"] + F @ rho
-    qdd_c = jnp.linalg.solve(J[:, :3], Pdd_des - Jdqd - J[:, 3:] @ alpha_r)
+    # J_xyz = R(a, c)^T diag(-1, -1, 1) is orthogonal (eq 4.6), so its inverse is its transpose
+    qdd_c = _J_xyz(q).T @ (Pdd_des - P2_rest)
     u_c = m[:3] * qdd_c + c[:3] * qd[:3]  # eq 5.15, Cartesian rows
     return jnp.concatenate([u_c, u_r]), jnp.concatenate([dF, dh_r]), IF, Ieps
 
@@ -211,5 +222,5 @@ def _run(plant, reference, controller, machine, u_max, friction_width, divergenc
     N = reference.t.shape[0]
     z5 = jnp.zeros(5)
     carry0 = (reference.q[0], reference.qd[0], z5, jnp.zeros(3), jnp.zeros(2), jnp.array(False), jnp.int32(N), jnp.int32(0))
-    carry, (q, qd, u, dh, sat) = jax.lax.scan(step, carry0, rows)
+    carry, (q, qd, u, dh, sat) = jax.lax.scan(step, carry0, rows, unroll=UNROLL)
     return ClosedLoopResult(q, qd, u, dh, sat, carry[5], carry[6])

@@ -1,0 +1,99 @@
+"""Benchmark: closed-loop 5-axis simulation with the thesis ch 5 contour controller (Table 5.3) against
+the SISO sliding-mode loop (Table 5.2), both measured in the same run on the Fig 5.5 path (eq 4.36,
+50 mm/s, control period 0.1 ms: 55 277 periods), and a ``jax.vmap`` over 1000 gain sets of the contour
+controller (a Table 5.5 sensitivity sweep of the tangent / normal / binormal bandwidths) in one
+compiled call.
+
+Run: ``python benchmarks/bench_control.py [--repeats R] [--sets S] [--vmap-samples N]``. Prints compile
+time (first call minus the best warm call) apart from the warm time, samples/s after compilation, the
+per-sample cost ratio contour / SISO (target: <= 3x, issue 17) and the vmap call's time per gain set.
+The vmap sweep runs the first ``N`` periods (default 5000 = 0.5 s, through the acceleration phase) so
+that 1000 sets fit in a short run; its rate is in (set x period)/s. Timings on a shared machine vary
+with its load, which is printed alongside.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+import research  # noqa: F401  (x64)
+from research.control import (
+    ContourGains,
+    TipGains,
+    eq436_reference,
+    identify_coulomb,
+    simulate_closed_loop,
+    table_5_2,
+    table_5_3,
+    thesis_plant,
+)
+from research.paths.kinematics5 import TableTiltingAC
+
+TARGET_RATIO = 3.0  # contour controller cost per sample / SISO loop's
+
+
+def timed(fn, repeats: int) -> tuple[float, float]:
+    """(first call [s], best warm call [s]); each call waits for its result."""
+    t0 = time.perf_counter()
+    jax.block_until_ready(fn())
+    first = time.perf_counter() - t0
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        jax.block_until_ready(fn())
+        best = min(best, time.perf_counter() - t0)
+    return first, best
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--sets", type=int, default=1000)
+    ap.add_argument("--vmap-samples", type=int, default=5000)
+    args = ap.parse_args()
+    print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores; jax {jax.__version__} {jax.default_backend()}")
+    ref, _ = eq436_reference(sample_period=1e-4)
+    plant = thesis_plant(identify_coulomb())
+    N = ref.n_samples
+    rows = []
+    for name, gains in (("SISO SMC (Table 5.2)", table_5_2()), ("contour controller (Table 5.3)", table_5_3())):
+        first, warm = timed(lambda g=gains: simulate_closed_loop(plant, ref, g).q, args.repeats)
+        rows.append((name, first - warm, warm, N / warm))
+        print(f"{name:32s} compile {first - warm:6.2f} s  warm {warm * 1e3:8.1f} ms  {N / warm:10.3g} samples/s")
+    ratio = rows[1][2] / rows[0][2]
+    print(f"cost per sample contour / SISO: {ratio:.2f}x (target <= {TARGET_RATIO:g}x): "
+          f"{'PASS' if ratio <= TARGET_RATIO else 'MISS'}")
+
+    n = min(args.vmap_samples, N)
+    short = jax.tree_util.tree_map(lambda x: x[:n] if hasattr(x, "shape") and x.ndim >= 1 else x, ref)
+    rng = np.random.default_rng(17)
+    base = table_5_3()
+    wn = jnp.asarray(np.column_stack([rng.uniform(70, 100, args.sets), *(2 * [rng.uniform(200, 230, args.sets)])]))
+
+    @jax.jit
+    def sweep(wn):
+        def one(w):
+            g = ContourGains(TipGains(w, base.tip.Ks, base.tip.Gamma, base.tip.zeta), base.rotary, base.W)
+            res = simulate_closed_loop(plant, short, g)
+            tip = jax.vmap(lambda q: TableTiltingAC().forward(q)[0])(res.q)
+            return jnp.max(jnp.linalg.norm(tip - short.P, axis=1)), res.diverged
+        return jax.vmap(one)(wn)
+
+    first, warm = timed(lambda: sweep(wn), max(1, args.repeats // 2))
+    err, div = (np.asarray(x) for x in sweep(wn))
+    print(f"vmap over {args.sets} gain sets x {n} periods: compile {first - warm:.2f} s, warm {warm:.2f} s "
+          f"({warm / args.sets * 1e3:.2f} ms per set, {args.sets * n / warm:.3g} set-periods/s); "
+          f"peak tip tracking error |P_ref - P| over the sets {err.min() * 1e3:.3f} .. {err.max() * 1e3:.3f} um, diverged {int(div.sum())}")
+    single_rate = rows[1][3]
+    print(f"vmap throughput / single contour run: {args.sets * n / warm / single_rate:.2f}x")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,34 @@
+"""Sencer (2009) thesis Fig 5.10: orientation contour error (angle between the actual tool axis and the
+reference orientation path, §4.5 / eq 5.40) at 50 mm/s for the coupling weights W = diag(w, w),
+w = 0, 3, 4, 5, and its mean against w (simulation; thesis curves experimental). Reads the stored runs of
+:mod:`research.figures.sencer2009_fig5_results`.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from research.control import FIG5_10_WEIGHTS
+from research.figures import sencer2009_fig5_results as stored
+from research.figures._style import figure, save
+
+NAME = "sencer2009_fig5_10_orientation_weights"
+REPRODUCES = "Sencer 2009 thesis Fig 5.10 (orientation contour error for W = 0, 3, 4, 5: steady decline of the mean)"
+
+
+def make_figure(out_dir: Path, fast: bool = False) -> list[Path]:
+    """Write the figure to ``out_dir``; returns the files written."""
+    out_dir = Path(out_dir)
+    fig, ax = figure(1, 2, figsize=(11, 4), width_ratios=(3, 1))
+    means = []
+    for w, style in zip(FIG5_10_WEIGHTS, ("k", "C0", "C1", "C2")):
+        run = stored.case("contour", W=w, fast=fast)
+        means.append(run["summary"]["orientation_mean"] * 1e3)
+        ax[0].plot(run["t"], run["orientation"] * 1e3, style, lw=0.9, label=f"W = diag({w:g}, {w:g})")
+    ax[0].set(xlabel="time [s]", ylabel="orientation contour error [mrad]", title="(a) orientation contour error, 50 mm/s")
+    ax[0].legend()
+    ax[1].plot(FIG5_10_WEIGHTS, means, "ko-")
+    ax[1].set(xlabel="w", ylabel="mean [mrad]", title="(b) mean orientation contour error")
+    out = out_dir / f"{NAME}.png"
+    save(fig, out)
+    return [out]

@@ -1,0 +1,56 @@
+"""Stored results of the thesis ch 5 closed-loop runs that the Fig 5.7-5.10 modules plot (not itself a
+figure). Each run is a results-store entry (``.cache/results/store``, keyed by its parameters and the
+code version, :func:`research.experiments.store.result_key`): the figure modules only read the entry's
+arrays; a missing entry is computed once by :func:`research.control.run_case` and stored.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from research.control import CONTROL_PERIOD, identify_coulomb, run_case, table_5_2, table_5_3
+from research.experiments.runner import DEFAULT_CACHE
+from research.experiments.store import ResultStore, result_key
+
+#: control period of the figures' fast variant [s]: the largest of 1, 0.5, 0.25 ms at which Table 5.2 is stable
+FAST_PERIOD = 2.5e-4
+
+
+def _store() -> ResultStore:
+    return ResultStore(Path(DEFAULT_CACHE) / "store")
+
+
+def coulomb(T: float) -> np.ndarray:
+    """Identified Coulomb friction [V] for period ``T`` (stored)."""
+    config = dict(study="sencer2009_ch5_coulomb", T=T)
+    store, key = _store(), result_key(config, kind="sencer2009_ch5")
+    entry = store.get(key)
+    if entry is None:
+        entry = store.put(key, config, {"coulomb": identify_coulomb(T=T)})
+    return entry.arrays()["coulomb"]
+
+
+def case(controller: str, *, feed: float = 50.0, W: float = 0.0, wn=(100.0, 230.0, 230.0), fast: bool = False) -> dict:
+    """Arrays and summary of one run: ``controller`` is ``"siso"`` (Table 5.2) or ``"contour"`` (Table 5.3
+    with ``W = diag(W, W)`` and tip bandwidths ``wn``).
+
+    Returns:
+        ``{"t", "axis_error", "contour", "contour_estimate", "orientation", "u"}`` arrays and ``"summary"``.
+    """
+    T = FAST_PERIOD if fast else CONTROL_PERIOD
+    config = dict(study="sencer2009_ch5_case", controller=controller, feed=float(feed), T=T)
+    if controller == "contour":
+        config.update(W=float(W), wn=[float(w) for w in wn])
+    store, key = _store(), result_key(config, kind="sencer2009_ch5")
+    entry = store.get(key)
+    if entry is None:
+        gains = table_5_2() if controller == "siso" else table_5_3().with_weights(W, W).with_bandwidths(wn)
+        r = run_case(gains, feed=feed, coulomb=coulomb(T), T=T)
+        arrays = dict(t=r.t, axis_error=r.axis_error, contour=r.contour, contour_estimate=r.contour_estimate,
+                      orientation=r.orientation, u=r.u)
+        entry = store.put(key, dict(config, summary=r.summary()), arrays)
+    out = dict(entry.arrays())
+    out["summary"] = entry.record["summary"]
+    return out
