@@ -131,3 +131,15 @@ def test_straight_stretch_raises_frenet_frame_error():
     with pytest.raises(FrenetFrameError, match=r"first at l = 0 \(t = 0 s\)"):
         parametric_reference(lambda s: jnp.stack([s, 0 * s, 0 * s]), lambda s: 0.5 + 0 * s, lambda s: 0 * s,
                              l, np.ones(11), np.zeros(11), np.zeros(11), l, TableTiltingAC(), 0.1)
+
+
+def test_cartesian_jacobian_is_orthogonal_and_matches_kinematics():
+    """The tip law inverts J_xyz by its transpose: J_xyz = R^T diag(-1, -1, 1) (eq 4.6) is orthogonal and
+    equals the closed-form dP/dq of research.paths.kinematics5 for any offsets."""
+    from research.control._loop import _J_xyz
+
+    q = jnp.array([12.0, -3.0, 40.0, 1.3, -0.4])
+    m = TableTiltingAC(L_ya=10.0, L_ac=25.0, L_t=5.0)
+    J = np.asarray(_J_xyz(q))
+    np.testing.assert_allclose(J, np.asarray(m.tip_jacobian(q))[:, :3], atol=1e-14)
+    np.testing.assert_allclose(J.T @ J, np.eye(3), atol=1e-14)
