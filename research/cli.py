@@ -53,9 +53,26 @@ def main(argv: list[str] | None = None) -> int:
             a.add_argument("--stale-code", action="store_true", help="also remove entries of other code versions")
             a.add_argument("--dry-run", action="store_true", help="list what would be removed, remove nothing")
 
+    tn = sub.add_parser("tune", help="accelerometer log(s) -> modes -> FIR delays (eq 10) -> a config, "
+                                     "with the residual vibration before and after")
+    tn.add_argument("logs", type=Path, nargs="+", help="resonance-test log(s): .csv (#time,accel_x,accel_y,accel_z), .npz, .mat")
+    tn.add_argument("--path", required=True, help="named path the tuned config runs, e.g. diamond")
+    tn.add_argument("--out", type=Path, help="config to write (default tuned_<first log stem>.toml)")
+    tn.add_argument("--feed", type=float, default=250.0, help="feed F [mm/s] (default 250)")
+    tn.add_argument("--tolerance-um", type=float, default=500.0, help="cornering tolerance [um] (default 500)")
+    tn.add_argument("--before-ms", type=float, nargs="+", default=[148.0, 89.0], help="delays to compare against [ms]")
+    tn.add_argument("--k", type=int, choices=(1, 2), default=1, help="eq 10 zero: 1 (shortest delay) or 2")
+    tn.add_argument("--unit", default="mm/s^2", help="acceleration unit of the log: mm/s^2 (Klipper), m/s^2 or g")
+    tn.add_argument("--time-unit", default="s", help="time unit of the log: s, ms or us")
+    tn.add_argument("--full-scale", type=float, help="sensor range in --unit (samples at it are clipping)")
+    tn.add_argument("--band", type=float, nargs=2, metavar=("LO", "HI"), help="band to search [Hz]")
+    tn.add_argument("--window", choices=("boxcar", "hann"), default="boxcar",
+                    help="boxcar: whole record (sweeps, tones; default); hann: Welch (random excitation)")
+    tn.add_argument("--resolution-hz", type=float, help="PSD bin width [Hz] (default: 1 / record length)")
+
     args = parser.parse_args(argv)
     try:
-        return {"run": _run, "sweep": _sweep, "figures": _figures, "store": _store}[args.command](args)
+        return {"run": _run, "sweep": _sweep, "figures": _figures, "store": _store, "tune": _tune}[args.command](args)
     except (ResearchError, OSError) as e:
         if args.debug:
             traceback.print_exc()
@@ -143,6 +160,86 @@ def _figures(args) -> int:
             "seconds": round(seconds, 2),
         })
     (args.out / "manifest.json").write_text(json.dumps(manifest, indent=2))
+    return 0
+
+
+def _tune(args) -> int:
+    """``tune``: modes from the log(s), eq 10 delays, residual vibration before/after on the path, a config."""
+    import numpy as np
+
+    from research.experiments.config import load_config
+    from research.experiments.fir_model import fir_metrics
+    from research.paths import PATHS, named_path
+    from research.vibration import estimate_modes, format_robustness, load_accel_log, robustness_table, tune_delays
+
+    if args.path not in PATHS:
+        raise ResearchError(f"--path: unknown path {args.path!r}; expected one of {sorted(PATHS)}")
+    points = np.asarray(named_path(args.path).points)
+    path_axes = ("x", "y", "z")[: points.shape[1]]
+    chosen, unused = {}, []
+    for file in args.logs:
+        log = load_accel_log(file, unit=args.unit, time_unit=args.time_unit, full_scale=args.full_scale)
+        if log.resampling:
+            r = log.resampling
+            print(f"{file}: irregular time stamps resampled ({r['method']}) to {r['median_period_s'] * 1e3:.4g} ms; "
+                  f"largest step {r['max_step_s'] * 1e3:.4g} ms at t = {r['at_time_s']:.6g} s")
+        survey = estimate_modes(log, band_hz=tuple(args.band) if args.band else None,
+                                resolution_hz=args.resolution_hz, window=args.window)
+        print(f"{file}: {log.n_samples} samples at {log.sample_rate:.6g} Hz, band {survey.band_hz[0]:.3g}-"
+              f"{survey.band_hz[1]:.4g} Hz, resolution {survey.resolution_hz:.3g} Hz")
+        for m in survey.modes:
+            flags = f"  FLAGS: {', '.join(m.flags)}" if m.flags else ""
+            print(f"  mode {m.axis}: {m.frequency_hz:.4f} +- {m.frequency_sd_hz:.4f} Hz, damping {m.damping:.4f} "
+                  f"+- {m.damping_sd:.4f}{flags}")
+        for ax, m in survey.dominant().items():
+            if ax not in path_axes:
+                unused.append(m)
+            elif ax not in chosen or m.peak_psd > chosen[ax].peak_psd:
+                chosen[ax] = m
+    for m in unused:
+        print(f"  not tuned: the {m.axis} mode at {m.frequency_hz:.4f} Hz (axis {m.axis!r} is not an axis of "
+              f"path {args.path!r} {path_axes})")
+    if not chosen:
+        raise ResearchError(f"no mode on the axes {path_axes} of path {args.path!r} in {[str(f) for f in args.logs]}")
+    modes = [chosen[a] for a in path_axes if a in chosen]
+    tuned = tune_delays(modes, k=args.k)
+    idx = tuple(path_axes.index(m.axis) for m in modes)
+    hz = np.array([m.frequency_hz for m in modes])
+    zeta = np.array([m.damping for m in modes])
+    eps = args.tolerance_um * 1e-3
+
+    def metrics(delays_s, f=hz, z=zeta, axes=idx):
+        return fir_metrics(points, args.feed, np.asarray(delays_s), eps, f, z, axes=axes)
+
+    before, after = metrics(np.asarray(args.before_ms) * 1e-3), metrics(np.asarray(tuned.delays_s))
+    print(f"eq 10 (k = {args.k}): delays " + ", ".join(f"T{i + 1} = {T * 1e3:.2f} ms ({a} {f:.3f} Hz)" for i, (T, a, f)
+          in enumerate(zip(tuned.delays_s, tuned.axes, tuned.frequencies_hz))))
+    print(f"path {args.path}, F = {args.feed:g} mm/s, eps = {args.tolerance_um:g} um:")
+    for label, m, d in (("before", before, args.before_ms), ("after", after, [T * 1e3 for T in tuned.delays_s])):
+        per_mode = ", ".join(f"{mo.axis} {mo.frequency_hz:.3f} Hz {float(r) * 1e3:.3f} um" for mo, r in zip(modes, m["residual"]))
+        exact = "" if bool(m["exact"]) else " (blocks shorter than T_d: closed form approximate)"
+        print(f"  {label:6s} delays {[round(x, 2) for x in d]} ms: cycle time {float(m['cycle_time']):.4f} s, residual "
+              f"vibration {per_mode}{exact}")
+
+    def path_residual(i, f_true):  # i indexes the tuned (longest-delay-first) order
+        j = [m.axis for m in modes].index(tuned.axes[i])
+        return float(metrics(tuned.delays_s, np.array([f_true]), zeta[j:j + 1], (idx[j],))["residual"][0])
+
+    print("robustness (true mode = estimate x (1 + error), delays kept):")
+    print(format_robustness(robustness_table(tuned, residual_fn=path_residual)))
+    out = args.out or Path(f"tuned_{args.logs[0].stem}.toml")
+    name = "".join(c if c.isalnum() or c in "_-." else "_" for c in out.stem)[:64]
+    mode_lines = ", ".join(f'{{ axis = "{m.axis}", frequency_hz = {m.frequency_hz!r}, damping = {m.damping!r} }}' for m in modes)
+    text = (f"# written by `python -m research tune` from {', '.join(str(f) for f in args.logs)} (issue 20)\n"
+            f"# modes: " + "; ".join(f"{m.axis} {m.frequency_hz:.4f} +- {m.frequency_sd_hz:.4f} Hz, zeta {m.damping:.4f} "
+                                      f"+- {m.damping_sd:.4f}" + (f" [{', '.join(m.flags)}]" if m.flags else "") for m in modes) + "\n"
+            f'name = "{name}"\nreproduces = "FIR delays tuned by eq 10 (Sencer 2015) to modes measured in '
+            f'{args.logs[0].name}"\n\n[path]\nname = "{args.path}"\n\n[interpolator]\nkind = "fir"\n'
+            f"feed_mm_per_s = {float(args.feed)!r}\ndelays_ms = {[T * 1e3 for T in tuned.delays_s]!r}\n"
+            f"tolerance_um = {float(args.tolerance_um)!r}\n\n[drive]\nmodel = \"ideal\"\nmodes = [{mode_lines}]\n")
+    out.write_text(text)
+    load_config(out)  # the written config must load (ConfigError otherwise)
+    print(f"wrote {out}")
     return 0
 
 
