@@ -44,6 +44,9 @@ class PulseTable:
         geo: ``(P, DEGREE + 1 or 1, d)`` coefficients of ``dP/du`` [mm] in powers of the local block
             fraction ``u'`` (motion pieces; 0 for gaps and padding).
         role: ``(P,)`` 0 / 1 / 2 for the head / body / tail piece of a line, -1 otherwise.
+        first_motion, last_motion: ``(M,)`` the first and last motion piece of each block.
+        arc_pieces: ``(A,)`` the sub-arc pieces of all arc blocks, in path order.
+        arc_span: ``(A, 2)`` arc length [mm] along the path at which each sub-arc starts and ends.
         n_blocks: real blocks ``M``; ``m_pad``: padded block count.
     """
 
@@ -52,6 +55,10 @@ class PulseTable:
     fraction: np.ndarray
     geo: np.ndarray
     role: np.ndarray
+    first_motion: np.ndarray
+    last_motion: np.ndarray
+    arc_pieces: np.ndarray
+    arc_span: np.ndarray
     n_blocks: int
     m_pad: int
 
@@ -80,17 +87,24 @@ class PulseTable:
         for k in np.flatnonzero(arc):
             rows = first[k] + np.arange(n_sub[k])
             geo[rows] = _arc_pieces(path, int(k), int(n_sub[k]))
+        arc_pieces = np.flatnonzero(~gap & arc[block])
+        cum = np.concatenate([[0.0], np.cumsum(path.lengths)])
+        k, i = block[arc_pieces], local[arc_pieces]
+        share = path.lengths[k] / n_sub[k]
+        arc_span = np.stack([cum[k] + i * share, cum[k] + (i + 1) * share], axis=1)
         Pp, Mp = bucket_size(P, 64), bucket_size(M, 16)  # small paths share one compiled build
         pad = Pp - P
         return PulseTable(
             np.concatenate([block, np.full(pad, Mp)]), np.concatenate([gap, np.ones(pad, bool)]),
             np.concatenate([fraction, np.zeros(pad)]), np.concatenate([geo, np.zeros((pad,) + geo.shape[1:])]),
-            np.concatenate([role, np.full(pad, -1)]), M, Mp,
+            np.concatenate([role, np.full(pad, -1)]), first, first + n_sub - 1, arc_pieces, arc_span, M, Mp,
         )
 
-    def pieces(self, head: np.ndarray, tail: np.ndarray, factor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def pieces(self, head: np.ndarray, tail: np.ndarray, factor: np.ndarray,
+               arc_rel: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Shares and feed factors of every piece for line heads / tails of shares ``head``,
-        ``tail`` ``(M,)`` and feed factors ``factor`` ``(M, 3)`` (head, body, tail; arcs take the body's)."""
+        ``tail`` ``(M,)`` and feed factors ``factor`` ``(M, 3)`` (head, body, tail); a sub-arc takes
+        its block's body factor times its own ``arc_rel`` ``(A,)`` (<= 1; default 1)."""
         frac = self.fraction.copy()
         blk = np.minimum(self.block, self.n_blocks - 1)
         r = self.role
@@ -98,6 +112,8 @@ class PulseTable:
         frac[r == 1] = 1.0 - head[blk[r == 1]] - tail[blk[r == 1]]
         frac[r == 2] = tail[blk[r == 2]]
         f = factor[blk, np.where(r < 0, 1, r)]
+        if arc_rel is not None:
+            f[self.arc_pieces] *= arc_rel
         return np.where(self.block < self.n_blocks, frac, 0.0), np.where(self.block < self.n_blocks, f, 1.0)
 
 

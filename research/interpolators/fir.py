@@ -185,22 +185,36 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     feeds_p = jnp.concatenate([feeds_cmd, jnp.ones(Mp - M + 1)])
     blk = jnp.asarray(table.block)
 
-    def schedule(factor, head, tail, full, shrink, others):
-        frac, piece_factor = table.pieces(head, tail, factor)
+    def timing(factor, head, tail, full, shrink, others, arc_rel):
+        """Piece shares, feed factors, pulse lengths and overlaps of a plan (no filtering)."""
+        frac, piece_factor = table.pieces(head, tail, factor, arc_rel)
         piece_tv = lengths_p[blk] / (feeds_p[blk] * jnp.asarray(piece_factor))
-        f_in, f_out = feeds_cmd * jnp.asarray(factor[:, 0]), feeds_cmd * jnp.asarray(factor[:, 2])
+        f_in = feeds_cmd * jnp.asarray(piece_factor[table.first_motion])
+        f_out = feeds_cmd * jnp.asarray(piece_factor[table.last_motion])
+        cruise = np.maximum.reduceat(piece_factor[: table.last_motion[-1] + 1], table.first_motion)  # block's top feed
         dF = _safe_norm(f_in[1:, None] * jnp.asarray(t_in[1:]) - f_out[:-1, None] * jnp.asarray(t_out[:-1]))
         Td = jnp.sum(delays)
         overlaps = jnp.where(jnp.asarray(full), Td, overlap_time(jnp.maximum(tol_vertex - others, 0.0), dF, delays)) * jnp.asarray(shrink)
+        return frac, piece_tv, cruise, overlaps
+
+    def predicted_time(candidate) -> float:
+        """Cycle time of a candidate before verification: a lower bound on its verified time,
+        because repairs only shrink overlaps and lower feeds."""
+        frac, piece_tv, _, overlaps = timing(*candidate[:4], np.ones(M - 1), *candidate[4:])
+        return float(np.sum(frac * np.asarray(_primal(piece_tv))) + np.sum(Td_np - np.asarray(_primal(overlaps))) + Td_np)
+
+    def schedule(factor, head, tail, full, shrink, others, arc_rel):
+        frac, piece_tv, cruise, overlaps = timing(factor, head, tail, full, shrink, others, arc_rel)
+        Td = jnp.sum(delays)
         gaps = jnp.concatenate([Td - overlaps, jnp.zeros(Mp - M + 1)])
         starts, ends, position, centre = build_profile(
             jnp.asarray(tp.start), jnp.asarray(table.geo), blk, jnp.asarray(table.gap), jnp.asarray(frac), piece_tv, gaps, delays)
-        return feeds_cmd * jnp.asarray(factor[:, 1]), overlaps, ends[:M] - starts[:M], starts[:M], position, centre[: M - 1]
+        return feeds_cmd * jnp.asarray(cruise), overlaps, ends[:M] - starts[:M], starts[:M], position, centre[: M - 1]
 
-    def settle(factor, head, tail, full, others):
+    def settle(factor, head, tail, full, others, arc_rel):
         """Verify and repair one candidate plan; returns ``(state, rounds, deviation)``."""
         factor, shrink = factor.copy(), np.ones(M - 1)
-        state = schedule(factor, head, tail, full, shrink, others)
+        state = schedule(factor, head, tail, full, shrink, others, arc_rel)
         rounds, deviation = 0, float("nan")
         if refine or limits is not None:
             cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
@@ -243,14 +257,23 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                     factor[k] *= min(0.98 * np.sqrt(tb_np[k] / arc_slow[k]), 0.98)
                 if too_fast.any():  # shrink by 15 % a round, then exact stops
                     shrink = np.where(too_fast, shrink * (0.85 if rounds <= _LIMIT_ROUNDS else 0.0), shrink)
-                state = schedule(factor, head, tail, full, shrink, others)
+                state = schedule(factor, head, tail, full, shrink, others, arc_rel)
         return state, rounds, deviation
 
-    candidates = [(factor, head, tail, full, others)]
+    candidates = [(factor, head, tail, full, others, None)]
     if refine and M > 1:
-        candidates = _look_ahead(tp, F_np, base, d_np, tv_np, t_in, t_out)
-    results = [settle(*c) for c in candidates]
-    state, rounds, deviation = min(results, key=lambda r: float(_primal(r[0][4].end - r[0][4].start)))
+        candidates = _look_ahead(tp, table, F_np, base, d_np, tv_np, t_in, t_out)
+    # branch and bound: verify candidates in order of predicted time, and only while one could still
+    # beat the best verified plan (its prediction is a lower bound on its verified time)
+    best, best_time = None, np.inf
+    for pred, _, c in sorted((predicted_time(c), i, c) for i, c in enumerate(candidates)) if len(candidates) > 1 else [(0.0, 0, candidates[0])]:
+        if pred >= best_time:
+            break
+        result = settle(*c)
+        t = float(_primal(result[0][4].end - result[0][4].start))
+        if t < best_time:
+            best, best_time = result, t
+    state, rounds, deviation = best
     feeds, overlaps, pulse, starts, position, centre = state
     return FIRPlan(starts, pulse, overlaps, feeds, delays, position, centre, jnp.asarray(tp.vertices),
                    float(deviation), int(rounds), tp.axes)
@@ -287,10 +310,11 @@ def _arc_factor(tp: ToolPath, delays, tol_block, feeds) -> np.ndarray:
     return caps / feeds
 
 
-def _look_ahead(tp: ToolPath, F_cmd, base, delays, tol_v, t_in, t_out):
-    """Candidate plans, one per dwell rule, each ``(factor, head, tail, full, others)``: feed factors
-    ``(M, 3)`` (head, body, tail), head and tail shares ``(M,)``, full-overlap flags ``(M - 1,)``
-    and the tolerance other turns take at dwell corners ``(M - 1,)``.
+def _look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in, t_out):
+    """Candidate plans, one per dwell rule, each ``(factor, head, tail, full, others, arc_rel)``:
+    feed factors ``(M, 3)`` (head, body, tail), head and tail shares ``(M,)``, full-overlap flags
+    ``(M - 1,)``, the tolerance other turns take at dwell corners ``(M - 1,)`` and the slow-down of
+    every sub-arc ``(A,)`` (a window reaching into an arc slows only the sub-arcs it covers).
 
     The rule decides where eq 13/14's dwell may replace a slow-down: ``"budget"`` gives the dwell
     what the other direction changes of its window leave of the tolerance at full overlap
@@ -321,15 +345,17 @@ def _look_ahead(tp: ToolPath, F_cmd, base, delays, tol_v, t_in, t_out):
     f_w = Fv.copy()
     f_w[need] = every.largest_feed(s_v[need], Fv[need], tol_v[need])
     out = []
-    for rule_budget in (budget, tol_v):  # "budget", then "isolated"
-        out.append(_dwell_rule(tp, F_cmd, F, Fv, dF, f_w, need, rule_budget, delays, tol_v, s_v, chain))
-    if np.array_equal(out[0][3], out[1][3]) and np.array_equal(out[0][4], out[1][4]):
-        out = out[:1]
+    for rule_budget, choice in ((budget, "cost"), (tol_v, "cost"), (tol_v, "all"), (tol_v, "none")):
+        c = _dwell_rule(tp, table, F_cmd, F, Fv, dF, f_w, need, rule_budget, delays, tol_v, s_v, chain, choice)
+        if not any(np.array_equal(c[3], o[3]) and np.array_equal(c[4], o[4]) for o in out):
+            out.append(c)
     return out
 
 
-def _dwell_rule(tp, F_cmd, F, Fv, dF, f_w, need, budget, delays, tol_v, s_v, chain):
-    """One candidate of :func:`_look_ahead` for the tolerance ``budget`` a dwell corner may use."""
+def _dwell_rule(tp, table, F_cmd, F, Fv, dF, f_w, need, budget, delays, tol_v, s_v, chain, choice="cost"):
+    """One candidate of :func:`_look_ahead` for the tolerance ``budget`` a dwell corner may use;
+    ``choice`` says which vertices that need a slow-down dwell instead: those where the dwell is
+    estimated cheaper (``"cost"``), all that can (``"all"``), none that need not (``"none"``)."""
     M = tp.n_blocks
     Td = float(delays.sum())
     Tk = np.asarray(overlap_time(np.maximum(budget, 0.0), dF, delays))
@@ -339,7 +365,8 @@ def _dwell_rule(tp, F_cmd, F, Fv, dF, f_w, need, budget, delays, tol_v, s_v, cha
     stretch = np.minimum(f_w * Td, 0.5 * (L[:-1] + L[1:]))
     with np.errstate(divide="ignore"):
         slow_cost = stretch * (1.0 / np.maximum(f_w, 1e-300) - 1.0 / Fv)
-    gap = need & (budget > 0) & (Tk < Td * (1 - 1e-12)) & (Td - Tk <= slow_cost)
+    can = need & (budget > 0) & (Tk < Td * (1 - 1e-12))
+    gap = {"cost": can & (Td - Tk <= slow_cost), "all": can, "none": np.zeros_like(can)}[choice]
     gap |= need & ((f_w <= 0) | (tol_v <= 0))  # no feed keeps a turn within a zero tolerance: exact stop
     query = np.flatnonzero(~gap)
     # without dwells the chain is every turn, whose feeds are already known
@@ -355,21 +382,59 @@ def _dwell_rule(tp, F_cmd, F, Fv, dF, f_w, need, budget, delays, tol_v, s_v, cha
     body = range_min(first, last, f, M, F)
     k_r = np.clip(np.searchsorted(cum, hi, side="right") - 1, 0, M - 1)  # block holding the window's right end
     k_l = np.clip(np.searchsorted(cum, lo, side="right") - 1, 0, M - 1)
-    head_len, tail_len = np.zeros(M), np.zeros(M)
-    head_f, tail_f = F.copy(), F.copy()
     inside_r, inside_l = hi < cum[k_r + 1], lo > cum[k_l]
-    np.maximum.at(head_len, k_r[inside_r], hi[inside_r] - cum[k_r[inside_r]])
-    np.minimum.at(head_f, k_r[inside_r], f[inside_r])
-    np.maximum.at(tail_len, k_l[inside_l], cum[k_l[inside_l] + 1] - lo[inside_l])
-    np.minimum.at(tail_f, k_l[inside_l], f[inside_l])
+    head_len, head_f, head_cap = _end_piece(k_r[inside_r], hi[inside_r] - cum[k_r[inside_r]], f[inside_r], L, body, F)
+    tail_len, tail_f, tail_cap = _end_piece(k_l[inside_l], cum[k_l[inside_l] + 1] - lo[inside_l], f[inside_l], L, body, F)
+    body = np.minimum(body, np.minimum(head_cap, tail_cap))
     head_f, tail_f = np.minimum(head_f, body), np.minimum(tail_f, body)
-    whole = tp.is_arc | (head_len + tail_len >= L)
+    arc = tp.is_arc
+    whole = ~arc & (head_len + tail_len >= L)
     merged = np.minimum(np.minimum(head_f, tail_f), body)
-    head_f, body, tail_f = (np.where(whole, merged, x) for x in (head_f, body, tail_f))
-    head = np.where(whole | tp.is_arc, 0.0, head_len / L)
-    tail = np.where(whole | tp.is_arc, 0.0, tail_len / L)
+    head_f, body, tail_f = (np.where(whole, merged, np.where(arc, F, x)) for x in (head_f, body, tail_f))
+    head = np.where(whole | arc, 0.0, head_len / L)
+    tail = np.where(whole | arc, 0.0, tail_len / L)
     factor = np.stack([head_f, body, tail_f], axis=1) / F_cmd[:, None]
-    return factor, head, tail, ~gap, np.where(gap, np.clip(tol_v - budget, 0.0, tol_v), 0.0)
+    # sub-arcs a window [lo, hi] overlaps: those ending after lo and starting before hi (path order)
+    span = table.arc_span
+    a_first = np.searchsorted(span[:, 1], lo, side="right")
+    a_last = np.searchsorted(span[:, 0], hi, side="left") - 1
+    A = span.shape[0]
+    arc_f = range_min(a_first, a_last, f, A, np.full(A, np.inf)) if A else np.zeros(0)
+    arc_rel = np.minimum(arc_f / F[table.block[table.arc_pieces]], 1.0) if A else np.zeros(0)
+    return factor, head, tail, ~gap, np.where(gap, np.clip(tol_v - budget, 0.0, tol_v), 0.0), arc_rel
+
+
+def _end_piece(blocks, reach, feeds, L, body, F):
+    """Head (or tail) piece of each line from the windows that reach into it.
+
+    A window reaching ``reach`` [mm] into block ``blocks`` needs the feed ``<= feeds`` over that
+    stretch. One end piece of length ``l`` at the slowest of those feeds covers every window that
+    reaches at most ``l``; the longer ones cap the body instead. ``l`` is the reach that minimises
+    the block's time ``l / f_end + (L - l) / body`` (a long fast window and a short slow one
+    should not make a long slow piece).
+
+    Returns:
+        ``(length, feed, body_cap)``, each ``(M,)`` [mm, mm/s, mm/s] (0, ``F``, inf without windows).
+    """
+    M = L.size
+    length, feed, cap = np.zeros(M), F.copy(), np.full(M, np.inf)
+    if blocks.size == 0:
+        return length, feed, cap
+    np.maximum.at(length, blocks, reach)
+    np.minimum.at(feed, blocks, feeds)
+    count = np.bincount(blocks, minlength=M)
+    order = np.lexsort((-reach, blocks))  # by block, farthest reach first
+    b_s, r_s, f_s = blocks[order], reach[order], feeds[order]
+    starts = np.concatenate([[0], np.cumsum(count)])
+    for k in np.flatnonzero(count > 1):
+        r, fk = r_s[starts[k]:starts[k + 1]], f_s[starts[k]:starts[k + 1]]
+        g = float(fk.min())
+        # option i: the piece takes reach r[i]; the windows reaching farther (r[:i]) cap the body
+        caps = np.concatenate([[np.inf], np.minimum.accumulate(fk)[:-1]])
+        cost = r / g + (L[k] - r) / np.minimum(body[k], caps)
+        i = int(np.argmin(cost))
+        length[k], cap[k] = r[i], caps[i]
+    return length, feed, cap
 
 
 def _arc_turns(tp: ToolPath, tol: float):
