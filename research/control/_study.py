@@ -36,7 +36,7 @@ from research.control._loop import ClosedLoopResult, direction_inertia, simulate
 from research.control._plant import FiveAxisPlant, thesis_plant
 from research.control._reference import eq436_reference
 from research.errors import ConvergenceError, ParameterError
-from research.paths.kinematics5 import TableTiltingAC
+from research.paths.kinematics5 import TableTiltingAC, orientation_jacobian
 
 #: control period of the simulations [s] (module docstring)
 CONTROL_PERIOD = 1e-4
@@ -126,6 +126,7 @@ class CaseResult:
         contour error [mm]; contour_estimate: ``(M,)`` compensated Frenet estimate (eq 4.27) [mm];
         orientation: ``(M,)`` exact orientation contour error [rad] (angle to the reference orientation
         path, §4.5 / eq 5.40); orientation_rotary: ``(M, 2)`` eq 4.35 estimate ``eps_R`` [rad];
+        orientation_estimate: ``(M,)`` its size in the workpiece frame, ``|J_o eps_R|`` (eq 4.34) [rad];
         u: ``(M, 5)`` [V]; diverged: the loop was flagged (:class:`ClosedLoopResult`).
     """
 
@@ -135,12 +136,14 @@ class CaseResult:
     contour_estimate: np.ndarray
     orientation: np.ndarray
     orientation_rotary: np.ndarray
+    orientation_estimate: np.ndarray
     u: np.ndarray
     diverged: bool
 
     def summary(self) -> dict:
         """Max / mean tool-tip contour error [mm], max axis errors, mean / max orientation error [rad], peak |u|."""
         return dict(contour_max=float(self.contour.max()), contour_mean=float(self.contour.mean()),
+                    orientation_estimate_error_max=float(np.abs(self.orientation_estimate - self.orientation).max()),
                     estimate_max=float(self.contour_estimate.max()),
                     axis_max=[float(x) for x in np.abs(self.axis_error).max(axis=0)],
                     orientation_max=float(self.orientation.max()), orientation_mean=float(self.orientation.mean()),
@@ -181,8 +184,10 @@ def run_case(controller: AxisSMC | ContourGains, *, feed: float = 50.0, coulomb=
     ori = exact_orientation_contour_error(np.asarray(ref.q), q)
     eR = q_ref[:, 3:] - q[:, 3:]
     v = np.asarray(ref.v)[sl]
-    epsR = eR - v * np.sum(v * eR, axis=1, keepdims=True)
-    return CaseResult(t, q_ref - q, contour, est, ori, epsR, np.asarray(res.u)[sl], bool(res.diverged))
+    epsR = eR - v * np.sum(v * eR, axis=1, keepdims=True)  # eq 4.35
+    Jo = np.asarray(orientation_jacobian(q_ref[:, 3], q_ref[:, 4]))
+    ori_est = np.linalg.norm(np.einsum("nij,nj->ni", Jo, epsR), axis=1)  # eq 4.34
+    return CaseResult(t, q_ref - q, contour, est, ori, epsR, ori_est, np.asarray(res.u)[sl], bool(res.diverged))
 
 
 def table_5_4(feeds=(50.0, 60.0, 80.0), *, coulomb=None, T: float = CONTROL_PERIOD) -> dict:

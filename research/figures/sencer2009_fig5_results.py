@@ -37,7 +37,7 @@ def case(controller: str, *, feed: float = 50.0, W: float = 0.0, wn=(100.0, 230.
     with ``W = diag(W, W)`` and tip bandwidths ``wn``).
 
     Returns:
-        ``{"t", "axis_error", "contour", "contour_estimate", "orientation", "u"}`` arrays and ``"summary"``.
+        ``{"t", "axis_error", "contour", "contour_estimate", "orientation", "orientation_estimate", "u"}`` arrays and ``"summary"``.
     """
     T = FAST_PERIOD if fast else CONTROL_PERIOD
     config = dict(study="sencer2009_ch5_case", controller=controller, feed=float(feed), T=T)
@@ -49,7 +49,7 @@ def case(controller: str, *, feed: float = 50.0, W: float = 0.0, wn=(100.0, 230.
         gains = table_5_2() if controller == "siso" else table_5_3().with_weights(W, W).with_bandwidths(wn)
         r = run_case(gains, feed=feed, coulomb=coulomb(T), T=T)
         arrays = dict(t=r.t, axis_error=r.axis_error, contour=r.contour, contour_estimate=r.contour_estimate,
-                      orientation=r.orientation, u=r.u)
+                      orientation=r.orientation, orientation_estimate=r.orientation_estimate, u=r.u)
         entry = store.put(key, dict(config, summary=r.summary()), arrays)
     out = dict(entry.arrays())
     out["summary"] = entry.record["summary"]
