@@ -207,6 +207,8 @@ def _check_clipping(x: np.ndarray, where: str, full_scale, unit: str) -> None:
                                 f"(first at sample index {int(over[0])}, value {x[over[0]]:g}); the accelerometer "
                                 "clipped, so the spectrum is distorted: repeat the test with a lower amplitude or a "
                                 "larger range")
+    if np.max(x) == np.min(x):  # a constant column has no peak to clip (no motion: the estimator's refusal)
+        return
     for side, extreme in (("maximum", np.max(x)), ("minimum", np.min(x))):
         n0, n1, first = _top_counts(x, extreme, side)
         if n0 >= CLIP_MIN_SAMPLES and n0 > 2.0 * SMOOTH_TOP_RATIO * max(n1, 1):

@@ -33,9 +33,11 @@ Flags on a :class:`Mode` (a flagged result, never a silent one):
 * ``"band_edge"``: the fitted frequency is within two half-power bandwidths (or one bin) of the
   analysed band's edge: the true mode may lie outside the measured band;
 * ``"unresolved"``: another peak of the same axis lies closer than twice the window's equivalent
-  noise bandwidth ``B_e``, or (Welch) the full-record periodogram shows two peaks within ``B_e`` of
-  it: two modes closer than the resolution, reported as one. Two modes closer than the full record's
-  own resolution ``1 / duration`` cannot be told from one and are not flagged;
+  noise bandwidth ``B_e``, or the full-record Hann periodogram shows two significant peaks within the
+  fitted mode's half-power band (or ``B_e``): two modes closer than the resolution, reported as one.
+  Modes whose half-power bands overlap so much that no significant dip separates them (modal overlap,
+  or closer than the record's ``1 / duration``) cannot be told from one mode and are not flagged; the
+  merged estimate lies between them with a larger damping;
 * ``"below_resolution"``: the half-power bandwidth ``2 zeta fn`` is below the bin width; the damping
   rests on the leakage model alone.
 
@@ -282,13 +284,24 @@ def _fine_peaks(x: np.ndarray, fs: float, band) -> np.ndarray:
 
 def _axis_modes(ax, f, P, floor, thr, window, fs, df, enbw, dof, band, max_modes, fine, wname) -> AxisSpectrum:
     # above the floor by the noise quantile, and standing out of its surroundings by as much (log prominence),
-    # so the ripple of a swept plateau above a lower noise floor is not a peak
+    # so the ripple of a swept plateau above a lower noise floor is not a peak. A base on the band's edge bin
+    # is where the band cut the spectrum, not a valley: the other side's base alone counts then.
     q = float(thr[0] / floor[0])
-    peaks, _ = signal.find_peaks(np.log(P), height=np.log(thr), prominence=np.log(q))
+    logP = np.log(P)
+    cand, props = signal.find_peaks(logP, height=np.log(thr), prominence=0.0)
+    peaks = []
+    for k, lb, rb in zip(cand, props["left_bases"], props["right_bases"]):
+        inner = [b for b in (lb, rb) if b not in (0, P.size - 1)]
+        base = max(logP[b] for b in inner) if inner else min(logP[lb], logP[rb])
+        if logP[k] - base >= np.log(q):
+            peaks.append(int(k))
     peaks = sorted(peaks, key=lambda k: -P[k])[:max_modes]
+    # the band's maximum on an edge bin, above the noise quantile of that one pre-chosen bin (two edges:
+    # false alarm FALSE_ALARM / 2 each): the spectrum rises out of the band, toward a mode outside it
     edge = None
-    k_max = int(np.argmax(P / floor))
-    if P[k_max] > thr[k_max] and k_max in (0, P.size - 1):
+    k_max = int(np.argmax(P))
+    q_edge = stats.chi2.ppf(1 - FALSE_ALARM / 2, dof) / stats.chi2.ppf(0.5, dof)
+    if k_max in (0, P.size - 1) and P[k_max] > floor[k_max] * q_edge:
         edge = "low" if k_max == 0 else "high"
     order = sorted(peaks)
     modes = []
@@ -302,8 +315,10 @@ def _axis_modes(ax, f, P, floor, thr, window, fs, df, enbw, dof, band, max_modes
     out = []
     for i, m in enumerate(modes):
         close = any(abs(fr[i] - fr[j]) < 2 * enbw for j in range(len(fr)) if j != i)
-        # two or more fine-resolution peaks inside this mode's resolution bandwidth: merged modes
-        close = close or int(np.count_nonzero(np.abs(fine - fr[i]) <= enbw)) >= 2
+        # two or more fine-resolution peaks inside this mode's half-power band (or resolution bandwidth): a
+        # single second-order mode has one maximum there, so these are merged modes
+        reach = max(enbw, m.damping * m.frequency_hz)
+        close = close or int(np.count_nonzero(np.abs(fine - fr[i]) <= reach)) >= 2
         if close and "unresolved" not in m.flags:
             m = dataclasses.replace(m, flags=m.flags + ("unresolved",))
         out.append(m)
@@ -345,10 +360,12 @@ def _fit_peak(ax, f, P, k, left, right, window, fs, df, enbw, dof, band, wname) 
         return Kmat @ (np.exp(la) * transmissibility_sq(grid, fn, np.exp(lz))) + np.exp(lc)
 
     logP = np.log(Pw)
-    c0 = max(float(np.min(Pw)) * 0.1, 1e-300)
+    c0 = float(np.min(Pw)) * 0.1
     a0 = float(P[k]) * (2 * z0) ** 2
-    lo_b = np.array([fw[0], np.log(1e-5), -np.inf, -np.inf])
-    hi_b = np.array([fw[-1], np.log(0.5), np.inf, np.inf])
+    # log-amplitudes bounded to e^+-40 around the data (finite exponentials; far beyond any fit)
+    lmin, lmax = float(np.log(np.min(Pw))), float(np.log(np.max(Pw)))
+    lo_b = np.array([fw[0], np.log(1e-5), lmin - 40.0, lmin - 40.0])
+    hi_b = np.array([fw[-1], np.log(0.5), lmax + 40.0, lmax])
     z0 = min(max(z0, 2e-5), 0.25)
     p0 = np.array([fk, np.log(z0), np.log(a0), np.log(c0)])
     if not fw[0] < fk < fw[-1]:  # a peak on the window's edge: start just inside it
