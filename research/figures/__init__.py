@@ -19,6 +19,7 @@ FIGURE_MODULES = (
     "research.figures.contour_sencer2009_fig4_6",
     "research.figures.identification_ch6",
     "research.figures.sencer2009_fig3_11",
+    "research.figures.vibration_calibration",
     "research.figures.sencer2009_fig5_7",
     "research.figures.sencer2009_fig5_9",
     "research.figures.sencer2009_fig5_10",
