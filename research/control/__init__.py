@@ -5,6 +5,7 @@ closed loop on the rigid-body drives of Table 5.1 through the A/C table-tilting 
 Units: mm, s, rad; voltages in V.
 """
 
+from research.control._compensation import SchemeResult, corrected_reference, feedback_vs_feedforward, mirror_passes
 from research.control._gains import (
     AXES,
     DIRECTIONS,
@@ -31,7 +32,9 @@ from research.control._study import (
     TABLE_5_4,
     TABLE_5_5,
     CaseResult,
+    check_controller,
     identify_coulomb,
+    measure,
     run_case,
     step_disturbance_peak,
     table_5_4,
@@ -49,7 +52,13 @@ __all__ = [
     "LOG_PERIOD",
     "TABLE_5_4",
     "TABLE_5_5",
+    "SchemeResult",
+    "check_controller",
+    "corrected_reference",
+    "feedback_vs_feedforward",
     "identify_coulomb",
+    "measure",
+    "mirror_passes",
     "run_case",
     "step_disturbance_peak",
     "table_5_4",

@@ -150,6 +150,15 @@ class CaseResult:
                     u_max=[float(x) for x in np.abs(self.u).max(axis=0)], diverged=bool(self.diverged))
 
 
+def check_controller(controller: AxisSMC | ContourGains, plant: FiveAxisPlant, T: float) -> None:
+    """Stability checks of :mod:`research.control._gains` for either controller on ``plant`` at ``T``."""
+    if isinstance(controller, AxisSMC):
+        check_axis_gains(controller, plant.m, plant.c, T)
+    else:
+        check_tip_gains(controller.tip, direction_inertia(plant), T)
+        check_axis_gains(controller.rotary, plant.m[3:], plant.c[3:], T, names=("a", "c"))
+
+
 def run_case(controller: AxisSMC | ContourGains, *, feed: float = 50.0, coulomb=None, plant: FiveAxisPlant | None = None,
              machine: TableTiltingAC | None = None, T: float = CONTROL_PERIOD, acceleration: float = 1500.0,
              u_max: float | None = None) -> CaseResult:
@@ -165,13 +174,17 @@ def run_case(controller: AxisSMC | ContourGains, *, feed: float = 50.0, coulomb=
     plant = thesis_plant() if plant is None else plant
     coulomb = identify_coulomb(plant, T=T) if coulomb is None else coulomb
     plant = plant.with_coulomb(coulomb)
-    if isinstance(controller, AxisSMC):
-        check_axis_gains(controller, plant.m, plant.c, T)
-    else:
-        check_tip_gains(controller.tip, direction_inertia(plant), T)
-        check_axis_gains(controller.rotary, plant.m[3:], plant.c[3:], T, names=("a", "c"))
+    check_controller(controller, plant, T)
     ref, traj = eq436_reference(machine, feed=feed, acceleration=acceleration, sample_period=T)
     res: ClosedLoopResult = simulate_closed_loop(plant, ref, controller, machine, u_max=u_max)
+    return measure(ref, traj, res, machine)
+
+
+def measure(ref, traj, res: ClosedLoopResult, machine: TableTiltingAC | None = None) -> CaseResult:
+    """The §5.4 metrics of a closed-loop run ``res`` against the CAM reference ``ref`` / ``traj`` (as
+    returned by :func:`research.control.eq436_reference`), read every :data:`LOG_PERIOD`."""
+    machine = TableTiltingAC() if machine is None else machine
+    T = ref.sample_period
     every = max(1, int(round(LOG_PERIOD / T)))
     sl = slice(0, None, every)
     t = np.asarray(ref.t)[sl]

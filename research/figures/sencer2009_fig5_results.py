@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from research.control import CONTROL_PERIOD, identify_coulomb, run_case, table_5_2, table_5_3
+from research.control import CONTROL_PERIOD, feedback_vs_feedforward, identify_coulomb, run_case, table_5_2, table_5_3
 from research.experiments.runner import DEFAULT_CACHE
 from research.experiments.store import ResultStore, result_key
 
@@ -53,4 +53,22 @@ def case(controller: str, *, feed: float = 50.0, W: float = 0.0, wn=(100.0, 230.
         entry = store.put(key, dict(config, summary=r.summary()), arrays)
     out = dict(entry.arrays())
     out["summary"] = entry.record["summary"]
+    return out
+
+
+def feedforward_comparison(*, feed: float = 50.0, passes: int = 3, fast: bool = False) -> dict:
+    """Stored :func:`research.control.feedback_vs_feedforward` rows: ``{"names", "summaries"}`` and per row
+    ``contour_<i>``, ``orientation_<i>`` arrays with the shared ``t``."""
+    T = FAST_PERIOD if fast else CONTROL_PERIOD
+    config = dict(study="sencer2009_ch5_feedforward", feed=float(feed), passes=int(passes), T=T)
+    store, key = _store(), result_key(config, kind="sencer2009_ch5")
+    entry = store.get(key)
+    if entry is None:
+        rows = feedback_vs_feedforward(feed=feed, passes=passes, coulomb=coulomb(T), T=T)
+        arrays = {"t": rows[0].case.t}
+        for i, r in enumerate(rows):
+            arrays[f"contour_{i}"], arrays[f"orientation_{i}"] = r.case.contour, r.case.orientation
+        entry = store.put(key, dict(config, names=[r.name for r in rows], summaries=[r.case.summary() for r in rows]), arrays)
+    out = dict(entry.arrays())
+    out["names"], out["summaries"] = entry.record["names"], entry.record["summaries"]
     return out

@@ -220,3 +220,27 @@ def test_fig4_7_orientation_estimate_within_6_urad(runs):
         r = runs[(kind, 50.0)]
         assert np.abs(r.orientation_estimate - r.orientation).max() < 6e-6
         assert r.orientation.max() > 1e-3
+
+
+def test_mirror_feedforward_and_contour_feedback_combine(short_ref, coulomb):
+    """Issue item 6 (beyond the thesis), on the first 0.3 s, with the basic Frenet contour error (eq 4.20,
+    the tip error's part normal to the path tangent): one mirror pass lowers the SISO peak; the contour
+    controller alone beats SISO; contour controller + mirror is at least as good as the contour controller
+    alone (the mirror only removes the repeatable error left over)."""
+    from research.control import mirror_passes
+    from research.paths.kinematics5 import TableTiltingAC
+
+    p = thesis_plant(coulomb)
+
+    def tip_error(res):
+        e = np.asarray(short_ref.P) - np.asarray(TableTiltingAC().forward(res.q)[0])
+        tan = np.asarray(short_ref.F)[:, :, 0]
+        return np.linalg.norm(e - np.sum(e * tan, axis=1, keepdims=True) * tan, axis=1).max()
+
+    siso = [tip_error(r) for r in mirror_passes(p, short_ref, table_5_2(), 1)]
+    cont = [tip_error(r) for r in mirror_passes(p, short_ref, table_5_3(), 1)]
+    assert siso[1] < 0.5 * siso[0]
+    assert cont[0] < siso[0]
+    assert cont[1] <= cont[0]
+    with pytest.raises(ParameterError, match="passes"):
+        mirror_passes(p, short_ref, table_5_2(), -1)
