@@ -1,5 +1,6 @@
 """Command line: ``python -m research run CONFIG``, ``python -m research sweep CONFIG``,
-``python -m research figures`` and ``python -m research store verify|gc``.
+``python -m research figures``, ``python -m research store verify|gc`` and
+``python -m research tune LOG --path NAME`` (FIR delays from an accelerometer log, issue 20).
 
 Errors of the input or the file system (:class:`~research.errors.ResearchError`, any ``OSError``) print
 one line ``error: ...`` and exit with status 2; ``--debug`` prints the traceback as well."""

@@ -8,8 +8,8 @@ The machine: an ideal drive (the axis follows the commanded acceleration ``x''``
 
 (participation ``p_m``, 1 for a single mode), simulated with ``scipy.signal.lsim`` on the mode's state
 matrices (exact matrix exponential of the mode, first-order hold of ``x''`` between samples), plus
-white Gaussian sensor noise at a stated SNR (``10 log10`` of the mean-square signal over the noise
-variance, per excited column; unexcited columns get the same noise variance) and, optionally, gravity
+white Gaussian sensor noise at a stated SNR (``10 log10`` of the mean-square signal of the strongest
+excited column over the noise variance; every column gets that same noise variance, as one sensor's) and, optionally, gravity
 on z. Excitation along a direction ``u`` (default the X-Y diagonal, so one log holds both axes):
 
 * :func:`sine_sweep`: ``x''(t) = A sin(2 pi (f0 t + (f1 - f0) t^2 / (2 D)))``, a linear chirp of constant
@@ -95,7 +95,7 @@ def synthetic_accel_log(modes: list[TrueMode], *, excitation: str = "sweep", f0:
         f0, f1: excitation band [Hz]; duration [s]; rate: sample rate [Hz]; amplitude: commanded
             acceleration amplitude along ``direction`` [mm/s^2].
         direction: excitation direction (normalized here); an axis with component 0 is not excited.
-        snr_db: signal-to-noise ratio [dB] of each excited column; ``None``: no noise.
+        snr_db: signal-to-noise ratio [dB] of the strongest excited column; ``None``: no noise.
         seed: seed of the noise (``numpy.random.default_rng``).
         n_tones: tones of the series; default ``ceil(2 sqrt((f1 - f0) duration))`` (dense, see above).
         gravity: add ``-1 g`` on z (a sensor at rest reads +1 g up; sign irrelevant to the PSD).
