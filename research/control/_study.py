@@ -124,6 +124,7 @@ class CaseResult:
     Attributes:
         t: ``(M,)`` [s]; axis_error: ``(M, 5)`` ``q_ref - q`` [mm, rad]; contour: ``(M,)`` exact tool-tip
         contour error [mm]; contour_estimate: ``(M,)`` compensated Frenet estimate (eq 4.27) [mm];
+        contour_basic, contour_shifted: ``(M,)`` the basic (eq 4.20) and shifted (eq 4.22) estimates [mm];
         orientation: ``(M,)`` exact orientation contour error [rad] (angle to the reference orientation
         path, §4.5 / eq 5.40); orientation_rotary: ``(M, 2)`` eq 4.35 estimate ``eps_R`` [rad];
         orientation_estimate: ``(M,)`` its size in the workpiece frame, ``|J_o eps_R|`` (eq 4.34) [rad];
@@ -134,6 +135,8 @@ class CaseResult:
     axis_error: np.ndarray
     contour: np.ndarray
     contour_estimate: np.ndarray
+    contour_basic: np.ndarray
+    contour_shifted: np.ndarray
     orientation: np.ndarray
     orientation_rotary: np.ndarray
     orientation_estimate: np.ndarray
@@ -145,6 +148,10 @@ class CaseResult:
         return dict(contour_max=float(self.contour.max()), contour_mean=float(self.contour.mean()),
                     orientation_estimate_error_max=float(np.abs(self.orientation_estimate - self.orientation).max()),
                     estimate_max=float(self.contour_estimate.max()),
+                    estimate_error_max={k: float(np.abs(getattr(self, f"contour_{k}") - self.contour).max())
+                                        for k in ("basic", "shifted", "estimate")},
+                    estimate_error_mean={k: float(np.abs(getattr(self, f"contour_{k}") - self.contour).mean())
+                                         for k in ("basic", "shifted", "estimate")},
                     axis_max=[float(x) for x in np.abs(self.axis_error).max(axis=0)],
                     orientation_max=float(self.orientation.max()), orientation_mean=float(self.orientation.mean()),
                     u_max=[float(x) for x in np.abs(self.u).max(axis=0)], diverged=bool(self.diverged))
@@ -193,14 +200,15 @@ def measure(ref, traj, res: ClosedLoopResult, machine: TableTiltingAC | None = N
     P = np.asarray(machine.forward(jnp.asarray(q))[0])
     reference = tip_reference(traj, machine)
     contour = exact_tip_contour_error(reference, float(t[0]), float(ref.t[-1]), P)
-    est = frenet_contour_estimates(reference, t, P).compensated
+    estimates = frenet_contour_estimates(reference, t, P)
     ori = exact_orientation_contour_error(np.asarray(ref.q), q)
     eR = q_ref[:, 3:] - q[:, 3:]
     v = np.asarray(ref.v)[sl]
     epsR = eR - v * np.sum(v * eR, axis=1, keepdims=True)  # eq 4.35
     Jo = np.asarray(orientation_jacobian(q_ref[:, 3], q_ref[:, 4]))
     ori_est = np.linalg.norm(np.einsum("nij,nj->ni", Jo, epsR), axis=1)  # eq 4.34
-    return CaseResult(t, q_ref - q, contour, est, ori, epsR, ori_est, np.asarray(res.u)[sl], bool(res.diverged))
+    return CaseResult(t, q_ref - q, contour, estimates.compensated, estimates.basic, estimates.shifted, ori, epsR,
+                      ori_est, np.asarray(res.u)[sl], bool(res.diverged))
 
 
 def table_5_4(feeds=(50.0, 60.0, 80.0), *, coulomb=None, T: float = CONTROL_PERIOD) -> dict:

@@ -147,7 +147,7 @@ def test_fig5_7_identification_and_contour_prediction(cases):
     np.testing.assert_allclose(s["axis_max"], FIG5_7_AXIS_PEAKS, rtol=2e-3)
     assert s["contour_max"] == pytest.approx(FIG5_7_CONTOUR["max"], rel=0.25)
     assert s["contour_mean"] == pytest.approx(FIG5_7_CONTOUR["mean"], rel=0.25)
-    assert abs(s["estimate_max"] - s["contour_max"]) < 1e-3  # ch 4 estimator within 1 um of the exact
+    assert s["estimate_error_max"]["estimate"] < 1e-3  # ch 4 estimator within 1 um of the exact
 
 
 def test_table_5_4_ratio_and_trend(cases):
@@ -244,3 +244,13 @@ def test_mirror_feedforward_and_contour_feedback_combine(short_ref, coulomb):
     assert cont[1] <= cont[0]
     with pytest.raises(ParameterError, match="passes"):
         mirror_passes(p, short_ref, table_5_2(), -1)
+
+
+def test_fig4_6_estimators_on_the_smc_drives(cases):
+    """Thesis Fig 4.6 on its own SISO SMC drives (issue item 7): "the delayed Frenet Frame shows the worst
+    performance", the compensated one the best, and all estimate within "0.1 and 0.05 [micron]" at the
+    peaks. Checked: compensated < basic <= shifted in max and mean discrepancy, and every max < 0.1 um."""
+    s = cases[("siso", 50.0)]
+    mx, mn = s["estimate_error_max"], s["estimate_error_mean"]
+    assert mx["estimate"] < mx["basic"] <= mx["shifted"] < 1e-4
+    assert mn["estimate"] < mn["basic"] <= mn["shifted"]
