@@ -200,7 +200,7 @@ def bin_correlation(window: np.ndarray, lags: int = 4) -> float:
 
 def estimate_modes(log: AccelLog, *, band_hz: tuple[float, float] | None = None, resolution_hz: float | None = None,
                    axes: tuple[str, ...] | None = None, max_modes: int = 4, window: str = "boxcar") -> ModeSurvey:
-    """Welch PSD per axis, significant peaks, and a resonance fit of each (module docstring).
+    """PSD per axis, significant peaks, and a resonance fit of each (module docstring).
 
     Args:
         log: the accelerometer log.
@@ -256,6 +256,10 @@ def estimate_modes(log: AccelLog, *, band_hz: tuple[float, float] | None = None,
         Pb = P[inband, j]
         floor = np.full_like(Pb, np.median(Pb))
         thr = floor * q
+        if not np.all(Pb > 0):  # a constant (or exactly periodic-zero) column: nothing to detect on it
+            spectra[ax] = AxisSpectrum(axis=ax, frequency_hz=fb, psd=Pb, floor=floor, threshold=thr, modes=(),
+                                       edge_rise=None)
+            continue
         fine = _fine_peaks(log.accel[:, j], fs, (lo, hi))
         spectra[ax] = _axis_modes(ax, fb, Pb, floor, thr, window, fs, df, enbw, dof, (lo, hi), max_modes, fine, wname)
     if not any(s.modes for s in spectra.values()):

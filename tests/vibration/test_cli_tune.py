@@ -1,7 +1,6 @@
 """``python -m research tune LOG --path diamond``: modes -> eq 10 delays -> a config that loads."""
 
 import numpy as np
-import pytest
 
 from research.cli import main
 from research.experiments.config import load_config

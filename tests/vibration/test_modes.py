@@ -100,3 +100,11 @@ def test_bin_correlation_and_dof_from_the_window():
     assert bin_correlation(signal.get_window("hann", 256)) == pytest.approx(1 + 2 * (4 / 9 + 1 / 36), rel=1e-12)
     assert bin_correlation(np.ones(256)) == pytest.approx(1.0, abs=1e-12)
     assert welch_dof(np.ones(256), 256, 7) == pytest.approx(14.0)
+
+
+def test_constant_column_is_skipped_not_an_error(sweep_log):
+    """A column with no signal at all (exactly constant) yields no modes on it; the others are still analysed."""
+    a = sweep_log.accel.copy()
+    a[:, 2] = 9806.65
+    survey = estimate_modes(accel_log(sweep_log.t, a, source="flat-z.csv"))
+    assert survey.spectra["z"].modes == () and set(survey.dominant()) == {"x", "y"}
