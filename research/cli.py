@@ -226,7 +226,8 @@ def _tune(args) -> int:
         j = [m.axis for m in modes].index(tuned.axes[i])
         return float(metrics(tuned.delays_s, np.array([f_true]), zeta[j:j + 1], (idx[j],))["residual"][0])
 
-    print("robustness (true mode = estimate x (1 + error), delays kept):")
+    print("robustness (true mode = estimate x (1 + error), delays kept); the estimates' own 2-sigma: " + ", ".join(
+        f"{m.axis} +-{200 * m.frequency_sd_hz / m.frequency_hz:.2g} %" for m in modes))
     print(format_robustness(robustness_table(tuned, residual_fn=path_residual)))
     out = args.out or Path(f"tuned_{args.logs[0].stem}.toml")
     name = "".join(c if c.isalnum() or c in "_-." else "_" for c in out.stem)[:64]
