@@ -382,9 +382,15 @@ def _dwell_rule(tp, table, F_cmd, F, Fv, dF, f_w, need, budget, delays, tol_v, s
     body = range_min(first, last, f, M, F)
     k_r = np.clip(np.searchsorted(cum, hi, side="right") - 1, 0, M - 1)  # block holding the window's right end
     k_l = np.clip(np.searchsorted(cum, lo, side="right") - 1, 0, M - 1)
-    inside_r, inside_l = hi < cum[k_r + 1], lo > cum[k_l]
-    head_len, head_f, head_cap = _end_piece(k_r[inside_r], hi[inside_r] - cum[k_r[inside_r]], f[inside_r], L, body, F)
-    tail_len, tail_f, tail_cap = _end_piece(k_l[inside_l], cum[k_l[inside_l] + 1] - lo[inside_l], f[inside_l], L, body, F)
+    # the window spans T_d / 2 of *time* each side of its vertex: through the blocks it covers,
+    # which run at their (lower) body feeds, it reaches less far into the end block than f T_d / 2
+    t_cum = np.concatenate([[0.0], np.cumsum(L / body)])
+    reach_r = np.minimum(hi - cum[k_r], np.maximum(0.5 * Td - (t_cum[k_r] - t_cum[j + 1]), 0.0) * f)
+    reach_l = np.minimum(cum[k_l + 1] - lo, np.maximum(0.5 * Td - (t_cum[j + 1] - t_cum[k_l + 1]), 0.0) * f)
+    inside_r = (hi < cum[k_r + 1]) & (reach_r > 0)
+    inside_l = (lo > cum[k_l]) & (reach_l > 0)
+    head_len, head_f, head_cap = _end_piece(k_r[inside_r], reach_r[inside_r], f[inside_r], L, body, F)
+    tail_len, tail_f, tail_cap = _end_piece(k_l[inside_l], reach_l[inside_l], f[inside_l], L, body, F)
     body = np.minimum(body, np.minimum(head_cap, tail_cap))
     head_f, tail_f = np.minimum(head_f, body), np.minimum(tail_f, body)
     arc = tp.is_arc
