@@ -21,7 +21,7 @@ REPRODUCES = ("beyond Sencer 2009: feedback (SISO SMC, tool-tip contour controll
 
 def make_figure(out_dir: Path, fast: bool = False) -> list[Path]:
     """Write the figure to ``out_dir``; returns the files written."""
-    res = stored.feedforward_comparison(fast=fast)
+    res = stored.feedforward_comparison(passes=1 if fast else 3, fast=fast)
     fig, ax = mosaic([["a"], ["b"], ["c"]], figsize=(10, 11), height_ratios=(3, 3, 2))
     t = res["t"]
     for i, name in enumerate(res["names"]):
