@@ -171,7 +171,15 @@ def _tune(args) -> int:
     from research.experiments.config import load_config
     from research.experiments.fir_model import fir_metrics
     from research.paths import PATHS, named_path
-    from research.vibration import estimate_modes, format_robustness, load_accel_log, robustness_table, tune_delays
+    from research.vibration import (
+        MARGIN_TOLERANCE,
+        estimate_modes,
+        format_robustness,
+        load_accel_log,
+        robustness_margin,
+        robustness_table,
+        tune_delays,
+    )
 
     if args.path not in PATHS:
         raise ResearchError(f"--path: unknown path {args.path!r}; expected one of {sorted(PATHS)}")
@@ -229,6 +237,12 @@ def _tune(args) -> int:
     print("robustness (true mode = estimate x (1 + error), delays kept); the estimates' own 2-sigma: " + ", ".join(
         f"{m.axis} +-{200 * m.frequency_sd_hz / m.frequency_hz:.2g} %" for m in modes))
     print(format_robustness(robustness_table(tuned, residual_fn=path_residual)))
+    for r in robustness_margin(tuned):
+        lo = "< -50 %" if r["low"] is None else f"{r['low'] * 100:+.1f} %"
+        hi = "> +50 %" if r["high"] is None else f"{r['high'] * 100:+.1f} %"
+        text = (f"R <= {MARGIN_TOLERANCE:.0%} for frequency errors {lo} .. {hi}" if r["ratio_at_estimate"] <= MARGIN_TOLERANCE
+                else f"R = {r['ratio_at_estimate']:.3g} > {MARGIN_TOLERANCE:.0%} even at the estimate (damping)")
+        print(f"  margin {r['axis']} {r['frequency_hz']:.3f} Hz: {text}")
     out = args.out or Path(f"tuned_{args.logs[0].stem}.toml")
     name = "".join(c if c.isalnum() or c in "_-." else "_" for c in out.stem)[:64]
     mode_lines = ", ".join(f'{{ axis = "{m.axis}", frequency_hz = {m.frequency_hz!r}, damping = {m.damping!r} }}' for m in modes)

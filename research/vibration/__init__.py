@@ -5,7 +5,8 @@
   :func:`accel_log`, :func:`save_accel_log`.
 - Modes: :func:`estimate_modes` (PSD per axis, significant peaks, leakage-aware resonance fit with
   standard errors and flags).
-- Delays: :func:`tune_delays` (eq 10), :func:`residual_ratio`, :func:`robustness_table`.
+- Delays: :func:`tune_delays` (eq 10), :func:`residual_ratio`, :func:`robustness_table`,
+  :func:`robustness_margin`.
 - Synthetic logs with known modes: :func:`synthetic_accel_log` (sine sweep or tone series, noise at
   a stated SNR, seeded).
 """
@@ -30,9 +31,11 @@ from research.vibration._modes_psd import (
 from research.vibration._synthetic import TrueMode, sine_sweep, synthetic_accel_log, tip_acceleration, tone_series
 from research.vibration._tuning import (
     FREQUENCY_ERRORS,
+    MARGIN_TOLERANCE,
     TunedDelays,
     format_robustness,
     residual_ratio,
+    robustness_margin,
     robustness_table,
     tune_delays,
 )
@@ -42,6 +45,7 @@ __all__ = [
     "AccelLog",
     "AxisSpectrum",
     "FREQUENCY_ERRORS",
+    "MARGIN_TOLERANCE",
     "LAYOUTS",
     "Mode",
     "ModeSurvey",
@@ -53,6 +57,7 @@ __all__ = [
     "format_robustness",
     "load_accel_log",
     "residual_ratio",
+    "robustness_margin",
     "robustness_table",
     "save_accel_log",
     "sine_sweep",

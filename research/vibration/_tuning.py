@@ -30,6 +30,10 @@ from research.interpolators import delays_for_modes, magnitude_response
 
 #: frequency errors of the robustness table (issue 20): +-5, +-10, +-20 %
 FREQUENCY_ERRORS = (-0.20, -0.10, -0.05, 0.0, 0.05, 0.10, 0.20)
+#: residual-vibration tolerance of the robustness margin: 5 %, the "insensitivity" level of the input-shaping
+#: literature (Singer and Seering 1990, J. Dyn. Sys. Meas. Control 112: the width of the frequency band
+#: over which the residual stays below 5 % of the unshaped one)
+MARGIN_TOLERANCE = 0.05
 
 
 @dataclasses.dataclass(frozen=True)
@@ -127,3 +131,32 @@ def format_robustness(rows: list[dict]) -> str:
             line += f" {r['path_residual'] * 1e3:13.3f}"
         lines.append(line)
     return "\n".join(lines)
+
+
+def robustness_margin(tuned: TunedDelays, tolerance: float = MARGIN_TOLERANCE, span: float = 0.5,
+                      points: int = 2001) -> list[dict]:
+    """The frequency-error interval around 0 in which each mode's ratio ``R`` stays <= ``tolerance``.
+
+    Scans ``e`` on ``points`` values over ``[-span, span]`` (resolution ``2 span / (points - 1)``) and
+    returns, per mode, ``{"axis", "frequency_hz", "low", "high", "ratio_at_estimate"}``: ``low < 0 < high``
+    bound the contiguous run containing ``e = 0`` (``None`` where it reaches the scan's end, so the margin
+    is wider than ``span``; both ``None`` and ``ratio_at_estimate > tolerance`` when even the estimate is
+    above the tolerance).
+    """
+    if not (0 < tolerance < 1 and 0 < span < 1 and points >= 3):
+        raise ParameterError(f"robustness_margin needs 0 < tolerance < 1, 0 < span < 1, points >= 3; got "
+                             f"{tolerance!r}, {span!r}, {points!r}")
+    e = np.linspace(-span, span, points)
+    i0 = int(np.argmin(np.abs(e)))
+    out = []
+    for ax, f, z in zip(tuned.axes, tuned.frequencies_hz, tuned.dampings):
+        r = residual_ratio(f * (1 + e), z, tuned.delays_s)
+        row = {"axis": ax, "frequency_hz": f, "ratio_at_estimate": float(residual_ratio(f, z, tuned.delays_s)[0]),
+               "low": None, "high": None}
+        if r[i0] <= tolerance:
+            above = np.flatnonzero(r > tolerance)
+            lo, hi = above[above < i0], above[above > i0]
+            row["low"] = float(e[lo[-1] + 1]) if lo.size else None
+            row["high"] = float(e[hi[0] - 1]) if hi.size else None
+        out.append(row)
+    return out

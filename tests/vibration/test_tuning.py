@@ -81,3 +81,21 @@ def test_bad_tuning_input():
         robustness_table(tune_delays([TrueMode("x", 20.0, 0.02)]), errors=(-1.5,))
     with pytest.raises(ParameterError):
         residual_ratio(-1.0, 0.02, [0.1])
+
+
+def test_robustness_margin_matches_the_sinc_crossings():
+    """One filter on one undamped mode: R(e) = sin(pi |e|) / (pi (1 + e)) (eq 9 at f (1 + e) with T = 1 / f).
+    The 5 % margin's ends, solved independently with brentq, match the scan within its step (5e-4)."""
+    from scipy.optimize import brentq
+
+    from research.vibration import robustness_margin
+
+    tuned = tune_delays([TrueMode("x", 20.0, 1e-9)])
+    (row,) = robustness_margin(tuned, tolerance=0.05)
+    g = lambda e: np.sin(np.pi * abs(e)) / (np.pi * (1 + e)) - 0.05  # noqa: E731
+    assert row["high"] == pytest.approx(brentq(g, 1e-6, 0.4), abs=5e-4)
+    assert row["low"] == pytest.approx(brentq(g, -0.4, -1e-6), abs=5e-4)
+    assert row["ratio_at_estimate"] < 1e-6
+    # heavy damping: even the estimate leaves more than 5 % (no margin reported)
+    (row,) = robustness_margin(tune_delays([TrueMode("x", 20.0, 0.3)]), tolerance=0.05)
+    assert row["ratio_at_estimate"] > 0.05 and row["low"] is None and row["high"] is None
