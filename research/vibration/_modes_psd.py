@@ -6,9 +6,10 @@ The tool-head acceleration of a base-excited mode (:class:`~research.drives.Flex
     T(s) = (2 zeta wn s + wn^2) / (s^2 + 2 zeta wn s + wn^2),
     |T(f)|^2 = (fn^4 + (2 zeta fn f)^2) / ((fn^2 - f^2)^2 + (2 zeta fn f)^2).
 
-A sine sweep or a dense tone series has a flat excitation spectrum across a mode's few half-power
-bandwidths, so near a peak the one-sided PSD is ``S(f) = A |T(f)|^2 + C`` (excitation level ``A``,
-noise floor ``C``). Steps:
+Across a mode's few half-power bandwidths the excitation spectrum of a sine sweep or a dense tone series
+is smooth, a power law ``(f / fn)^s`` (``s = 0`` at constant amplitude, ``s = 2`` for Klipper's
+amplitude ``accel_per_hz f``), so near a peak the one-sided PSD is ``S(f) = A (f / fn)^s |T(f)|^2 + C``
+(excitation level ``A``, noise floor ``C``). Steps:
 
 1. PSD (``scipy.signal.welch``). Default: one segment of the whole record with a rectangular window:
    for a deterministic excitation (sweep, tones) this is the exact energy spectrum ``|T|^2 |X|^2`` of
@@ -24,7 +25,7 @@ noise floor ``C``). Steps:
 3. Per peak, a least-squares fit of ``log E[PSD]`` (``S`` convolved with ``K``, so the damping is not
    the window's; for the default whole-record rectangular window, whose periodogram samples the
    energy spectrum of a transient that lies wholly inside the record, ``S`` itself) to ``log PSD`` over
-   the peak's window: ``fn``, ``zeta``, ``A``, ``C``; standard errors
+   the peak's window: ``fn``, ``zeta``, ``A``, ``C``, ``s``; standard errors
    from the Jacobian with the residual variance, inflated for the correlation of neighbouring bins
    (:func:`bin_correlation`).
 
@@ -63,6 +64,10 @@ FALSE_ALARM = 1e-3
 #: :data:`FIT_MIN_BINS` bins): |T|^2 has fallen to ~ 1/(1 + 4^2) of its peak there
 FIT_HALF_WIDTHS = 4.0
 FIT_MIN_BINS = 8
+#: the excitation spectrum across a peak's window is modelled as ``(f / fn)^s`` with ``|s| <=`` this: a
+#: constant-amplitude sweep has ``s = 0``, Klipper's amplitude ``accel_per_hz f`` gives ``s = 2``, a
+#: constant-displacement sweep ``s = 4``
+EXCITATION_SLOPE_MAX = 4.0
 #: sub-bins per bin on which the model is integrated against the window kernel
 KERNEL_OVERSAMPLING = 8
 
@@ -358,24 +363,24 @@ def _fit_peak(ax, f, P, k, left, right, window, fs, df, enbw, dof, band, wname) 
     Kmat = _kernel(wname, window.size, fs, fw[:, None] - grid[None, :]) * sub if wname != "boxcar" else None
 
     def expected(p):
-        fn, lz, la, lc = p
+        fn, lz, la, lc, slope = p
         if wname == "boxcar":  # a whole deterministic transient: the periodogram samples its energy spectrum
-            return np.exp(la) * transmissibility_sq(fw, fn, np.exp(lz)) + np.exp(lc)
-        return Kmat @ (np.exp(la) * transmissibility_sq(grid, fn, np.exp(lz))) + np.exp(lc)
+            return np.exp(la) * (fw / fn) ** slope * transmissibility_sq(fw, fn, np.exp(lz)) + np.exp(lc)
+        return Kmat @ (np.exp(la) * (grid / fn) ** slope * transmissibility_sq(grid, fn, np.exp(lz))) + np.exp(lc)
 
     logP = np.log(Pw)
     c0 = float(np.min(Pw)) * 0.1
     a0 = float(P[k]) * (2 * z0) ** 2
     # log-amplitudes bounded to e^+-40 around the data (finite exponentials; far beyond any fit)
     lmin, lmax = float(np.log(np.min(Pw))), float(np.log(np.max(Pw)))
-    lo_b = np.array([fw[0], np.log(1e-5), lmin - 40.0, lmin - 40.0])
-    hi_b = np.array([fw[-1], np.log(0.5), lmax + 40.0, lmax])
+    lo_b = np.array([fw[0], np.log(1e-5), lmin - 40.0, lmin - 40.0, -EXCITATION_SLOPE_MAX])
+    hi_b = np.array([fw[-1], np.log(0.5), lmax + 40.0, lmax, EXCITATION_SLOPE_MAX])
     z0 = min(max(z0, 2e-5), 0.25)
-    p0 = np.array([fk, np.log(z0), np.log(a0), np.log(c0)])
+    p0 = np.array([fk, np.log(z0), np.log(a0), np.log(c0), 0.0])
     if not fw[0] < fk < fw[-1]:  # a peak on the window's edge: start just inside it
         p0[0] = float(np.clip(fk, fw[0] + 1e-6 * df, fw[-1] - 1e-6 * df))
     res = optimize.least_squares(lambda p: np.log(expected(p)) - logP, p0, bounds=(lo_b, hi_b), x_scale="jac")
-    n, npar = sel.size, 4
+    n, npar = sel.size, 5
     rss = float(np.sum(res.fun**2))
     s2 = rss / max(n - npar, 1)
     # neighbouring bins are correlated (Hann: 4/9 at one bin, 1/36 at two): n / corr independent residuals
@@ -385,7 +390,7 @@ def _fit_peak(ax, f, P, k, left, right, window, fs, df, enbw, dof, band, wname) 
         cov = np.linalg.pinv(res.jac.T @ res.jac) * s2 * corr
         sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
     except np.linalg.LinAlgError:
-        sd = np.full(4, np.inf)
+        sd = np.full(5, np.inf)
     fn, zeta = float(res.x[0]), float(np.exp(res.x[1]))
     flags = []
     lo, hi = band

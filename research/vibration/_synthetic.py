@@ -49,12 +49,15 @@ def _check(f0, f1, duration, rate, amplitude):
         raise ParameterError(f"duration [s] and amplitude [mm/s^2] must be > 0, got {duration!r}, {amplitude!r}")
 
 
-def sine_sweep(f0: float, f1: float, duration: float, rate: float, amplitude: float) -> tuple[np.ndarray, np.ndarray]:
-    """``(t, x'')``: linear chirp of the commanded axis acceleration [s, mm/s^2] (module docstring)."""
+def sine_sweep(f0: float, f1: float, duration: float, rate: float, amplitude: float,
+               per_hz: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """``(t, x'')``: linear chirp of the commanded axis acceleration [s, mm/s^2] (module docstring);
+    ``per_hz``: amplitude ``amplitude * f(t)`` (Klipper's ``accel_per_hz``, mm/s^2/Hz) instead of constant."""
     _check(f0, f1, duration, rate, amplitude)
     t = np.arange(int(round(duration * rate))) / rate
     phase = 2 * np.pi * (f0 * t + 0.5 * (f1 - f0) / duration * t**2)
-    return t, amplitude * np.sin(phase)
+    scale = f0 + (f1 - f0) * t / duration if per_hz else 1.0
+    return t, amplitude * scale * np.sin(phase)
 
 
 def tone_series(f0: float, f1: float, n_tones: int, duration: float, rate: float,
@@ -86,7 +89,7 @@ def tip_acceleration(t: np.ndarray, axis_accel: np.ndarray, modes: list[TrueMode
 def synthetic_accel_log(modes: list[TrueMode], *, excitation: str = "sweep", f0: float = 2.0, f1: float = 40.0,
                         duration: float = 10.0, rate: float = 3200.0, amplitude: float = 1000.0,
                         direction=(1.0, 1.0, 0.0), snr_db: float | None = 20.0, seed: int = 0,
-                        n_tones: int | None = None, gravity: bool = True) -> AccelLog:
+                        n_tones: int | None = None, gravity: bool = True, per_hz: bool = False) -> AccelLog:
     """A resonance-test log of a machine with known ``modes`` (module docstring).
 
     Args:
@@ -98,6 +101,7 @@ def synthetic_accel_log(modes: list[TrueMode], *, excitation: str = "sweep", f0:
         snr_db: signal-to-noise ratio [dB] of the strongest excited column; ``None``: no noise.
         seed: seed of the noise (``numpy.random.default_rng``).
         n_tones: tones of the series; default ``ceil(2 sqrt((f1 - f0) duration))`` (dense, see above).
+        per_hz: sweep amplitude ``amplitude * f(t)`` [mm/s^2/Hz] (Klipper's ``accel_per_hz``), not constant.
         gravity: add ``-1 g`` on z (a sensor at rest reads +1 g up; sign irrelevant to the PSD).
     Returns:
         :class:`AccelLog` with columns x, y, z [mm/s^2], source ``"synthetic ..."``.
@@ -110,7 +114,7 @@ def synthetic_accel_log(modes: list[TrueMode], *, excitation: str = "sweep", f0:
         if m.axis not in ("x", "y", "z"):
             raise ParameterError(f"TrueMode.axis must be 'x', 'y' or 'z', got {m.axis!r}")
     if excitation == "sweep":
-        t, a = sine_sweep(f0, f1, duration, rate, amplitude)
+        t, a = sine_sweep(f0, f1, duration, rate, amplitude, per_hz)
     elif excitation == "tones":
         n = n_tones if n_tones is not None else int(np.ceil(2 * np.sqrt((f1 - f0) * duration)))
         t, a = tone_series(f0, f1, n, duration, rate, amplitude)
