@@ -10,11 +10,11 @@ Everything is computed from the path's parametric form ``P(l), a(l), c(l)`` and 
 
 Frenet frame undefined: where the tip curve's curvature ``kappa = |P_l x P_ll| / |P_l|^3`` is below
 ``kappa_min`` (a straight stretch) the normal is undefined; :func:`parametric_reference` raises
-:class:`~research.errors.FrenetFrameError` naming the parameter and time stretch (no fallback frame is
-invented: a straight stretch has no unique normal/binormal split, and the tool-tip controller's
-gains differ between the two only through Table 5.3, where they are equal; a caller with such a path
-must say how to split). Where the rotary axes do not move (``|dq_R/dl| = 0``) the orientation path is a
-point, every rotary error is a contour error, and ``v = 0`` makes eq 5.20 give ``eps_R = e_R``.
+:class:`~research.errors.FrenetFrameError` naming the parameter and time stretch. No fallback frame is
+invented: on a straight stretch the split of the normal plane into normal and binormal is arbitrary,
+and a caller with such a path must choose one. Where the rotary axes do not move (``|dq_R/dl| = 0``)
+the orientation path is a point, every rotary error is a contour error, and ``v = 0`` makes eq 5.20
+give ``eps_R = e_R``.
 """
 
 from __future__ import annotations
