@@ -173,7 +173,11 @@ class IdentificationConfig(_Strict):
     """Identify a drive from a log: a synthetic one (the thesis §6.5 program run through a catalog drive
     and a noisy encoder, so errors against the truth are known) or a logged file."""
 
-    method: Literal["ls", "pso", "optimistix"] = Field("ls", description="least squares, PSO or optimistix fit")
+    method: Literal["ls", "pso", "optimistix", "simulation_error"] = Field(
+        "ls", description="least squares (eq 6.12), PSO (§6.4), optimistix bounded fit, or the noise-robust "
+                          "simulation-error fit (research.identification.simulation_error_fit)")
+    structure: Literal["eq6.3", "pp2", "pp4", "pi5"] = Field(
+        "eq6.3", description="model structure of the simulation-error fit (the other methods fit eq 6.3)")
     truth: Literal["sencer2009_table6_1", "sencer2009_table6_2"] = Field(
         "sencer2009_table6_1", description="catalog closed-loop drive that generates the synthetic log")
     n_moves: int = Field(70, ge=1, description="excitation length: moves of the §6.5 program (thesis: 70)")

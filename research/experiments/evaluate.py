@@ -186,7 +186,15 @@ def _identify(ic, base: Path) -> dict:
         truth = virtual_drive(ic.truth)
         ref = identification_program(ic.seed, n_moves=ic.n_moves).trajectory()
         log = synthetic_log(truth, ref, encoder=Encoder(ic.resolution_um * 1e-3, ic.noise_um * 1e-3), seed=ic.seed)
-    if ic.method == "ls":
+    if ic.method == "simulation_error":
+        from research.identification import simulation_error_fit
+
+        sef = simulation_error_fit(log, ic.structure)
+        if ic.structure != "eq6.3":
+            return {"parameters": sef.parameters, "rms_um": sef.rms_um, "converged": sef.converged,
+                    "samples": int(log.n_samples)}
+        fit = sef.to_identified_drive()
+    elif ic.method == "ls":
         fit = least_squares(log)
     else:
         prob = ProjectedProblem.from_regression(build_regression(log))

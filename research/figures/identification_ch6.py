@@ -17,7 +17,7 @@ from research.drives import (
 from research.figures._style import figure, save
 from research.identification import (
     EMPS_SPLIT_S,
-    THESIS_LS_DC,
+    ASSUMED_FRICTION,
     ProjectedProblem,
     PSOSettings,
     RegressionOptions,
@@ -40,7 +40,7 @@ HZ = 2 * np.pi
 
 def _virtual(out_dir: pathlib.Path, fast: bool) -> list[pathlib.Path]:
     base = table_6_1_closed_loop()
-    truth = ClosedLoopModel(base.a1, base.a2, base.a3, base.b0, base.b1, base.b2, THESIS_LS_DC)
+    truth = ClosedLoopModel(base.a1, base.a2, base.a3, base.b0, base.b1, base.b2, ASSUMED_FRICTION)
     ref = identification_program(0, n_moves=20 if fast else 70).trajectory()
     log = synthetic_log(truth, ref, encoder=Encoder(5e-5), seed=1)
     prob = ProjectedProblem.from_regression(build_regression(log))
@@ -70,7 +70,7 @@ def _virtual(out_dir: pathlib.Path, fast: bool) -> list[pathlib.Path]:
     ax[0, 0].legend()
     lines = [f"{k}: wn {r.pole_parameters()[0] / HZ:.2f} Hz, zeta {r.pole_parameters()[1]:.3f}, "
              f"p {r.pole_parameters()[2] / HZ:.2f} Hz, dc {r.dc:.1f}" for k, r in fits.items()]
-    fig.suptitle("Table 6.1 P-PI virtual drive (true wn 30.57 Hz, zeta 0.445, p 10.73 Hz, dc 585.3 mm/s$^2$)\n"
+    fig.suptitle(f"Table 6.1 P-PI virtual drive (true wn 30.57 Hz, zeta 0.445, p 10.73 Hz, assumed dc {ASSUMED_FRICTION:g} mm/s$^2$)\n"
                  + "\n".join(lines), fontsize=7)
     p1 = out_dir / f"{NAME}_frf.png"
     save(fig, p1)

@@ -26,6 +26,7 @@ from research.identification._log import (
     RESAMPLING_METHODS,
     TIME_UNITS,
     DriveLog,
+    load_axis_logs,
     load_drive_log,
     save_drive_log,
 )
@@ -54,7 +55,16 @@ from research.identification._simulation_error import INITIAL_MODES, simulation_
 from research.identification._structure import EQ_6_3, PI5, PP2, PP4, STRUCTURES, ModelStructure, structure
 from research.identification._structure_fit import INITIAL_SAMPLES, StructureFit
 from research.identification._synthetic import synthetic_log
+from research.identification._thesis_tables import (
+    PRINTED,
+    TABLE_6_2_LS_A3_CORRECTED,
+    check_table_6_2_a3_typo,
+    obtained_estimates,
+    pole_parameters_hz,
+)
 from research.identification._virtual import (
+    ASSUMED_FRICTION,
+    ASSUMED_INERTIA,
     LEAD_RG,
     THESIS_FRICTION_TORQUE,
     THESIS_LS_DC,
@@ -64,6 +74,13 @@ from research.identification._virtual import (
 )
 
 __all__ = [
+    "PRINTED",
+    "TABLE_6_2_LS_A3_CORRECTED",
+    "check_table_6_2_a3_typo",
+    "obtained_estimates",
+    "pole_parameters_hz",
+    "ASSUMED_FRICTION",
+    "ASSUMED_INERTIA",
     "EQ_6_3",
     "INITIAL_MODES",
     "INITIAL_SAMPLES",
@@ -117,6 +134,7 @@ __all__ = [
     "identification_program",
     "identify_emps",
     "least_squares",
+    "load_axis_logs",
     "load_drive_log",
     "load_emps",
     "output_error_fit",

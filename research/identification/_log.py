@@ -404,3 +404,69 @@ def save_drive_log(log: DriveLog, path) -> Path:
     else:
         raise DriveLogError(f"{path}: unknown drive-log file type {path.suffix!r}; expected .csv or .npz")
     return path
+
+
+def load_axis_logs(
+    path,
+    axes: dict,
+    *,
+    time: str = "t",
+    time_unit: str = "s",
+    units: dict | None = None,
+    uniform_rtol: float = UNIFORM_RTOL,
+    plausibility: Plausibility | None = DEFAULT_PLAUSIBILITY,
+) -> dict[str, DriveLog]:
+    """Several axes logged in one file (a controller trace of X, Y, Z ...), one :class:`DriveLog` each.
+
+    Args:
+        path: ``.csv``, ``.mat`` or ``.npz`` file.
+        axes: axis name -> ``{"reference": column, "actual": column[, "control": column]}``, e.g.
+            ``{"x": {"reference": "X_cmd", "actual": "X_enc"}}``.
+        time, time_unit: the shared time column and its unit (``TIME_UNITS``).
+        units: column name -> length unit (``LENGTH_UNITS``) for position columns not in mm, e.g.
+            ``{"X_cmd": "m", "X_enc": "m"}``; a control column's unit is kept as a label (default "V").
+        uniform_rtol, plausibility: as :func:`load_drive_log`; plausibility is checked per axis after the
+            unit conversion, so a column in um declared as mm is refused naming that column.
+    Returns:
+        axis name -> :class:`DriveLog` [s, mm].
+    Raises:
+        DriveLogError: no axes, an axis without ``reference``/``actual``, an unknown role, column or unit, or
+            any failure of :func:`load_drive_log`'s checks; every message names the file.
+    """
+    path = Path(path)
+    units = dict(units or {})
+    if not isinstance(axes, dict) or not axes:
+        raise DriveLogError(f"{path}: axes must map axis names to their columns, e.g. "
+                            "{'x': {'reference': 'X_cmd', 'actual': 'X_enc'}}, got {axes!r}")
+    if time_unit not in TIME_UNITS:
+        raise DriveLogError(f"{path}: unknown time unit {time_unit!r}; expected one of {sorted(TIME_UNITS)}")
+    if not path.exists():
+        raise DriveLogError(f"{path}: file not found")
+    raw = _read_table(path)
+    if time not in raw:
+        raise DriveLogError(f"{path}: missing time column {time!r}; the file has {sorted(raw)}")
+    t = _numeric(raw[time], f"{path}: column {time!r} (t)") * TIME_UNITS[time_unit]
+    out = {}
+    for axis, cols in axes.items():
+        if not isinstance(cols, dict) or not {"reference", "actual"} <= set(cols) or not set(cols) <= {
+                "reference", "actual", "control"}:
+            raise DriveLogError(f"{path}: axis {axis!r} needs columns {{'reference', 'actual'}} (and optionally "
+                                f"'control'), got {cols!r}")
+        data, unit_of = {}, {"t": "s"}
+        for role, name in cols.items():
+            if name not in raw:
+                raise DriveLogError(f"{path}: axis {axis!r}: missing column {name!r} for the {role}; the file has "
+                                    f"{sorted(raw)}")
+            a = _numeric(raw[name], f"{path}: column {name!r} ({role})")
+            if role == "control":
+                data[role], unit_of[role] = a, units.get(name, "V")
+                continue
+            u = units.get(name, "mm")
+            if u not in LENGTH_UNITS:
+                raise DriveLogError(f"{path}: column {name!r} ({role} of axis {axis!r}): unknown length unit {u!r}; "
+                                    f"expected one of {sorted(LENGTH_UNITS)}")
+            data[role], unit_of[role] = a * LENGTH_UNITS[u], "mm"
+        out[axis] = DriveLog(t=t, reference=data["reference"], actual=data["actual"], control=data.get("control"),
+                             source=f"{path} axis {axis}", columns={"t": time, **cols}, units=unit_of,
+                             uniform_rtol=uniform_rtol, plausibility=plausibility)
+    return out

@@ -14,8 +14,9 @@ offset and initial state (:mod:`research.identification._simulation`), so those 
 least squares at every evaluation (variable projection, Golub & Pereyra 1973) and only the pole parameters
 ``(wn, zeta[, p])`` are searched, with ``scipy.optimize.least_squares`` (trust-region reflective, bounds =
 stability bounds, log-scaled). Friction signs are those of the *simulated* velocity (noise free); they are
-held fixed during an optimizer pass and updated between passes until the final model's own signs equal the
-ones held (the fit is then an exact stationary point of the exact simulation error). Starts: a coarse grid
+held fixed during an optimizer pass and updated from the exact simulation before and between passes until
+the final model's own signs equal the ones held (the fit is then an exact stationary point of the exact
+simulation error). Grid starts are ranked with the signs of the low-passed measured velocity. Starts: a coarse grid
 over the pole parameters (cheap: one projection each) plus any given starts (e.g. the thesis LS), the best
 few polished. ``d_c >= 0`` is kept by re-solving with ``d_c = 0`` when the free solution is negative (exact
 for one inequality).
@@ -29,6 +30,7 @@ import time
 import numpy as np
 from scipy.linalg import lstsq
 from scipy.optimize import least_squares as scipy_least_squares
+from scipy.signal import butter, sosfiltfilt
 
 from research.errors import DriveLogError, ParameterError
 from research.identification._log import DriveLog
@@ -38,7 +40,7 @@ from research.identification._structure_fit import StructureFit
 
 INITIAL_MODES = ("estimate", "rest")
 #: damping values of the start grid (under-, well- and over-damped pairs)
-GRID_ZETA = (0.3, 0.7, 1.5)
+GRID_ZETA = (0.25, 0.5, 0.8, 1.1)
 
 
 def _columns(st: ModelStructure, R, signs, initial):
@@ -110,6 +112,23 @@ class _Problem:
         return pos, s
 
 
+def _thesis_starts(log) -> list:
+    """Pole parameters of the prefiltered LS (when stable) and of the bounded fit: good starts at low noise,
+    rough ones at high noise (their bias is what this fit removes)."""
+    from research.identification._bounded import bounded_fit
+    from research.identification._least_squares import least_squares
+
+    out = []
+    try:
+        for r in (least_squares(log), bounded_fit(log)):
+            sig = np.array(r.pole_parameters())
+            if r.stable and np.all(np.isfinite(sig)) and np.all(sig > 0):
+                out.append(sig)
+    except (DriveLogError, ParameterError):  # not enough excitation for eq 6.9: the grid alone starts the fit
+        pass
+    return out
+
+
 def _grid(st: ModelStructure, lo, hi, Ts, n):
     f = np.geomspace(max(lo[0], 1.0 * HZ), min(hi[0], 0.2 / Ts * HZ), n)
     pairs = [(w, z) for w in f for z in GRID_ZETA]
@@ -131,7 +150,8 @@ def simulation_error_fit(
     bounds: tuple | None = None,
     starts=(),
     grid_points: int | None = None,
-    n_polish: int = 3,
+    n_polish: int = 4,
+    thesis_starts: bool = True,
     max_nfev: int = 200,
     max_passes: int = 8,
     tol: float = 1e-10,
@@ -146,7 +166,9 @@ def simulation_error_fit(
         bounds: ``(lower, upper)`` of the pole parameters; default ``structure.default_bounds(Ts)``.
         starts: extra starting pole parameters (e.g. from the thesis LS), each in ``structure.pole_names`` order.
         grid_points: frequencies per axis of the start grid (default 5 for one pair, 4 for more).
-        n_polish: best starts that the optimizer polishes.
+        n_polish: best grid starts that the optimizer polishes (given starts are always polished).
+        thesis_starts: for one-pair-plus-real-pole structures (eq 6.3) also start from the equation-error LS
+            (eq 6.12, prefiltered) and the bounded variable-projection fit (§6.4) of the same log.
         max_nfev: optimizer evaluations per pass.
         max_passes: friction-sign passes (each a full optimizer run warm-started).
         tol: ``ftol = xtol = gtol`` of the optimizer.
@@ -173,8 +195,12 @@ def simulation_error_fit(
     if lo.shape != (len(st.pole_names),) or hi.shape != lo.shape or not np.all((0 < lo) & (lo < hi)):
         raise ParameterError(f"bounds of structure {st.name!r} must be two arrays of {len(st.pole_names)} values "
                              f"{st.pole_names} with 0 < lower < upper, got {lo!r}, {hi!r}")
+    if thesis_starts and st.n_pairs == 1 and st.has_real_pole:
+        starts = list(starts) + _thesis_starts(log)
     prob = _Problem(st, log, initial)
-    signs = np.sign(prob.ref.v)  # noise-free first guess: the reference's direction of motion
+    # first guess of the friction signs: the measured direction of motion, low-passed (20 Hz, zero phase) so
+    # that encoder noise at rest does not flip it; each polished start then uses its own simulated signs
+    signs = np.sign(np.gradient(sosfiltfilt(butter(4, min(20.0, 0.2 / Ts), fs=1.0 / Ts, output="sos"), log.actual), Ts))
     cands = [np.clip(np.asarray(s, float), lo, hi) for s in starts if np.all(np.isfinite(s))]
     n_grid = grid_points or (5 if st.n_pairs == 1 else 4)
     cand = np.vstack([_grid(st, lo, hi, Ts, n_grid)] + ([np.array(cands)] if cands else []))
@@ -185,25 +211,30 @@ def simulation_error_fit(
     def fun(u, s):
         return prob.project(np.exp(u), s)[0]
 
+    def polish(u, s):
+        """Optimizer passes with the friction signs held, updated between passes until consistent."""
+        status, consistent, passes = 0, False, 0
+        _, theta, R = prob.project(np.exp(u), s)
+        s = prob.exact(np.exp(u), theta, R, s)[1]  # the start model's own signs
+        for passes in range(1, max_passes + 1):
+            sol = scipy_least_squares(fun, u, args=(s,), bounds=(ulo, uhi), method="trf", ftol=tol, xtol=tol,
+                                      gtol=tol, max_nfev=max_nfev)
+            u, status = sol.x, sol.status
+            sigma = np.exp(u)
+            _, theta, R = prob.project(sigma, s)
+            pos, s_new = prob.exact(sigma, theta, R, s)
+            if np.array_equal(s_new, s):
+                consistent = True
+                break
+            s = s_new
+        return u, s, status, consistent, passes, float(np.sum((prob.y - pos) ** 2))
+
     best = None
-    for i in dict.fromkeys(order):  # unique, best first
-        u = np.clip(np.log(cand[i]), ulo + 1e-9, uhi - 1e-9)
-        sol = scipy_least_squares(fun, u, args=(signs,), bounds=(ulo, uhi), method="trf", ftol=tol, xtol=tol,
-                                  gtol=tol, max_nfev=max_nfev)
-        if best is None or sol.cost < best.cost:
-            best = sol
-    u, s, passes, consistent, status = best.x, signs, 0, False, best.status
-    for passes in range(1, max_passes + 1):
-        sigma = np.exp(u)
-        r, theta, R = prob.project(sigma, s)
-        pos, s_new = prob.exact(sigma, theta, R, s)
-        if np.array_equal(s_new, s):
-            consistent = True
-            break
-        s = s_new
-        sol = scipy_least_squares(fun, u, args=(s,), bounds=(ulo, uhi), method="trf", ftol=tol, xtol=tol, gtol=tol,
-                                  max_nfev=max_nfev)
-        u, status = sol.x, sol.status
+    for i in dict.fromkeys(order):  # unique, best first; each compared by its exact simulation error
+        out = polish(np.clip(np.log(cand[i]), ulo + 1e-9, uhi - 1e-9), signs)
+        if best is None or out[-1] < best[-1]:
+            best = out
+    u, s, status, consistent, passes, _ = best
     sigma = np.exp(u)
     r, theta, R = prob.project(sigma, s)
     pos, s = prob.exact(sigma, theta, R, s)

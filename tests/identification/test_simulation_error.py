@@ -24,19 +24,10 @@ from research.identification import (
     synthetic_log,
 )
 from research.identification._simulation import Reference, consistent_signs, linear_part, responses
-from research.trajectory import Trajectory
 
-from .conftest import relative_errors
+from .conftest import at_rest, relative_errors
 
 EMPS = Path(__file__).resolve().parents[3] / "shared" / "data" / "emps" / "emps_estimation_first15s.mat"
-
-
-def _at_rest(traj):
-    """The program with its first velocity sample exactly 0 (it carries a -2.6e-16 rounding residue that
-    makes drives.simulate apply one period of friction at rest)."""
-    v = np.asarray(traj.v).copy()
-    v[0] = 0.0
-    return Trajectory(traj.t, traj.q, v, traj.a, traj.j, traj.duration, None, traj.axes, traj.sample_period)
 
 
 def _sim(structure, sigma, b, dc, offset, q, Ts):
@@ -49,7 +40,7 @@ def test_simulator_equals_the_drive_simulator_on_eq_6_3_with_friction():
     """Independent computation: research.drives.simulate (lax.scan of the exact discretization with the
     cubic hold of the true reference) vs the filtered responses of _simulation (spline through samples),
     Table 6.1 with dc = 300 mm/s^2: equal within 0.05 um (the spline's error at phase switches)."""
-    ref = _at_rest(identification_program(1, n_moves=15).trajectory())
+    ref = at_rest(identification_program(1, n_moves=15).trajectory())
     base = table_6_1_closed_loop()
     truth = ClosedLoopModel(base.a1, base.a2, base.a3, base.b0, base.b1, base.b2, 300.0)
     x = np.asarray(simulate(truth, ref).position[:, 0])
@@ -190,12 +181,10 @@ def test_compare_gives_a_reason_instead_of_a_fit_for_an_unstable_model():
 def test_emps_held_out_second_order():
     """Issue 14 target on the real EMPS axis: fit the 2nd-order P/P structure on t < 12 s, free-run
     prediction from the record's start scored on the held-out 12-15 s: tracking-error fit >= 99.3 % and
-    RMS <= 3.5 um; the thesis' eq 6.3 (integral action, which the P/P loop lacks) predicts worse."""
+    RMS <= 3.5 um (the comparison with eq 6.3 and higher orders is in benchmarks/bench_identification.py)."""
     from research.identification import load_emps
 
-    sel = select_structure(load_emps(EMPS), 12.0, ("pp2", "eq6.3"))
+    sel = select_structure(load_emps(EMPS), 12.0, ("pp2",))
     v = sel.scores["pp2"]["validation"]
     assert v["tracking_error_fit_percent"] >= 99.3 and v["rms_um"] <= 3.5
-    assert sel.fits["pp2"].converged
-    assert sel.scores["eq6.3"]["validation"]["rms_um"] > v["rms_um"]
-    assert sel.best == "pp2" and sel.best_aic == "pp2"
+    assert sel.fits["pp2"].converged and sel.fits["pp2"].stable
