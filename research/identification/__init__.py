@@ -36,6 +36,7 @@ from research.identification._projection import (
     ProjectedProblem,
     theta1_from_poles,
 )
+from research.identification._physical import PhysicalModel, physical_fit
 from research.identification._pso import PSOSettings, particle_swarm
 from research.identification._regression import (
     COLUMNS,
@@ -74,6 +75,8 @@ from research.identification._virtual import (
 )
 
 __all__ = [
+    "PhysicalModel",
+    "physical_fit",
     "PRINTED",
     "TABLE_6_2_LS_A3_CORRECTED",
     "check_table_6_2_a3_typo",
