@@ -24,12 +24,12 @@ from research.identification._structure_fit import StructureFit
 Z99 = 2.5758293035489
 
 
-def simulate_model(model, log: DriveLog, *, initial: str = "data") -> tuple[np.ndarray | None, str | None]:
+def simulate_model(model, log: DriveLog, *, initial: str = "data", force=None) -> tuple[np.ndarray | None, str | None]:
     """``(x_sim [mm], None)``, or ``(None, reason)`` when the model cannot be simulated (unstable poles, listed,
     or negative friction). :class:`StructureFit` models start from the data (``initial``); thesis
     :class:`IdentifiedDrive` models from rest at ``x_r[0]`` (as :func:`fit_report`)."""
     if isinstance(model, StructureFit):
-        return model.simulate(log, initial=initial), None
+        return model.simulate(log, initial=initial, force=force), None
     if not isinstance(model, IdentifiedDrive):
         raise ParameterError(f"expected a StructureFit or IdentifiedDrive, got {type(model).__name__}")
     if not model.stable:
@@ -48,7 +48,7 @@ def _scores(log, sim, k):
             "rms_um": float(1e3 * np.sqrt(np.mean(e * e))), "max_um": float(1e3 * np.max(np.abs(e)))}
 
 
-def compare(model, log: DriveLog, *, windows: dict | None = None, initial: str = "data") -> dict:
+def compare(model, log: DriveLog, *, windows: dict | None = None, initial: str = "data", force=None) -> dict:
     """MATLAB ``compare``: free-run simulation of ``model`` on ``log``, scored per window.
 
     Args:
@@ -57,13 +57,14 @@ def compare(model, log: DriveLog, *, windows: dict | None = None, initial: str =
             it never sees measured positions).
         windows: name -> ``(start, stop)`` [s]; default the whole log as ``"all"``.
         initial: initial state of a :class:`StructureFit` (``"data"``: from the first samples, or ``"rest"``).
+        force: ``(N,)`` measured force for structures with a force input.
     Returns:
         window -> ``{position_fit_percent, tracking_error_fit_percent, rms_um, max_um}``, or
         ``{"reason": ...}`` for every window when the model cannot be simulated. Fit % is
         ``100 (1 - ||y - y_sim|| / ||y - mean y||)``.
     """
     windows = {"all": (-np.inf, np.inf)} if windows is None else dict(windows)
-    sim, reason = simulate_model(model, log, initial=initial)
+    sim, reason = simulate_model(model, log, initial=initial, force=force)
     out = {}
     for name, (a, b) in windows.items():
         k = (log.t >= a) & (log.t < b)

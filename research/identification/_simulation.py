@@ -199,9 +199,9 @@ def _modes(poles, t):
     return np.column_stack(pos), np.column_stack(vel)
 
 
-def linear_part(structure: ModelStructure, R: Responses, b, offset: float, c) -> tuple[np.ndarray, np.ndarray]:
+def linear_part(structure: ModelStructure, R: Responses, b, offset: float, c, force=None) -> tuple[np.ndarray, np.ndarray]:
     """Position and velocity without friction: ``d_0 S_0 + sum b_i S_i - offset F[1] + sum c_m phi_m``
-    (relative to ``x_r,0``) [mm, mm/s]."""
+    (relative to ``x_r,0``) [mm, mm/s], plus ``g F[f]`` when ``force = (g, f)`` (a measured force ``f``)."""
     d0 = R.den[-1]
     pos = d0 * R.S[:, 0] + R.S[:, 1:structure.n_zeros + 1] @ np.asarray(b)
     vel = d0 * R.S[:, 1] + R.S[:, 2:structure.n_zeros + 2] @ np.asarray(b)
@@ -209,6 +209,9 @@ def linear_part(structure: ModelStructure, R: Responses, b, offset: float, c) ->
         pos, vel = pos - offset * R.offset_pos, vel - offset * R.offset_vel
     if c is not None:
         pos, vel = pos + R.modes_pos @ np.asarray(c), vel + R.modes_vel @ np.asarray(c)
+    if force is not None:
+        fp, fv = R.disturbance(np.asarray(force[1], dtype=np.float64))
+        pos, vel = pos + force[0] * fp, vel + force[0] * fv
     return pos, vel
 
 

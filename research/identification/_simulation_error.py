@@ -43,13 +43,15 @@ INITIAL_MODES = ("estimate", "rest")
 GRID_ZETA = (0.25, 0.5, 0.8, 1.1)
 
 
-def _columns(st: ModelStructure, R, signs, initial):
+def _columns(st: ModelStructure, R, signs, initial, force=None):
     """Regressor of the linear parameters (``b1..bm``, ``dc``, ``offset``, initial state) and the known part."""
     cols = [R.S[:, i] for i in range(1, st.n_zeros + 1)]
     if st.friction:
         cols.append(-R.disturbance(signs)[0])
     if st.offset:
         cols.append(-R.offset_pos)
+    if st.force:
+        cols.append(R.disturbance(force)[0])
     if initial == "estimate":
         cols += list(R.modes_pos.T)
     return np.column_stack(cols), R.den[-1] * R.S[:, 0]
@@ -79,8 +81,8 @@ def _solve_linear(Phi, target, dc_index):
 
 
 class _Problem:
-    def __init__(self, st, log, initial):
-        self.st, self.initial = st, initial
+    def __init__(self, st, log, initial, force=None):
+        self.st, self.initial, self.force = st, initial, force
         self.ref = Reference.from_samples(log.reference, log.sample_period)
         self.y = log.actual - self.ref.x0
         self.dc_index = st.n_zeros if st.friction else None
@@ -90,7 +92,7 @@ class _Problem:
         """``(residual, theta, responses)`` for pole parameters ``sigma`` and friction signs held fixed."""
         self.evaluations += 1
         R = responses(self.st, sigma, self.ref)
-        Phi, known = _columns(self.st, R, signs, self.initial)
+        Phi, known = _columns(self.st, R, signs, self.initial, self.force)
         theta = _solve_linear(Phi, self.y - known, self.dc_index)
         return self.y - known - Phi @ theta, theta, R
 
@@ -102,13 +104,16 @@ class _Problem:
         k += int(st.friction)
         off = float(theta[k]) if st.offset else 0.0
         k += int(st.offset)
+        g = float(theta[k]) if st.force else None
+        k += int(st.force)
         c = theta[k:] if self.initial == "estimate" else None
-        return b, dc, off, c
+        return b, dc, off, c, g
 
     def exact(self, sigma, theta, R, signs):
         """Exact simulation (friction signs consistent) -> ``(position - x_r0, signs)``."""
-        b, dc, off, c = self.split(theta)
-        pos, _, s, _ = consistent_signs(R, *linear_part(self.st, R, b, off, c), dc, signs)
+        b, dc, off, c, g = self.split(theta)
+        force = None if g is None else (g, self.force)
+        pos, _, s, _ = consistent_signs(R, *linear_part(self.st, R, b, off, c, force), dc, signs)
         return pos, s
 
 
@@ -155,6 +160,7 @@ def simulation_error_fit(
     max_nfev: int = 200,
     max_passes: int = 8,
     tol: float = 1e-10,
+    force=None,
 ) -> StructureFit:
     """Fit ``structure`` to ``log`` by simulation error (module docstring).
 
@@ -172,6 +178,7 @@ def simulation_error_fit(
         max_nfev: optimizer evaluations per pass.
         max_passes: friction-sign passes (each a full optimizer run warm-started).
         tol: ``ftol = xtol = gtol`` of the optimizer.
+        force: ``(N,)`` measured external force (any unit) for structures with ``force=True``.
     Returns:
         :class:`StructureFit`; ``converged`` is true when the last pass met ``tol`` and its friction signs are the
         final model's own.
@@ -197,7 +204,14 @@ def simulation_error_fit(
                              f"{st.pole_names} with 0 < lower < upper, got {lo!r}, {hi!r}")
     if thesis_starts and st.n_pairs == 1 and st.has_real_pole:
         starts = list(starts) + _thesis_starts(log)
-    prob = _Problem(st, log, initial)
+    if st.force:
+        if force is None:
+            raise DriveLogError(f"{log.source}: structure {st.name!r} has a force input; pass force= (N,) samples")
+        force = np.asarray(force, dtype=np.float64)
+        if force.shape != (log.n_samples,) or not np.all(np.isfinite(force)):
+            raise DriveLogError(f"{log.source}: force must be {log.n_samples} finite samples (one per log sample), "
+                                f"got shape {force.shape}")
+    prob = _Problem(st, log, initial, force if st.force else None)
     # first guess of the friction signs: the measured direction of motion, low-passed (20 Hz, zero phase) so
     # that encoder noise at rest does not flip it; each polished start then uses its own simulated signs
     signs = np.sign(np.gradient(sosfiltfilt(butter(4, min(20.0, 0.2 / Ts), fs=1.0 / Ts, output="sos"), log.actual), Ts))
@@ -241,8 +255,9 @@ def simulation_error_fit(
     res = prob.y - pos
     std = _covariance(prob, sigma, theta, s, res)
     names = st.pole_names + st.linear_names
-    b, dc, off, c = prob.split(theta)
-    values = list(sigma) + list(b) + ([dc] if st.friction else []) + ([off] if st.offset else [])
+    b, dc, off, c, g = prob.split(theta)
+    values = (list(sigma) + list(b) + ([dc] if st.friction else []) + ([off] if st.offset else [])
+              + ([g] if st.force else []))
     at_bound = tuple(k for k, v, a, z in zip(st.pole_names, u, ulo, uhi) if min(v - a, z - v) < 1e-6)
     return StructureFit(
         structure=st, parameters={k: float(v) for k, v in zip(names, values)}, std=dict(zip(names, std)),
@@ -263,7 +278,7 @@ def _covariance(prob: _Problem, sigma, theta, signs, res) -> list[float]:
 
     def predict(sig, th):
         R = responses(st, sig, prob.ref)
-        Phi, known = _columns(st, R, signs, prob.initial)
+        Phi, known = _columns(st, R, signs, prob.initial, prob.force)
         return known + Phi @ th, Phi
 
     _, Phi = predict(sigma, theta)

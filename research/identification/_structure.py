@@ -41,6 +41,9 @@ class ModelStructure:
             without integrator: with integral action its response ``s/D 1`` is a decaying transient, the same
             as an initial state, so it is not identifiable (refused).
         friction: fit the Coulomb friction ``d_c sign(x')`` of eq 6.2 [mm/s^2].
+        force: a measured external force (cutting force, a benchmark's force pulses) enters the disturbance
+            path, ``+ s^k/D (g f)``, with a fitted gain ``force_gain`` [mm/s^2 per unit of f] (eq 6.1's
+            disturbance transfer function; the force must then be given to the fit and the simulation).
     """
 
     name: str
@@ -49,6 +52,7 @@ class ModelStructure:
     integrator: bool
     offset: bool = False
     friction: bool = True
+    force: bool = False
 
     def __post_init__(self):
         if not (isinstance(self.n_poles, int) and 2 <= self.n_poles <= 8):
@@ -86,7 +90,7 @@ class ModelStructure:
         """Names of the parameters the output is linear in: ``b1 .. bm`` (coefficient of ``s^i`` in ``N``),
         then ``dc`` and ``offset`` when fitted [mm/s^2]."""
         return (tuple(f"b{i}" for i in range(1, self.n_zeros + 1)) + (("dc",) if self.friction else ())
-                + (("offset",) if self.offset else ()))
+                + (("offset",) if self.offset else ()) + (("force_gain",) if self.force else ()))
 
     @property
     def n_parameters(self) -> int:

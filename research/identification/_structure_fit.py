@@ -67,6 +67,11 @@ class StructureFit:
     def offset(self) -> float:
         return float(self.parameters.get("offset", 0.0))
 
+    @property
+    def force_gain(self) -> float | None:
+        """Gain of the measured force input [mm/s^2 per unit], None without one."""
+        return self.parameters.get("force_gain")
+
     def denominator(self) -> np.ndarray:
         return self.structure.denominator(self.sigma)
 
@@ -129,7 +134,8 @@ class StructureFit:
                                source=self.source, info={"converged": self.converged, "std": self.std,
                                                          "initial": self.initial})
 
-    def simulate(self, log: DriveLog, *, initial: str = "data", initial_samples: int = INITIAL_SAMPLES) -> np.ndarray:
+    def simulate(self, log: DriveLog, *, initial: str = "data", initial_samples: int = INITIAL_SAMPLES,
+                 force=None) -> np.ndarray:
         """Free-run simulation on ``log``'s reference -> ``x_sim`` ``(N,)`` [mm].
 
         Args:
@@ -138,12 +144,16 @@ class StructureFit:
                 ``initial_samples`` measured positions (a log that starts mid-move starts the model there);
                 ``"rest"``: the loop starts at rest at the first reference sample.
             initial_samples: samples used by ``"data"``.
+            force: ``(N,)`` measured force, required when the structure has a force input.
         """
         if initial not in ("data", "rest"):
             raise ParameterError(f"initial must be 'data' or 'rest', got {initial!r}")
         ref = Reference.from_samples(log.reference, log.sample_period)
         R = responses(self.structure, self.sigma, ref)
-        pl, vl = linear_part(self.structure, R, self.b, self.offset, None)
+        if self.structure.force and force is None:
+            raise ParameterError(f"structure {self.structure.name!r} has a force input: pass force=")
+        fin = (self.force_gain, force) if self.structure.force else None
+        pl, vl = linear_part(self.structure, R, self.b, self.offset, None, fin)
         pos, vel, s, _ = consistent_signs(R, pl, vl, self.dc)
         if initial == "data":
             w = slice(0, min(int(initial_samples), log.n_samples))
@@ -151,7 +161,7 @@ class StructureFit:
             for _ in range(20):  # the initial state moves the friction signs: iterate to a consistent pair
                 base = pl - self.dc * R.disturbance(s)[0]
                 c, *_ = np.linalg.lstsq(R.modes_pos[w], (y - base)[w], rcond=None)
-                pos, _v, s_new, _n = consistent_signs(R, *linear_part(self.structure, R, self.b, self.offset, c),
+                pos, _v, s_new, _n = consistent_signs(R, *linear_part(self.structure, R, self.b, self.offset, c, fin),
                                                       self.dc, s)
                 if np.array_equal(s_new, s):
                     break
