@@ -437,7 +437,7 @@ def load_axis_logs(
     units = dict(units or {})
     if not isinstance(axes, dict) or not axes:
         raise DriveLogError(f"{path}: axes must map axis names to their columns, e.g. "
-                            "{'x': {'reference': 'X_cmd', 'actual': 'X_enc'}}, got {axes!r}")
+                            f"{{'x': {{'reference': 'X_cmd', 'actual': 'X_enc'}}}}, got {axes!r}")
     if time_unit not in TIME_UNITS:
         raise DriveLogError(f"{path}: unknown time unit {time_unit!r}; expected one of {sorted(TIME_UNITS)}")
     if not path.exists():

@@ -123,3 +123,36 @@ def test_valid_logs_round_trip(n, period, t0, suffix, data):
     np.testing.assert_allclose(back.t, log.t, rtol=0, atol=atol)
     np.testing.assert_allclose(back.reference, log.reference, rtol=0, atol=atol)
     np.testing.assert_allclose(back.actual, log.actual, rtol=0, atol=atol)
+
+
+AXIS_SPECS = st.one_of(
+    st.just({"x": {"reference": "x_ref", "actual": "x_act"}}),
+    st.dictionaries(st.sampled_from(["x", "y", ""]), st.dictionaries(
+        st.sampled_from(["reference", "actual", "control", "bogus"]), st.sampled_from(["t", "x_ref", "x_act", "nope"]),
+        max_size=4), max_size=3),
+    st.sampled_from([None, [], "x", {"x": None}]),
+)
+UNITS = st.dictionaries(st.sampled_from(["x_ref", "x_act", "t"]), st.sampled_from(["mm", "m", "um", "in", "deg", ""]),
+                        max_size=3)
+
+
+@FUZZ
+@given(st.sampled_from(sorted(VALID)), AXIS_SPECS, UNITS, st.sampled_from(["s", "ms", "min"]), st.booleans())
+def test_axis_logs_raise_only_drive_log_error_naming_the_file(suffix, axes, units, time_unit, damage):
+    """load_axis_logs (several axes, per-column units): any mapping, unit or damaged file gives logs in mm
+    that pass the DriveLog checks, or a DriveLogError naming the file."""
+    from research.identification import load_axis_logs
+
+    data = bytearray(VALID[suffix])
+    if damage:
+        data = data[: len(data) // 2]
+    f = FOLDER / f"axes{suffix}"
+    f.write_bytes(bytes(data))
+    try:
+        logs = load_axis_logs(f, axes, time_unit=time_unit, units=units)
+    except DriveLogError as e:
+        assert str(f) in str(e)
+        return
+    for log in logs.values():
+        _accepted(log)
+        assert log.units["reference"] == "mm" and log.units["actual"] == "mm"
