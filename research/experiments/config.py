@@ -62,7 +62,8 @@ METRIC_UNITS = {
 NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$"
 #: largest |coordinate| of ``points_mm`` [mm] (1 km: beyond any machine, and far from float overflow)
 MAX_COORDINATE_MM = 1e6
-DRIVE_MODELS = ("ideal", "sencer2009_table6_1", "sencer2009_table6_1_ppi", "sencer2009_table6_2", "sencer2009_table6_2_pid")
+DRIVE_MODELS = ("ideal", "sencer2009_table6_1", "sencer2009_table6_1_ppi", "sencer2009_table6_2", "sencer2009_table6_2_pid",
+                "identified")
 
 
 class _Strict(BaseModel):
@@ -252,6 +253,12 @@ class ExperimentConfig(_Strict):
     def _something_to_do(self):
         if self.path is None and self.identification is None:
             raise ValueError("give a [path] (motion study) or an [identification] table (or both)")
+        if self.drive is not None and self.drive.model == "identified" and (
+                self.identification is None or self.identification.method != "simulation_error"
+                or self.identification.structure != "eq6.3"):
+            raise ValueError("drive.model = \"identified\" runs the path through the drive identified in the same "
+                             "config: it needs an [identification] table with method = \"simulation_error\" and "
+                             "structure = \"eq6.3\" (the structure the drive simulator takes)")
         labels = [i.label or i.kind for i in self.interpolators]
         if len(set(labels)) != len(labels):
             raise ValueError(f"interpolator labels must be unique, got {labels}; set label = \"...\"")
