@@ -184,18 +184,21 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     lengths_p = jnp.asarray(np.concatenate([tp.lengths, np.ones(Mp - M + 1)]))
     feeds_p = jnp.concatenate([feeds_cmd, jnp.ones(Mp - M + 1)])
     blk = jnp.asarray(table.block)
+    # per-block and per-corner inputs padded to the bucketed block count (one compiled kernel)
+    pad_b, pad_c = Mp - M, Mp - M
+    motion_ends = jnp.asarray(np.stack([np.pad(table.first_motion, (0, pad_b)), np.pad(table.last_motion, (0, pad_b))]))
+    tangents_p = jnp.asarray(np.stack([np.pad(t_in, ((0, pad_b), (0, 0))), np.pad(t_out, ((0, pad_b), (0, 0)))]))
+    tol_vertex_p = jnp.concatenate([tol_vertex, jnp.ones(pad_c)])  # padding: any tolerance > 0 (finite gradients)
 
     def timing(factor, head, tail, full, shrink, others, arc_rel):
         """Piece shares, feed factors, pulse lengths and overlaps of a plan (no filtering)."""
         frac, piece_factor = table.pieces(head, tail, factor, arc_rel)
-        piece_tv = lengths_p[blk] / (feeds_p[blk] * jnp.asarray(piece_factor))
-        f_in = feeds_cmd * jnp.asarray(piece_factor[table.first_motion])
-        f_out = feeds_cmd * jnp.asarray(piece_factor[table.last_motion])
         cruise = np.maximum.reduceat(piece_factor[: table.last_motion[-1] + 1], table.first_motion)  # block's top feed
-        dF = _safe_norm(f_in[1:, None] * jnp.asarray(t_in[1:]) - f_out[:-1, None] * jnp.asarray(t_out[:-1]))
-        Td = jnp.sum(delays)
-        overlaps = jnp.where(jnp.asarray(full), Td, overlap_time(jnp.maximum(tol_vertex - others, 0.0), dF, delays)) * jnp.asarray(shrink)
-        return frac, piece_tv, cruise, overlaps
+        corner = np.stack([np.pad(np.asarray(full, dtype=np.float64), (0, pad_c), constant_values=1.0),
+                           np.pad(shrink, (0, pad_c), constant_values=1.0), np.pad(others, (0, pad_c))])
+        piece_tv, overlaps = _timing_kernel(lengths_p, feeds_p, blk, jnp.asarray(piece_factor), motion_ends, tangents_p,
+                                            jnp.asarray(corner), tol_vertex_p, delays)
+        return frac, piece_tv, cruise, overlaps[: M - 1]
 
     def predicted_time(candidate) -> float:
         """Cycle time of a candidate before verification: a lower bound on its verified time,
@@ -277,6 +280,33 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     feeds, overlaps, pulse, starts, position, centre = state
     return FIRPlan(starts, pulse, overlaps, feeds, delays, position, centre, jnp.asarray(tp.vertices),
                    float(deviation), int(rounds), tp.axes)
+
+
+@jax.jit
+def _timing_kernel(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, corner, tol_vertex, delays):
+    """Pulse length of every piece and overlap of every corner (padded shapes, one dispatch).
+
+    Args:
+        lengths_p, feeds_p: ``(M_pad + 1,)`` block lengths [mm] and commanded feeds [mm/s].
+        blk, piece_factor: ``(P,)`` block and feed factor of every piece.
+        motion_ends: ``(2, M_pad)`` first and last motion piece of each block.
+        tangents: ``(2, M_pad, d)`` entry and exit tangents of each block.
+        corner: ``(3, M_pad - 1)`` full-overlap flag, overlap shrink factor, tolerance other turns take.
+        tol_vertex: ``(M_pad - 1,)`` tolerance at each vertex [mm]; ``delays``: ``(n,)`` [s].
+
+    Returns:
+        ``(piece_tv (P,), overlaps (M_pad - 1,))`` [s]: ``L / F`` of each piece's block at the
+        piece's feed, and ``T_k`` from eq 13/14 at the feeds either side of each corner.
+    """
+    piece_tv = lengths_p[blk] / (feeds_p[blk] * piece_factor)
+    nb = motion_ends.shape[1]
+    f_in = feeds_p[:nb] * piece_factor[motion_ends[0]]
+    f_out = feeds_p[:nb] * piece_factor[motion_ends[1]]
+    dF = _safe_norm(f_in[1:, None] * tangents[0, 1:] - f_out[:-1, None] * tangents[1, :-1])
+    Td = jnp.sum(delays)
+    full, shrink, others = corner
+    overlaps = jnp.where(full > 0, Td, overlap_time(jnp.maximum(tol_vertex - others, 0.0), dF, delays)) * shrink
+    return piece_tv, overlaps
 
 
 def _as_toolpath(path) -> ToolPath:
