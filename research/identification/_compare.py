@@ -137,4 +137,4 @@ def residual_analysis(model, log: DriveLog, *, max_lag: int = 50, initial: str =
     acf = np.array([e[t:] @ e[:-t] for t in lags]) / ree0
     cl = np.arange(-max_lag, max_lag + 1)
     ccf = np.array([(e[t:] @ u[:N - t]) if t >= 0 else (e[:N + t] @ u[-t:]) for t in cl]) / np.sqrt(ree0 * ruu0)
-    return ResidualAnalysis(lags, acf, cl, ccf, Z99 / np.sqrt(N), N)
+    return ResidualAnalysis(lags, acf, cl, ccf, float(Z99 / np.sqrt(N)), int(N))
