@@ -7,14 +7,18 @@
 - The thesis' estimators: :func:`frenet_contour_estimates` (basic eq 4.20, shifted eq 4.21-4.22,
   compensated eq 4.23-4.27), :func:`orientation_contour_error` (eq 4.28-4.35), the exact errors they
   approximate, and the §4.5 study on the eq 4.36 path (:func:`five_axis_contour_study`).
-- CEC mirror compensation (eq 3-4): :func:`cec_problem`, :func:`mirror_compensation` (optimistix
-  ``FixedPointIteration`` or ``Newton``), :func:`mirror_passes`, with the limit check
-  :func:`check_setpoint`; Prévost's two applications ready-made (:func:`prevost2012_application1`, ...).
+- CEC mirror compensation (eq 3-4): :func:`cec_problem`; Prévost's method, one mirror pass
+  (:func:`mirror_single_pass`); extensions beyond the paper: :func:`mirror_compensation` (iterated
+  mirror by optimistix ``FixedPointIteration``, or model inversion by ``Newton``) and
+  :func:`mirror_passes`; the limit check :func:`check_setpoint`; Prévost's two applications
+  ready-made (:func:`prevost2012_application1`, ...).
 - The EMPS chain: identify the real EMPS axis, then CEC on a path within its stroke
   (:func:`emps_cec_chain`).
 """
 
 from research.contour._cec import (
+    EXTENSIONS,
+    PAPER_METHOD,
     CECProblem,
     CompensationResult,
     cec_problem,
@@ -24,6 +28,7 @@ from research.contour._cec import (
     intersample_response,
     mirror_compensation,
     mirror_passes,
+    mirror_single_pass,
     mirror_step,
     q_filter,
     simulate_correction,
@@ -53,7 +58,10 @@ from research.contour._frenet import (
 from research.contour._geometry import Projection, dense_polyline, project, trajectory_polyline
 from research.contour._limits import LimitCheck, check_setpoint
 from research.contour._prevost import (
+    APPLICATION2_TOLERANCE,
     PREVOST_FEED,
+    PREVOST_TS,
+    STANDIN_DELAYS,
     PrevostCase,
     prevost2012_application1,
     prevost2012_application2,
@@ -61,6 +69,7 @@ from research.contour._prevost import (
 )
 
 __all__ = [
+    "APPLICATION2_TOLERANCE",
     "CECProblem",
     "CompensationResult",
     "ContourError",
@@ -70,7 +79,10 @@ __all__ = [
     "FrenetEstimates",
     "LimitCheck",
     "OrientationContourError",
+    "EXTENSIONS",
+    "PAPER_METHOD",
     "PREVOST_FEED",
+    "PREVOST_TS",
     "PrevostCase",
     "Projection",
     "TrackingError",
@@ -94,6 +106,7 @@ __all__ = [
     "intersample_response",
     "mirror_compensation",
     "mirror_passes",
+    "mirror_single_pass",
     "mirror_step",
     "orientation_contour_error",
     "prevost2012_application1",
@@ -103,6 +116,7 @@ __all__ = [
     "simulate_correction",
     "simulate_setpoint",
     "smoothed_corner_case",
+    "STANDIN_DELAYS",
     "tip_reference",
     "tracking_error",
     "trajectory_polyline",

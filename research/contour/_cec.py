@@ -10,13 +10,20 @@ is ``q + D`` with ``v + D'``, ``a + D''``, ``j + D'''``, where the derivatives o
 correction are central finite differences at ``Ts``: what a CNC would feed forward from corrected
 position samples. The exact derivatives of the interpolator's profile are kept.
 
-Two formulations of the same problem, both with optimistix and the JAX drive model:
+Prévost's method is one mirror pass: the corrected setpoint is computed once from the
+uncompensated simulation and then checked ("Once the new setpoint is calculated using the CEC
+method, the new simulated tool positions are evaluated", §3; "The CEC algorithm is directly
+applied", §4.2): :func:`mirror_single_pass`, the result to compare with the paper.
 
-- fixed point (``optimistix.FixedPointIteration``): ``D <- D - e_T(D)``, Prévost's rule iterated;
-  one simulation per iteration;
-- root find (``optimistix.Newton``) of ``r(D) = P(D) - stop_gradient(foot(P(D)))``: the JAX Jacobian
-  of ``r`` is the drive's input-output map ``dP/dD``, so each Newton step is a model inversion
-  ``D <- D - (dP/dD)^-1 e_T``. The roots of ``r`` are the fixed points of the mirror rule.
+Extensions beyond the paper (it iterates nothing), both with optimistix and the JAX drive model:
+
+- iterated mirror (``method="fixed_point"``, ``optimistix.FixedPointIteration``):
+  ``D <- D - e_T(D)`` repeated until ``max |e_T| <= tolerance``; one simulation per iteration
+  (:func:`mirror_passes` repeats it a fixed number of times);
+- model inversion (``method="newton"``, ``optimistix.Newton``) on
+  ``r(D) = P(D) - stop_gradient(foot(P(D)))``: the JAX Jacobian of ``r`` is the drive's
+  input-output map ``dP/dD``, so each Newton step is ``D <- D - (dP/dD)^-1 e_T``. The roots of
+  ``r`` are the fixed points of the mirror rule.
 
 Inside the loop the CAM path is a dense polyline (vertices ``spacing`` apart) and each sample is
 projected onto a fixed window of pieces around the foot of its uncompensated actual position, which
@@ -26,6 +33,7 @@ keeps the loop in pure JAX; reported errors always come from the exact projectio
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -48,6 +56,13 @@ from research.paths.polyline import Polyline
 from research.trajectory import Trajectory
 
 METHODS = ("fixed_point", "newton")
+#: what each ``method`` of :func:`mirror_compensation` is; neither is in Prévost 2012
+EXTENSIONS = {
+    "fixed_point": "iterated mirror: Prévost's eq 4 repeated to a tolerance (extension)",
+    "newton": "model inversion: Newton root find with the drive Jacobian (extension)",
+}
+#: ``CompensationResult.method`` of the paper's method, :func:`mirror_single_pass`
+PAPER_METHOD = "single_pass"
 #: largest accepted difference [mm] between the in-loop and the exact |e_T| (0.1 um)
 LOOP_DISCREPANCY = 1e-4
 
@@ -232,7 +247,8 @@ class CompensationResult:
     """Outcome of a CEC compensation.
 
     Attributes:
-        method: ``"fixed_point"``, ``"newton"`` or ``"passes"`` (a fixed number of mirror passes).
+        method: ``"single_pass"`` (Prévost's method), or the extensions ``"fixed_point"`` (iterated
+            mirror), ``"newton"`` (model inversion), ``"passes"`` (a fixed number of mirror passes).
         correction: ``(N, A)`` setpoint correction ``D`` [mm].
         setpoint: the compensated setpoint (derivatives as in the module docstring).
         response: its simulated drive response.
@@ -315,13 +331,14 @@ def _check_common(tolerance, max_steps, on_violation, limits):
 def mirror_compensation(problem: CECProblem, *, method: str = "newton", tolerance: float = 2e-3,
                         max_steps: int = 100, limits: AxisLimits | None = None, control_limit=None,
                         on_violation: str = "flag", throw: bool = True) -> CompensationResult:
-    """Compensate the setpoint until the simulated actual motion is within ``tolerance`` of the CAM path.
+    """Compensate the setpoint until the simulated actual motion is within ``tolerance`` of the CAM
+    path. An extension of Prévost's single pass (:func:`mirror_single_pass`): see :data:`EXTENSIONS`.
 
     Args:
         problem: from :func:`cec_problem`.
         method: ``"fixed_point"`` (optimistix ``FixedPointIteration`` on eq 4) or ``"newton"``
             (optimistix ``Newton`` root find with the JAX Jacobian, i.e. model inversion).
-        tolerance: target max ``|e_T|`` [mm] (Prévost Application 1: 2 um = 2e-3 mm).
+        tolerance: target max ``|e_T|`` [mm] (Prévost Application 1 reaches 2 um = 2e-3 mm in one pass).
         max_steps: iteration cap.
         limits: axis v/a/j limits the compensated setpoint must respect (Prévost §3: "must be checked").
         control_limit: per-axis bound on the control signal (drive models with a control output) [V].
@@ -359,11 +376,13 @@ def mirror_compensation(problem: CECProblem, *, method: str = "newton", toleranc
 
 def mirror_passes(problem: CECProblem, passes: int, *, smoothing: int = 1, limits: AxisLimits | None = None,
                   control_limit=None, on_violation: str = "flag") -> CompensationResult:
-    """Apply Prévost's rule (eq 4) a fixed number of times, as the paper does ("the CEC algorithm is
-    directly applied", §4.2), recording the exact max ``|e_T|`` after every pass in ``history``.
+    """Apply Prévost's rule (eq 4) a fixed number of times, recording the exact max ``|e_T|`` after
+    every pass in ``history``. ``passes = 1`` is the paper's method (:func:`mirror_single_pass`);
+    more passes are the iterated-mirror extension.
 
     Never raises for non-convergence (there is no tolerance): ``converged`` is False and ``history``
-    shows what each pass achieved. ``smoothing``: Q-filter window in samples (:func:`mirror_step`).
+    shows what each pass achieved. ``smoothing``: Q-filter window in samples (:func:`mirror_step`,
+    an extension as well).
     """
     if not isinstance(passes, (int, np.integer)) or passes < 1:
         raise ParameterError(f"passes must be an integer >= 1, got {passes!r}")
@@ -379,3 +398,22 @@ def mirror_passes(problem: CECProblem, passes: int, *, smoothing: int = 1, limit
         history.append(contour_error(problem.cam_path, np.asarray(simulate_correction(problem, D).position)).max)
     return _finish(problem, "passes", D, passes, 1 + 2 * passes, 0, 0.0, history, t0, limits, control_limit,
                    on_violation, False, before)
+
+
+def mirror_single_pass(problem: CECProblem, *, limits: AxisLimits | None = None, control_limit=None,
+                       on_violation: str = "flag") -> CompensationResult:
+    """Prévost's CEC method: one mirror pass, eq 4, ``R'_i = R_i - e_T(t_i)`` from the uncompensated
+    simulation, then the compensated motion simulated and checked (§3).
+
+    Args:
+        problem: from :func:`cec_problem`.
+        limits, control_limit, on_violation: the check of the compensated setpoint, as in
+            :func:`mirror_compensation` (Prévost §3: "the trajectory execution has to be checked").
+    Returns:
+        :class:`CompensationResult` with ``method = "single_pass"``, ``history = (after.max,)``;
+        ``converged`` is False (no tolerance is asked for).
+    Raises:
+        InfeasibleProblem: limits violated with ``on_violation="refuse"``; ParameterError: bad arguments.
+    """
+    r = mirror_passes(problem, 1, limits=limits, control_limit=control_limit, on_violation=on_violation)
+    return dataclasses.replace(r, method=PAPER_METHOD)
