@@ -25,7 +25,8 @@ The paper's text ends after eq 7; the rest is designed here in its spirit:
   order 3: ``v(0) = a(0) = 0``, ``j(0) = 6 b alpha``. So the paper's "order ... chosen as 3 to
   maintain a zero value at t = 0 for acceleration" (§2.1) is needed only for an offset ``b != 0``:
   with ``b = 0`` order 2 already starts with ``a(0) = 0`` (but with a jerk step ``6 m alpha``),
-  and order 3 also starts without one. ``order=1`` gives the exponential interpolator.
+  and order 3 with ``b = 0`` starts without a jerk step as well. ``order=1`` gives the exponential
+  interpolator; the ramps here have ``b = 0``.
 * ``alpha``: found by bisection on ``log alpha`` for the boundary between candidates whose peak
   |acceleration| (and |jerk| when a limit is given) stays within the limits on a dense grid and
   candidates that break them; a motion whose steady part already breaks a limit (``A w^2 > a_max``)
