@@ -18,9 +18,9 @@ def test_emps_chain_before_after():
     assert r.validation_rms_um < 10.0
     assert r.model.zeros().real.max() > 0  # non-minimum-phase: why the plain mirror diverges
     c = r.compensation
-    # predicted contour error: 323 um before, ~7 um after 5 Q-filtered mirror passes
-    assert 0.25 < c.before.max < 0.40
-    assert c.after.max < 0.015 and c.after.max < c.before.max / 20
+    # model prediction (no paper number): 323 um before, 6.95 um after 5 Q-filtered mirror passes;
+    # asserted is the property, a reduction by more than 20x, not the values
+    assert c.after.max < c.before.max / 20
     # inside the logged stroke, and the check against the log's peak |v|, |a| is reported
     P = np.asarray(c.response.position)
     assert r.stroke[0] <= P.min() and P.max() <= r.stroke[1]

@@ -56,7 +56,8 @@ def test_fig_4_6_ordering(study):
     assert 0.01e-3 < mean["basic"] < 0.05e-3
     # compensated Frenet closest to the exact error (thesis Fig 4.6b): 0.0002 um here, 1% of basic
     assert mean["compensated"] < 0.02 * mean["basic"]
-    # thesis text: "the delayed Frenet Frame shows the worst performance": shifted >= basic (by 0.1 %)
+    # thesis text: "the delayed Frenet Frame shows the worst performance": shifted >= basic, but by
+    # 0.1 % only: a tie, so this confirms the thesis' ordering weakly (README: a tie)
     assert mean["basic"] <= mean["shifted"]
     # contour errors of ~140 um at the A-axis reversals (thesis Fig 4.6a: ~300 um with its SMC drives)
     assert 0.1 < study.exact.max() < 0.2
