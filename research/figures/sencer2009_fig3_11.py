@@ -10,6 +10,10 @@ as rad/s^3, see :func:`research.optimal.table31_limits`), programmed feed 150 mm
 - ``*_fig3_12.png``: axis velocity, acceleration and jerk against time, optimized (solid) and constant
   15 mm/s (dashed), with the limits.
 
+The constant-feed time is L/F plus the S-curve start and stop (20.000 + 0.259 s on the 300 mm
+blade path); the thesis' 20.18 s is L/F = 20 s on its 300 mm impeller path plus ramps it does not
+describe, so the agreement is by construction of the path length, not a reproduction.
+
 ``fast=True`` solves a 40-control-point schedule of the blade path only (seconds); the full run uses
 the thesis' n = 276 control points.
 """

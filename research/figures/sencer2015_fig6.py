@@ -17,7 +17,10 @@ Also reported (:func:`comparison`): the corner error *after the servo* (distance
 to the actual path: 537 um for the FIR's eps = 500 um, the drive's lag adds 37 um), the option
 ``cec_passes`` that makes eps hold after the servo (Prévost's mirror on the FIR reference, with
 the FIR's own rounded curve as the target, :mod:`research.contour`: one pass 503.8 um, three
-499.3 um, the timing of the reference unchanged), and the beam deflection *during* the motion.
+499.3 um, the timing of the reference unchanged; the correction is not on the eq 10 spectral
+zeros, so the Y residual vibration rises from 12.9 to 31.9 um), and the beam deflection *during*
+the motion (FIR 262 / 994 um, blend 549 / 2367 um on X / Y: quasi-static bending under the axis
+acceleration).
 :func:`assumption_sweep` sweeps the two assumptions (beam damping 0.5-5 %, diamond size x0.5-x2).
 """
 
