@@ -105,5 +105,10 @@ def output_error_fit(
         method="output_error", coefficients=coeffs, loss=loss, loss_kind="simulation error", wall_time_s=wall,
         iterations=int(steps), source=log.source,
         info={"sigma": sigma.tolist(), "initial_method": initial.method, "initial_loss": loss0,
-              "converged": bool(converged), "hold": HOLD, "bounds": bounds.to_dict()},
+              "converged": bool(converged), "hold": HOLD, "bounds": bounds.to_dict(),
+              # the logistic map only approaches a bound: a fit whose optimum lies on one keeps moving in u
+              # and never meets the solver's tolerance (EMPS: p parks at 0.2 Hz, the P/P loop has no
+              # integrator); these are named here, use simulation_error_fit for a converged fit
+              "at_bound": [n for n, v, lo, hi in zip(("wn", "zeta", "p"), sigma, bounds.lower, bounds.upper)
+                           if min(v / lo - 1, 1 - v / hi) < 1e-3]},
     )

@@ -76,4 +76,7 @@ def test_emps_identify_on_12_s_validate_on_last_3_s():
         assert rep.fits["estimation"]["tracking_error"] > floor
         assert rep.fits["validation"]["position"] > 99.9
     assert oe.fits["validation"]["tracking_error"] > vp.fits["validation"]["tracking_error"]
+    # why the JAX output-error fit reports no convergence on EMPS: the P/P loop has no integrator, so the
+    # eq 6.3 real pole drifts to its lower bound, which the logistic map only approaches (issue 14)
+    assert oe.result.info["converged"] is False and oe.result.info["at_bound"] == ["p"]
     assert oe.log.units["actual"] == "mm" and np.ptp(oe.log.reference) > 200  # metres converted to mm
