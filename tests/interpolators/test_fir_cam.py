@@ -183,7 +183,7 @@ def test_property_cycle_time_rarely_increases_with_eps():
     It does NOT hold everywhere yet, so this is a bound on how often and how much it fails, set
     from a larger measurement with the same generator: lines 7 of 250 programs slower at 1.5 eps
     (0.1-12 %; before sub-arcs, end pieces and the extra dwell candidates 10 of 250, up to 31 %),
-    lines and arcs 2 of 310 (1.2 %, 15.7 %; before 6 of 310, up to 144 %). At those rates 30
+    lines and arcs 2 of 310 (1.2 %, 15.7 %; before 13 of 310, up to 994 %). At those rates 30
     programs give about 0.5 violations; the test allows 2, each under 20 %. The remaining cases
     come from one head or tail piece per line standing for a staircase of window feeds (open in
     the FIR-on-CAM issue)."""
