@@ -14,10 +14,12 @@ see :func:`research.piecewise.bucket_size`), so paths of similar size share one 
 """
 
 import os as _os
+import sys as _sys
 
-import jax as _jax
-
-_jax.config.update("jax_enable_x64", True)
+# float64 and the disk cache are set through JAX's environment variables, read when jax is imported,
+# so `import research` (and `python -m research figures --list`) does not import jax itself; where jax
+# is already imported the same settings go through its config.
+_os.environ["JAX_ENABLE_X64"] = "1"
 
 
 def _compilation_cache() -> None:
@@ -28,10 +30,15 @@ def _compilation_cache() -> None:
         _os.makedirs(where, exist_ok=True)
     except OSError:  # read-only home: run without the disk cache
         return
-    _jax.config.update("jax_compilation_cache_dir", where)
-    _jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.2)
+    _os.environ["JAX_COMPILATION_CACHE_DIR"] = where
+    _os.environ["JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS"] = "0.2"
+    if "jax" in _sys.modules:
+        _sys.modules["jax"].config.update("jax_compilation_cache_dir", where)
+        _sys.modules["jax"].config.update("jax_persistent_cache_min_compile_time_secs", 0.2)
 
 
+if "jax" in _sys.modules:
+    _sys.modules["jax"].config.update("jax_enable_x64", True)
 _compilation_cache()
 
 from research.errors import (  # noqa: E402
@@ -43,8 +50,20 @@ from research.errors import (  # noqa: E402
     PathError,
     ResearchError,
 )
-from research.piecewise import PiecewisePolynomial  # noqa: E402
-from research.trajectory import Trajectory  # noqa: E402
+
+
+def __getattr__(name: str):
+    """``research.PiecewisePolynomial`` and ``research.Trajectory`` are imported on first use (they import jax)."""
+    if name == "PiecewisePolynomial":
+        from research.piecewise import PiecewisePolynomial
+
+        return PiecewisePolynomial
+    if name == "Trajectory":
+        from research.trajectory import Trajectory
+
+        return Trajectory
+    raise AttributeError(f"module 'research' has no attribute {name!r}")
+
 
 __all__ = [
     "ConfigError",

@@ -27,6 +27,9 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("--cache", type=Path, default=Path(".cache/results"), help="results root (default .cache/results)")
     run.add_argument("--figures", type=Path, default=Path("paper_figures"), help="figure folder (default paper_figures)")
     run.add_argument("--force", action="store_true", help="recompute even when the store has the result")
+    run.add_argument("--results", type=Path, default=Path("results"),
+                     help="results folder: <results>/<name>/ gets results.json, arrays, figure, config, report.md "
+                          "(default results)")
 
     sw = sub.add_parser("sweep", help="run (or resume) the [sweep] of an experiment config")
     sw.add_argument("config", type=Path, help="experiment file with a [sweep] table, e.g. experiments/sensitivity_delays.toml")
@@ -113,9 +116,11 @@ def _store(args) -> int:
 def _run(args) -> int:
     from research.experiments import format_summary, run_experiment
 
-    result = run_experiment(args.config, cache_dir=args.cache, figures_dir=args.figures, force=args.force)
+    result = run_experiment(args.config, cache_dir=args.cache, figures_dir=args.figures, force=args.force,
+                            results_dir=args.results)
     print()
     print(format_summary(result))
+    print(f"\nresults: {result.results_file.parent}/ (report.md: summary and figure together)")
     return 0
 
 
@@ -131,12 +136,12 @@ def _sweep(args) -> int:
 
 
 def _figures(args) -> int:
-    from research.figures import registry
+    from research.figures import catalog, figure_module
 
-    figures = registry()
+    figures = catalog()  # names and descriptions from the modules' source: nothing heavy is imported
     if args.list:
-        for name, module in figures.items():
-            print(f"{name}: {module.REPRODUCES}" + (f" [{module.CONFIG}]" if getattr(module, "CONFIG", None) else ""))
+        for name, entry in figures.items():
+            print(f"{name}: {entry.reproduces}" + (f" [{entry.config}]" if entry.config else ""))
         return 0
     names = args.only or list(figures)
     unknown = [n for n in names if n not in figures]
@@ -144,12 +149,15 @@ def _figures(args) -> int:
         raise ResearchError(f"unknown figure(s) {unknown}; registered: {sorted(figures)}")
     args.out.mkdir(parents=True, exist_ok=True)
     manifest = []
+    started = time.perf_counter()
     for i, name in enumerate(names, 1):
+        print(f"[{i}/{len(names)}] {name}: started ({time.perf_counter() - started:.0f} s elapsed) - "
+              f"{figures[name].reproduces}", flush=True)
         start = time.perf_counter()
-        module = figures[name]
+        module = figure_module(name)
         files = module.make_figure(args.out, fast=args.fast)
         seconds = time.perf_counter() - start
-        print(f"[{i}/{len(names)}] {name} ({seconds:.1f} s): " + ", ".join(str(f) for f in files))
+        print(f"[{i}/{len(names)}] {name}: done in {seconds:.1f} s: " + ", ".join(str(f) for f in files), flush=True)
         manifest.append({
             "name": name,
             "reproduces": module.REPRODUCES,

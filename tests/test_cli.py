@@ -25,8 +25,17 @@ def test_run_default_experiment(tmp_path):
         capture_output=True, text=True, check=True, cwd=tmp_path,
     ).stdout
     assert "max corner error [um]          500.000" in out
-    assert (tmp_path / "cache" / "sencer2015_diamond" / "results.json").exists()
-    assert (tmp_path / "figs" / "sencer2015_diamond.png").exists()
+    # the visible results folder (issue 16 item 4), named in the summary line, in the working folder
+    folder = tmp_path / "results" / "sencer2015_diamond"
+    assert "results: results/sencer2015_diamond/" in out and "[3/3] results in results/sencer2015_diamond/" in out
+    record = json.loads((folder / "results.json").read_text())
+    assert record["scalars"]["max_corner_error"] == pytest.approx(0.5, rel=1e-9)  # eq 14: corner error = eps
+    assert (folder / "config.toml").read_bytes() == (REPO / "experiments" / "sencer2015_diamond.toml").read_bytes()
+    assert (folder / "figure.png").read_bytes() == (tmp_path / "figs" / "sencer2015_diamond.png").read_bytes()
+    assert "trajectory.npz" in {f.name for f in folder.iterdir()}
+    report = (folder / "report.md").read_text()
+    assert "![figure](figure.png)" in report and "max corner error [um]          500.000" in report
+    assert not (tmp_path / "cache" / "sencer2015_diamond").exists()  # the cache holds only the store
 
 
 def test_run_twice_is_served_from_the_store(tmp_path, capsys):
@@ -34,7 +43,7 @@ def test_run_twice_is_served_from_the_store(tmp_path, capsys):
 
     cfg = tmp_path / "c.toml"
     cfg.write_text('name = "c"\nreproduces = "-"\n[path]\nname = "corner90"\n[output]\nfigure = false\n')
-    args = ["run", str(cfg), "--cache", str(tmp_path / "cache")]
+    args = ["run", str(cfg), "--cache", str(tmp_path / "cache"), "--results", str(tmp_path / "results")]
     assert main(args) == 0 and "computing" in capsys.readouterr().out
     assert main(args) == 0 and "(cached)" in capsys.readouterr().out
 
@@ -52,10 +61,31 @@ def test_sweep_command(tmp_path, capsys):
     assert (tmp_path / "c" / "sweeps" / "s" / "table.npz").exists()
 
 
-def test_figures_fast_writes_manifest(tmp_path):
+def test_figures_list_is_fast_and_imports_no_figure_module():
+    """Issue 16: ``figures --list`` took 2 min (it imported every figure module); target < 2 s. It reads the
+    registry from the modules' source: no figure module and no jax is imported, and it lists exactly the
+    names and descriptions the modules themselves carry."""
+    code = ("import sys, time; t = time.perf_counter(); from research.cli import main; main(['figures', '--list']); "
+            "print('SECONDS', time.perf_counter() - t); "
+            "print('HEAVY', sorted(m for m in sys.modules if m == 'jax' or m.startswith(('research.figures.', 'matplotlib'))))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=REPO).stdout
+    seconds = float(out.split("SECONDS ")[1].split()[0])
+    assert seconds < 2.0, out
+    assert "HEAVY []" in out, out
+    listed = [line.split(": ", 1) for line in out.splitlines() if not line.startswith(("SECONDS", "HEAVY"))]
+    modules = registry()
+    assert [n for n, _ in listed] == list(modules)
+    for name, text in listed:
+        assert text.startswith(modules[name].REPRODUCES)
+
+
+def test_figures_fast_writes_manifest(tmp_path, capsys):
     from research.cli import main
 
     assert main(["figures", "--fast", "--out", str(tmp_path)] + [a for n in LIGHT for a in ("--only", n)]) == 0
+    lines = capsys.readouterr().out.splitlines()  # a line as each figure starts, then one as it finishes
+    assert [ln.split(": ")[1].split(" ")[0] for ln in lines] == ["started", "done"] * len(LIGHT)
+    assert lines[0].startswith(f"[1/2] {LIGHT[0]}: started") and lines[3].startswith(f"[2/2] {LIGHT[1]}: done in")
     manifest = json.loads((tmp_path / "manifest.json").read_text())
     assert [m["name"] for m in manifest] == LIGHT
     for m in manifest:
@@ -104,7 +134,7 @@ def test_unwritable_cache_is_a_clear_store_error(tmp_path, capsys):
     cfg = tmp_path / "c.toml"
     cfg.write_text('name = "c"\nreproduces = "-"\n[path]\nname = "corner90"\n[output]\nfigure = false\n')
     (tmp_path / "cache").write_text("a file where the results root should be")
-    assert main(["run", str(cfg), "--cache", str(tmp_path / "cache")]) == 2
+    assert main(["run", str(cfg), "--cache", str(tmp_path / "cache"), "--results", str(tmp_path / "results")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "cannot write" in err and str(tmp_path / "cache") in err
 

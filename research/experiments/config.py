@@ -34,6 +34,7 @@ Example (``experiments/sencer2015_diamond.toml``)::
 from __future__ import annotations
 
 import difflib
+import re
 import tomllib
 from pathlib import Path
 from typing import Annotated, Literal, Union, get_args
@@ -62,6 +63,9 @@ METRIC_UNITS = {
 NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$"
 #: largest |coordinate| of ``points_mm`` [mm] (1 km: beyond any machine, and far from float overflow)
 MAX_COORDINATE_MM = 1e6
+#: plausible feed range [mm/s] (issue 16): below 1 mm/s is a unit slip (m/s typed in a mm/s key), above
+#: 10 m/s beyond any machine tool (mm/min typed in a mm/s key); outside it a config is refused
+FEED_RANGE_MM_PER_S = (1.0, 10_000.0)
 DRIVE_MODELS = ("ideal", "sencer2009_table6_1", "sencer2009_table6_1_ppi", "sencer2009_table6_2", "sencer2009_table6_2_pid",
                 "identified")
 
@@ -133,6 +137,7 @@ class FIRConfig(_Strict):
         bad = [i for i, d in enumerate(self.delays_ms) if not d > 0]
         if bad:
             raise ValueError(f"delays_ms[{bad[0]}] must be > 0 ms, got {self.delays_ms[bad[0]]}")
+        _plausible_units(self.feed_mm_per_s, self.delays_ms, self.sample_period_ms, "delays_ms")
         return self
 
 
@@ -148,6 +153,30 @@ class TimeOptimalConfig(_Strict):
     intervals_per_segment: int = Field(16, ge=3, description="jerk intervals per segment")
     window: int | None = Field(None, ge=1, description="segments per receding window (none: whole path)")
     sample_period_ms: float = Field(1.0, gt=0, description="sample period of the returned trajectory [ms]")
+
+    @model_validator(mode="after")
+    def _plausible(self):
+        _plausible_units(self.feed_mm_per_s, self.envelope_delays_ms, self.sample_period_ms, "envelope_delays_ms")
+        return self
+
+
+def _plausible_units(feed: float, delays_ms: list[float], sample_period_ms: float, delays_key: str) -> None:
+    """Refuse the unit slips the key names invite (issue 16): a feed outside :data:`FEED_RANGE_MM_PER_S`
+    and a delay shorter than the sample period (an FIR shorter than Ts has no sample inside it; a value
+    such as 0.06 in a ``_ms`` key is most likely seconds)."""
+    lo, hi = FEED_RANGE_MM_PER_S
+    if feed < lo:
+        raise ValueError(f"feed_mm_per_s = {feed:g} mm/s is below {lo:g} mm/s; the key is in mm/s: was it m/s "
+                         f"({feed:g} m/s = {feed * 1e3:g} mm/s)?")
+    if feed > hi:
+        raise ValueError(f"feed_mm_per_s = {feed:g} mm/s is above {hi:g} mm/s (10 m/s); the key is in mm/s: was it "
+                         f"mm/min ({feed:g} mm/min = {feed / 60:g} mm/s)?")
+    for i, d in enumerate(delays_ms):
+        if d < sample_period_ms:
+            hint = (f"; the key is in ms: was it seconds ({d:g} s = {d * 1e3:g} ms)?" if d < 1.0
+                    else "; lengthen the delay or shorten sample_period_ms")
+            raise ValueError(f"{delays_key}[{i}] = {d:g} ms is below the sample period sample_period_ms = "
+                             f"{sample_period_ms:g} ms{hint}")
 
 
 Interpolator = Annotated[Union[FIRConfig, TimeOptimalConfig], Field(discriminator="kind")]
@@ -345,6 +374,9 @@ def _describe(err: dict, file: Path, single_interpolator: bool) -> str:
     key = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in loc).lstrip(".") or "(top level)"
     msg = err["msg"].removeprefix("Value error, ")
     kind, value = err["type"], err.get("input")
+    named = re.match(r"([a-z_]+(?:\[\d+\])?) = ", msg) if kind == "value_error" else None
+    if named and isinstance(value, dict) and named.group(1).split("[")[0] in value:  # a table check naming its key
+        key = f"{key}.{named.group(1)}"
     if kind == "extra_forbidden":
         msg = "unknown key (typo?" + _suggest(err["loc"]) + ")"
     elif kind.startswith(("float", "int")) and isinstance(value, bool):

@@ -33,6 +33,8 @@ from research.trajectory import Trajectory
 
 DEFAULT_CACHE = Path(".cache") / "results"
 DEFAULT_FIGURES = Path("paper_figures")
+#: the visible results folder of the command line (one folder per experiment)
+DEFAULT_RESULTS = Path("results")
 
 
 @dataclass(frozen=True)
@@ -65,19 +67,28 @@ def hashed_config(cfg: ExperimentConfig) -> dict:
     return cfg.model_dump(mode="json", exclude=set(COSMETIC))
 
 
-def config_key(cfg: ExperimentConfig, base: Path) -> str:
-    """Store key of a config whose relative file names are read from ``base``."""
-    return result_key(hashed_config(cfg), {k: base / f for k, f in input_files(cfg).items()})
+def config_key(cfg: ExperimentConfig, base: Path, *, kind: str = "point") -> str:
+    """Store key of a config whose relative file names are read from ``base``.
+
+    ``kind``: ``"point"`` for a sweep point's record (scalars only), ``"run"`` for a ``run`` entry (the
+    full record with the trajectory and figure); the two never share an entry, so a ``run`` after a
+    ``sweep`` of the same config cannot be served a sweep point's record (issue 16).
+    """
+    return result_key(hashed_config(cfg), {k: base / f for k, f in input_files(cfg).items()}, kind=kind)
 
 
 def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_CACHE,
-                   figures_dir: str | Path = DEFAULT_FIGURES, log=print, force: bool = False) -> RunResult:
+                   figures_dir: str | Path = DEFAULT_FIGURES, log=print, force: bool = False,
+                   results_dir: str | Path | None = None) -> RunResult:
     """Run the experiment in ``config_file`` (or fetch it from the store) and save its results and figure.
 
     Args:
         config_file: TOML experiment config (see :mod:`research.experiments.config`).
-        cache_dir: results root: the store is ``<cache_dir>/store``, the readable view ``<cache_dir>/<name>/``.
-        figures_dir: where the figure goes.
+        cache_dir: the store is ``<cache_dir>/store``.
+        figures_dir: where the figure goes (``<name>.png``).
+        results_dir: the readable results folder ``<results_dir>/<name>/`` (``results.json``,
+            ``trajectory.npz``, ``arrays.npz``, ``figure.png``, ``config.toml`` as run, ``report.md``);
+            ``None``: ``<cache_dir>`` (the command line passes ``results/``, :data:`DEFAULT_RESULTS`).
         log: progress callback taking one string (``print`` by default).
         force: recompute even if the store has the result (the entry is kept; the new one is not stored).
 
@@ -86,9 +97,15 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
     """
     cfg, base = load_config(config_file)
     store = ResultStore(Path(cache_dir) / "store")
-    key = config_key(cfg, base)
+    key = config_key(cfg, base, kind="run")
     entry = None if force else store.get(key)
     want_figure = cfg.output.figure and cfg.path is not None
+    stem = cfg.name
+    if cfg.sweep is not None:  # the sweep's own outputs keep their names; this run is the base point
+        stem = f"{cfg.name}_base"
+        log(f"note: {config_file} has a [sweep] table over {list(cfg.sweep.parameters)}; `run` computes only the "
+            f"base point (the config without [sweep]) and writes it as {stem!r}; "
+            f"`python -m research sweep {config_file}` runs the sweep")
     log(f"[1/3] {cfg.name}: key {key[:12]} (code {code_version()}) " + ("found in the store" if entry else "computing"))
     files: dict[str, bytes] = {}
     if entry is None:
@@ -117,18 +134,54 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
             entry, cached = store.get(key), False
     shown = ", ".join(f"{k} = {v:.6g} {record['units'][k]}" for k, v in record["scalars"].items())
     log(f"[2/3] results: {shown}")
-    out = Path(cache_dir) / cfg.name
+    out = Path(cache_dir if results_dir is None else results_dir) / stem
     results_file = atomic_write(out / "results.json", json.dumps(record, indent=2).encode())
     # files of a stored entry are read back through their manifest checksums (never served damaged)
     stored = (lambda name: entry.read_bytes(name) if entry.file(name) else None) if entry else files.get
-    traj_bytes = stored("trajectory.npz")
-    if traj_bytes:
-        atomic_write(out / "trajectory.npz", traj_bytes)
+    written = ["results.json"]
+    for name in ("trajectory.npz", "arrays.npz"):
+        data = stored(name) if entry or name != "arrays.npz" else _npz(ev.arrays)
+        if data:
+            atomic_write(out / name, data)
+            written.append(name)
     figure_file = None
     if want_figure:
-        figure_file = atomic_write(Path(figures_dir) / f"{cfg.name}.png", stored("figure.png"))
-    log(f"[3/3] {results_file}" + (f"; figure: {figure_file}" if figure_file else "") + ("; (cached)" if cached else ""))
-    return RunResult(cfg, key, record, cached, results_file, figure_file)
+        png = stored("figure.png")
+        figure_file = atomic_write(Path(figures_dir) / f"{stem}.png", png)
+        atomic_write(out / "figure.png", png)
+        written.append("figure.png")
+    atomic_write(out / "config.toml", Path(config_file).read_bytes())
+    result = RunResult(cfg, key, record, cached, results_file, figure_file)
+    atomic_write(out / "report.md", _report(result, config_file, written + ["config.toml"]).encode())
+    log(f"[3/3] results in {out}/ (results.json, report.md, config.toml"
+        + "".join(f", {n}" for n in written[1:]) + ")" + (f"; figure: {figure_file}" if figure_file else "")
+        + ("; (cached)" if cached else ""))
+    return result
+
+
+def _npz(arrays: dict) -> bytes | None:
+    if not arrays:
+        return None
+    buf = io.BytesIO()
+    np.savez(buf, **{k: np.asarray(v) for k, v in arrays.items()})
+    return buf.getvalue()
+
+
+def _report(result: RunResult, config_file, files: list[str]) -> str:
+    """``report.md``: what was run, the summary table and the figure together (Markdown)."""
+    cfg = result.config
+    lines = [f"# {cfg.name}", "", f"Reproduces: {cfg.reproduces}", ""]
+    if cfg.description:
+        lines += [cfg.description, ""]
+    lines += [f"Config: `{config_file}` (copy: [config.toml](config.toml)); store key `{result.key}`; code "
+              f"`{result.record.get('code_version', code_version())}`" + (" (served from the store)" if result.cached else ""), ""]
+    if cfg.sweep is not None:
+        lines += ["Base point only: the `[sweep]` table was not run (`python -m research sweep CONFIG` runs it).", ""]
+    lines += ["## Summary", "", "```", format_summary(result), "```", ""]
+    if "figure.png" in files:
+        lines += ["## Figure", "", "![figure](figure.png)", ""]
+    lines += ["## Files", ""] + [f"- [{f}]({f})" for f in files] + [""]
+    return "\n".join(lines)
 
 
 def _legacy_view(record: dict) -> dict:
@@ -149,7 +202,8 @@ def _figure(cfg: ExperimentConfig, ev) -> bytes:
     from research.figures.fir_run import plot_fir_run
 
     label, plan, traj, metrics = ev.objects["runs"][0]
-    fig = plot_fir_run(ev.objects["path"], plan, traj, metrics, title=f"{cfg.name}\n{cfg.reproduces}")
+    name = f"{cfg.name}: base point of the sweep (no [sweep] applied)" if cfg.sweep is not None else cfg.name
+    fig = plot_fir_run(ev.objects["path"], plan, traj, metrics, title=f"{name}\n{cfg.reproduces}")
     buf = io.BytesIO()
     save(fig, buf)
     return buf.getvalue()
@@ -160,6 +214,9 @@ def format_summary(result: RunResult) -> str:
     rec, cfg = result.record, result.config
     rows = [("experiment", cfg.name), ("reproduces", cfg.reproduces),
             ("store key", result.key[:16] + (" (cached)" if result.cached else ""))]
+    if cfg.sweep is not None:
+        rows.append(("note", f"base point only: [sweep] over {len(cfg.sweep.parameters)} field(s) not run "
+                             "(python -m research sweep CONFIG runs it)"))
     runs = {k: v for k, v in rec["details"].items() if k != "identification"}
     for (label, d), ic in zip(runs.items(), cfg.interpolators):
         m = d["metrics"]

@@ -92,17 +92,21 @@ def run_sweep(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_CACHE,
     if engine == "vmap" and (reason or general):
         raise ConfigError(f"{config_file}: key 'sweep.engine': the vmap path cannot take this sweep "
                           f"({reason or 'a swept field is not an FIR or mode parameter'}); use auto, dask or serial")
-    log(f"sweep {cfg.name}: {len(points)} points over {list(cfg.sweep.parameters)}; "
-        f"{len(fast)} on the vmap fast path, {len(general)} on the general path"
-        + (f", {len(rows)} invalid" if rows else ""))
+    why_general = reason or (f"engine = {engine!r}" if engine in ("dask", "serial") else None)
+    log(f"sweep {cfg.name}: {len(points)} points over {list(cfg.sweep.parameters)}"
+        + (f", {len(rows)} invalid (refused by the schema)" if rows else "") + "; "
+        + (f"{len(fast)} candidates for the vmap fast path (each checked against the closed forms' domain), "
+           f"{len(general)} for the general path" if fast else
+           f"all {len(valid)} on the general path ({why_general or 'a swept field is not an FIR or mode parameter'})"))
     bar = tqdm(total=len(points), disable=not show_progress, unit="pt", desc=cfg.name)
     bar.update(len(rows))
     stats = {"points": len(points), "fast": 0, "general": 0, "computed": 0, "cached": 0}
     base_sens = None
     if fast:
+        # the bar advances only by the points the fast path keeps; the ones it hands back are counted
+        # when the general path finishes them (the bar never goes back)
         fast_rows, redo, st = run_fast(fast, cfg, base_dir, store, chunk=cfg.sweep.chunk,
                                        with_sensitivities=cfg.sweep.sensitivities, progress=bar.update)
-        bar.update(-len(redo))
         for i, r in fast_rows.items():
             rows[i] = {"status": "ok", "error": None, "source": "vmap"} | _chosen(r, cfg)
         general += redo
@@ -110,10 +114,11 @@ def run_sweep(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_CACHE,
         stats["cached"] += cached_rows
         stats["computed"] += len(fast_rows) - cached_rows
         stats["fast"] = len(fast_rows)
-        if redo:
-            log(f"{len(redo)} points outside the closed forms' domain (block shorter than the filter): general path")
+        log(f"vmap fast path: {len(fast_rows)} points" + (
+            f"; {len(redo)} outside the closed forms' domain (block shorter than the filter, or not finite) "
+            "go to the general path" if redo else ""))
         if cfg.sweep.sensitivities:
-            base_sens = _chosen(_base_sensitivities(cfg, base_dir, store), cfg)
+            base_sens = _chosen(_base_sensitivities(cfg, base_dir, store), cfg) or None  # None: base outside the domain
     tasks = []
     for p in general:
         key = config_key(p.config, base_dir)
@@ -134,6 +139,11 @@ def run_sweep(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_CACHE,
         stats["computed"] += len(tasks)
     stats["general"] = len(general)
     bar.close()
+    log(f"engines: {stats['fast']} points on the vmap fast path, {stats['general']} on the general path"
+        + (f", {len(points) - len(valid)} invalid" if len(points) > len(valid) else ""))
+    if cfg.sweep.sensitivities and stats["general"]:
+        stats["sensitivities"] = (f"unavailable for the {stats['general']} general-path points (autodiff runs on the "
+                                  "vmap fast path only" + (f"; {reason}" if reason else "") + ")")
     table = [{"index": p.index} | p.values | rows[p.index] for p in points]
     stats |= {"ok": sum(r["status"] == "ok" for r in table), "failed": sum(r["status"] != "ok" for r in table),
               "seconds": time.perf_counter() - t0}
@@ -182,7 +192,10 @@ def _write_table(out: Path, cfg: ExperimentConfig, table: list[dict], stats: dic
     np.savez(buf, **arrays)
     atomic_write(out / "table.npz", buf.getvalue())
     doc = {"experiment": cfg.name, "reproduces": cfg.reproduces, "config": hashed_config(cfg) | {"sweep": cfg.sweep.model_dump(mode="json")},
-           "stats": stats, "base_sensitivities": base_sens, "rows": table}
+           "stats": stats, "base_sensitivities": base_sens,
+           "units": {c: metric_unit(c) for c in dict.fromkeys(k for r in table for k in r)
+                     if c not in cfg.sweep.parameters and c not in ("index", "status", "error", "source")},
+           "rows": table}
     return atomic_write(out / "table.json", json.dumps(doc, indent=1).encode())
 
 
@@ -204,14 +217,35 @@ def format_sweep(result: SweepResult) -> str:
     for k in metrics:
         col = result.column(k)
         i, j = int(np.nanargmin(col)), int(np.nanargmax(col))
-        lines.append(f"  {k:<28} min {col[i]:.6g} at {_at(result, i)}; max {col[j]:.6g} at {_at(result, j)}")
+        unit = metric_unit(k)
+        lines.append(f"  {k + ' [' + unit + ']':<34} min {col[i]:.6g} at {_at(result, i)}; max {col[j]:.6g} at {_at(result, j)}")
     if result.base_sensitivities:
-        lines.append("at the base config (autodiff, units s, mm, mm/s):")
+        lines.append("at the base config (autodiff; metric units per input unit: T_i in s, eps in mm, F in mm/s):")
         lines += [f"  {k:<32} {v: .6g}" for k, v in result.base_sensitivities.items()]
+    elif result.config.sweep.sensitivities and s["fast"]:
+        lines.append(f"sensitivities at the base config: unavailable (it is outside the closed forms' domain); "
+                     f"the {s['fast']} fast-path points have d_* columns in the table")
+    elif result.config.sweep.sensitivities:
+        lines.append("sensitivities: unavailable (autodiff d(metric)/d(T_i, eps, F) runs on the vmap fast path only; "
+                     "this sweep has no point there)")
+    if s.get("sensitivities") and s["fast"]:
+        lines.append(f"sensitivities: {s['sensitivities']}")
     failed = [r for r in result.rows if r["status"] != "ok"]
     for r in failed[:5]:
         lines.append(f"  failed point {r['index']} {_at(result, r['index'])}: {r['error'].splitlines()[0]}")
     return "\n".join(lines)
+
+
+def metric_unit(column: str) -> str:
+    """Unit of a table column (``cycle_time`` -> ``s``, ``residual_vibration.x`` -> ``mm``; ``d_a/d_b`` ->
+    ``unit(a)/unit(b)``), from :data:`~research.experiments.config.METRIC_UNITS`."""
+    from research.experiments.config import METRIC_UNITS
+
+    if column.startswith("d_") and "/d_" in column:
+        num, den = column[2:].split("/d_", 1)
+        den_unit = {"eps": "mm", "F": "mm/s"}.get(den, "s" if den.startswith("T") else "-")
+        return f"{metric_unit(num)}/({den_unit})"
+    return METRIC_UNITS.get(column.split(".")[0], "-")
 
 
 def _at(result: SweepResult, i: int) -> str:

@@ -86,5 +86,19 @@ def run_general(tasks: list[tuple[int, str, dict]], base_dir: str | Path, store:
     finally:
         client.close()
         if cluster is not None:
+            # close each worker with time to exit on its own: the cluster's own close gives a nanny 4 s,
+            # after which it kills the process (``distributed.nanny - WARNING ... killing``, issue 16) --
+            # JAX workers on a loaded machine need longer
+            cluster.sync(_close_workers, list(cluster.workers.values()), WORKER_CLOSE_TIMEOUT_S)
             cluster.close()
     return out
+
+
+#: seconds a LocalCluster worker process is given to exit before its nanny kills it
+WORKER_CLOSE_TIMEOUT_S = 60.0
+
+
+async def _close_workers(nannies, timeout: float) -> None:
+    import asyncio
+
+    await asyncio.gather(*(n.close(timeout=timeout) for n in nannies))

@@ -19,6 +19,7 @@ Example:
 
 from __future__ import annotations
 
+import difflib
 import itertools
 import re
 from dataclasses import dataclass
@@ -104,9 +105,10 @@ def expand(cfg: ExperimentConfig, file: str | Path) -> list[Point]:
         except ValueError as e:
             raise ConfigError(f"{file}: key 'sweep.parameters.\"{f}\"': {e}") from None
         except (KeyError, IndexError) as e:
+            close = difflib.get_close_matches(f, field_names(base), n=1, cutoff=0.6)
             raise ConfigError(f"{file}: key 'sweep.parameters.\"{f}\"': the config has no field {f!r} "
-                              f"({e.args[0] if e.args else e}); fields are written as in the config, "
-                              "e.g. 'interpolator.delays_ms[0]'") from None
+                              f"({e.args[0] if e.args else e})" + (f"; did you mean {close[0]!r}?" if close else "")
+                              + "; fields are written as in the config, e.g. 'interpolator.delays_ms[0]'") from None
     points = []
     for i, combo in enumerate(combos):
         raw = base
@@ -118,6 +120,29 @@ def expand(cfg: ExperimentConfig, file: str | Path) -> list[Point]:
         except ConfigError as e:
             points.append(Point(i, point_values, None, f"ConfigError: {e}"))
     return points
+
+
+def field_names(raw: dict) -> list[str]:
+    """Every sweepable field of a config dictionary, dotted as :func:`parse_field` reads them
+    (``"interpolator.delays_ms[0]"``; a single interpolator also without its index)."""
+    out = []
+
+    def walk(node, prefix):
+        if isinstance(node, dict):
+            for k, v in node.items():
+                walk(v, f"{prefix}.{k}" if prefix else k)
+        elif isinstance(node, list) and node:
+            if len(node) == 1 and isinstance(node[0], dict):
+                walk(node[0], prefix)  # interpolator.x on a single interpolator
+            for i, v in enumerate(node):
+                walk(v, f"{prefix}[{i}]")
+            if not isinstance(node[0], (dict, list)):
+                out.append(prefix)
+        elif prefix:
+            out.append(prefix)
+
+    walk(raw, "")
+    return out
 
 
 def _copy(x):

@@ -116,6 +116,7 @@ def run_fast(points: list[Point], base: ExperimentConfig, base_dir, store: Resul
                          axes=axes, with_sensitivities=with_sensitivities)
             cols = {k: np.asarray(v)[: len(part)] for k, v in out.items()}
             store.put(key, {"kind": "vmap-chunk", "points": len(part)}, cols)
+        kept = 0
         for i, p in enumerate(part):
             row = {k: float(v[i]) for k, v in cols.items() if v.ndim == 1 and k != "exact"}
             for j, a in enumerate(axes_letters):
@@ -124,8 +125,9 @@ def run_fast(points: list[Point], base: ExperimentConfig, base_dir, store: Resul
                 row.pop("residual_vibration", None)
             if bool(cols["exact"][i]) and all(np.isfinite(v) for v in row.values()):
                 rows[p.index] = row
+                kept += 1
             else:
                 redo.append(p)
-        if progress is not None:
-            progress(len(part))
+        if progress is not None:  # only the points kept here: the ones handed back are counted where they finish
+            progress(kept)
     return rows, redo, stats

@@ -1,9 +1,16 @@
 """Regenerated paper figures: one module per figure, each with ``NAME``, ``REPRODUCES`` and
-``make_figure(out_dir, fast=False) -> list[Path]``. ``python -m research figures`` runs them all."""
+``make_figure(out_dir, fast=False) -> list[Path]``. ``python -m research figures`` runs them all.
+
+:func:`catalog` reads ``NAME``, ``REPRODUCES`` and ``CONFIG`` from the modules' source (literal
+assignments, no import), so listing the figures costs milliseconds; :func:`registry` and
+:func:`figure_module` import them."""
 
 from __future__ import annotations
 
+import ast
 import importlib
+from dataclasses import dataclass
+from pathlib import Path
 from types import ModuleType
 
 #: registered figure modules, in the order they are regenerated
@@ -31,3 +38,66 @@ def registry() -> dict[str, ModuleType]:
     """``{NAME: module}`` of every registered figure."""
     modules = [importlib.import_module(m) for m in FIGURE_MODULES]
     return {m.NAME: m for m in modules}
+
+
+@dataclass(frozen=True)
+class FigureEntry:
+    """A registered figure as its module's source states it (nothing imported).
+
+    Attributes:
+        name: ``NAME``; module: the dotted module name; reproduces: ``REPRODUCES``;
+        config: ``CONFIG`` (the experiment config it is made from) or ``None``.
+    """
+
+    name: str
+    module: str
+    reproduces: str
+    config: str | None = None
+
+
+def catalog() -> dict[str, FigureEntry]:
+    """``{NAME: FigureEntry}`` of every registered figure, in order, read from the module files' literal
+    ``NAME`` / ``REPRODUCES`` / ``CONFIG`` assignments (no module, and so no jax, is imported).
+
+    Raises:
+        ResearchError: a registered module is missing, or does not assign ``NAME`` and ``REPRODUCES``
+            as literal strings (the registry could not list it without importing it).
+    """
+    from research.errors import ResearchError
+
+    here = Path(__file__).resolve().parent
+    out = {}
+    for dotted in FIGURE_MODULES:
+        file = here / (dotted.rsplit(".", 1)[1] + ".py")
+        try:
+            tree = ast.parse(file.read_text(encoding="utf-8"), filename=str(file))
+        except (OSError, SyntaxError) as e:
+            raise ResearchError(f"{file}: registered figure module {dotted!r} cannot be read ({e})") from None
+        found = {}
+        for node in tree.body:
+            if (isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name)
+                    and node.targets[0].id in ("NAME", "REPRODUCES", "CONFIG")):
+                try:
+                    found[node.targets[0].id] = ast.literal_eval(node.value)
+                except ValueError:
+                    raise ResearchError(f"{file}: line {node.lineno}: {node.targets[0].id} must be a literal string "
+                                        "(the figure registry reads it without importing the module)") from None
+        if not (isinstance(found.get("NAME"), str) and isinstance(found.get("REPRODUCES"), str)):
+            raise ResearchError(f"{file}: a registered figure module needs literal NAME and REPRODUCES strings, "
+                                f"found {sorted(found)}")
+        out[found["NAME"]] = FigureEntry(found["NAME"], dotted, found["REPRODUCES"], found.get("CONFIG"))
+    return out
+
+
+def figure_module(name: str) -> ModuleType:
+    """Import the module of the registered figure ``name`` (a key of :func:`catalog`).
+
+    Raises:
+        ResearchError: no figure of that name is registered.
+    """
+    from research.errors import ResearchError
+
+    entries = catalog()
+    if name not in entries:
+        raise ResearchError(f"unknown figure {name!r}; registered: {sorted(entries)}")
+    return importlib.import_module(entries[name].module)

@@ -40,6 +40,17 @@ def write(tmp_path, text, name="exp.toml"):
         (('name = "corner90"', 'name = "corner90"\ngcode = "x.nc"'), r"exactly one of name, gcode, points_mm"),
         (('reproduces = "test"', ""), r"key 'reproduces': Field required"),
         (("[interpolator]", "[interpolator"), r"TOML syntax error"),
+        # unit plausibility (issue 16: `delays_ms = [0.06, 0.03]` passed and printed a jerk of inf)
+        (("delays_ms = [50.0, 30.0]", "delays_ms = [0.06, 0.03]"),
+         r"key 'interpolator.delays_ms\[0\]': .*0.06 ms is below the sample period.*seconds \(0.06 s = 60 ms\)"),
+        (("delays_ms = [50.0, 30.0]", "delays_ms = [50.0, 30.0]\nsample_period_ms = 40.0"),
+         r"key 'interpolator.delays_ms\[1\]': .*30 ms is below the sample period sample_period_ms = 40 ms"),
+        (("feed_mm_per_s = 200.0", "feed_mm_per_s = 0.25"), r"key 'interpolator.feed_mm_per_s': .*below 1 mm/s.*m/s"),
+        (("feed_mm_per_s = 200.0", "feed_mm_per_s = 15000.0"),
+         r"key 'interpolator.feed_mm_per_s': .*above 10000 mm/s.*mm/min \(15000 mm/min = 250 mm/s\)"),
+        (('[interpolator]\nfeed_mm_per_s = 200.0\ndelays_ms = [50.0, 30.0]',
+          '[interpolator]\nkind = "time_optimal"\nfeed_mm_per_s = 200.0\nenvelope_delays_ms = [0.05, 30.0]'),
+         r"key 'interpolator.envelope_delays_ms\[0\]': .*below the sample period"),
     ],
 )
 def test_config_errors_name_file_and_key(tmp_path, edit, match):

@@ -53,7 +53,8 @@ def test_runner_caches_and_input_file_changes_the_key(tmp_path):
     third = run()
     assert not third.cached and third.key != first.key
     cfg, base = load_config(cfg_file)
-    assert config_key(cfg, base) == third.key
+    assert config_key(cfg, base, kind="run") == third.key
+    assert config_key(cfg, base) != third.key  # a sweep point's key: never the same entry as a run
 
 
 @pytest.mark.parametrize("text, match", [

@@ -53,7 +53,9 @@ def test_expand_grid_and_list(tmp_path):
 
 
 @pytest.mark.parametrize("sweep, match", [
-    ('"interpolator.delay_ms[0]" = [1.0]', r"sweep.parameters.*no field 'interpolator.delay_ms\[0\]'"),
+    ('"interpolator.delay_ms[0]" = [1.0]',
+     r"sweep.parameters.*no field 'interpolator.delay_ms\[0\]'.*did you mean 'interpolator.delays_ms\[0\]'\?"),
+    ('"drive.modes[1].frequncy_hz" = [1.0]', r"did you mean 'drive.modes\[1\].frequency_hz'\?"),
     ('"interpolator.delays_ms[5]" = [1.0]', r"no field.*index \[5\] out of range"),
     ('"interpolator.tolerance_um" = [1.0, 2.0]\n"interpolator.feed_mm_per_s" = [1.0]', r"equal lengths"),
 ])
@@ -122,8 +124,20 @@ def test_interrupted_general_sweep_resumes_and_failing_point_goes_on(tmp_path, m
 
 
 def test_dask_local_cluster(tmp_path):
+    """A LocalCluster sweep, closed without its nanny killing a worker (issue 16: every Dask sweep ended
+    with ``distributed.nanny - WARNING ... killing``)."""
+    import logging
+
     f = write(tmp_path, '[sweep]\nengine = "dask"\n[sweep.parameters]\n"interpolator.tolerance_um" = [100.0, 300.0]\n')
-    res = quiet(f, tmp_path, workers=1)  # one worker process: the LocalCluster path at the least start-up cost
+    seen = []
+    handler = logging.Handler(logging.WARNING)
+    handler.emit = lambda record: seen.append(record.getMessage())
+    logging.getLogger("distributed.nanny").addHandler(handler)
+    try:
+        res = quiet(f, tmp_path, workers=1)  # one worker process: the LocalCluster path at the least start-up cost
+    finally:
+        logging.getLogger("distributed.nanny").removeHandler(handler)
+    assert not [m for m in seen if "killing" in m], seen
     assert res.stats["ok"] == 2 and all(r["source"] == "general" for r in res.rows)
     assert res.rows[1]["max_corner_error"] == pytest.approx(0.3, rel=1e-6)
 
@@ -132,3 +146,75 @@ def test_vmap_engine_refuses_general_fields(tmp_path):
     f = write(tmp_path, '[sweep]\nengine = "vmap"\n[sweep.parameters]\n"interpolator.sample_period_ms" = [1.0, 2.0]\n')
     with pytest.raises(ConfigError, match="sweep.engine"):
         quiet(f, tmp_path)
+
+
+def test_run_after_sweep_runs_the_base_point_under_its_own_name(tmp_path):
+    """Issue 16: ``run`` after ``sweep`` on the same config crashed (a sweep point's store entry served as a
+    run's), and ``run`` on a sweep config ignored ``[sweep]`` silently and overwrote the sweep's figure."""
+    from research.experiments import run_experiment
+
+    base = BASE.replace('name = "diamond"', 'name = "corner90"').replace("figure = false", "figure = true")
+    base = base.replace('modes = [{axis = "x", frequency_hz = 11.4}, {axis = "y", frequency_hz = 6.8}]', "")
+    f = write(tmp_path, '[sweep]\nengine = "serial"\n[sweep.parameters]\n"interpolator.tolerance_um" = [100.0, 500.0]\n',
+              base=base)
+    sw = quiet(f, tmp_path)  # the 500 um point is the base config: stored under the base config's point key
+    assert sw.stats["general"] == 2 and sw.figure_file == tmp_path / "figs" / "sw.png"
+    sweep_png = sw.figure_file.read_bytes()
+    lines = []
+    res = run_experiment(f, cache_dir=tmp_path / "cache", figures_dir=tmp_path / "figs", log=lines.append)
+    assert any("has a [sweep] table" in s and "only the" in s and "base point" in s for s in lines)
+    assert res.figure_file == tmp_path / "figs" / "sw_base.png" and res.figure_file.stat().st_size > 10_000
+    assert sw.figure_file.read_bytes() == sweep_png  # the sweep's figure is not overwritten
+    assert res.record["experiment"] == "sw" and "metrics" in res.record  # a run record, not a sweep point's
+    assert res.record["scalars"]["max_corner_error"] == pytest.approx(0.5, rel=1e-9)  # eq 14: error = eps
+    assert res.results_file.parent.name == "sw_base"
+    again = run_experiment(f, cache_dir=tmp_path / "cache", figures_dir=tmp_path / "figs", log=lambda s: None)
+    assert again.cached and again.figure_file == res.figure_file
+
+
+class _Bar:
+    """Stands in for tqdm: records every update."""
+    updates: list = []
+
+    def __init__(self, total, **kw):
+        self.total = total
+
+    def update(self, n=1):
+        _Bar.updates.append(n)
+
+    def close(self):
+        pass
+
+
+def test_engine_lines_progress_and_sensitivities_are_honest(tmp_path, monkeypatch):
+    """A sweep whose fast-path candidates partly fall outside the closed forms' domain: the engine lines
+    count what actually ran where, the bar only goes forward and ends at the total, the general-path
+    points are said to have no sensitivities, and rows carry units."""
+    from research.experiments import sweep as sweep_mod
+
+    # 5 mm legs: at 250 mm/s a leg takes 20 ms, shorter than T1 + T2 = 237 ms (closed forms not exact);
+    # at 20 mm/s it takes 250 ms (exact)
+    base = BASE.replace('[path]\nname = "diamond"', '[path]\npoints_mm = [[0.0, 0.0], [5.0, 0.0], [5.0, 5.0]]')
+    f = write(tmp_path, '[sweep]\n[sweep.parameters]\n"interpolator.feed_mm_per_s" = [20.0, 250.0]\n', base=base)
+    _Bar.updates = []
+    monkeypatch.setattr(sweep_mod, "tqdm", _Bar)
+    lines = []
+    res = run_sweep(f, cache_dir=tmp_path / "cache", figures_dir=tmp_path / "figs", log=lines.append)
+    assert [r["source"] for r in res.rows] == ["vmap", "general"]
+    assert all(n >= 0 for n in _Bar.updates) and sum(_Bar.updates) == 2
+    assert "on the vmap fast path," not in lines[0] and "candidates for the vmap fast path" in lines[0]
+    assert "vmap fast path: 1 points; 1 outside the closed forms' domain" in "\n".join(lines)
+    assert "engines: 1 points on the vmap fast path, 1 on the general path" in lines
+    text = format_sweep(res)
+    assert "unavailable for the 1 general-path points" in text
+    assert "cycle_time [s]" in text and "max_corner_error [mm]" in text
+    table = json.loads(res.table_file.read_text())
+    assert table["units"]["cycle_time"] == "s" and table["units"]["d_cycle_time/d_T1"] == "s/(s)"
+    assert table["units"]["residual_vibration.x"] == "mm"
+
+
+def test_sensitivities_unavailable_off_the_fast_path(tmp_path):
+    f = write(tmp_path, '[sweep]\nengine = "serial"\n[sweep.parameters]\n"interpolator.tolerance_um" = [100.0]\n')
+    res = quiet(f, tmp_path)
+    assert res.base_sensitivities is None
+    assert "sensitivities: unavailable" in format_sweep(res)
