@@ -18,6 +18,56 @@ _UNITS = {"cycle_time": "s", "residual_vibration": "mm", "max_corner_error": "mm
           "peak_feed": "mm/s", "max_tracking_error": "mm"}
 
 
+def field_label(field: str, cfg) -> str:
+    """Axis label of a swept field from the schema: the ``Field`` description with its symbol and unit
+    (``"interpolator.delays_ms[0]"`` -> ``"FIR delays T_1 [ms]"``, ``"drive.modes[1].frequency_hz"`` ->
+    ``"natural frequency [Hz] (mode 2, y)"``); the raw key where the schema has no description.
+
+    Args:
+        field: the swept field as written in ``[sweep.parameters]``.
+        cfg: the base :class:`~research.experiments.config.ExperimentConfig` (picks the interpolator kind).
+    """
+    import re
+
+    from research.experiments.config import ExperimentConfig, _models_in
+    from research.experiments.sweep_points import parse_field
+
+    try:
+        parts = parse_field(field)
+    except ValueError:
+        return field
+    models, node, desc, index, where = [ExperimentConfig], cfg, None, None, []
+    for i, part in enumerate(parts):
+        if isinstance(part, int):
+            if desc is not None and i == len(parts) - 1:
+                index = part  # an element of a list field (delays_ms[0])
+            elif isinstance(node, list) and 0 <= part < len(node):
+                node = node[part]
+                models = [type(node)]
+                if hasattr(node, "axis"):
+                    where.append(f"mode {part + 1}, {node.axis}")
+            continue
+        if isinstance(node, list) and len(node) == 1:  # interpolator.x on a single interpolator
+            node = node[0]
+            models = [type(node)]
+        field_info = next((m.model_fields[part] for m in models if part in m.model_fields), None)
+        if field_info is None:
+            return field
+        desc = field_info.description
+        node = getattr(node, part, None)
+        models = _models_in(field_info.annotation) or models
+    if not desc:
+        return field
+    desc = re.sub(r"\s*\([^()]*\)$", "", desc)  # a trailing remark: "damping ratio [-] (2 %: ...)"
+    if len(desc) > 48:  # a description, not a label: the key itself
+        desc = str(parts[-1])
+    if index is not None:
+        desc = re.sub(r"\b([A-Za-z])_i\b", lambda m: f"{m.group(1)}_{index + 1}", desc)
+        if f"_{index + 1}" not in desc:
+            desc += f" [{index}]"
+    return desc + (f" ({'; '.join(where)})" if where else "")
+
+
 def plot_sweep(result, target: Path) -> Path:
     """Write the sweep's figure (PNG) to ``target`` atomically and return it."""
     from research.figures._style import figure, save
@@ -42,11 +92,11 @@ def plot_sweep(result, target: Path) -> Path:
             if np.isfinite(z).sum() > 3 and np.nanmax(z) > np.nanmin(z):
                 ax.contour(u0, u1, z, colors="w", linewidths=0.5, levels=8)
             fig.colorbar(im, ax=ax, label=f"{m} [{unit}]")
-            ax.set(xlabel=fields[0], ylabel=fields[1])
+            ax.set(xlabel=field_label(fields[0], result.config), ylabel=field_label(fields[1], result.config))
         else:
             order = np.argsort(x[0])
             ax.plot(x[0][order], y[order], ".-" if len(fields) == 1 else ".", ms=3)
-            ax.set(xlabel=fields[0], ylabel=f"{m} [{unit}]")
+            ax.set(xlabel=field_label(fields[0], result.config), ylabel=f"{m} [{unit}]")
         ax.set_title(m)
     for ax in axs.ravel()[n:]:
         ax.axis("off")

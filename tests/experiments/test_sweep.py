@@ -218,3 +218,20 @@ def test_sensitivities_unavailable_off_the_fast_path(tmp_path):
     res = quiet(f, tmp_path)
     assert res.base_sensitivities is None
     assert "sensitivities: unavailable" in format_sweep(res)
+
+
+def test_sweep_axis_labels_come_from_the_schema(tmp_path):
+    """Issue 16 item 6: sweep axes were labelled with raw keys (``interpolator.delays_ms[0]``); the label is
+    the schema's description of the field, with the list index as the symbol's subscript and the unit."""
+    from research.experiments.config import FIRConfig, ModeConfig
+    from research.experiments.sweep_figure import field_label
+
+    cfg, _ = load_config(write(tmp_path, ""))
+    assert FIRConfig.model_fields["delays_ms"].description == "FIR delays T_i [ms]"
+    assert field_label("interpolator.delays_ms[0]", cfg) == "FIR delays T_1 [ms]"
+    assert field_label("interpolator.delays_ms[1]", cfg) == "FIR delays T_2 [ms]"
+    assert field_label("interpolator.tolerance_um", cfg) == FIRConfig.model_fields["tolerance_um"].description
+    assert field_label("drive.modes[1].frequency_hz", cfg) == (
+        ModeConfig.model_fields["frequency_hz"].description + " (mode 2, y)")
+    assert field_label("drive.modes[0].damping", cfg) == "damping ratio [-] (mode 1, x)"
+    assert field_label("no.such_field", cfg) == "no.such_field"
