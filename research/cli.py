@@ -40,6 +40,8 @@ def main(argv: list[str] | None = None) -> int:
     sw.add_argument("--workers", type=int, help="LocalCluster worker processes (default: CPU count)")
     sw.add_argument("--retry-failed", action="store_true", help="recompute points stored as failures")
     sw.add_argument("--no-progress", action="store_true", help="no progress bar")
+    sw.add_argument("--results", type=Path, default=Path("results"),
+                    help="results folder: <results>/<name>/ gets table.json/.npz, figure, config, report.md (default results)")
 
     figs = sub.add_parser("figures", help="regenerate the registered paper figures")
     figs.add_argument("--only", action="append", metavar="NAME", help="only this figure (repeatable)")
@@ -129,9 +131,10 @@ def _sweep(args) -> int:
 
     result = run_sweep(args.config, cache_dir=args.cache, figures_dir=args.figures, engine=args.engine,
                        scheduler=args.scheduler, workers=args.workers, retry_failed=args.retry_failed,
-                       show_progress=not args.no_progress)
+                       show_progress=not args.no_progress, results_dir=args.results)
     print()
     print(format_sweep(result))
+    print(f"\nresults: {result.table_file.parent}/ (report.md: summary and figure together)")
     return 0
 
 

@@ -54,11 +54,18 @@ def test_sweep_command(tmp_path, capsys):
     cfg = tmp_path / "s.toml"
     cfg.write_text('name = "s"\nreproduces = "-"\n[path]\nname = "diamond"\n[sweep]\n[sweep.parameters]\n'
                    '"interpolator.tolerance_um" = [100.0, 200.0, 400.0]\n')
-    assert main(["sweep", str(cfg), "--cache", str(tmp_path / "c"), "--figures", str(tmp_path / "f"), "--no-progress"]) == 0
+    assert main(["sweep", str(cfg), "--cache", str(tmp_path / "c"), "--figures", str(tmp_path / "f"), "--no-progress",
+                 "--results", str(tmp_path / "r")]) == 0
     out = capsys.readouterr().out
     assert "3 points, 3 ok, 0 failed" in out and "d_cycle_time/d_T1" in out
     assert (tmp_path / "f" / "s.png").stat().st_size > 10_000
-    assert (tmp_path / "c" / "sweeps" / "s" / "table.npz").exists()
+    folder = tmp_path / "r" / "s"  # the visible results folder, named in the last line
+    assert f"results: {folder}/" in out
+    assert (folder / "figure.png").read_bytes() == (tmp_path / "f" / "s.png").read_bytes()
+    assert (folder / "config.toml").read_bytes() == cfg.read_bytes() and (folder / "table.npz").exists()
+    table = json.loads((folder / "table.json").read_text())
+    assert [r["max_corner_error"] for r in table["rows"]] == pytest.approx([0.1, 0.2, 0.4], rel=1e-6)  # eq 14: = eps
+    assert "![figure](figure.png)" in (folder / "report.md").read_text()
 
 
 def test_figures_list_is_fast_and_imports_no_figure_module():

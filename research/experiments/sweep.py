@@ -70,10 +70,14 @@ class SweepResult:
 
 def run_sweep(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_CACHE, figures_dir: str | Path = DEFAULT_FIGURES,
               engine: str | None = None, scheduler: str | None = None, workers: int | None = None,
-              retry_failed: bool = False, log=print, show_progress: bool = True) -> SweepResult:
+              retry_failed: bool = False, log=print, show_progress: bool = True,
+              results_dir: str | Path | None = None) -> SweepResult:
     """Run (or resume) the sweep of ``config_file``.
 
     Args:
+        results_dir: the readable folder ``<results_dir>/<name>/`` (``table.json``, ``table.npz``,
+            ``figure.png``, ``config.toml`` as run, ``report.md``); ``None``: ``<cache_dir>/sweeps`` (the
+            command line passes ``results/``).
         engine: overrides ``sweep.engine`` (``auto``, ``vmap``, ``dask``, ``serial``).
         scheduler: Dask scheduler address; ``None``: a ``LocalCluster`` when the engine is Dask.
         workers: LocalCluster worker processes (default: CPU count).
@@ -147,14 +151,25 @@ def run_sweep(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_CACHE,
     table = [{"index": p.index} | p.values | rows[p.index] for p in points]
     stats |= {"ok": sum(r["status"] == "ok" for r in table), "failed": sum(r["status"] != "ok" for r in table),
               "seconds": time.perf_counter() - t0}
-    out = Path(cache_dir) / "sweeps" / cfg.name
+    out = (Path(cache_dir) / "sweeps" if results_dir is None else Path(results_dir)) / cfg.name
     table_file = _write_table(out, cfg, table, stats, base_sens)
     result = SweepResult(cfg, list(cfg.sweep.parameters), table, stats, table_file, None, base_sens)
     if cfg.output.figure and stats["ok"]:
         from research.experiments.sweep_figure import plot_sweep
 
         figure_file = plot_sweep(result, Path(figures_dir) / f"{cfg.name}.png")
+        atomic_write(out / "figure.png", figure_file.read_bytes())
         result = SweepResult(cfg, result.fields, table, stats, table_file, figure_file, base_sens)
+    atomic_write(out / "config.toml", Path(config_file).read_bytes())
+    files = ["table.json", "table.npz"] + (["figure.png"] if result.figure_file else []) + ["config.toml"]
+    report = [f"# {cfg.name} (sweep)", "", f"Reproduces: {cfg.reproduces}", "",
+              f"Config: `{config_file}` (copy: [config.toml](config.toml))", "",
+              "## Summary", "", "```", format_sweep(result), "```", ""]
+    if result.figure_file:
+        report += ["## Figure", "", "![figure](figure.png)", ""]
+    report += ["## Files", ""] + [f"- [{f}]({f})" for f in files] + [""]
+    atomic_write(out / "report.md", "\n".join(report).encode())
+    log(f"sweep results in {out}/ (report.md, {', '.join(files)})")
     return result
 
 
