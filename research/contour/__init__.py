@@ -12,6 +12,8 @@
   mirror by optimistix ``FixedPointIteration``, or model inversion by ``Newton``) and
   :func:`mirror_passes`; the limit check :func:`check_setpoint`; Prévost's two applications
   ready-made (:func:`prevost2012_application1`, ...).
+- Cornering tolerance held after the servo: :func:`servo_tolerance` plans the FIR at the reduced
+  tolerance whose simulated actual corner error is eps (:func:`vertex_distances`).
 - The EMPS chain: identify the real EMPS axis, then CEC on a path within its stroke
   (:func:`emps_cec_chain`).
 """
@@ -57,6 +59,7 @@ from research.contour._frenet import (
 )
 from research.contour._geometry import Projection, dense_polyline, project, trajectory_polyline
 from research.contour._limits import LimitCheck, check_setpoint
+from research.contour._servo_tolerance import ServoTolerance, held_at_rest, servo_tolerance, vertex_distances
 from research.contour._prevost import (
     APPLICATION2_TOLERANCE,
     PREVOST_FEED,
@@ -69,6 +72,10 @@ from research.contour._prevost import (
 )
 
 __all__ = [
+    "ServoTolerance",
+    "held_at_rest",
+    "servo_tolerance",
+    "vertex_distances",
     "APPLICATION2_TOLERANCE",
     "CECProblem",
     "CompensationResult",
