@@ -5,7 +5,7 @@ closed loop on the rigid-body drives of Table 5.1 through the A/C table-tilting 
 Units: mm, s, rad; voltages in V.
 """
 
-from research.control._compensation import SchemeResult, corrected_reference, feedback_vs_feedforward, mirror_passes
+from research.control._compensation import SchemeResult, corrected_reference, feedback_vs_feedforward, tracking_mirror_passes
 from research.control._gains import (
     AXES,
     DIRECTIONS,
@@ -58,7 +58,7 @@ __all__ = [
     "feedback_vs_feedforward",
     "identify_coulomb",
     "measure",
-    "mirror_passes",
+    "tracking_mirror_passes",
     "run_case",
     "step_disturbance_peak",
     "table_5_4",

@@ -46,7 +46,7 @@ def corrected_reference(ref: ContourReference, Dq: np.ndarray, DP: np.ndarray) -
     return eqx.tree_at(lambda r: (r.q, r.qd, r.qdd, r.P, r.Pd, r.Pdd), ref, tuple(jnp.asarray(x) for x in new))
 
 
-def mirror_passes(plant: FiveAxisPlant, ref: ContourReference, controller: AxisSMC | ContourGains, passes: int,
+def tracking_mirror_passes(plant: FiveAxisPlant, ref: ContourReference, controller: AxisSMC | ContourGains, passes: int,
                   machine: TableTiltingAC | None = None):
     """Run ``passes`` mirror updates; returns the closed-loop results of pass 0 (uncompensated) .. ``passes``."""
     machine = TableTiltingAC() if machine is None else machine
@@ -88,7 +88,7 @@ def feedback_vs_feedforward(*, feed: float = 50.0, passes: int = 3, coulomb=None
     rows = []
     for name, g in (("SISO SMC", table_5_2()), ("contour controller", table_5_3())):
         check_controller(g, plant, T)
-        runs = mirror_passes(plant, ref, g, passes)
+        runs = tracking_mirror_passes(plant, ref, g, passes)
         rows.append(SchemeResult(name, measure(ref, traj, runs[0])))
         for k in sorted({1, passes} - {0}):
             rows.append(SchemeResult(f"{name} + mirror ({k} pass{'es' if k > 1 else ''})", measure(ref, traj, runs[k])))

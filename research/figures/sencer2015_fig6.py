@@ -32,7 +32,6 @@ from pathlib import Path
 
 import equinox as eqx
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from research.contour import cec_problem, held_at_rest, mirror_passes, servo_tolerance, vertex_distances
 
@@ -49,12 +48,6 @@ REPRODUCES = "Sencer 2015 Fig 6 (diamond: FIR vs geometric smoothing, feed, acce
 BEAMS_HZ = (11.4, 6.8)  # X, Y first bending modes, §4
 BEAM_DAMPING = 0.02
 SETTLE = 1.5  # s of rest simulated after the longest motion
-
-
-def vertex_errors(q: np.ndarray, t: np.ndarray, path: Polyline, step: float = 1e-5) -> np.ndarray:
-    """Distance [mm] from each interior vertex of ``path`` to the curve through the samples ``q``
-    at times ``t`` (:func:`research.contour.vertex_distances`)."""
-    return vertex_distances(q, t, path.points[1:-1], step)
 
 
 def comparison(sample_period: float = 1e-3, *, include_ocp: bool = True, damping=(BEAM_DAMPING,),
@@ -124,8 +117,8 @@ def comparison(sample_period: float = 1e-3, *, include_ocp: bool = True, damping
             "cycle_time": float(traj.duration),
             "residual_vibration": np.array(residual) if len(damping) > 1 else residual[0],
             "max_deflection_in_motion": np.array(in_motion) if len(damping) > 1 else in_motion[0],
-            "corner_error_reference": vertex_errors(np.asarray(traj.q), np.asarray(traj.t), path),
-            "corner_error_post_servo": vertex_errors(actual, t, path),
+            "corner_error_reference": vertex_distances(np.asarray(traj.q), np.asarray(traj.t), path.points[1:-1]),
+            "corner_error_post_servo": vertex_distances(actual, t, path.points[1:-1]),
         }
     return out
 

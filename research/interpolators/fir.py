@@ -270,7 +270,8 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     # branch and bound: verify candidates in order of predicted time, and only while one could still
     # beat the best verified plan (its prediction is a lower bound on its verified time)
     best, best_time = None, np.inf
-    for pred, _, c in sorted((predicted_time(c), i, c) for i, c in enumerate(candidates)) if len(candidates) > 1 else [(0.0, 0, candidates[0])]:
+    order = sorted((predicted_time(c), i, c) for i, c in enumerate(candidates)) if len(candidates) > 1 else [(0.0, 0, candidates[0])]
+    for pred, _, c in order:
         if pred >= best_time:
             break
         result = settle(*c)

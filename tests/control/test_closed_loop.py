@@ -227,7 +227,7 @@ def test_mirror_feedforward_and_contour_feedback_combine(short_ref, coulomb):
     the tip error's part normal to the path tangent): one mirror pass lowers the SISO peak; the contour
     controller alone beats SISO; contour controller + mirror is at least as good as the contour controller
     alone (the mirror only removes the repeatable error left over)."""
-    from research.control import mirror_passes
+    from research.control import tracking_mirror_passes
     from research.paths.kinematics5 import TableTiltingAC
 
     p = thesis_plant(coulomb)
@@ -237,13 +237,13 @@ def test_mirror_feedforward_and_contour_feedback_combine(short_ref, coulomb):
         tan = np.asarray(short_ref.F)[:, :, 0]
         return np.linalg.norm(e - np.sum(e * tan, axis=1, keepdims=True) * tan, axis=1).max()
 
-    siso = [tip_error(r) for r in mirror_passes(p, short_ref, table_5_2(), 1)]
-    cont = [tip_error(r) for r in mirror_passes(p, short_ref, table_5_3(), 1)]
+    siso = [tip_error(r) for r in tracking_mirror_passes(p, short_ref, table_5_2(), 1)]
+    cont = [tip_error(r) for r in tracking_mirror_passes(p, short_ref, table_5_3(), 1)]
     assert siso[1] < 0.5 * siso[0]
     assert cont[0] < siso[0]
     assert cont[1] <= cont[0]
     with pytest.raises(ParameterError, match="passes"):
-        mirror_passes(p, short_ref, table_5_2(), -1)
+        tracking_mirror_passes(p, short_ref, table_5_2(), -1)
 
 
 def test_fig4_6_estimators_on_the_smc_drives(cases):
