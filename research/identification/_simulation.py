@@ -29,6 +29,7 @@ changes (each pass fixes at least the first wrong sample; :func:`consistent_sign
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -37,6 +38,9 @@ from scipy.signal import lfilter
 from research.errors import ConvergenceError
 from research.identification._structure import ModelStructure
 
+#: a free response is set to zero once its envelope e^{a t} is below e^-DECAYED = 1e-20 of its start (far
+#: below double rounding of the fitted positions); exp would only underflow gradually there
+DECAYED = 20 * np.log(10.0)
 #: passes of the friction-sign fixed point before giving up (each pass costs two IIR filters)
 MAX_SIGN_PASSES = 5000
 
@@ -75,6 +79,17 @@ class Reference:
     @property
     def n_samples(self) -> int:
         return int(self.q.size)
+
+    @functools.cached_property
+    def channels(self) -> np.ndarray:
+        """``(4, N)`` normalized cubic channels ``[q, v Ts, a Ts^2, j Ts^3]`` of the discretization."""
+        Ts = self.sample_period
+        return np.vstack((self.q, self.v * Ts, self.a * Ts**2, self.j * Ts**3))
+
+    @functools.cached_property
+    def t(self) -> np.ndarray:
+        """``(N,)`` sample times from 0 [s]."""
+        return np.arange(self.n_samples) * self.sample_period
 
 
 def _expm(M):
@@ -150,11 +165,24 @@ class Responses:
     def disturbance(self, u) -> tuple[np.ndarray, np.ndarray]:
         """``(s^k/D u, s^{k+1}/D u)`` at the samples for a disturbance ``u`` held over each period [mm, mm/s per unit]."""
         n = self.den.size - 1
-        out = []
-        for i in (self.k, self.k + 1):
-            y = lfilter(self._w_num[i], self._w_den, u)
-            out.append(y * self.Ts ** (n - i))
-        return out[0], out[1]
+        y = lfilter([1.0], self._w_den, u)
+        out = _fir(self._w_num[[self.k, self.k + 1]][:, :, None], y[None, :])
+        return out[0] * self.Ts ** (n - self.k), out[1] * self.Ts ** (n - self.k - 1)
+
+    def disturbance_position(self, u) -> np.ndarray:
+        """``s^k/D u`` only (the first output of :meth:`disturbance`) [mm per unit]."""
+        n = self.den.size - 1
+        return lfilter(self._w_num[self.k], self._w_den, u) * self.Ts ** (n - self.k)
+
+
+def _fir(taps, U):
+    """``sum_k taps[:, k, :] @ U[:, t - k]``: the FIR filters of every state over every input channel
+    (``taps`` ``(n, n+1, c)``, ``U`` ``(c, N)``) as ``n + 1`` small matrix products (zero before the record)."""
+    n_taps, N = taps.shape[1], U.shape[1]
+    out = taps[:, 0, :] @ U
+    for k in range(1, n_taps):
+        out[:, k:] += taps[:, k, :] @ U[:, :N - k]
+    return out
 
 
 def responses(structure: ModelStructure, sigma, ref: Reference) -> Responses:
@@ -162,40 +190,47 @@ def responses(structure: ModelStructure, sigma, ref: Reference) -> Responses:
     Ts, n = ref.sample_period, structure.n_poles
     den = structure.denominator(sigma)
     Ad, G, Gw = _discretize(den, Ts)
-    channels = (ref.q, ref.v * Ts, ref.a * Ts**2, ref.j * Ts**3)
     num, dz = _state_filters(Ad, np.column_stack([G, Gw]))
-    U = np.vstack(channels)  # (4, N)
-    fir = np.stack([sum(lfilter(num[i, :, c], [1.0], U[c]) for c in range(4)) for i in range(n)])  # (n, N)
+    fir = _fir(num[:, :, :4], ref.channels)  # (n, N)
     Z = (lfilter([1.0], dz, fir, axis=-1) * (Ts ** (n - np.arange(n)))[:, None]).T  # S_0 .. S_{n-1}
     d = den[::-1]  # d_0, d_1, ..., d_{n-1}, 1
     Sn = ref.q - Z @ d[:n]
-    Sn1 = ref.v - np.column_stack([Z[:, 1:], Sn]) @ d[:n]
-    S = np.column_stack([Z, Sn, Sn1])
+    Sn1 = ref.v - Z[:, 1:] @ d[:n - 1] - Sn * d[n - 1]
+    S = np.empty((ref.n_samples, n + 2))
+    S[:, :n], S[:, n], S[:, n + 1] = Z, Sn, Sn1
     w_num, w_den = num[:, :, 4], dz
     k = int(structure.integrator)
-    ones = np.ones(ref.n_samples)
-    off = [lfilter(w_num[i], w_den, ones) * Ts ** (n - i) for i in (k, k + 1)]
-    t = np.arange(ref.n_samples) * Ts
-    mp, mv = _modes(structure.poles(sigma), t)
+    step = lfilter([1.0], w_den, np.ones(ref.n_samples))  # 1/den(z) of a unit step, then each numerator
+    off = _fir(w_num[[k, k + 1]][:, :, None], step[None, :]) * (Ts ** (n - np.array([k, k + 1])))[:, None]
+    mp, mv = _modes(structure.poles(sigma), ref.t)
     return Responses(S, mp, mv, off[0], off[1], den, k, Ts, w_num, w_den)
 
 
 def _modes(poles, t):
-    """Real basis of the free responses ``e^{lambda t}`` (and derivatives) of the poles ``(n,)``."""
+    """Real basis of the free responses ``e^{lambda t}`` (and derivatives) of the poles ``(n,)``: ``e^{a t}`` for a
+    real pole, ``e^{a t} cos(b t)``, ``e^{a t} sin(b t)`` for a pair ``a +- i b`` (upper one taken)."""
     pos, vel, done = [], [], set()
+    n_t = t.size
     for i, lam in enumerate(poles):
         if i in done:
             continue
+        # samples until the envelope e^{a t} falls below e^-DECAYED (1e-20): zero after that, exact to that level
+        k = n_t if lam.real >= 0 else min(n_t, int(np.ceil(DECAYED / (-lam.real * t[1]))) + 1 if n_t > 1 else n_t)
+        tk = t[:k]
         if abs(lam.imag) <= 1e-9 * abs(lam):
-            e = np.exp(lam.real * t)
-            pos.append(e)
-            vel.append(lam.real * e)
+            e = np.exp(lam.real * tk)
+            cols = [(e, lam.real * e)]
         else:
             j = next(m for m in range(i + 1, len(poles)) if m not in done and abs(poles[m] - np.conj(lam)) <= 1e-9 * abs(lam))
             done.add(j)
-            e = np.exp(lam * t)
-            pos += [e.real, e.imag]
-            vel += [(lam * e).real, (lam * e).imag]
+            a, b = lam.real, lam.imag
+            e = np.exp(a * tk)
+            c, s = e * np.cos(b * tk), e * np.sin(b * tk)
+            cols = [(c, a * c - b * s), (s, b * c + a * s)]
+        for p_col, v_col in cols:
+            pos.append(np.zeros(n_t))
+            vel.append(np.zeros(n_t))
+            pos[-1][:k], vel[-1][:k] = p_col, v_col
     return np.column_stack(pos), np.column_stack(vel)
 
 

@@ -39,6 +39,9 @@ from research.identification._structure import HZ, ModelStructure, structure as 
 from research.identification._structure_fit import StructureFit
 
 INITIAL_MODES = ("estimate", "rest")
+#: optimizer tolerance of the screening pass that only ranks the starts' basins (the chosen one is then
+#: polished to ``tol``); swept in ``benchmarks/bench_identification.py``
+SCREEN_TOL = 1e-6
 #: damping values of the start grid (under-, well- and over-damped pairs)
 GRID_ZETA = (0.25, 0.5, 0.8, 1.1)
 
@@ -47,28 +50,29 @@ def _columns(st: ModelStructure, R, signs, initial, force=None):
     """Regressor of the linear parameters (``b1..bm``, ``dc``, ``offset``, initial state) and the known part."""
     cols = [R.S[:, i] for i in range(1, st.n_zeros + 1)]
     if st.friction:
-        cols.append(-R.disturbance(signs)[0])
+        cols.append(-R.disturbance_position(signs))
     if st.offset:
         cols.append(-R.offset_pos)
     if st.force:
-        cols.append(R.disturbance(force)[0])
+        cols.append(R.disturbance_position(force))
     if initial == "estimate":
         cols += list(R.modes_pos.T)
     return np.column_stack(cols), R.den[-1] * R.S[:, 0]
 
 
 def _lsq(A, y):
-    """Least squares on column-scaled ``A``: normal equations plus one step of iterative refinement (accuracy
-    ~ cond(A) eps, 6x faster than an SVD for 10^4 x 10 systems), SVD when the Gram matrix is ill conditioned."""
-    scale = np.linalg.norm(A, axis=0)
+    """Least squares by the column-scaled normal equations plus one step of iterative refinement (accuracy
+    ~ cond(A) eps; a few passes over ``A`` instead of a QR or SVD of the N x m matrix), SVD when the scaled
+    Gram matrix is ill conditioned (cond > 1e12: the refinement no longer recovers the digits)."""
+    G, g = A.T @ A, A.T @ y
+    scale = np.sqrt(np.diag(G))
     scale[scale == 0] = 1.0
-    As = A / scale
-    G = As.T @ As
-    if np.linalg.cond(G) > 1e12:
-        return lstsq(As, y, lapack_driver="gelsd")[0] / scale
-    x = np.linalg.solve(G, As.T @ y)
-    x += np.linalg.solve(G, As.T @ (y - As @ x))
-    return x / scale
+    Gs = G / np.outer(scale, scale)
+    if np.linalg.cond(Gs) > 1e12:
+        return lstsq(A / scale, y, lapack_driver="gelsd")[0] / scale
+    x = np.linalg.solve(Gs, g / scale) / scale
+    x += np.linalg.solve(Gs, (A.T @ (y - A @ x)) / scale) / scale
+    return x
 
 
 def _solve_linear(Phi, target, dc_index):
@@ -225,29 +229,40 @@ def simulation_error_fit(
     def fun(u, s):
         return prob.project(np.exp(u), s)[0]
 
-    def polish(u, s):
-        """Optimizer passes with the friction signs held, updated between passes until consistent."""
-        status, consistent, passes = 0, False, 0
+    def trf(u, s, tol_):
+        return scipy_least_squares(fun, u, args=(s,), bounds=(ulo, uhi), method="trf", ftol=tol_, xtol=tol_,
+                                   gtol=tol_, max_nfev=max_nfev)
+
+    def own_signs(u, s):
+        """Exact simulation of the model at ``u`` (its linear part projected with signs ``s`` held) ->
+        ``(its own friction signs, exact squared simulation error)``."""
         _, theta, R = prob.project(np.exp(u), s)
-        s = prob.exact(np.exp(u), theta, R, s)[1]  # the start model's own signs
+        pos, s_new = prob.exact(np.exp(u), theta, R, s)
+        return s_new, float(np.sum((prob.y - pos) ** 2))
+
+    def screen(u, s):
+        """One optimizer pass at SCREEN_TOL with the start model's own signs: which basin a start falls in."""
+        s = own_signs(u, s)[0]
+        u = trf(u, s, SCREEN_TOL).x
+        return (u, *own_signs(u, s))
+
+    def polish(u, s):
+        """Optimizer passes at ``tol`` with the friction signs held, updated between passes until consistent."""
+        status, consistent, passes = 0, False, 0
         for passes in range(1, max_passes + 1):
-            sol = scipy_least_squares(fun, u, args=(s,), bounds=(ulo, uhi), method="trf", ftol=tol, xtol=tol,
-                                      gtol=tol, max_nfev=max_nfev)
+            sol = trf(u, s, tol)
             u, status = sol.x, sol.status
-            sigma = np.exp(u)
-            _, theta, R = prob.project(sigma, s)
-            pos, s_new = prob.exact(sigma, theta, R, s)
+            s_new, err = own_signs(u, s)
             if np.array_equal(s_new, s):
                 consistent = True
                 break
             s = s_new
-        return u, s, status, consistent, passes, float(np.sum((prob.y - pos) ** 2))
+        return u, s, status, consistent, passes, err
 
-    best = None
-    for i in dict.fromkeys(order):  # unique, best first; each compared by its exact simulation error
-        out = polish(np.clip(np.log(cand[i]), ulo + 1e-9, uhi - 1e-9), signs)
-        if best is None or out[-1] < best[-1]:
-            best = out
+    # every start screened (unique, best first), the best basin by its exact simulation error polished
+    screened = [screen(np.clip(np.log(cand[i]), ulo + 1e-9, uhi - 1e-9), signs) for i in dict.fromkeys(order)]
+    u0, s0, _ = min(screened, key=lambda r: r[-1])
+    best = polish(u0, s0)
     u, s, status, consistent, passes, _ = best
     sigma = np.exp(u)
     r, theta, R = prob.project(sigma, s)

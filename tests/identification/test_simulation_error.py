@@ -2,7 +2,6 @@
 against independent ones, consistency under encoder noise, initial state from the data, the convergence
 flag, bad input, model structures and the MATLAB compare / resid style reports."""
 
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -25,9 +24,8 @@ from research.identification import (
 )
 from research.identification._simulation import Reference, consistent_signs, linear_part, responses
 
-from .conftest import at_rest, relative_errors
+from .conftest import EMPS, at_rest, relative_errors
 
-EMPS = Path(__file__).resolve().parents[3] / "shared" / "data" / "emps" / "emps_estimation_first15s.mat"
 
 
 def _sim(structure, sigma, b, dc, offset, q, Ts):
