@@ -22,14 +22,18 @@ from research.identification._excitation import (
 )
 from research.identification._least_squares import least_squares
 from research.identification._log import (
+    ANGLE_UNITS,
     LENGTH_UNITS,
+    POSITION_UNITS,
     RESAMPLING_METHODS,
     TIME_UNITS,
     DriveLog,
+    Plausibility,
     load_axis_logs,
     load_drive_log,
     save_drive_log,
 )
+from research.identification._log_read import read_halscope, write_halscope
 from research.identification._output_error import output_error_fit, simulate_log
 from research.identification._projection import (
     PoleBounds,
@@ -108,7 +112,12 @@ __all__ = [
     "EMPS_SPLIT_S",
     "emps_structures",
     "LEAD_RG",
+    "ANGLE_UNITS",
     "LENGTH_UNITS",
+    "POSITION_UNITS",
+    "Plausibility",
+    "read_halscope",
+    "write_halscope",
     "MAX_CONDITION",
     "PARAMETERS",
     "RESAMPLING_METHODS",
