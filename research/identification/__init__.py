@@ -57,6 +57,7 @@ from research.identification._report import FitReport, fit_percent, fit_report
 from research.identification._result import COEFFICIENTS, IdentifiedDrive
 from research.identification._selection import StructureSelection, aic, select_structure
 from research.identification._simulation_error import INITIAL_MODES, simulation_error_fit
+from research.identification._store import load_identified, save_identified
 from research.identification._structure import EQ_6_3, PI5, PP2, PP4, STRUCTURES, ModelStructure, structure
 from research.identification._structure_fit import INITIAL_SAMPLES, StructureFit
 from research.identification._synthetic import synthetic_log
@@ -104,6 +105,8 @@ __all__ = [
     "compare",
     "residual_analysis",
     "select_structure",
+    "load_identified",
+    "save_identified",
     "simulate_model",
     "simulation_error_fit",
     "structure",
