@@ -42,6 +42,9 @@ INITIAL_MODES = ("estimate", "rest")
 #: optimizer tolerance of the screening pass that only ranks the starts' basins (the chosen one is then
 #: polished to ``tol``); swept in ``benchmarks/bench_identification.py``
 SCREEN_TOL = 1e-6
+#: a reference within AFFINE_RTOL of its stroke from a straight line in time does not accelerate: 1e-9 of the
+#: stroke is below any encoder's resolution (1 nm on a 1 m stroke)
+AFFINE_RTOL = 1e-9
 #: damping values of the start grid (under-, well- and over-damped pairs)
 GRID_ZETA = (0.25, 0.5, 0.8, 1.1)
 
@@ -121,6 +124,25 @@ class _Problem:
         return pos, s
 
 
+def _check_excitation(log: DriveLog) -> None:
+    """Refuse logs that cannot identify a closed loop: a constant or constant-speed reference (no acceleration:
+    every structure's response to it is the same ramp), or a measured position that does not move."""
+    ref, act = log.columns.get("reference", "reference"), log.columns.get("actual", "actual")
+    span = float(np.ptp(log.reference))
+    if span == 0:
+        raise DriveLogError(f"{log.source}: the reference column {ref!r} is constant; an identification log must move "
+                            "the axis (use the §6.5 program)")
+    t = log.t - log.t[0]
+    dev = float(np.max(np.abs(log.reference - np.polyval(np.polyfit(t, log.reference, 1), t))))
+    if dev <= AFFINE_RTOL * span:
+        raise DriveLogError(f"{log.source}: the reference column {ref!r} moves at constant speed (it deviates "
+                            f"{dev:.3g} mm from a straight line in time over a {span:.6g} mm stroke); it does not excite "
+                            "the drive's dynamics: an identification log needs accelerations (the §6.5 program)")
+    if np.ptp(log.actual) == 0:
+        raise DriveLogError(f"{log.source}: the measured position column {act!r} is constant while the reference "
+                            f"{ref!r} moves {span:.6g} mm; is the drive enabled and is it the encoder column?")
+
+
 def _thesis_starts(log) -> list:
     """Pole parameters of the prefiltered LS (when stable) and of the bounded fit: good starts at low noise,
     rough ones at high noise (their bias is what this fit removes)."""
@@ -198,9 +220,7 @@ def simulation_error_fit(
     if log.n_samples < 10 * n_par:
         raise DriveLogError(f"{log.source}: {log.n_samples} samples are too few for the {n_par} parameters of structure "
                             f"{st.name!r} (need at least {10 * n_par})")
-    if np.ptp(log.reference) == 0:
-        raise DriveLogError(f"{log.source}: the reference column {log.columns.get('reference', 'reference')!r} is "
-                            "constant; an identification log must move the axis (use the §6.5 program)")
+    _check_excitation(log)
     Ts = log.sample_period
     lo, hi = st.default_bounds(Ts) if bounds is None else (np.asarray(bounds[0], float), np.asarray(bounds[1], float))
     if lo.shape != (len(st.pole_names),) or hi.shape != lo.shape or not np.all((0 < lo) & (lo < hi)):
