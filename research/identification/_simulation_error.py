@@ -41,7 +41,7 @@ from research.identification._structure_fit import StructureFit
 INITIAL_MODES = ("estimate", "rest")
 #: optimizer tolerance of the screening pass that only ranks the starts' basins (the chosen one is then
 #: polished to ``tol``); swept in ``benchmarks/bench_identification.py``
-SCREEN_TOL = 1e-6
+SCREEN_TOL = 1e-3
 #: a reference within AFFINE_RTOL of its stroke from a straight line in time does not accelerate: 1e-9 of the
 #: stroke is below any encoder's resolution (1 nm on a 1 m stroke)
 AFFINE_RTOL = 1e-9
