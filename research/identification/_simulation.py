@@ -19,8 +19,8 @@ canonical form ``z' = A z + e_n x_r`` (``z_j = S_{j-1}``) written in time normal
 generator (Van Loan) gives ``z_{k+1} = Ad z_k + G [q, v Ts, a Ts^2, j Ts^3]_k``. Each state is then one
 FIR (all states and channels at once: ``n + 1`` small matrix products over the record) plus one IIR filter
 (``scipy.signal.lfilter``), so a simulation costs about a millisecond for 10^4 samples. The free responses
-are set to zero once their envelope has decayed below 1e-20 (:data:`DECAYED`). ``S_n`` and ``S_{n+1}`` follow from the identities ``S_n = x_r - sum d_j S_j`` and
-``S_{n+1} = x_r' - sum d_j S_{j+1}``.
+are set to zero once their envelope has decayed below 1e-20 (:data:`DECAYED`). ``S_n`` and ``S_{n+1}`` follow
+from the identities ``S_n = x_r - sum d_j S_j`` and ``S_{n+1} = x_r' - sum d_j S_{j+1}``.
 
 The friction sign feeds back (the sign at sample ``k`` depends on signs before ``k`` only), so it is found by
 a fixed-point iteration that is exact when it stops: signs -> simulated velocity -> signs, until no sign
