@@ -193,12 +193,13 @@ def responses(structure: ModelStructure, sigma, ref: Reference) -> Responses:
     Ad, G, Gw = _discretize(den, Ts)
     num, dz = _state_filters(Ad, np.column_stack([G, Gw]))
     fir = _fir(num[:, :, :4], ref.channels)  # (n, N)
-    Z = (lfilter([1.0], dz, fir, axis=-1) * (Ts ** (n - np.arange(n)))[:, None]).T  # S_0 .. S_{n-1}
+    ST = np.empty((n + 2, ref.n_samples))  # rows S_0 .. S_{n+1}, contiguous; S is its transpose
+    ST[:n] = lfilter([1.0], dz, fir, axis=-1)
+    ST[:n] *= (Ts ** (n - np.arange(n)))[:, None]
     d = den[::-1]  # d_0, d_1, ..., d_{n-1}, 1
-    Sn = ref.q - Z @ d[:n]
-    Sn1 = ref.v - Z[:, 1:] @ d[:n - 1] - Sn * d[n - 1]
-    S = np.empty((ref.n_samples, n + 2))
-    S[:, :n], S[:, n], S[:, n + 1] = Z, Sn, Sn1
+    ST[n] = ref.q - d[:n] @ ST[:n]
+    ST[n + 1] = ref.v - d[:n - 1] @ ST[1:n] - d[n - 1] * ST[n]
+    S = ST.T
     w_num, w_den = num[:, :, 4], dz
     k = int(structure.integrator)
     step = lfilter([1.0], w_den, np.ones(ref.n_samples))  # 1/den(z) of a unit step, then each numerator
@@ -210,29 +211,29 @@ def responses(structure: ModelStructure, sigma, ref: Reference) -> Responses:
 def _modes(poles, t):
     """Real basis of the free responses ``e^{lambda t}`` (and derivatives) of the poles ``(n,)``: ``e^{a t}`` for a
     real pole, ``e^{a t} cos(b t)``, ``e^{a t} sin(b t)`` for a pair ``a +- i b`` (upper one taken)."""
-    pos, vel, done = [], [], set()
     n_t = t.size
+    pos, vel = np.zeros((n_t, len(poles))), np.zeros((n_t, len(poles)))
+    done, col = set(), 0
     for i, lam in enumerate(poles):
         if i in done:
             continue
         # samples until the envelope e^{a t} falls below e^-DECAYED (1e-20): zero after that, exact to that level
-        k = n_t if lam.real >= 0 else min(n_t, int(np.ceil(DECAYED / (-lam.real * t[1]))) + 1 if n_t > 1 else n_t)
+        k = n_t if lam.real >= 0 or n_t < 2 else min(n_t, int(np.ceil(DECAYED / (-lam.real * t[1]))) + 1)
         tk = t[:k]
         if abs(lam.imag) <= 1e-9 * abs(lam):
             e = np.exp(lam.real * tk)
-            cols = [(e, lam.real * e)]
+            pos[:k, col], vel[:k, col] = e, lam.real * e
+            col += 1
         else:
             j = next(m for m in range(i + 1, len(poles)) if m not in done and abs(poles[m] - np.conj(lam)) <= 1e-9 * abs(lam))
             done.add(j)
             a, b = lam.real, lam.imag
             e = np.exp(a * tk)
             c, s = e * np.cos(b * tk), e * np.sin(b * tk)
-            cols = [(c, a * c - b * s), (s, b * c + a * s)]
-        for p_col, v_col in cols:
-            pos.append(np.zeros(n_t))
-            vel.append(np.zeros(n_t))
-            pos[-1][:k], vel[-1][:k] = p_col, v_col
-    return np.column_stack(pos), np.column_stack(vel)
+            pos[:k, col], pos[:k, col + 1] = c, s
+            vel[:k, col], vel[:k, col + 1] = a * c - b * s, b * c + a * s
+            col += 2
+    return pos, vel
 
 
 def linear_part(structure: ModelStructure, R: Responses, b, offset: float, c, force=None) -> tuple[np.ndarray, np.ndarray]:
