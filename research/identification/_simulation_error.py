@@ -17,8 +17,9 @@ stability bounds, log-scaled). Friction signs are those of the *simulated* veloc
 held fixed during an optimizer pass and updated from the exact simulation before and between passes until
 the final model's own signs equal the ones held (the fit is then an exact stationary point of the exact
 simulation error). Grid starts are ranked with the signs of the low-passed measured velocity. Starts: a coarse grid
-over the pole parameters (cheap: one projection each) plus any given starts (e.g. the thesis LS), the best
-few polished. ``d_c >= 0`` is kept by re-solving with ``d_c = 0`` when the free solution is negative (exact
+over the pole parameters (cheap: one projection each) plus any given starts (e.g. the thesis LS); the best
+few are screened by one optimizer pass at :data:`SCREEN_TOL` with their own friction signs, and only the
+basin with the lowest exact simulation error is polished to ``tol`` with the sign passes. ``d_c >= 0`` is kept by re-solving with ``d_c = 0`` when the free solution is negative (exact
 for one inequality).
 """
 
@@ -198,7 +199,8 @@ def simulation_error_fit(
         bounds: ``(lower, upper)`` of the pole parameters; default ``structure.default_bounds(Ts)``.
         starts: extra starting pole parameters (e.g. from the thesis LS), each in ``structure.pole_names`` order.
         grid_points: frequencies per axis of the start grid (default 5 for one pair, 4 for more).
-        n_polish: best grid starts that the optimizer polishes (given starts are always polished).
+        n_polish: best grid starts that are screened (given starts are always screened); the best screened
+            basin is polished.
         thesis_starts: for one-pair-plus-real-pole structures (eq 6.3) also start from the equation-error LS
             (eq 6.12, prefiltered) and the bounded variable-projection fit (§6.4) of the same log.
         max_nfev: optimizer evaluations per pass.
