@@ -19,6 +19,17 @@ from research.control._gains import (
     table_5_2,
     table_5_3,
 )
+from research.control._identified_machine import (
+    FIG6_13_ACCELERATION,
+    FIG6_13_BOUND,
+    FIG6_13_FEED,
+    TABLE_6_3_PSO,
+    AxisIdentification,
+    ContourPrediction,
+    fig6_13,
+    identify_table_6_3,
+    predict_contour_error,
+)
 from research.control._loop import ClosedLoopResult, direction_inertia, simulate_closed_loop
 from research.control._plant import FiveAxisPlant, thesis_plant
 from research.control._reference import ContourReference, eq436_reference, parametric_reference
@@ -42,6 +53,15 @@ from research.control._study import (
 )
 
 __all__ = [
+    "AxisIdentification",
+    "ContourPrediction",
+    "FIG6_13_ACCELERATION",
+    "FIG6_13_BOUND",
+    "FIG6_13_FEED",
+    "TABLE_6_3_PSO",
+    "fig6_13",
+    "identify_table_6_3",
+    "predict_contour_error",
     "AXES",
     "CONTROL_PERIOD",
     "CaseResult",
