@@ -67,6 +67,7 @@ from typing import Union
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jax import Array
 
 from research.control._gains import AxisSMC, ContourGains
@@ -217,13 +218,14 @@ def simulate_closed_loop(plant: FiveAxisPlant, reference: ContourReference, cont
         reference: :class:`ContourReference` (its ``sample_period`` is the control period T).
         controller: :class:`AxisSMC` (5 axes, SISO) or :class:`ContourGains` (Fig 5.4 scheme).
         machine: A/C kinematics (needed by the contour controller; default all offsets zero).
-        u_max: amplifier voltage limit [V] (None: no saturation).
+        u_max: amplifier voltage limit [V], scalar or one per axis (None: no saturation).
         friction_width: 0 for the exact sign of eq 6.2, else the ``tanh`` width [mm/s] (for gradients).
         divergence_limit: axis error [mm or rad] beyond which the run is flagged diverged.
     Returns:
         :class:`ClosedLoopResult`.
     Raises:
-        ParameterError: a SISO gain set without 5 axes, or a non-positive limit.
+        ParameterError: a SISO gain set without 5 axes, a non-positive limit, or the contour controller on
+            a joint-only reference.
     """
     machine = TableTiltingAC() if machine is None else machine
     if isinstance(controller, AxisSMC) and controller.lam.shape != (5,):
@@ -232,11 +234,18 @@ def simulate_closed_loop(plant: FiveAxisPlant, reference: ContourReference, cont
         raise ParameterError(f"controller must be AxisSMC or ContourGains, got {type(controller).__name__}")
     if reference.q.shape[1:] != (5,):
         raise ParameterError(f"reference must have 5 axes, got q of shape {reference.q.shape}")
-    if u_max is not None and not u_max > 0:
-        raise ParameterError(f"u_max must be > 0 V, got {u_max!r}")
+    if isinstance(controller, ContourGains) and not reference.has_frame:
+        raise ParameterError("the contour controller needs a reference with the tip path's Frenet frame "
+                             "(parametric_reference / eq436_reference); this one is joint-only (joint_reference)")
+    if u_max is not None:
+        u_max = np.broadcast_to(np.asarray(u_max, dtype=np.float64), (5,)) if np.ndim(u_max) == 0 else np.asarray(u_max, dtype=np.float64)
+        if u_max.shape != (5,):
+            raise ParameterError(f"u_max must be a scalar or one limit per axis (x, y, z, a, c), got shape {u_max.shape}")
+        if not np.all(np.isfinite(u_max) & (u_max > 0)):
+            raise ParameterError(f"u_max must be > 0 V and finite for every axis, got {u_max}")
     if not divergence_limit > 0:
         raise ParameterError(f"divergence_limit must be > 0, got {divergence_limit!r}")
-    return _run(plant, reference, controller, machine, jnp.inf if u_max is None else float(u_max),
+    return _run(plant, reference, controller, machine, jnp.full(5, jnp.inf) if u_max is None else jnp.asarray(u_max),
                 float(friction_width), float(divergence_limit))
 
 
