@@ -224,8 +224,8 @@ def simulate_closed_loop(plant: FiveAxisPlant, reference: ContourReference, cont
     Returns:
         :class:`ClosedLoopResult`.
     Raises:
-        ParameterError: a SISO gain set without 5 axes, a non-positive limit, or the contour controller on
-            a joint-only reference.
+        ParameterError: a SISO gain set without 5 axes, a non-positive limit, the contour controller on
+            a joint-only reference, or reference rows of different lengths or with non-finite values.
     """
     machine = TableTiltingAC() if machine is None else machine
     if isinstance(controller, AxisSMC) and controller.lam.shape != (5,):
@@ -234,6 +234,7 @@ def simulate_closed_loop(plant: FiveAxisPlant, reference: ContourReference, cont
         raise ParameterError(f"controller must be AxisSMC or ContourGains, got {type(controller).__name__}")
     if reference.q.shape[1:] != (5,):
         raise ParameterError(f"reference must have 5 axes, got q of shape {reference.q.shape}")
+    _check_reference(reference)
     if isinstance(controller, ContourGains) and not reference.has_frame:
         raise ParameterError("the contour controller needs a reference with the tip path's Frenet frame "
                              "(parametric_reference / eq436_reference); this one is joint-only (joint_reference)")
@@ -247,6 +248,26 @@ def simulate_closed_loop(plant: FiveAxisPlant, reference: ContourReference, cont
         raise ParameterError(f"divergence_limit must be > 0, got {divergence_limit!r}")
     return _run(plant, reference, controller, machine, jnp.full(5, jnp.inf) if u_max is None else jnp.asarray(u_max),
                 float(friction_width), float(divergence_limit))
+
+
+_REFERENCE_FIELDS = ("t", "q", "qd", "qdd", "P", "Pd", "Pdd", "F", "Fd", "Fdd", "v", "vd")
+
+
+def _check_reference(reference: ContourReference) -> None:
+    """Every row of the reference has the same length and (when the arrays are concrete, i.e. outside a
+    trace) finite values; raises :class:`ParameterError` naming the field and the first bad sample."""
+    N = reference.t.shape[0]
+    for name in _REFERENCE_FIELDS:
+        x = getattr(reference, name)
+        if x.shape[:1] != (N,):
+            raise ParameterError(f"ContourReference.{name} has {x.shape[0] if x.ndim else 0} rows, t has {N}")
+        if isinstance(x, jax.core.Tracer):
+            continue
+        bad = ~np.isfinite(np.asarray(x).reshape(N, -1)).all(axis=1)
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise ParameterError(f"ContourReference.{name} is not finite at sample {k} (t = {float(reference.t[k]):.6g} s)"
+                                 f"{'' if bad.sum() == 1 else f' and {int(bad.sum()) - 1} more samples'}")
 
 
 @eqx.filter_jit

@@ -95,3 +95,30 @@ def test_joint_reference_rejects_contour_controller_and_bad_limits(setup):
         simulate_closed_loop(plant, ref, table_5_2(), u_max=[1.0, 1.0, -1.0, 1.0, 1.0])
     with pytest.raises(ParameterError, match="one limit per axis"):
         simulate_closed_loop(plant, ref, table_5_2(), u_max=[1.0, 1.0])
+
+
+def test_divergence_under_saturation_is_flagged_with_its_time(setup):
+    """With a 1 mm divergence limit the saturated 150 mm/s run is flagged diverged, at a time inside a
+    stretch where an axis is at its amplifier limit, and the log it returns (up to the flag) is finite."""
+    plant, u_max, scheds, runs = setup
+    r = feed_tracking(scheds["150"].trajectory, plant, u_max, divergence_limit=1.0)
+    assert r.diverged and np.isfinite(r.diverged_at)
+    assert np.all(np.isfinite(r.axis_error)) and np.all(np.isfinite(r.u))
+    assert np.abs(r.axis_error).max() <= 1.0 + 1e-9
+    sat_t = runs["150"].t[runs["150"].saturated.any(axis=1)]
+    assert sat_t.min() <= r.diverged_at <= sat_t.max()
+
+
+def test_non_finite_or_ragged_reference_raises(setup):
+    """Bad reference rows raise ParameterError naming the field and the first bad sample."""
+    import equinox as eqx
+    import jax.numpy as jnp
+
+    plant, _, scheds, _ = setup
+    ref = joint_reference(scheds["40"].trajectory, 1e-3)
+    bad = eqx.tree_at(lambda r: r.qd, ref, ref.qd.at[7, 2].set(jnp.nan))
+    with pytest.raises(ParameterError, match=r"qd is not finite at sample 7"):
+        simulate_closed_loop(plant, bad, table_5_2())
+    short = eqx.tree_at(lambda r: r.qdd, ref, ref.qdd[:-1])
+    with pytest.raises(ParameterError, match="qdd has"):
+        simulate_closed_loop(plant, short, table_5_2())

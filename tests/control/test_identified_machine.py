@@ -73,3 +73,19 @@ def test_prediction_of_the_true_machine_has_zero_discrepancy():
     assert pred.discrepancy("truth").max() == 0.0
     with pytest.raises(ParameterError, match="5 axes"):
         predict_contour_error({"short": truth[:4]})
+
+
+def test_unstable_or_frictionless_fit_is_refused_with_the_reason():
+    """An identified model with a right-half-plane pole cannot predict a contour error: ``model`` raises
+    ParameterError naming the axis and the poles (fig6_13 lists such a method under ``excluded``)."""
+    from research.control import AxisIdentification
+    from research.identification import IdentifiedDrive
+
+    coeffs = dict(a1=-10.0, a2=1e4, a3=1e5, b0=0.0, b1=0.0, b2=1e4, dc=1.0)  # s^3 - 10 s^2 + ...: unstable
+    fit = IdentifiedDrive(method="ls", coefficients=coeffs, loss=0.0, loss_kind="equation error, eq 6.10",
+                          wall_time_s=0.0, iterations=0, source="test")
+    ai = AxisIdentification("x", table_6_3_closed_loop("x"), fit, fit)
+    with pytest.raises(ParameterError, match=r"ls fit of axis 'x' has unstable poles"):
+        ai.model("ls")
+    with pytest.raises(ParameterError, match="method"):
+        ai.model("optimistix")
