@@ -5,8 +5,10 @@ public 300 mm blade-flank path of the Fig 3.11 module (the thesis' impeller CL d
 Model and assumptions: :mod:`research.control._feed_tracking`. Samples at the amplifier limit are
 marked. The runs are results-store entries (``.cache/results/store``); the figure only reads them.
 
-``fast=True``: the 40-control-point schedule of the Fig 3.11 module's fast variant; the full run uses
-its n = 276 schedule.
+``fast=True``: the 40-control-point schedule of the Fig 3.11 module's fast variant, the 0.25 ms control
+period and the isolated-reversal friction estimate of the Fig 5 modules' fast variant
+(:func:`research.figures.sencer2009_fig5_results.coulomb`); the full run uses the n = 276 schedule,
+0.1 ms and the identified friction.
 """
 
 from __future__ import annotations
@@ -42,7 +44,8 @@ def stored(case: str, fast: bool = False) -> dict:
 
     if case not in CASES:
         raise ParameterError(f"case must be one of {CASES}, got {case!r}")
-    config = dict(study="sencer2009_fig3_13", case=case, fast=bool(fast), T=CONTROL_PERIOD)
+    T = ch5.FAST_PERIOD if fast else CONTROL_PERIOD
+    config = dict(study="sencer2009_fig3_13", case=case, fast=bool(fast), T=T)
     store, key = ResultStore(Path(DEFAULT_CACHE) / "store"), result_key(config, kind="sencer2009_ch3")
     entry = store.get(key)
     if entry is None:
@@ -52,9 +55,9 @@ def stored(case: str, fast: bool = False) -> dict:
                                       refinements=1 if fast else 3, sample_period=5e-3 if fast else 1e-3)
         else:
             sched = constant_feed(path, limits, float(case), sample_period=1e-3)
-        plant = thesis_plant(ch5.coulomb(CONTROL_PERIOD))
+        plant = thesis_plant(ch5.coulomb(T, fast))
         u_max = amplifier_limits(plant, limits)
-        run = feed_tracking(sched.trajectory, plant, u_max)
+        run = feed_tracking(sched.trajectory, plant, u_max, T=T)
         tr = sched.trajectory
         demand = np.abs(np.asarray(plant.m) * np.asarray(tr.a) + np.asarray(plant.c) * np.asarray(tr.v)).max(axis=0) \
             + np.asarray(plant.coulomb)
