@@ -37,7 +37,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from research.contour import eq436_trajectory, exact_tip_contour_error, simulate_setpoint, tip_reference
-from research.drives import TABLE_6_3, ClosedLoopModel, Encoder, table_6_3_closed_loop
+from research.drives import ClosedLoopModel, Encoder, table_6_3_closed_loop
 from research.errors import ParameterError
 from research.paths.kinematics5 import TableTiltingAC
 
@@ -194,6 +194,3 @@ def fig6_13(*, seed: int = 0, encoder: Encoder | None = None) -> tuple[dict, Con
     pred = predict_contour_error(models)
     return ident, ContourPrediction(pred.t, pred.true, pred.predicted, excluded)
 
-
-#: the thesis' Table 6.3 "Actual" rows, for the figure's table
-TABLE_6_3_ACTUAL = {a: (TABLE_6_3[a]["wn_hz"], TABLE_6_3[a]["zeta"], TABLE_6_3[a]["p_hz"], TABLE_6_3[a]["dc"]) for a in AXES}
