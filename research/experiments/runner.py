@@ -197,13 +197,12 @@ def _legacy_view(record: dict) -> dict:
 
 
 def _figure(cfg: ExperimentConfig, ev) -> bytes:
-    """PNG of the first interpolator's run (Sencer 2015 Fig 6a-b layout)."""
-    from research.figures._style import save
-    from research.figures.fir_run import plot_fir_run
+    """PNG of the run (Sencer 2015 Fig 6a-b layout, every interpolator in the path and feed panels)."""
+    from research.experiments.plot_style import save
+    from research.experiments.run_figure import plot_run
 
-    label, plan, traj, metrics = ev.objects["runs"][0]
     name = f"{cfg.name}: base point of the sweep (no [sweep] applied)" if cfg.sweep is not None else cfg.name
-    fig = plot_fir_run(ev.objects["path"], plan, traj, metrics, title=f"{name}\n{cfg.reproduces}")
+    fig = plot_run(ev.objects["path"], ev.objects["runs"], title=f"{name}\n{cfg.reproduces}")
     buf = io.BytesIO()
     save(fig, buf)
     return buf.getvalue()
@@ -223,13 +222,15 @@ def format_summary(result: RunResult) -> str:
         tag = f"{label}: " if len(runs) > 1 else ""
         n = len(d["turning_angle_deg"])
         rows.append((f"{tag}segments / corners", f"{n + 1} / {n}"))
+        rows.append((f"{tag}interpolator", ic.kind))
         if ic.kind == "fir":
             rows += [(f"{tag}feed F [mm/s]", _range(np.asarray(d["feeds"]))),
                      (f"{tag}FIR delays T_i [ms]", ", ".join(f"{x:g}" for x in ic.delays_ms))]
-        else:
+        elif ic.kind == "time_optimal":
             rows.append((f"{tag}OCP status / iterations", f"{d['status']} / {d['iterations']}"))
+        if hasattr(ic, "tolerance_um"):
+            rows.append((f"{tag}tolerance eps [um]", f"{ic.tolerance_um:g}"))
         rows += [
-            (f"{tag}tolerance eps [um]", f"{ic.tolerance_um:g}"),
             (f"{tag}cycle time [s]", f"{m['cycle_time']:.6f}"),
             (f"{tag}max corner error [um]", f"{m['max_corner_error'] * 1e3:.3f}"),
             (f"{tag}max contour error [um]", f"{m['max_contour_error'] * 1e3:.3f}"),

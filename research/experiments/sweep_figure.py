@@ -70,7 +70,7 @@ def field_label(field: str, cfg) -> str:
 
 def plot_sweep(result, target: Path) -> Path:
     """Write the sweep's figure (PNG) to ``target`` atomically and return it."""
-    from research.figures._style import figure, save
+    from research.experiments.plot_style import figure, save
 
     fields = result.fields
     ok = [r for r in result.rows if r["status"] == "ok"]
