@@ -284,8 +284,27 @@ class SweepConfig(_Strict):
         return {k: v.values() if isinstance(v, Range) else list(v) for k, v in self.parameters.items()}
 
 
+class PaperNumber(_Strict):
+    """A number the paper prints that this config reproduces (issue 16 item 3): checked against the stored
+    result by the figure's test and shown in the run summary."""
+
+    key: str = Field(..., description="a result scalar (e.g. \"half.cycle_time\") or a path into the record's details "
+                                      "(\"details.<label>.<field>[i]...\")")
+    value: float = Field(..., description="the paper's value, in the unit of the result (mm, s, mm/s^n, -)")
+    tolerance: float = Field(..., ge=0, description="accepted |result - value| (same unit): the paper's rounding, or a "
+                                                    "stated model difference")
+    source: str = Field(..., min_length=1, description="where the paper prints it (section, figure or eq, and the line)")
+
+
 class OutputConfig(_Strict):
+    """What a run writes besides ``results.json`` (none of it changes the results key)."""
+
     figure: bool = Field(True, description="write a figure to paper_figures/")
+    export: list[Literal["csv", "gcode"]] = Field(
+        [], description="trajectories to export per interpolator into results/<name>/: <label>.csv (t, q, v, a, j per "
+                        "axis, units in the header) and <label>.ngc (a G-code stream, one G1 per sample)")
+    gcode_tolerance_um: float = Field(0.0, ge=0, description="G64 P tolerance of the G-code stream [um] (0: G61, "
+                                                             "exact path)")
 
 
 class ExperimentConfig(_Strict):
@@ -304,6 +323,7 @@ class ExperimentConfig(_Strict):
     metrics: list[Literal[tuple(METRIC_UNITS)]] | None = Field(None, description="metrics to report (default: all)")
     output: OutputConfig = OutputConfig()
     sweep: SweepConfig | None = None
+    paper: list[PaperNumber] = Field([], description="paper numbers this config reproduces ([[paper]] tables)")
 
     @model_validator(mode="before")
     @classmethod

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from research.experiments.config import METRIC_UNITS, ExperimentConfig, build_path, read_program
-from research.experiments.fir_model import residual_vibration_sampled
+from research.drives import residual_vibration_sampled
 from research.experiments.stages import compensation_stage, contour_stage, drive_model, interpolate
 from research.metrics import summarize
 from research.trajectory import Trajectory

@@ -28,6 +28,7 @@ import numpy as np
 
 from research.experiments.config import ExperimentConfig, input_files, load_config
 from research.experiments.evaluate import evaluate
+from research.experiments.paper_numbers import check_paper_numbers
 from research.experiments.store import COSMETIC, ResultStore, atomic_write, code_version, file_digest, result_key
 from research.trajectory import Trajectory
 
@@ -60,6 +61,14 @@ class RunResult:
     def trajectory(self) -> Trajectory:
         """The first interpolator's sampled trajectory (read back from ``trajectory.npz``)."""
         return Trajectory.load(self.results_file.parent / "trajectory.npz")
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The stored arrays (``arrays.npz``: ``<label>.t/q/v/a/j``, drive and stage outputs); empty if none."""
+        return _read_npz(self.results_file.parent / "arrays.npz")
+
+    def paper_checks(self) -> list:
+        """The config's ``[[paper]]`` numbers against this result (:func:`check_paper_numbers`)."""
+        return check_paper_numbers(self.config, self.record)
 
 
 def hashed_config(cfg: ExperimentConfig) -> dict:
@@ -150,13 +159,45 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
         figure_file = atomic_write(Path(figures_dir) / f"{stem}.png", png)
         atomic_write(out / "figure.png", png)
         written.append("figure.png")
+    written += _export(cfg, record, out)
     atomic_write(out / "config.toml", Path(config_file).read_bytes())
     result = RunResult(cfg, key, record, cached, results_file, figure_file)
+    result.paper_checks()  # a [[paper]] key the result does not have is a ConfigError now, not in a test later
     atomic_write(out / "report.md", _report(result, config_file, written + ["config.toml"]).encode())
     log(f"[3/3] results in {out}/ (results.json, report.md, config.toml"
         + "".join(f", {n}" for n in written[1:]) + ")" + (f"; figure: {figure_file}" if figure_file else "")
         + ("; (cached)" if cached else ""))
     return result
+
+
+def _export(cfg: ExperimentConfig, record: dict, out: Path) -> list[str]:
+    """``output.export``: each interpolator's stored trajectory as ``<label>.csv`` / ``<label>.ngc`` in ``out``."""
+    if not cfg.output.export:
+        return []
+    from research.experiments.export import trajectory_csv, trajectory_gcode
+
+    arrays = _read_npz(out / "arrays.npz")
+    written = []
+    for ic in cfg.interpolators:
+        label = ic.label or ic.kind
+        d = record["details"][label]
+        t = arrays[f"{label}.t"]
+        traj = Trajectory(t, *(arrays[f"{label}.{k}"] for k in ("q", "v", "a", "j")), np.float64(d["metrics"]["cycle_time"]),
+                          None, tuple(d["metrics"]["axes"]), ic.sample_period_ms * 1e-3)
+        if "csv" in cfg.output.export:
+            atomic_write(out / f"{label}.csv", trajectory_csv(traj).encode())
+            written.append(f"{label}.csv")
+        if "gcode" in cfg.output.export:
+            atomic_write(out / f"{label}.ngc", trajectory_gcode(traj, cfg.output.gcode_tolerance_um * 1e-3).encode())
+            written.append(f"{label}.ngc")
+    return written
+
+
+def _read_npz(file: Path) -> dict[str, np.ndarray]:
+    if not file.exists():
+        return {}
+    with np.load(file, allow_pickle=False) as data:
+        return {k: data[k] for k in data.files}
 
 
 def _npz(arrays: dict) -> bytes | None:
@@ -246,6 +287,9 @@ def format_summary(result: RunResult) -> str:
         if k.split(".")[-1] not in shown:
             unit = rec["units"][k]
             rows.append((f"{k} [um]", f"{v * 1e3:.3f}") if unit == "mm" else (f"{k} [{unit}]", f"{v:.6g}"))
+    for c in result.paper_checks():
+        rows.append((f"paper: {c.key}", f"{c.value:.6g} (paper {c.expected:.6g} +- {c.tolerance:.3g}, {c.source}): "
+                                        + ("PASS" if c.ok else "MISS")))
     width = max(len(r[0]) for r in rows)
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
 
