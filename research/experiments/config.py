@@ -47,6 +47,7 @@ from research.experiments.config_stages import (
     BlendConfig,
     ClosedLoopConfig,
     CompensationConfig,
+    FrequencyResponseConfig,
     ContourConfig,
     LimitsConfig,
     SCurveConfig,
@@ -76,6 +77,11 @@ METRIC_UNITS = {
     "cec_error_before": "mm",
     "cec_error_after": "mm",
     "cec_simulations": "-",
+    # drive frequency response: poles of eq 6.13 and the -3 dB tracking bandwidth
+    "drive_wn_hz": "Hz",
+    "drive_zeta": "-",
+    "drive_p_hz": "Hz",
+    "drive_bandwidth_hz": "Hz",
 }
 #: what ``name`` (the results folder and figure file stem) may be: starts with a letter or digit, at most 64
 #: characters of letters, digits, ``_``, ``-`` and ``.`` (so never ``..`` or a path)
@@ -226,6 +232,8 @@ class DriveConfig(_Strict):
     parameters: ClosedLoopConfig | None = Field(None, description="eq 6.3 parameters (model = \"parameters\")")
     modes: list[ModeConfig] = Field([], description="structural modes")
     settle_time_s: float = Field(1.5, gt=0, description="rest simulated after the motion [s] (catalog drives)")
+    frequency_response: FrequencyResponseConfig | None = Field(
+        None, description="tracking / disturbance responses, poles and bandwidth of the drive (a drive model, not ideal)")
 
     @model_validator(mode="after")
     def _parameters_with_model(self):
@@ -338,8 +346,12 @@ class ExperimentConfig(_Strict):
 
     @model_validator(mode="after")
     def _something_to_do(self):
-        if self.path is None and self.identification is None:
-            raise ValueError("give a [path] (motion study) or an [identification] table (or both)")
+        drive_study = self.drive is not None and self.drive.frequency_response is not None
+        if self.path is None and self.identification is None and not drive_study:
+            raise ValueError("give a [path] (motion study), an [identification] table or a [drive.frequency_response] "
+                             "table")
+        if drive_study and self.drive.model == "ideal":
+            raise ValueError("[drive.frequency_response] needs a drive model, not \"ideal\"")
         if self.drive is not None and self.drive.model == "identified" and (
                 self.identification is None or self.identification.method != "simulation_error"
                 or self.identification.structure != "eq6.3"):

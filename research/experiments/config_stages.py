@@ -152,6 +152,21 @@ class ClosedLoopConfig(_Strict):
                                           self.b0, self.b1_per_s, self.b2_per_s2, self.dc_mm_per_s2)
 
 
+class FrequencyResponseConfig(_Strict):
+    """Frequency responses of the drive (thesis eq 6.1: tracking ``x/x_r`` and disturbance ``x/w``) on
+    ``num`` log-spaced frequencies, with its poles (eq 6.13) and tracking bandwidth (-3 dB)."""
+
+    start_hz: float = Field(1.0, gt=0, description="lowest frequency [Hz] (thesis Fig 6.7: 1 Hz)")
+    stop_hz: float = Field(100.0, gt=0, description="highest frequency [Hz] (thesis Fig 6.7: 100 Hz)")
+    num: int = Field(400, ge=2, description="log-spaced frequencies")
+
+    @model_validator(mode="after")
+    def _increasing(self):
+        if not self.stop_hz > self.start_hz:
+            raise ValueError(f"stop_hz = {self.stop_hz:g} Hz must be above start_hz = {self.start_hz:g} Hz")
+        return self
+
+
 ESTIMATORS = ("basic", "shifted", "compensated")
 
 

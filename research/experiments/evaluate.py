@@ -26,9 +26,15 @@ from pathlib import Path
 
 import numpy as np
 
-from research.experiments.config import METRIC_UNITS, ExperimentConfig, build_path, read_program
+from research.experiments.config import METRIC_UNITS, ExperimentConfig, build_path, named_axes, read_program
 from research.drives import residual_vibration_sampled
-from research.experiments.stages import compensation_stage, contour_stage, drive_model, interpolate
+from research.experiments.stages import (
+    compensation_stage,
+    contour_stage,
+    drive_model,
+    frequency_response_stage,
+    interpolate,
+)
 from research.metrics import summarize
 from research.trajectory import Trajectory
 
@@ -60,6 +66,13 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
         ident = _identify(cfg.identification, base, objects)
         details["identification"] = ident
         scalars |= {k: v for k, v in ident.items() if k.endswith("_error")}
+    if cfg.drive is not None and cfg.drive.frequency_response is not None:
+        log(f"drive {cfg.drive.model}: frequency response")
+        axes = named_axes(cfg) if cfg.path is not None else ("x",)
+        found, more = frequency_response_stage(cfg.drive.frequency_response,
+                                               drive_model(cfg.drive, axes, objects.get("identified_drive")), axes)
+        scalars |= found
+        arrays |= more
     if cfg.path is not None:
         if cfg.path.gcode is not None:  # one read: chords for the metrics, blocks for the FIR planner
             program = read_program(cfg.path, base)

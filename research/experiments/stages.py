@@ -169,3 +169,35 @@ def compensation_stage(cc, path, traj: Trajectory, drive):
     scalars = {"cec_error_before": res.before.max, "cec_error_after": res.after.max,
                "cec_simulations": float(res.simulations)}
     return scalars, res
+
+
+def frequency_response_stage(fc, drive, axes: tuple[str, ...]) -> tuple[dict, dict]:
+    """Tracking and disturbance responses (thesis eq 6.1) of ``drive`` (one model, or one per axis) on
+    ``fc``'s frequencies, its poles (eq 6.13) and the -3 dB bandwidth of ``|x/x_r|`` (the first frequency
+    where it falls below 1/sqrt(2), by log-linear interpolation; left out if it stays above in the range).
+
+    Returns:
+        ``(scalars, arrays)``: ``drive_wn_hz``, ``drive_zeta``, ``drive_p_hz``, ``drive_bandwidth_hz``
+        (suffixed ``.<axis>`` for per-axis drives); arrays ``bode.f``, ``bode.tracking`` and
+        ``bode.disturbance`` (complex, per axis for per-axis drives).
+    """
+    from research.drives import frequency_response
+
+    f = np.logspace(np.log10(fc.start_hz), np.log10(fc.stop_hz), fc.num)
+    models = dict(zip(axes, drive)) if isinstance(drive, tuple) else {"": drive}
+    scalars, arrays = {}, {"bode.f": f}
+    for axis, model in models.items():
+        tag = f".{axis}" if axis else ""
+        fr = frequency_response(model, f)
+        track = np.asarray(fr.tracking)
+        wn, zeta, p = model.closed_loop_model().pole_parameters()
+        mag = np.abs(track)
+        below = np.flatnonzero(mag < 1 / np.sqrt(2))
+        scalars |= {f"drive_wn_hz{tag}": float(wn) / (2 * np.pi), f"drive_zeta{tag}": float(zeta),
+                    f"drive_p_hz{tag}": float(p) / (2 * np.pi)}
+        if below.size and below[0] > 0:
+            i = below[0]
+            x = np.log(f[i - 1:i + 1])
+            scalars[f"drive_bandwidth_hz{tag}"] = float(np.exp(np.interp(-np.log(np.sqrt(2)), np.log(mag[[i, i - 1]]), x[::-1])))
+        arrays |= {f"bode.tracking{tag}": track, f"bode.disturbance{tag}": np.asarray(fr.disturbance)}
+    return scalars, arrays

@@ -122,3 +122,20 @@ def test_compensation_stage_matches_prevost_application_2():
     assert s["cec_error_before"] == pytest.approx(ref.before.max, rel=1e-6)
     assert s["cec_error_after"] == pytest.approx(ref.after.max, rel=1e-6)
     assert s["cec_error_after"] < s["cec_error_before"]
+
+
+def test_frequency_response_stage_of_a_drive_alone():
+    """A drive-only config: the poles of eq 6.13 from the coefficients (computed here with numpy.roots), and
+    |x/x_r| at the reported bandwidth is 1/sqrt(2) (evaluated here from the eq 6.3 transfer function)."""
+    _, ev = run(drive={"model": "parameters", "parameters": TABLE_6_1, "frequency_response": {"num": 800}})
+    s = ev.record["scalars"]
+    roots = np.roots([1.0, TABLE_6_1["a1_per_s"], TABLE_6_1["a2_per_s2"], TABLE_6_1["a3_per_s3"]])
+    pair = roots[np.abs(roots.imag) > 0][0]
+    assert s["drive_wn_hz"] == pytest.approx(abs(pair) / (2 * np.pi), rel=1e-9)
+    assert s["drive_zeta"] == pytest.approx(-pair.real / abs(pair), rel=1e-9)
+    w = 2j * np.pi * s["drive_bandwidth_hz"]
+    num = np.polyval([TABLE_6_1["b0"], TABLE_6_1["b1_per_s"], TABLE_6_1["b2_per_s2"], TABLE_6_1["a3_per_s3"]], w)
+    den = np.polyval([1.0, TABLE_6_1["a1_per_s"], TABLE_6_1["a2_per_s2"], TABLE_6_1["a3_per_s3"]], w)
+    assert abs(num / den) == pytest.approx(1 / np.sqrt(2), rel=1e-4)
+    with pytest.raises(ConfigError, match=r"needs a drive model, not \"ideal\""):
+        validate({"name": "t", "reproduces": "-", "drive": {"frequency_response": {}}}, "t.toml")
