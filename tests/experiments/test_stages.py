@@ -139,3 +139,14 @@ def test_frequency_response_stage_of_a_drive_alone():
     assert abs(num / den) == pytest.approx(1 / np.sqrt(2), rel=1e-4)
     with pytest.raises(ConfigError, match=r"needs a drive model, not \"ideal\""):
         validate({"name": "t", "reproduces": "-", "drive": {"frequency_response": {}}}, "t.toml")
+
+
+def test_limit_holding_fir_is_not_sent_to_the_fast_path():
+    """The closed forms of the vmap fast path model the paper's planner, not plan_fir(limits=...)."""
+    from research.experiments.sweep_vmap import eligible
+
+    cfg = validate({"name": "t", "reproduces": "-", "path": {"name": "diamond"}}, "t.toml")
+    assert eligible(cfg) is None
+    held = validate({"name": "t", "reproduces": "-", "path": {"name": "diamond"}, "interpolator": {
+        "limits": {"velocity_mm_per_s": 250.0, "acceleration_mm_per_s2": 1000.0}}}, "t.toml")
+    assert "limit-holding" in eligible(held)
