@@ -52,6 +52,7 @@ from research.experiments.config_stages import (
     LimitsConfig,
     SCurveConfig,
     SigmoidConfig,
+    VibrationConfig,
 )
 from research.paths import PATHS, Polyline, named_path
 
@@ -82,6 +83,10 @@ METRIC_UNITS = {
     "drive_zeta": "-",
     "drive_p_hz": "Hz",
     "drive_bandwidth_hz": "Hz",
+    # vibration stage: estimated modes and their eq 10 delays
+    "mode_frequency_hz": "Hz",
+    "mode_damping": "-",
+    "tuned_delay": "s",
 }
 #: what ``name`` (the results folder and figure file stem) may be: starts with a letter or digit, at most 64
 #: characters of letters, digits, ``_``, ``-`` and ``.`` (so never ``..`` or a path)
@@ -326,6 +331,7 @@ class ExperimentConfig(_Strict):
                                              description="one table, or an array of tables [[interpolator]]; kind defaults to fir")
     drive: DriveConfig | None = None
     identification: IdentificationConfig | None = None
+    vibration: VibrationConfig | None = Field(None, description="resonance test -> modes -> eq 10 delays")
     contour: ContourConfig | None = Field(None, description="contour-error stage (needs a drive other than ideal)")
     compensation: CompensationConfig | None = Field(None, description="CEC stage (needs a drive other than ideal)")
     metrics: list[Literal[tuple(METRIC_UNITS)]] | None = Field(None, description="metrics to report (default: all)")
@@ -347,9 +353,9 @@ class ExperimentConfig(_Strict):
     @model_validator(mode="after")
     def _something_to_do(self):
         drive_study = self.drive is not None and self.drive.frequency_response is not None
-        if self.path is None and self.identification is None and not drive_study:
-            raise ValueError("give a [path] (motion study), an [identification] table or a [drive.frequency_response] "
-                             "table")
+        if self.path is None and self.identification is None and self.vibration is None and not drive_study:
+            raise ValueError("give a [path] (motion study), an [identification] table, a [vibration] table or a "
+                             "[drive.frequency_response] table")
         if drive_study and self.drive.model == "ideal":
             raise ValueError("[drive.frequency_response] needs a drive model, not \"ideal\"")
         if self.drive is not None and self.drive.model == "identified" and (
@@ -438,6 +444,8 @@ def input_files(cfg: ExperimentConfig) -> dict[str, str]:
         files["path.gcode"] = cfg.path.gcode
     if cfg.identification is not None and cfg.identification.log_file is not None:
         files["identification.log_file"] = cfg.identification.log_file
+    if cfg.vibration is not None and cfg.vibration.log_file is not None:
+        files["vibration.log_file"] = cfg.vibration.log_file
     return files
 
 

@@ -195,3 +195,35 @@ class CompensationConfig(_Strict):
     max_steps: int = Field(20, ge=1, description="iteration cap (fixed_point, newton)")
     spacing_mm: float = Field(0.02, gt=0, description="largest piece of the in-loop target polyline [mm]")
     friction: Literal["exact", "smooth"] = Field("exact", description="Coulomb sign in the simulation (eq 6.2)")
+
+
+class TrueModeConfig(_Strict):
+    """A mode of the synthetic machine a resonance-test log is made from."""
+
+    axis: Literal["x", "y", "z"] = Field(..., description="axis letter")
+    frequency_hz: float = Field(..., gt=0, description="natural frequency [Hz]")
+    damping: float = Field(0.02, gt=0, lt=1, description="damping ratio [-] (2 %: Sencer 2015 gives none)")
+
+
+class VibrationConfig(_Strict):
+    """Resonance test -> modes -> eq 10 delays (Sencer 2015, :mod:`research.vibration`): a seeded synthetic
+    sine-sweep log of ``modes`` (truth known), or a logged file (``log_file``, relative to the config)."""
+
+    log_file: str | None = Field(None, description="accelerometer log (csv/npz/mat) instead of a synthetic one")
+    unit: str = Field("mm/s^2", description="acceleration unit of log_file: mm/s^2, m/s^2 or g")
+    modes: list[TrueModeConfig] = Field([], description="the synthetic machine's modes (synthetic log)")
+    f0_hz: float = Field(2.0, gt=0, description="sweep start [Hz]")
+    f1_hz: float = Field(40.0, gt=0, description="sweep end [Hz]")
+    duration_s: float = Field(10.0, gt=0, description="sweep length [s]")
+    rate_hz: float = Field(3200.0, gt=0, description="sample rate [Hz] (an ADXL345 at 3.2 kHz, as Klipper)")
+    snr_db: float = Field(20.0, description="signal-to-noise ratio of the strongest axis [dB]")
+    seed: int = Field(0, ge=0, description="noise seed")
+    k: Literal[1, 2] = Field(1, description="eq 10 zero used for every delay (1: the shortest delay)")
+
+    @model_validator(mode="after")
+    def _one_source(self):
+        if (self.log_file is None) == (not self.modes):
+            raise ValueError("give either log_file or modes (a synthetic log of known modes), not both or neither")
+        if not self.f1_hz > self.f0_hz:
+            raise ValueError(f"f1_hz = {self.f1_hz:g} Hz must be above f0_hz = {self.f0_hz:g} Hz")
+        return self

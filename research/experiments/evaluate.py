@@ -34,6 +34,7 @@ from research.experiments.stages import (
     drive_model,
     frequency_response_stage,
     interpolate,
+    vibration_stage,
 )
 from research.metrics import summarize
 from research.trajectory import Trajectory
@@ -66,6 +67,11 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
         ident = _identify(cfg.identification, base, objects)
         details["identification"] = ident
         scalars |= {k: v for k, v in ident.items() if k.endswith("_error")}
+    if cfg.vibration is not None:
+        log("vibration: resonance test -> modes -> eq 10 delays")
+        found, details["vibration"], more = vibration_stage(cfg.vibration, base)
+        scalars |= found
+        arrays |= more
     if cfg.drive is not None and cfg.drive.frequency_response is not None:
         log(f"drive {cfg.drive.model}: frequency response")
         axes = named_axes(cfg) if cfg.path is not None else ("x",)

@@ -34,6 +34,8 @@ from research.trajectory import Trajectory
 
 DEFAULT_CACHE = Path(".cache") / "results"
 DEFAULT_FIGURES = Path("paper_figures")
+#: ``details`` entries of stages that are not interpolator runs
+STAGE_DETAILS = ("identification", "vibration")
 #: the visible results folder of the command line (one folder per experiment)
 DEFAULT_RESULTS = Path("results")
 
@@ -227,7 +229,7 @@ def _report(result: RunResult, config_file, files: list[str]) -> str:
 
 def _legacy_view(record: dict) -> dict:
     """``metrics`` and ``corners`` of the first interpolator, at the top level (the README's layout)."""
-    runs = [v for k, v in record["details"].items() if k != "identification"]
+    runs = [v for k, v in record["details"].items() if k not in STAGE_DETAILS]
     if not runs:
         return {}
     first = runs[0]
@@ -257,7 +259,7 @@ def format_summary(result: RunResult) -> str:
     if cfg.sweep is not None:
         rows.append(("note", f"base point only: [sweep] over {len(cfg.sweep.parameters)} field(s) not run "
                              "(python -m research sweep CONFIG runs it)"))
-    runs = {k: v for k, v in rec["details"].items() if k != "identification"}
+    runs = {k: v for k, v in rec["details"].items() if k not in STAGE_DETAILS}
     for (label, d), ic in zip(runs.items(), cfg.interpolators):
         m = d["metrics"]
         tag = f"{label}: " if len(runs) > 1 else ""

@@ -201,3 +201,39 @@ def frequency_response_stage(fc, drive, axes: tuple[str, ...]) -> tuple[dict, di
             scalars[f"drive_bandwidth_hz{tag}"] = float(np.exp(np.interp(-np.log(np.sqrt(2)), np.log(mag[[i, i - 1]]), x[::-1])))
         arrays |= {f"bode.tracking{tag}": track, f"bode.disturbance{tag}": np.asarray(fr.disturbance)}
     return scalars, arrays
+
+
+def vibration_stage(vc, base) -> tuple[dict, dict, dict]:
+    """Resonance test -> modes (:func:`research.vibration.estimate_modes`) -> eq 10 delays
+    (:func:`research.vibration.tune_delays`) for the dominant mode of each axis.
+
+    Returns:
+        ``(scalars, details, arrays)``: ``mode_frequency_hz.<axis>``, ``mode_damping.<axis>``,
+        ``tuned_delay.T<i>`` [s]; details ``{"modes": [...], "tuned": {...}, "log": ...}``; arrays
+        ``vibration.<axis>.f / psd / threshold``.
+    """
+    from research.vibration import TrueMode, estimate_modes, load_accel_log, synthetic_accel_log, tune_delays
+
+    if vc.log_file is not None:
+        log = load_accel_log(base / vc.log_file, unit=vc.unit)
+    else:
+        log = synthetic_accel_log([TrueMode(m.axis, m.frequency_hz, m.damping) for m in vc.modes], excitation="sweep",
+                                  f0=vc.f0_hz, f1=vc.f1_hz, duration=vc.duration_s, rate=vc.rate_hz, snr_db=vc.snr_db,
+                                  seed=vc.seed)
+    survey = estimate_modes(log)
+    dominant = survey.dominant()
+    tuned = tune_delays(list(dominant.values()), k=vc.k)
+    scalars, arrays = {}, {}
+    for axis, m in dominant.items():
+        scalars |= {f"mode_frequency_hz.{axis}": float(m.frequency_hz), f"mode_damping.{axis}": float(m.damping)}
+    scalars |= {f"tuned_delay.T{i + 1}": float(T) for i, T in enumerate(tuned.delays_s)}
+    for axis, spec in survey.spectra.items():
+        arrays |= {f"vibration.{axis}.f": spec.frequency_hz, f"vibration.{axis}.psd": spec.psd,
+                   f"vibration.{axis}.threshold": spec.threshold}
+    details = {"log": {"source": log.source, "samples": int(log.t.size), "sample_rate_hz": float(1 / log.sample_period)},
+               "modes": [{"axis": m.axis, "frequency_hz": m.frequency_hz, "frequency_sd_hz": m.frequency_sd_hz,
+                          "damping": m.damping, "damping_sd": m.damping_sd, "peak_psd": m.peak_psd, "flags": list(m.flags)}
+                         for s in survey.spectra.values() for m in s.modes],
+               "tuned": {"delays_s": list(tuned.delays_s), "axes": list(tuned.axes),
+                         "frequencies_hz": list(tuned.frequencies_hz), "k": [int(k) for k in tuned.k]}}
+    return scalars, details, arrays

@@ -32,6 +32,9 @@ def run(**tables):
     ({"drive": {"model": "sencer2009_table6_1"}, "compensation": {"methd": "newton"}},
      r"key 'compensation.methd': unknown key \(typo\? did you mean 'method'\?\)"),
     ({"drive": {"model": "sencer2009_table6_1"}, "contour": {"estimators": ["exact"]}}, r"key 'contour.estimators\[0\]'"),
+    ({"vibration": {}}, r"key 'vibration': give either log_file or modes"),
+    ({"vibration": {"modes": [{"axis": "x", "frequency_hz": 11.4}], "f1_hz": 1.0}}, r"f1_hz = 1 Hz must be above f0_hz"),
+    ({"vibration": {"modes": [{"axis": "q", "frequency_hz": 11.4}]}}, r"key 'vibration.modes\[0\].axis'"),
 ])
 def test_stage_tables_are_validated(tables, message):
     with pytest.raises(ConfigError, match=message):
