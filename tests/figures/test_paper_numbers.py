@@ -32,3 +32,24 @@ def test_paper_numbers_from_the_stored_result(tmp_path, name):
     bad = [c.line() for c in checks if not c.ok]
     assert not bad, "\n".join(bad)
     assert Path(stored.results_file).parent == tmp_path / "results" / name
+
+
+def test_figures_command_runs_a_config_figure_through_the_store(tmp_path, capsys):
+    """``figures`` on a config figure: computed once, then served from the store (unchanged config and code),
+    the paper checks printed and written to the manifest, the readable results under --results."""
+    import json
+
+    from research.cli import main
+
+    name = "sencer2009_fig6_7_drive_bode"
+    args = ["figures", "--only", name, "--out", str(tmp_path / "f"), "--cache", str(tmp_path / "c"),
+            "--results", str(tmp_path / "r")]
+    assert main(args) == 0
+    first = capsys.readouterr().out
+    assert main(args) == 0
+    again = capsys.readouterr().out
+    assert "(from the store)" not in first and "(from the store)" in again
+    assert again.count("paper: ") == 2 and "MISS" not in again
+    manifest = json.loads((tmp_path / "f" / "manifest.json").read_text())
+    assert manifest[0]["config"] == CONFIG_FIGURES[name] and all(c["ok"] for c in manifest[0]["paper"])
+    assert (tmp_path / "f" / f"{name}.png").exists() and (tmp_path / "r" / name / "arrays.npz").exists()
