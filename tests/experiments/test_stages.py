@@ -153,3 +153,20 @@ def test_limit_holding_fir_is_not_sent_to_the_fast_path():
     held = validate({"name": "t", "reproduces": "-", "path": {"name": "diamond"}, "interpolator": {
         "limits": {"velocity_mm_per_s": 250.0, "acceleration_mm_per_s2": 1000.0}}}, "t.toml")
     assert "limit-holding" in eligible(held)
+
+
+def test_compensation_passes_match_the_package():
+    """method = "passes" gives research.contour.mirror_passes on the same problem: the same history of max |e_T|."""
+    from research.contour import cec_problem, mirror_passes
+    from research.interpolators import fir_interpolate
+    from research.drives import virtual_drive
+    from research.paths import named_path
+
+    _, ev = run(path={"name": "corner90"}, interpolator={"feed_mm_per_s": 100.0, "delays_ms": [24.0, 12.0],
+                                                         "tolerance_um": 50.0, "sample_period_ms": 4.0},
+                drive={"model": "sencer2009_table6_1", "settle_time_s": 0.1}, compensation={"method": "passes", "passes": 2})
+    traj = fir_interpolate(named_path("corner90"), 100.0, [0.024, 0.012], 0.05, 0.004)
+    ref = mirror_passes(cec_problem(named_path("corner90"), traj, virtual_drive("sencer2009_table6_1")), 2)
+    got = ev.record["details"]["fir"]["compensation"]
+    assert got["method"] == "passes" and got["history"] == pytest.approx(list(ref.history), rel=1e-9)
+    assert ev.record["scalars"]["cec_error_after"] == pytest.approx(ref.after.max, rel=1e-9)
