@@ -170,3 +170,16 @@ def test_compensation_passes_match_the_package():
     got = ev.record["details"]["fir"]["compensation"]
     assert got["method"] == "passes" and got["history"] == pytest.approx(list(ref.history), rel=1e-9)
     assert ev.record["scalars"]["cec_error_after"] == pytest.approx(ref.after.max, rel=1e-9)
+
+
+def test_table_6_3_drive_is_one_model_per_axis():
+    from research.drives import table_6_3_closed_loop
+    from research.experiments.stages import drive_model
+
+    cfg = validate({"name": "t", "reproduces": "-", "path": {"name": "corner90"}, "drive": {"model": "sencer2009_table6_3"}},
+                   "t.toml")
+    models = drive_model(cfg.drive, ("x", "y"))
+    assert isinstance(models, tuple) and len(models) == 2
+    for m, axis in zip(models, "xy"):
+        assert m.pole_parameters() == pytest.approx(table_6_3_closed_loop(axis).pole_parameters(), rel=1e-12)
+    assert models[0].pole_parameters() != pytest.approx(models[1].pole_parameters(), rel=1e-3)
