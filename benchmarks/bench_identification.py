@@ -26,12 +26,23 @@ whole 15 s record and scored on the held-out 12-15 s (tracking-error fit %, RMS 
 warm (PSO: after its JAX compilation, which is printed apart; LS and the simulation-error fit compile
 nothing). Also the Table 6.1 drive at 5 um encoder noise: the pole errors of each method. Targets (issue 14):
 EMPS pp2 held-out fit >= 99.3 % and RMS <= 3.5 um; 5 um noise: wn, zeta, p within 2 %.
+
+Before -> after of the simulation-error fit (``--baseline-rev REV``): the package at git revision ``REV`` is
+exported (``git archive``) to a temporary folder, and this script times the same EMPS fits with that package
+and with the working tree's, each in its own subprocess (one BLAS thread), alternating, ``--repeats`` times
+each; the medians of wall and CPU time are printed with their ratio, next to the thesis PSO of the same run.
+The machine is shared, so CPU time (``time.process_time``) is the steadier number; the load is printed.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import os
 import pathlib
+import subprocess
+import sys
+import tempfile
 import time
 
 import numpy as np
@@ -57,7 +68,8 @@ from research.identification import (
 from research.identification._projection import PoleBounds
 from research.identification._pso import _swarm
 
-EMPS_DEFAULT = pathlib.Path(__file__).resolve().parents[2] / "shared" / "data" / "emps" / "emps_estimation_first15s.mat"
+EMPS_DEFAULT = (pathlib.Path(os.environ.get("RESEARCH_SHARED_DIR", pathlib.Path(__file__).resolve().parents[2] / "shared"))
+                / "data" / "emps" / "emps_estimation_first15s.mat")
 
 
 def _timed(fn, repeat=1):
@@ -158,11 +170,78 @@ def bench_issue14(emps_path: pathlib.Path, quick: bool) -> None:
                   + (f" -> {'PASS' if np.all(worst < 0.02) else 'MISS'} (target 2 %)" if method == "simulation_error" else ""))
 
 
+def _time_fits(emps_path: pathlib.Path, structures) -> None:
+    """Child process of :func:`bench_speed`: fit each structure twice on EMPS t < 12 s (the first call also pays
+    any one-off cost, e.g. the eq 6.3 thesis starts' JAX compilation) and print one JSON line per structure."""
+    import research.identification as ri
+
+    log = ri.load_emps(emps_path)
+    est, _ = log.split(12.0)
+    for name in structures:
+        ri.simulation_error_fit(est, name)
+        w, c = time.perf_counter(), time.process_time()
+        fit = ri.simulation_error_fit(est, name)
+        w, c = time.perf_counter() - w, time.process_time() - c
+        v = ri.compare(fit, log, windows={"validation": (12.0, np.inf)})["validation"]
+        print(json.dumps({"structure": name, "wall_s": w, "cpu_s": c, "evaluations": fit.info.get("evaluations"),
+                          "converged": fit.converged, "fit_percent": v["tracking_error_fit_percent"],
+                          "rms_um": v["rms_um"], "package": str(pathlib.Path(ri.__file__).parent)}), flush=True)
+
+
+def _child(root: pathlib.Path, emps_path: pathlib.Path, structures) -> list[dict]:
+    env = dict(os.environ, PYTHONPATH=str(root), OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    out = subprocess.run([sys.executable, __file__, "--time-fits", "--emps", str(emps_path), "--structures", *structures],
+                         env=env, cwd=root, capture_output=True, text=True, check=True).stdout
+    return [json.loads(line) for line in out.splitlines() if line.startswith("{")]
+
+
+def bench_speed(emps_path: pathlib.Path, baseline_rev: str, repeats: int, structures=("pp2", "eq6.3")) -> None:
+    """Before -> after wall and CPU time of the simulation-error fit (module docstring)."""
+    repo = pathlib.Path(__file__).resolve().parents[1]
+    rev = subprocess.run(["git", "rev-parse", "--short", baseline_rev], cwd=repo, capture_output=True, text=True,
+                         check=True).stdout.strip()
+    with open("/proc/loadavg") as f:
+        load = f.read().split()[:3]
+    print(f"\n== simulation-error fit, before ({rev}) -> after (working tree), EMPS t < 12 s, {repeats} alternating runs "
+          f"each, load {' '.join(load)} ==")
+    with tempfile.TemporaryDirectory(prefix="bench_ident_base_") as tmp:
+        archive = subprocess.run(["git", "archive", rev, "research"], cwd=repo, capture_output=True, check=True).stdout
+        subprocess.run(["tar", "-x", "-C", tmp], input=archive, check=True)
+        runs = {"before": [], "after": []}
+        for _ in range(repeats):
+            runs["before"] += _child(pathlib.Path(tmp), emps_path, structures)
+            runs["after"] += _child(repo, emps_path, structures)
+    for name in structures:
+        row = {}
+        for k, rs in runs.items():
+            rs = [r for r in rs if r["structure"] == name]
+            row[k] = {q: float(np.median([r[q] for r in rs])) for q in ("wall_s", "cpu_s", "evaluations")} | {
+                "fit": rs[-1]["fit_percent"], "rms": rs[-1]["rms_um"], "conv": rs[-1]["converged"]}
+        b, a = row["before"], row["after"]
+        print(f"  {name:6s} before: wall {b['wall_s']:6.2f} s, CPU {b['cpu_s']:6.2f} s, {b['evaluations']:4.0f} evaluations, "
+              f"held-out {b['fit']:.3f} % / {b['rms']:.3f} um, converged {b['conv']}")
+        print(f"  {name:6s} after : wall {a['wall_s']:6.2f} s, CPU {a['cpu_s']:6.2f} s, {a['evaluations']:4.0f} evaluations, "
+              f"held-out {a['fit']:.3f} % / {a['rms']:.3f} um, converged {a['conv']}")
+        print(f"  {name:6s} speed-up: wall {b['wall_s'] / a['wall_s']:.2f}x, CPU {b['cpu_s'] / a['cpu_s']:.2f}x")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="skip the N-sample PSO and use a 30-move program")
     ap.add_argument("--emps", type=pathlib.Path, default=EMPS_DEFAULT, help="EMPS .mat file (skipped if absent)")
+    ap.add_argument("--baseline-rev", help="git revision whose simulation-error fit is timed against the working tree")
+    ap.add_argument("--repeats", type=int, default=3, help="alternating before/after runs of --baseline-rev")
+    ap.add_argument("--speed-only", action="store_true", help="only the before -> after timing of --baseline-rev")
+    ap.add_argument("--time-fits", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--structures", nargs="+", default=["pp2", "eq6.3"], help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.time_fits:
+        _time_fits(args.emps, args.structures)
+        return
+    if args.baseline_rev and args.emps.exists():
+        bench_speed(args.emps, args.baseline_rev, args.repeats)
+    if args.speed_only:
+        return
     ref = identification_program(0, n_moves=30 if args.quick else 70).trajectory()
     for table, base in (("Table 6.1 P-PI", table_6_1_closed_loop()), ("Table 6.2 PID", table_6_2_closed_loop())):
         truth = ClosedLoopModel(base.a1, base.a2, base.a3, base.b0, base.b1, base.b2, ASSUMED_FRICTION)

@@ -22,14 +22,18 @@ from research.identification._excitation import (
 )
 from research.identification._least_squares import least_squares
 from research.identification._log import (
+    ANGLE_UNITS,
     LENGTH_UNITS,
+    POSITION_UNITS,
     RESAMPLING_METHODS,
     TIME_UNITS,
     DriveLog,
+    Plausibility,
     load_axis_logs,
     load_drive_log,
     save_drive_log,
 )
+from research.identification._log_read import read_halscope, write_halscope
 from research.identification._output_error import output_error_fit, simulate_log
 from research.identification._projection import (
     PoleBounds,
@@ -53,6 +57,7 @@ from research.identification._report import FitReport, fit_percent, fit_report
 from research.identification._result import COEFFICIENTS, IdentifiedDrive
 from research.identification._selection import StructureSelection, aic, select_structure
 from research.identification._simulation_error import INITIAL_MODES, simulation_error_fit
+from research.identification._store import load_identified, save_identified
 from research.identification._structure import EQ_6_3, PI5, PP2, PP4, STRUCTURES, ModelStructure, structure
 from research.identification._structure_fit import INITIAL_SAMPLES, StructureFit
 from research.identification._synthetic import synthetic_log
@@ -100,6 +105,8 @@ __all__ = [
     "compare",
     "residual_analysis",
     "select_structure",
+    "load_identified",
+    "save_identified",
     "simulate_model",
     "simulation_error_fit",
     "structure",
@@ -108,7 +115,12 @@ __all__ = [
     "EMPS_SPLIT_S",
     "emps_structures",
     "LEAD_RG",
+    "ANGLE_UNITS",
     "LENGTH_UNITS",
+    "POSITION_UNITS",
+    "Plausibility",
+    "read_halscope",
+    "write_halscope",
     "MAX_CONDITION",
     "PARAMETERS",
     "RESAMPLING_METHODS",

@@ -1,19 +1,21 @@
 """Drive logs: logged reference and actual axis positions (thesis §6.3, Fig 6.3), loaded and validated.
 
-A :class:`DriveLog` holds one axis: time ``t`` [s], reference ``x_r`` [mm] and measured ``x`` [mm] at the
-control period ``Ts``, plus, optionally, the control signal. Files are read by :func:`load_drive_log`
-(CSV with a header line, MATLAB ``.mat`` through ``scipy.io.loadmat``, NumPy ``.npz``); lengths are
-converted to mm and time to s at this edge, so everything downstream works in mm and s.
+A :class:`DriveLog` holds one axis: time ``t`` [s], reference ``x_r`` [mm] and measured ``x`` [mm] (rad for a
+rotary axis) at the control period ``Ts``, plus, optionally, the control signal. Files are read by
+:func:`load_drive_log` and :func:`load_axis_logs` (CSV with a header line, MATLAB ``.mat``, NumPy ``.npz``,
+LinuxCNC halscope text exports: :mod:`research.identification._log_read`); positions are converted to mm
+(m, um, in), rad (deg) or through an encoder resolution (counts) and time to s at this edge
+(:mod:`research.identification._log_units`), so everything downstream works in mm (rad) and s.
 
 Validation (each failure raises :class:`~research.errors.DriveLogError` naming file, column and sample
 index): both positions present, equal lengths, no NaN or inf, time strictly increasing, uniform sampling
 within ``uniform_rtol`` of the median period (otherwise resample explicitly with :meth:`DriveLog.resample`,
 whose method is recorded in :attr:`DriveLog.resampling`), and plausible units (:class:`Plausibility`: a
-position span over 10 m, a speed over 20 m/s or a sample period outside [10 us, 0.1 s] is refused with
-the likely unit mistake, um read as mm or ms read as s; pass ``plausibility=`` to override, ``None`` to
-skip). A file that cannot be parsed at all (corrupt ``.npz`` / ``.mat``, non-UTF-8 CSV, a non-numeric
-cell or column) is a :class:`~research.errors.DriveLogError` naming the file, and the line and column
-or the column name, too.
+position span over 10 m, a speed over 20 m/s (10 000 rpm for rotary axes), a sample period outside
+[10 us, 0.1 s] or fractional counts are refused with the likely unit mistake; pass ``plausibility=`` to
+override, ``None`` to skip). A file that cannot be parsed at all (corrupt ``.npz`` / ``.mat``, non-UTF-8
+text, a non-numeric cell or column, a truncated row) is a :class:`~research.errors.DriveLogError` naming
+the file, and the line and column or the column name, too.
 """
 
 from __future__ import annotations
@@ -24,12 +26,23 @@ from pathlib import Path
 import numpy as np
 
 from research.errors import DriveLogError
+from research.identification._log_read import _numeric, _read_table
+from research.identification._log_units import (
+    ANGLE_UNITS,
+    COUNTS,
+    LENGTH_UNITS,
+    POSITION_UNITS,
+    TIME_UNITS,
+    convert_position,
+    time_factor,
+)
 from research.trajectory import Trajectory
 
-#: length units accepted at the edge and their size in mm
-LENGTH_UNITS = {"mm": 1.0, "m": 1000.0, "um": 1e-3, "in": 25.4}
-#: time units accepted at the edge and their size in s
-TIME_UNITS = {"s": 1.0, "ms": 1e-3}
+__all__ = ["ANGLE_UNITS", "LENGTH_UNITS", "POSITION_UNITS", "TIME_UNITS", "DriveLog", "Plausibility", "load_axis_logs",
+           "load_drive_log", "save_drive_log", "_numeric", "_read_table"]
+
+#: keys of one axis in :func:`load_axis_logs`
+AXIS_KEYS = {"reference", "actual", "control", "counts_per_mm", "counts_per_rev"}
 #: interpolation methods of :meth:`DriveLog.resample`
 RESAMPLING_METHODS = ("linear", "cubic")
 #: default tolerance on sampling jitter, relative to the median sample period
@@ -39,22 +52,33 @@ MAX_POSITION_SPAN_MM = 10_000.0  # 10 m: no machine axis is longer; a larger spa
 MAX_SPEED_MM_PER_S = 20_000.0  # 20 m/s: beyond the fastest linear-motor axes; larger: um read as mm
 MAX_SAMPLE_PERIOD_S = 0.1  # 10 Hz: slower than any servo log; a 1 kHz log in ms read as s has Ts = 1 "s"
 MIN_SAMPLE_PERIOD_S = 1e-5  # 100 kHz: faster than servo loops log; smaller: s read as ms or us
+MAX_SPEED_RAD_PER_S = 2 * np.pi * 10_000 / 60  # 10 000 rpm: beyond rotary feed axes (direct-drive tables ~1000 rpm)
 
 
 @dataclasses.dataclass(frozen=True)
 class Plausibility:
-    """Bounds that catch unit mistakes in a log (positions in um read as mm, time in ms read as s).
+    """Bounds that catch unit mistakes in a log (positions in um read as mm, time in ms read as s, counts with the
+    wrong resolution), checked after the unit conversion.
+
+    No acceleration bound: a step-response log (a common identification input) has a reference acceleration
+    of ``step / Ts^2`` (1 mm at 1 kHz: 100 g), so a bound strict enough to catch um read as mm would refuse it;
+    the span and speed bounds catch that mistake.
 
     Attributes:
-        max_span_mm: largest ``max - min`` of a position column [mm].
-        max_speed_mm_per_s: largest ``|dx/dt|`` between samples of a position column [mm/s].
+        max_span_mm: largest ``max - min`` of a linear position column [mm] (rotary axes may turn any number of
+            revolutions: no span bound in rad).
+        max_speed_mm_per_s: largest ``|dx/dt|`` between samples of a linear position column [mm/s].
+        max_speed_rad_per_s: the same for a rotary axis [rad/s].
         min_sample_period_s, max_sample_period_s: accepted range of the median sample period [s].
+        integer_counts: a column declared in counts must hold whole numbers (:mod:`._log_units`).
     """
 
     max_span_mm: float = MAX_POSITION_SPAN_MM
     max_speed_mm_per_s: float = MAX_SPEED_MM_PER_S
     min_sample_period_s: float = MIN_SAMPLE_PERIOD_S
     max_sample_period_s: float = MAX_SAMPLE_PERIOD_S
+    max_speed_rad_per_s: float = MAX_SPEED_RAD_PER_S
+    integer_counts: bool = True
 
     def check(self, log: "DriveLog") -> None:
         """Raise :class:`DriveLogError` naming the column and the likely unit if ``log`` is implausible."""
@@ -71,18 +95,23 @@ class Plausibility:
                 "is the time in s read as ms? pass time_unit='s' (or override Plausibility.min_sample_period_s)")
         for role in ("reference", "actual"):
             x, name = getattr(log, role), cols.get(role, role)
+            rotary = log.units.get(role) == "rad"
             span = float(np.max(x) - np.min(x))
-            if span > self.max_span_mm:
+            if not rotary and span > self.max_span_mm:
                 raise DriveLogError(
-                    f"{src}: column {name!r} ({role}) spans {span:g} mm, above {self.max_span_mm:g} mm; "
-                    "are the positions in um read as mm? pass length_unit='um' (or override Plausibility.max_span_mm)")
+                    f"{src}: column {name!r} ({role}) spans {span:g} mm, above {self.max_span_mm:g} mm; are the "
+                    "positions in um (or counts) read as mm? pass length_unit='um' or 'counts' with counts_per_mm "
+                    "(or override Plausibility.max_span_mm)")
             speed = np.abs(np.diff(x)) / np.diff(log.t)
             k = int(np.argmax(speed))
-            if speed[k] > self.max_speed_mm_per_s:
+            bound, unit = (self.max_speed_rad_per_s, "rad/s") if rotary else (self.max_speed_mm_per_s, "mm/s")
+            if speed[k] > bound:
+                hint = ("are the angles in deg read as rad, or counts with a wrong counts_per_rev?" if rotary else
+                        "are the positions in um read as mm (length_unit='um'), counts with a wrong counts_per_mm, "
+                        "or the time in s read as ms?")
                 raise DriveLogError(
-                    f"{src}: column {name!r} ({role}) moves at {speed[k]:g} mm/s at sample index {k + 1}, above "
-                    f"{self.max_speed_mm_per_s:g} mm/s; are the positions in um read as mm (length_unit='um') "
-                    "or the time in s read as ms? (or override Plausibility.max_speed_mm_per_s)")
+                    f"{src}: column {name!r} ({role}) moves at {speed[k]:g} {unit} at sample index {k + 1}, above "
+                    f"{bound:g} {unit}; {hint} (or override Plausibility.max_speed_{unit.replace('/', '_per_')})")
 
 
 #: the bounds every log is checked against unless told otherwise
@@ -252,90 +281,6 @@ class DriveLog:
 
 
 # -- loading ---------------------------------------------------------------------------------------
-def _numeric(value, where: str) -> np.ndarray:
-    """``value`` as a float64 array; a non-numeric (text, object, complex, structured) one is a DriveLogError."""
-    a = np.asarray(value) if not isinstance(value, np.ndarray) else value
-    if a.dtype.kind not in "iuf":
-        raise DriveLogError(f"{where} holds {a.dtype} data ({a.dtype.kind!r} kind); expected real numbers")
-    return np.asarray(a, dtype=np.float64)
-
-
-def _read_table(path: Path) -> dict[str, np.ndarray]:
-    """All columns of a CSV (header line), ``.mat`` or ``.npz`` file as arrays by name.
-
-    Raises:
-        DriveLogError: the file cannot be parsed (corrupt or empty archive, non-UTF-8 or ragged CSV, a
-            non-numeric cell: named by line and column), or holds no columns.
-    """
-    suffix = path.suffix.lower()
-    if suffix not in (".mat", ".npz", ".csv"):
-        raise DriveLogError(f"{path}: unknown drive-log file type {suffix!r}; expected .csv, .mat or .npz")
-    try:
-        size = path.stat().st_size
-    except OSError as e:
-        raise DriveLogError(f"{path}: cannot read ({e.strerror or e})") from None
-    if size == 0:
-        raise DriveLogError(f"{path}: the file is empty; expected a {suffix} drive log")
-    if suffix == ".csv":
-        raw = _read_csv(path)
-    else:
-        try:  # third-party parsers raise many types on damaged bytes; every one becomes a DriveLogError
-            if suffix == ".mat":
-                from scipy.io import loadmat
-
-                raw = {k: v for k, v in loadmat(str(path)).items() if not k.startswith("__")}
-            else:
-                with np.load(path, allow_pickle=False) as z:
-                    raw = {k: z[k] for k in z.files}
-        except MemoryError:
-            raise
-        except Exception as e:  # noqa: BLE001 - re-raised as this package's error, naming the file
-            kind = "MATLAB .mat" if suffix == ".mat" else "NumPy .npz"
-            raise DriveLogError(f"{path}: not a readable {kind} file ({type(e).__name__}: {e})") from None
-    if not raw:
-        raise DriveLogError(f"{path}: the file holds no columns; expected t, x_ref, x_act (or the names you pass)")
-    return raw
-
-
-def _read_csv(path: Path) -> dict[str, np.ndarray]:
-    try:
-        text = path.read_bytes().decode("utf-8")
-    except UnicodeDecodeError as e:
-        data = path.read_bytes()
-        line = data[: e.start].count(b"\n") + 1
-        raise DriveLogError(f"{path}:{line}: not UTF-8 text (byte {data[e.start]:#04x}); save the log as UTF-8 CSV") from None
-    except OSError as e:
-        raise DriveLogError(f"{path}: cannot read ({e.strerror or e})") from None
-    lines = text.splitlines()
-    header = lines[0].strip() if lines else ""
-    names = [h.strip() for h in header.split(",")]
-    if not header or any(not n for n in names):
-        raise DriveLogError(f"{path}:1: a CSV drive log needs a header line naming every column, got {header!r}")
-    dup = next((n for i, n in enumerate(names) if n in names[:i]), None)
-    if dup is not None:
-        raise DriveLogError(f"{path}:1: column name {dup!r} appears twice in the header; names must be unique")
-    rows = []
-    for lineno, line in enumerate(lines[1:], start=2):
-        if not line.strip() or line.lstrip().startswith("#"):
-            continue
-        cells = line.split(",")
-        if len(cells) != len(names):
-            raise DriveLogError(f"{path}:{lineno}: row has {len(cells)} values but the header names "
-                                f"{len(names)} columns {names}")
-        row = []
-        for col, cell in enumerate(cells, start=1):
-            try:
-                row.append(float(cell))
-            except ValueError:
-                raise DriveLogError(f"{path}:{lineno}:{col}: column {names[col - 1]!r}: {cell.strip()!r} is not a "
-                                    "number; expected a plain decimal number") from None
-        rows.append(row)
-    if not rows:
-        raise DriveLogError(f"{path}: the CSV has a header {names} but no data rows")
-    data = np.array(rows, dtype=np.float64)
-    return {n: data[:, i] for i, n in enumerate(names)}
-
-
 def load_drive_log(
     path,
     *,
@@ -346,49 +291,81 @@ def load_drive_log(
     length_unit: str = "mm",
     time_unit: str = "s",
     control_unit: str = "V",
+    units: dict | None = None,
+    counts_per_mm: float | None = None,
+    counts_per_rev: float | None = None,
     uniform_rtol: float = UNIFORM_RTOL,
     plausibility: Plausibility | None = DEFAULT_PLAUSIBILITY,
 ) -> DriveLog:
     """Read a drive log and map its columns by name.
 
     Args:
-        path: ``.csv`` (header line with column names), ``.mat`` or ``.npz`` file.
+        path: ``.csv`` (header line with column names), ``.mat``, ``.npz``, or a LinuxCNC halscope text export
+            (``.txt`` / ``.log``: channels by HAL name, time ``t`` from the sample period; see
+            :func:`research.identification.read_halscope`).
         time, reference, actual: names of the time, commanded-position and measured-position columns.
         control: optional name of a control-signal column (kept, not used by the identification).
-        length_unit: unit of the position columns in the file, one of ``LENGTH_UNITS``; converted to mm.
+        length_unit: unit of both position columns, one of ``POSITION_UNITS`` (mm, m, um, in -> mm; deg, rad ->
+            rad for a rotary axis; counts -> mm or rad through ``counts_per_mm`` / ``counts_per_rev``).
         time_unit: unit of the time column, one of ``TIME_UNITS``; converted to s.
         control_unit: unit label of the control column (not converted).
+        units: per-column override of ``length_unit`` by role, ``{"x_ref": "mm", "x_act": "counts"}`` (a
+            controller that logs the command in mm and the encoder in counts).
+        counts_per_mm, counts_per_rev: encoder resolution of the columns in counts (one of the two).
         uniform_rtol: accepted sampling jitter relative to the median period.
         plausibility: unit-plausibility bounds (:class:`Plausibility`); ``None`` skips the check.
     Returns:
-        the validated :class:`DriveLog` in s and mm.
+        the validated :class:`DriveLog` in s and mm (rad for a rotary axis).
     Raises:
-        DriveLogError: unknown file type or unit, a missing column (the available ones are listed), or any
-            failed validation (see :class:`DriveLog`).
+        DriveLogError: unknown file type or unit, counts without a resolution (the column named), a missing
+            column (the available ones are listed), or any failed validation (see :class:`DriveLog`).
     """
     path = Path(path)
-    if length_unit not in LENGTH_UNITS:
-        raise DriveLogError(f"{path}: unknown length unit {length_unit!r}; expected one of {sorted(LENGTH_UNITS)}")
-    if time_unit not in TIME_UNITS:
-        raise DriveLogError(f"{path}: unknown time unit {time_unit!r}; expected one of {sorted(TIME_UNITS)}")
+    units = dict(units or {})
+    bad = set(units) - {"x_ref", "x_act"}
+    if bad:
+        raise DriveLogError(f"{path}: units keys {sorted(bad)} are not position roles; expected 'x_ref' and/or 'x_act' "
+                            "(the time unit is time_unit=, the control's control_unit=)")
+    T = time_factor(time_unit, str(path))
     if not path.exists():
         raise DriveLogError(f"{path}: file not found")
     raw = _read_table(path)
-    wanted = {"t": time, "reference": reference, "actual": actual}
+    cols = {"reference": reference, "actual": actual} | ({"control": control} if control is not None else {})
+    by_column = {reference: units.get("x_ref", length_unit), actual: units.get("x_act", length_unit)}
     if control is not None:
-        wanted["control"] = control
-    for role, name in wanted.items():
+        by_column[control] = control_unit
+    return _axis_log(path, raw, time, T, cols, by_column, {"counts_per_mm": counts_per_mm, "counts_per_rev": counts_per_rev},
+                     str(path), uniform_rtol, plausibility)
+
+
+def _axis_log(path, raw, time, T, cols, by_column, scales, source, uniform_rtol, plausibility) -> DriveLog:
+    """One axis from the raw columns: look up, convert (:func:`convert_position`), validate (:class:`DriveLog`)."""
+    if time not in raw:
+        raise DriveLogError(f"{path}: missing time column {time!r}; the file has {sorted(raw)}")
+    data, unit_of = {"t": _numeric(raw[time], f"{path}: column {time!r} (t)") * T}, {"t": "s"}
+    for role, name in cols.items():
         if name not in raw:
             raise DriveLogError(f"{path}: missing column {name!r} for the {role}; the file has {sorted(raw)}")
-    L, T = LENGTH_UNITS[length_unit], TIME_UNITS[time_unit]
-    cols = {role: _numeric(raw[name], f"{path}: column {name!r} ({role})") for role, name in wanted.items()}
-    units = {"t": "s", "reference": "mm", "actual": "mm"}
-    if control is not None:
-        units["control"] = control_unit
-    return DriveLog(
-        t=cols["t"] * T, reference=cols["reference"] * L, actual=cols["actual"] * L, control=cols.get("control"),
-        source=str(path), columns=wanted, units=units, uniform_rtol=uniform_rtol, plausibility=plausibility,
-    )
+        where = f"{path}: column {name!r} ({role})"
+        a = _numeric(raw[name], where)
+        if role == "control":
+            data[role], unit_of[role] = a, by_column.get(name, "V")
+            continue
+        unit = by_column.get(name, "mm")
+        data[role], unit_of[role] = convert_position(
+            a, unit, where, **(scales if unit == COUNTS else {}),
+            integer_counts=plausibility is None or plausibility.integer_counts)
+    given = {k: v for k, v in scales.items() if v is not None}
+    if given and COUNTS not in (by_column.get(cols["reference"], "mm"), by_column.get(cols["actual"], "mm")):
+        raise DriveLogError(f"{path}: a counts resolution {given} is given but neither {cols['reference']!r} nor "
+                            f"{cols['actual']!r} is declared in {COUNTS!r}; declare the unit or drop the resolution")
+    if unit_of["reference"] != unit_of["actual"]:
+        raise DriveLogError(f"{path}: the reference {cols['reference']!r} is in {unit_of['reference']} but the measured "
+                            f"position {cols['actual']!r} in {unit_of['actual']} after conversion; a linear axis needs "
+                            "two lengths, a rotary one two angles")
+    return DriveLog(t=data["t"], reference=data["reference"], actual=data["actual"], control=data.get("control"),
+                    source=source, columns={"t": time, **cols}, units=unit_of, uniform_rtol=uniform_rtol,
+                    plausibility=plausibility)
 
 
 def save_drive_log(log: DriveLog, path) -> Path:
@@ -419,54 +396,46 @@ def load_axis_logs(
     """Several axes logged in one file (a controller trace of X, Y, Z ...), one :class:`DriveLog` each.
 
     Args:
-        path: ``.csv``, ``.mat`` or ``.npz`` file.
-        axes: axis name -> ``{"reference": column, "actual": column[, "control": column]}``, e.g.
-            ``{"x": {"reference": "X_cmd", "actual": "X_enc"}}``.
-        time, time_unit: the shared time column and its unit (``TIME_UNITS``).
-        units: column name -> length unit (``LENGTH_UNITS``) for position columns not in mm, e.g.
-            ``{"X_cmd": "m", "X_enc": "m"}``; a control column's unit is kept as a label (default "V").
+        path: ``.csv``, ``.mat``, ``.npz`` or halscope text (``.txt`` / ``.log``) file.
+        axes: axis name -> ``{"reference": column, "actual": column[, "control": column][, "counts_per_mm": r |
+            "counts_per_rev": r]}``, e.g. ``{"x": {"reference": "X_cmd", "actual": "X_enc", "counts_per_mm": 1000}}``;
+            the resolution applies to that axis' columns declared in counts.
+        time, time_unit: the shared time column and its unit (``TIME_UNITS``; a halscope file's is ``t`` in s).
+        units: column name -> unit (``POSITION_UNITS``) for position columns not in mm, e.g.
+            ``{"X_cmd": "m", "X_enc": "counts", "C_cmd": "deg"}``; a control column's unit is kept as a label
+            (default "V").
         uniform_rtol, plausibility: as :func:`load_drive_log`; plausibility is checked per axis after the
             unit conversion, so a column in um declared as mm is refused naming that column.
     Returns:
-        axis name -> :class:`DriveLog` [s, mm].
+        axis name -> :class:`DriveLog` [s, mm or rad].
     Raises:
-        DriveLogError: no axes, an axis without ``reference``/``actual``, an unknown role, column or unit, or
-            any failure of :func:`load_drive_log`'s checks; every message names the file.
+        DriveLogError: no axes, an axis without ``reference``/``actual``, an unknown key, column or unit, counts
+            without a resolution, or any failure of :func:`load_drive_log`'s checks; every message names the file.
     """
     path = Path(path)
     units = dict(units or {})
     if not isinstance(axes, dict) or not axes:
         raise DriveLogError(f"{path}: axes must map axis names to their columns, e.g. "
                             f"{{'x': {{'reference': 'X_cmd', 'actual': 'X_enc'}}}}, got {axes!r}")
-    if time_unit not in TIME_UNITS:
-        raise DriveLogError(f"{path}: unknown time unit {time_unit!r}; expected one of {sorted(TIME_UNITS)}")
+    T = time_factor(time_unit, str(path))
     if not path.exists():
         raise DriveLogError(f"{path}: file not found")
     raw = _read_table(path)
     if time not in raw:
         raise DriveLogError(f"{path}: missing time column {time!r}; the file has {sorted(raw)}")
-    t = _numeric(raw[time], f"{path}: column {time!r} (t)") * TIME_UNITS[time_unit]
     out = {}
-    for axis, cols in axes.items():
-        if not isinstance(cols, dict) or not {"reference", "actual"} <= set(cols) or not set(cols) <= {
-                "reference", "actual", "control"}:
-            raise DriveLogError(f"{path}: axis {axis!r} needs columns {{'reference', 'actual'}} (and optionally "
-                                f"'control'), got {cols!r}")
-        data, unit_of = {}, {"t": "s"}
-        for role, name in cols.items():
-            if name not in raw:
-                raise DriveLogError(f"{path}: axis {axis!r}: missing column {name!r} for the {role}; the file has "
-                                    f"{sorted(raw)}")
-            a = _numeric(raw[name], f"{path}: column {name!r} ({role})")
-            if role == "control":
-                data[role], unit_of[role] = a, units.get(name, "V")
-                continue
-            u = units.get(name, "mm")
-            if u not in LENGTH_UNITS:
-                raise DriveLogError(f"{path}: column {name!r} ({role} of axis {axis!r}): unknown length unit {u!r}; "
-                                    f"expected one of {sorted(LENGTH_UNITS)}")
-            data[role], unit_of[role] = a * LENGTH_UNITS[u], "mm"
-        out[axis] = DriveLog(t=t, reference=data["reference"], actual=data["actual"], control=data.get("control"),
-                             source=f"{path} axis {axis}", columns={"t": time, **cols}, units=unit_of,
-                             uniform_rtol=uniform_rtol, plausibility=plausibility)
+    for axis, spec in axes.items():
+        if not isinstance(spec, dict) or not {"reference", "actual"} <= set(spec) or not set(spec) <= AXIS_KEYS:
+            raise DriveLogError(f"{path}: axis {axis!r} needs columns {{'reference', 'actual'}} (optionally 'control', "
+                                f"and 'counts_per_mm' or 'counts_per_rev' for columns in counts), got {spec!r}")
+        cols = {k: v for k, v in spec.items() if k in ("reference", "actual", "control")}
+        scales = {k: spec.get(k) for k in ("counts_per_mm", "counts_per_rev")}
+        by_column = {name: units.get(name, "V" if role == "control" else "mm") for role, name in cols.items()}
+        try:
+            out[axis] = _axis_log(path, raw, time, T, cols, by_column, scales, f"{path} axis {axis}", uniform_rtol,
+                                  plausibility)
+        except DriveLogError as e:
+            if f"axis {axis}" in str(e):
+                raise
+            raise DriveLogError(f"{e} (axis {axis!r})") from None
     return out

@@ -69,8 +69,8 @@ class FitReport:
 
     def frf_error(self, frequency_hz=None) -> dict | None:
         """Largest tracking-FRF error against ``truth`` over ``frequency_hz`` [Hz] (default 0.1-100 Hz): magnitude [dB] and phase [deg];
-        None without a truth or for a model with ``dc < 0``."""
-        if self.truth is None or self.result.dc < 0:
+        None without a truth, or for an unstable model or one with ``dc < 0`` (no drive model to compare)."""
+        if self.truth is None or self.result.dc < 0 or not self.result.stable:
             return None
         f = np.logspace(-1, 2, 200) if frequency_hz is None else np.asarray(frequency_hz, dtype=np.float64)
         est = np.asarray(frequency_response(self.result.model(), f).tracking)

@@ -93,10 +93,17 @@ class IdentifiedDrive:
         """The identified :class:`ClosedLoopModel` (eq 6.3).
 
         Raises:
-            ParameterError: ``dc < 0`` (an unconstrained fit traded friction against the linear part; such a
-                model cannot be simulated as Coulomb friction).
+            ParameterError: poles not all in the open left half plane (listed: an unconstrained LS optimum can be
+                unstable, e.g. on the EMPS log), or ``dc < 0`` (an unconstrained fit traded friction against the
+                linear part; such a model cannot be simulated as Coulomb friction). The result itself stays
+                readable: :attr:`stable`, :meth:`poles` and :meth:`to_dict` flag it.
         """
         c = self.coefficients
+        if not self.stable:
+            raise ParameterError(
+                f"{self.method} fit of {self.source} is unstable: poles " + ", ".join(f"{r:.6g}" for r in self.poles())
+                + " rad/s (a real part >= 0); it is a flagged result, not a drive model (use a bounded fit: "
+                "bounded_fit, particle_swarm or simulation_error_fit keep the poles inside stability bounds)")
         if c["dc"] < 0:
             raise ParameterError(
                 f"{self.method} fit of {self.source} has negative Coulomb friction dc = {c['dc']:.6g} mm/s^2; "

@@ -39,6 +39,12 @@ from research.identification._structure import HZ, ModelStructure, structure as 
 from research.identification._structure_fit import StructureFit
 
 INITIAL_MODES = ("estimate", "rest")
+#: optimizer tolerance of the screening pass that only ranks the starts' basins (the chosen one is then
+#: polished to ``tol``); swept in ``benchmarks/bench_identification.py``
+SCREEN_TOL = 1e-3
+#: a reference within AFFINE_RTOL of its stroke from a straight line in time does not accelerate: 1e-9 of the
+#: stroke is below any encoder's resolution (1 nm on a 1 m stroke)
+AFFINE_RTOL = 1e-9
 #: damping values of the start grid (under-, well- and over-damped pairs)
 GRID_ZETA = (0.25, 0.5, 0.8, 1.1)
 
@@ -47,28 +53,29 @@ def _columns(st: ModelStructure, R, signs, initial, force=None):
     """Regressor of the linear parameters (``b1..bm``, ``dc``, ``offset``, initial state) and the known part."""
     cols = [R.S[:, i] for i in range(1, st.n_zeros + 1)]
     if st.friction:
-        cols.append(-R.disturbance(signs)[0])
+        cols.append(-R.disturbance_position(signs))
     if st.offset:
         cols.append(-R.offset_pos)
     if st.force:
-        cols.append(R.disturbance(force)[0])
+        cols.append(R.disturbance_position(force))
     if initial == "estimate":
         cols += list(R.modes_pos.T)
     return np.column_stack(cols), R.den[-1] * R.S[:, 0]
 
 
 def _lsq(A, y):
-    """Least squares on column-scaled ``A``: normal equations plus one step of iterative refinement (accuracy
-    ~ cond(A) eps, 6x faster than an SVD for 10^4 x 10 systems), SVD when the Gram matrix is ill conditioned."""
-    scale = np.linalg.norm(A, axis=0)
+    """Least squares by the column-scaled normal equations plus one step of iterative refinement (accuracy
+    ~ cond(A) eps; a few passes over ``A`` instead of a QR or SVD of the N x m matrix), SVD when the scaled
+    Gram matrix is ill conditioned (cond > 1e12: the refinement no longer recovers the digits)."""
+    G, g = A.T @ A, A.T @ y
+    scale = np.sqrt(np.diag(G))
     scale[scale == 0] = 1.0
-    As = A / scale
-    G = As.T @ As
-    if np.linalg.cond(G) > 1e12:
-        return lstsq(As, y, lapack_driver="gelsd")[0] / scale
-    x = np.linalg.solve(G, As.T @ y)
-    x += np.linalg.solve(G, As.T @ (y - As @ x))
-    return x / scale
+    Gs = G / np.outer(scale, scale)
+    if np.linalg.cond(Gs) > 1e12:
+        return lstsq(A / scale, y, lapack_driver="gelsd")[0] / scale
+    x = np.linalg.solve(Gs, g / scale) / scale
+    x += np.linalg.solve(Gs, (A.T @ (y - A @ x)) / scale) / scale
+    return x
 
 
 def _solve_linear(Phi, target, dc_index):
@@ -115,6 +122,25 @@ class _Problem:
         force = None if g is None else (g, self.force)
         pos, _, s, _ = consistent_signs(R, *linear_part(self.st, R, b, off, c, force), dc, signs)
         return pos, s
+
+
+def _check_excitation(log: DriveLog) -> None:
+    """Refuse logs that cannot identify a closed loop: a constant or constant-speed reference (no acceleration:
+    every structure's response to it is the same ramp), or a measured position that does not move."""
+    ref, act = log.columns.get("reference", "reference"), log.columns.get("actual", "actual")
+    span = float(np.ptp(log.reference))
+    if span == 0:
+        raise DriveLogError(f"{log.source}: the reference column {ref!r} is constant; an identification log must move "
+                            "the axis (use the §6.5 program)")
+    t = log.t - log.t[0]
+    dev = float(np.max(np.abs(log.reference - np.polyval(np.polyfit(t, log.reference, 1), t))))
+    if dev <= AFFINE_RTOL * span:
+        raise DriveLogError(f"{log.source}: the reference column {ref!r} moves at constant speed (it deviates "
+                            f"{dev:.3g} mm from a straight line in time over a {span:.6g} mm stroke); it does not excite "
+                            "the drive's dynamics: an identification log needs accelerations (the §6.5 program)")
+    if np.ptp(log.actual) == 0:
+        raise DriveLogError(f"{log.source}: the measured position column {act!r} is constant while the reference "
+                            f"{ref!r} moves {span:.6g} mm; is the drive enabled and is it the encoder column?")
 
 
 def _thesis_starts(log) -> list:
@@ -194,9 +220,7 @@ def simulation_error_fit(
     if log.n_samples < 10 * n_par:
         raise DriveLogError(f"{log.source}: {log.n_samples} samples are too few for the {n_par} parameters of structure "
                             f"{st.name!r} (need at least {10 * n_par})")
-    if np.ptp(log.reference) == 0:
-        raise DriveLogError(f"{log.source}: the reference column {log.columns.get('reference', 'reference')!r} is "
-                            "constant; an identification log must move the axis (use the §6.5 program)")
+    _check_excitation(log)
     Ts = log.sample_period
     lo, hi = st.default_bounds(Ts) if bounds is None else (np.asarray(bounds[0], float), np.asarray(bounds[1], float))
     if lo.shape != (len(st.pole_names),) or hi.shape != lo.shape or not np.all((0 < lo) & (lo < hi)):
@@ -225,29 +249,40 @@ def simulation_error_fit(
     def fun(u, s):
         return prob.project(np.exp(u), s)[0]
 
-    def polish(u, s):
-        """Optimizer passes with the friction signs held, updated between passes until consistent."""
-        status, consistent, passes = 0, False, 0
+    def trf(u, s, tol_):
+        return scipy_least_squares(fun, u, args=(s,), bounds=(ulo, uhi), method="trf", ftol=tol_, xtol=tol_,
+                                   gtol=tol_, max_nfev=max_nfev)
+
+    def own_signs(u, s):
+        """Exact simulation of the model at ``u`` (its linear part projected with signs ``s`` held) ->
+        ``(its own friction signs, exact squared simulation error)``."""
         _, theta, R = prob.project(np.exp(u), s)
-        s = prob.exact(np.exp(u), theta, R, s)[1]  # the start model's own signs
+        pos, s_new = prob.exact(np.exp(u), theta, R, s)
+        return s_new, float(np.sum((prob.y - pos) ** 2))
+
+    def screen(u, s):
+        """One optimizer pass at SCREEN_TOL with the start model's own signs: which basin a start falls in."""
+        s = own_signs(u, s)[0]
+        u = trf(u, s, SCREEN_TOL).x
+        return (u, *own_signs(u, s))
+
+    def polish(u, s):
+        """Optimizer passes at ``tol`` with the friction signs held, updated between passes until consistent."""
+        status, consistent, passes = 0, False, 0
         for passes in range(1, max_passes + 1):
-            sol = scipy_least_squares(fun, u, args=(s,), bounds=(ulo, uhi), method="trf", ftol=tol, xtol=tol,
-                                      gtol=tol, max_nfev=max_nfev)
+            sol = trf(u, s, tol)
             u, status = sol.x, sol.status
-            sigma = np.exp(u)
-            _, theta, R = prob.project(sigma, s)
-            pos, s_new = prob.exact(sigma, theta, R, s)
+            s_new, err = own_signs(u, s)
             if np.array_equal(s_new, s):
                 consistent = True
                 break
             s = s_new
-        return u, s, status, consistent, passes, float(np.sum((prob.y - pos) ** 2))
+        return u, s, status, consistent, passes, err
 
-    best = None
-    for i in dict.fromkeys(order):  # unique, best first; each compared by its exact simulation error
-        out = polish(np.clip(np.log(cand[i]), ulo + 1e-9, uhi - 1e-9), signs)
-        if best is None or out[-1] < best[-1]:
-            best = out
+    # every start screened (unique, best first), the best basin by its exact simulation error polished
+    screened = [screen(np.clip(np.log(cand[i]), ulo + 1e-9, uhi - 1e-9), signs) for i in dict.fromkeys(order)]
+    u0, s0, _ = min(screened, key=lambda r: r[-1])
+    best = polish(u0, s0)
     u, s, status, consistent, passes, _ = best
     sigma = np.exp(u)
     r, theta, R = prob.project(sigma, s)

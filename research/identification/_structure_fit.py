@@ -159,7 +159,7 @@ class StructureFit:
             w = slice(0, min(int(initial_samples), log.n_samples))
             y = log.actual - ref.x0
             for _ in range(20):  # the initial state moves the friction signs: iterate to a consistent pair
-                base = pl - self.dc * R.disturbance(s)[0]
+                base = pl - self.dc * R.disturbance_position(s)
                 c, *_ = np.linalg.lstsq(R.modes_pos[w], (y - base)[w], rcond=None)
                 pos, _v, s_new, _n = consistent_signs(R, *linear_part(self.structure, R, self.b, self.offset, c, fin),
                                                       self.dc, s)

@@ -1,5 +1,8 @@
 """Shared, session-scoped data for the identification tests (logs are simulated once)."""
 
+import os
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -10,6 +13,11 @@ from research.drives import (
     table_6_2_closed_loop,
 )
 from research.identification import ASSUMED_FRICTION, identification_program, synthetic_log
+
+#: third-party data beside the checkout (``../shared``, as in CI); RESEARCH_SHARED_DIR points elsewhere
+SHARED = Path(os.environ.get("RESEARCH_SHARED_DIR", Path(__file__).resolve().parents[3] / "shared"))
+#: the EMPS estimation excerpt (see ../shared/data/README.md)
+EMPS = SHARED / "data" / "emps" / "emps_estimation_first15s.mat"
 
 #: fine encoder of the reproduction tests: 0.05 um counts (the EMPS benchmark's resolution)
 FINE_ENCODER = Encoder(resolution=5e-5)

@@ -45,7 +45,7 @@ def test_reader_failures_name_the_file(trace, tmp_path):
     *_, path = trace
     with pytest.raises(DriveLogError, match=r"trace\.csv.*missing column 'Z_cmd'"):
         load_axis_logs(path, {"z": {"reference": "Z_cmd", "actual": "X_enc"}}, time="time_s")
-    with pytest.raises(DriveLogError, match=r"trace\.csv.*unknown length unit 'furlong'"):
+    with pytest.raises(DriveLogError, match=r"trace\.csv.*unknown position unit .furlong."):
         load_axis_logs(path, {"x": {"reference": "X_cmd", "actual": "X_enc"}}, time="time_s", units={"X_cmd": "furlong"})
     with pytest.raises(DriveLogError, match=r"trace\.csv.*needs columns"):
         load_axis_logs(path, {"x": {"reference": "X_cmd"}}, time="time_s")

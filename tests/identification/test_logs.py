@@ -69,8 +69,11 @@ def test_unequal_lengths_missing_column_unknown_type(tmp_path):
     np.savez(tmp_path / "m.npz", t=t, x_ref=xr)
     with pytest.raises(DriveLogError, match=r"missing column 'x_act'.*\['t', 'x_ref'\]"):
         load_drive_log(tmp_path / "m.npz")
-    (tmp_path / "x.txt").write_text("1,2,3")
-    with pytest.raises(DriveLogError, match=r"unknown drive-log file type '\.txt'"):
+    (tmp_path / "x.xlsx").write_text("1,2,3")
+    with pytest.raises(DriveLogError, match=r"unknown drive-log file type '\.xlsx'"):
+        load_drive_log(tmp_path / "x.xlsx")
+    (tmp_path / "x.txt").write_text("1,2,3")  # .txt is a halscope export: its first line must say so
+    with pytest.raises(DriveLogError, match=r"x\.txt:1: not a halscope text export.*'1,2,3'"):
         load_drive_log(tmp_path / "x.txt")
 
 

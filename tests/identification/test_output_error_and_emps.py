@@ -1,7 +1,6 @@
 """Output-error fit, reports and JSON, and the real EMPS log (skipped when ../shared/data is absent)."""
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -21,9 +20,8 @@ from research.identification import (
     synthetic_log,
 )
 
-from .conftest import relative_errors, with_friction
+from .conftest import EMPS, relative_errors, with_friction
 
-EMPS = Path(__file__).resolve().parents[3] / "shared" / "data" / "emps" / "emps_estimation_first15s.mat"
 
 
 def test_fit_percent_definition():

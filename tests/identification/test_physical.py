@@ -1,7 +1,5 @@
 """Physical model identification (inverse-dynamics least squares with a known P/P controller)."""
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -9,7 +7,7 @@ from research.errors import DriveLogError
 from research.identification import PP2, DriveLog, compare, identification_program, physical_fit, select_structure
 from research.identification._simulation import Reference, consistent_signs, linear_part, responses
 
-EMPS = Path(__file__).resolve().parents[3] / "shared" / "data" / "emps" / "emps_estimation_first15s.mat"
+from .conftest import EMPS
 
 
 def test_recovers_mass_and_friction_of_a_simulated_pp_loop():

@@ -2,7 +2,6 @@
 against independent ones, consistency under encoder noise, initial state from the data, the convergence
 flag, bad input, model structures and the MATLAB compare / resid style reports."""
 
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -25,9 +24,8 @@ from research.identification import (
 )
 from research.identification._simulation import Reference, consistent_signs, linear_part, responses
 
-from .conftest import at_rest, relative_errors
+from .conftest import EMPS, at_rest, relative_errors
 
-EMPS = Path(__file__).resolve().parents[3] / "shared" / "data" / "emps" / "emps_estimation_first15s.mat"
 
 
 def _sim(structure, sigma, b, dc, offset, q, Ts):
@@ -214,3 +212,34 @@ def test_measured_force_pulses_enter_the_disturbance_path():
     assert held < 2.0 and without.rms_um > 5 * fit.rms_um
     with pytest.raises(DriveLogError, match="force"):
         simulation_error_fit(est, st)
+
+
+def test_logs_that_cannot_identify_a_loop_are_refused_by_name():
+    """Issue 14 "bad input": a constant-speed reference (no acceleration excites nothing) and an axis whose
+    encoder column does not move are DriveLogErrors naming the file and column; a log with one accelerating
+    stretch is accepted."""
+    t = np.arange(2000) * 1e-3
+    ramp = 50.0 * t
+    with pytest.raises(DriveLogError, match=r"ramp\.csv: the reference column 'X_cmd' moves at constant speed"):
+        simulation_error_fit(DriveLog(t, ramp, ramp - 0.5, source="ramp.csv",
+                                      columns={"t": "t", "reference": "X_cmd", "actual": "X_enc"}), "pp2")
+    with pytest.raises(DriveLogError, match=r"dead\.csv: the measured position column 'actual' is constant"):
+        simulation_error_fit(DriveLog(t, np.sin(t), np.zeros_like(t), source="dead.csv"), "pp2")
+
+
+def test_an_unstable_thesis_fit_is_flagged_with_its_poles_never_a_model():
+    """An eq 6.3 result with a real pole at +2 rad/s (s^3 + 8 s^2 - 8 s - 24 = (s - 2)(s^2 + 10 s + 12), poles 2 and -5 +- sqrt 13): .model()
+    refuses it listing the poles, compare and fit_report give the reason instead of a fit %, to_dict says
+    unstable."""
+    from research.identification import IdentifiedDrive, fit_report
+
+    coeffs = {"a1": 8.0, "a2": -8.0, "a3": -24.0, "b0": 0.0, "b1": 0.0, "b2": 10.0, "dc": 1.0}
+    bad = IdentifiedDrive("ls", coeffs, 0.0, "equation error, eq 6.10", 0.0, 0, "fake.csv")
+    assert np.max(np.roots([1, 8, -8, -24]).real) == pytest.approx(2.0)
+    with pytest.raises(ParameterError, match=r"ls fit of fake\.csv is unstable: poles -8\.60555, 2, -1\.39445 rad/s"):
+        bad.model()
+    t = np.arange(300) * 1e-3
+    log = DriveLog(t, np.sin(5 * t), np.sin(5 * t))
+    assert "unstable poles" in compare(bad, log)["all"]["reason"] and "2" in compare(bad, log)["all"]["reason"]
+    rep = fit_report(bad, log)
+    assert rep.simulated is None and "unstable" in rep.reason and bad.to_dict()["stable"] is False
