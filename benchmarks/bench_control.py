@@ -7,7 +7,8 @@ compiled call.
 Run: ``python benchmarks/bench_control.py [--repeats R] [--sets S] [--vmap-samples N]``. Prints compile
 time (first call minus the best warm call) apart from the warm time (SISO and contour calls interleaved,
 best of R each, so both see the same load), samples/s after compilation, the
-per-sample cost ratio contour / SISO (target: <= 3x, issue 17) and the vmap call's time per gain set.
+per-sample cost ratio contour / SISO in process CPU time and in wall time (target: <= 3x, issue 17;
+the verdict uses CPU time, which the waits for a core on a loaded machine do not inflate) and the vmap call's time per gain set.
 The vmap sweep runs the first ``N`` periods (default 5000 = 0.5 s, through the acceleration phase) so
 that 1000 sets fit in a short run; its rate is in (set x period)/s. Timings on a shared machine vary
 with its load, which is printed alongside.
@@ -65,7 +66,10 @@ def main() -> int:
     plant = thesis_plant(identify_coulomb(T=2.5e-4))
     N = ref.n_samples
     rows = []
-    calls = [(name, lambda g=gains: simulate_closed_loop(plant, ref, g).q)
+    # jitted wrapper: inside the trace the reference's per-call finiteness check (a host-side numpy pass,
+    # the same for both loops) is skipped, so the timing is the closed loop itself
+    loop = jax.jit(lambda p, r, g: simulate_closed_loop(p, r, g).q)
+    calls = [(name, lambda g=gains: loop(plant, ref, g))
              for name, gains in (("SISO SMC (Table 5.2)", table_5_2()), ("contour controller (Table 5.3)", table_5_3()))]
     firsts = []
     for _, fn in calls:
@@ -73,17 +77,22 @@ def main() -> int:
         jax.block_until_ready(fn())
         firsts.append(time.perf_counter() - t0)
     best = [np.inf, np.inf]
+    cpu = [np.inf, np.inf]
     for _ in range(args.repeats):  # interleaved, so both see the same machine load
         for i, (_, fn) in enumerate(calls):
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             jax.block_until_ready(fn())
             best[i] = min(best[i], time.perf_counter() - t0)
-    for (name, _), first, warm in zip(calls, firsts, best):
+            cpu[i] = min(cpu[i], time.process_time() - c0)
+    for (name, _), first, warm, c in zip(calls, firsts, best, cpu):
         rows.append((name, first - warm, warm, N / warm))
-        print(f"{name:32s} compile {first - warm:6.2f} s  warm {warm * 1e3:8.1f} ms  {N / warm:10.3g} samples/s")
-    ratio = rows[1][2] / rows[0][2]
-    print(f"cost per sample contour / SISO: {ratio:.2f}x (target <= {TARGET_RATIO:g}x): "
-          f"{'PASS' if ratio <= TARGET_RATIO else 'MISS'}")
+        print(f"{name:32s} compile {first - warm:6.2f} s  warm {warm * 1e3:8.1f} ms  {N / warm:10.3g} samples/s  "
+              f"({warm / N * 1e6:.2f} us/sample wall, {c / N * 1e6:.2f} us/sample CPU)")
+    ratio_wall = rows[1][2] / rows[0][2]
+    ratio = cpu[1] / cpu[0]
+    # verdict on process CPU time: on a shared, loaded machine the wall time also counts the waits for a core
+    print(f"cost per sample contour / SISO: {ratio:.2f}x CPU time, {ratio_wall:.2f}x wall time "
+          f"(target <= {TARGET_RATIO:g}x, judged on CPU time): {'PASS' if ratio <= TARGET_RATIO else 'MISS'}")
 
     n = min(args.vmap_samples, N)
     short = jax.tree_util.tree_map(lambda x: x[:n] if hasattr(x, "shape") and x.ndim >= 1 else x, ref)

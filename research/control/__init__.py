@@ -1,8 +1,10 @@
 """Feedback controllers beyond the drives' own loops (Sencer 2009 thesis ch 5): the SISO sliding-mode
 axis controller with disturbance adaptation (thesis [35], Table 5.2), the tool-tip contour controller
 (§5.2, eq 5.1-5.17, Table 5.3) and the orientation contour controller (§5.3, eq 5.18-5.39), run in
-closed loop on the rigid-body drives of Table 5.1 through the A/C table-tilting kinematics.
-Units: mm, s, rad; voltages in V.
+closed loop on the rigid-body drives of Table 5.1 through the A/C table-tilting kinematics; and the
+thesis' end-to-end results that need these drives: Fig 3.13 (feed schedules through the SISO drives
+with an amplifier limit, :func:`feed_tracking`) and §6.5.3 / Fig 6.13 (the Table 6.3 virtual machine
+identified with LS and PSO, :func:`fig6_13`). Units: mm, s, rad; voltages in V.
 """
 
 from research.control._compensation import SchemeResult, corrected_reference, feedback_vs_feedforward, tracking_mirror_passes
@@ -19,9 +21,21 @@ from research.control._gains import (
     table_5_2,
     table_5_3,
 )
+from research.control._feed_tracking import FeedTracking, amplifier_limits, feed_tracking
+from research.control._identified_machine import (
+    FIG6_13_ACCELERATION,
+    FIG6_13_BOUND,
+    FIG6_13_FEED,
+    TABLE_6_3_PSO,
+    AxisIdentification,
+    ContourPrediction,
+    fig6_13,
+    identify_table_6_3,
+    predict_contour_error,
+)
 from research.control._loop import ClosedLoopResult, direction_inertia, simulate_closed_loop
 from research.control._plant import FiveAxisPlant, thesis_plant
-from research.control._reference import ContourReference, eq436_reference, parametric_reference
+from research.control._reference import ContourReference, eq436_reference, joint_reference, parametric_reference
 from research.control._study import (
     CONTROL_PERIOD,
     FIG5_7_AXIS_PEAKS,
@@ -42,6 +56,19 @@ from research.control._study import (
 )
 
 __all__ = [
+    "FeedTracking",
+    "amplifier_limits",
+    "feed_tracking",
+    "joint_reference",
+    "AxisIdentification",
+    "ContourPrediction",
+    "FIG6_13_ACCELERATION",
+    "FIG6_13_BOUND",
+    "FIG6_13_FEED",
+    "TABLE_6_3_PSO",
+    "fig6_13",
+    "identify_table_6_3",
+    "predict_contour_error",
     "AXES",
     "CONTROL_PERIOD",
     "CaseResult",

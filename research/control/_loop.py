@@ -45,6 +45,15 @@ are applied.
 (eq 5.27; ``e~' = e_R' + W eps_R``, ``eps_R'`` by the product rule with ``v'``), ``d_hat`` by eq 5.24.
 W = 0 is the SISO law of the rotary axes.
 
+*Cost per sample* (benchmarks/bench_control.py, target <= 3x the SISO loop). Everything that depends only
+on the reference is computed before the loop: the Frenet frame and its derivatives come with the
+reference (:mod:`research.control._reference`) and are stacked once into ``[F | F' | F'']``, so one
+reduction per period gives all six frame products. Per period only what depends on the measured state
+is computed: the tip kinematics ``P, P', P''_rest`` in scalar closed form (two plane rotations, see
+:func:`_tip_motion`). On XLA:CPU each ``dot`` of these sizes is a separate library call per period and
+a Taylor-mode (``jet``) evaluation of the kinematics costs more than the rest of the law together; the
+closed form took the contour / SISO cost ratio from 5-7x to about 2x (CPU time, same run).
+
 Saturation and divergence: with ``u_max`` the voltages are clipped (the amplifier limit; counted per
 sample in the result). If any axis error exceeds ``divergence_limit`` (mm or rad) or a control value is
 not finite, the loop is flagged ``diverged`` at that sample and its state is frozen from there, so no
@@ -58,8 +67,8 @@ from typing import Union
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jax import Array
-from jax.experimental.jet import jet
 
 from research.control._gains import AxisSMC, ContourGains
 from research.control._plant import FiveAxisPlant
@@ -109,8 +118,11 @@ def _orientation_law(g: AxisSMC, W, m, c, r, q, qd, dh, Ieps, T):
     """Eq 5.20-5.27 for A, C: returns ``(u, d_hat, int eps, commanded acceleration)``."""
     e, de = r["q"][3:] - q, r["qd"][3:] - qd
     v, vd = r["v"], r["vd"]
-    eps = e - v * jnp.dot(v, e)  # eq 5.20
-    deps = de - vd * jnp.dot(v, e) - v * (jnp.dot(vd, e) + jnp.dot(v, de))
+    # v.e, v.e', v'.e in one reduction (fewer kernels per period on CPU)
+    D = jnp.sum(jnp.stack([v, vd])[:, None, :] * jnp.stack([e, de])[None, :, :], axis=-1)
+    ve, vde, vde_ = D[0, 0], D[0, 1], D[1, 0]
+    eps = e - v * ve  # eq 5.20
+    deps = de - vd * ve - v * (vde_ + vde)
     Ieps = Ieps + T * eps
     et = e + W * Ieps  # eq 5.22
     det = de + W * eps
@@ -121,37 +133,77 @@ def _orientation_law(g: AxisSMC, W, m, c, r, q, qd, dh, Ieps, T):
     return u, dh, Ieps, acc + g.Ks * S / m
 
 
-def _J_xyz(q):
-    """``dP/d[x, y, z] = R(a, c)^T diag(-1, -1, 1)`` of eq 4.5 (independent of the offsets)."""
+def _rot(cs, sn, u0, u1):
+    """Plane rotation ``[[cos, -sin], [sin, cos]] [u0, u1]`` (scalars)."""
+    return cs * u0 - sn * u1, sn * u0 + cs * u1
+
+
+def _tip_motion(machine: TableTiltingAC, q, qd, alpha):
+    """Tool tip ``P`` (eq 4.5), ``P' = J q'`` and the part of ``P''`` not made by the Cartesian
+    accelerations, ``J' q' + J_ac alpha`` (eq 4.10), for the rotary accelerations ``alpha = [a'', c'']``.
+
+    ``P = R(a, c)^T k`` with ``k = diag(-1, -1, 1) ([x, y, z] - offset(a))`` (eq 4.5, 4.6) is a plane
+    rotation by ``a`` of ``(k1, k2)`` into ``(w1, w2)``, then a plane rotation by ``c`` of ``(k0, w1)`` into
+    ``(P0, P1)``, and ``P2 = w2``. For ``u = Rot(t) v``: ``u' = Rot v' + t' Jr u`` and
+    ``u'' = Rot v'' + 2 t' Jr Rot v' + t'' Jr u - t'^2 u`` (``Jr [u0, u1] = [-u1, u0]``); dropping the
+    Cartesian accelerations from ``v''`` gives ``P''_rest``. Scalar closed form: the jet (Taylor-mode)
+    form of the same derivatives, and a stacked 3 x 3 form, cost 1-4 us per control period on CPU
+    (benchmarks/bench_control.py). Equal to ``machine.forward`` and its jet to rounding (tested).
+    """
+    L = machine.L_ac
     sa, ca, sc, cc = jnp.sin(q[3]), jnp.cos(q[3]), jnp.sin(q[4]), jnp.cos(q[4])
-    R = jnp.array([[cc, sc, 0.0], [-ca * sc, ca * cc, sa], [sa * sc, -sa * cc, ca]])
-    return R.T * jnp.array([-1.0, -1.0, 1.0])[None, :]
+    ad, cd, aa, ca_ = qd[3], qd[4], alpha[0], alpha[1]
+    k0, k1, k2 = -q[0], -(q[1] + L * sa), q[2] - (L * ca + machine.L_ya - machine.L_t)
+    k0d, k1d, k2d = -qd[0], -(qd[1] + L * ca * ad), qd[2] + L * sa * ad
+    k1r, k2r = L * (sa * ad**2 - ca * aa), L * (ca * ad**2 + sa * aa)  # offset's part of k''
+    # rotation by a
+    w1, w2 = _rot(ca, sa, k1, k2)
+    r1, r2 = _rot(ca, sa, k1d, k2d)
+    w1d, w2d = r1 - ad * w2, r2 + ad * w1
+    s1, s2 = _rot(ca, sa, k1r, k2r)
+    w1r = s1 - 2 * ad * r2 - aa * w2 - ad**2 * w1
+    w2r = s2 + 2 * ad * r1 + aa * w1 - ad**2 * w2
+    # rotation by c of (k0, w1); k0'' is a Cartesian acceleration (dropped)
+    P0, P1 = _rot(cc, sc, k0, w1)
+    t0, t1 = _rot(cc, sc, k0d, w1d)
+    P0d, P1d = t0 - cd * P1, t1 + cd * P0
+    u0, u1 = _rot(cc, sc, 0.0 * k0, w1r)
+    P0r = u0 - 2 * cd * t1 - ca_ * P1 - cd**2 * P0
+    P1r = u1 + 2 * cd * t0 + ca_ * P0 - cd**2 * P1
+    return jnp.stack([P0, P1, w2]), jnp.stack([P0d, P1d, w2d]), jnp.stack([P0r, P1r, w2r])
+
+
+def _J_xyz_T(q, v):
+    """``J_xyz^T v`` with ``J_xyz = dP/d[x, y, z] = R(a, c)^T diag(-1, -1, 1)`` (eq 4.5; independent of
+    the offsets): ``diag(-1, -1, 1) R v``, ``R v = Rot(-a) about X of Rot(-c) about Z of v`` (eq 4.6)."""
+    sa, ca, sc, cc = jnp.sin(q[3]), jnp.cos(q[3]), jnp.sin(q[4]), jnp.cos(q[4])
+    u0, u1 = _rot(cc, -sc, v[0], v[1])
+    w1, w2 = _rot(ca, -sa, u1, v[2])
+    return jnp.stack([-u0, -w1, w2])
 
 
 def _contour_law(g: ContourGains, plant, machine, r, q, qd, dh, IF, Ieps, T):
     m, c = plant.m, plant.c
     u_r, dh_r, Ieps, alpha_r = _orientation_law(g.rotary, g.W, m[3:], c[3:], r, q[3:], qd[3:], dh[3:], Ieps, T)
 
-    def tip(qq):
-        return machine.forward(qq)[0]
-
-    # one Taylor pass (jax.experimental.jet): P, P' = J q', and the part of P'' not made by the
-    # Cartesian accelerations, J' q' + J_ac alpha_ac (eq 4.10)
-    P, (Pd, P2_rest) = jet(tip, (q,), ((qd, jnp.concatenate([jnp.zeros(3), alpha_r])),))
-    F, Fd, Fdd = r["F"], r["Fd"], r["Fdd"]
+    # P, P' = J q', and the part of P'' not made by the Cartesian accelerations, J' q' + J_ac alpha_ac (eq 4.10)
+    P, Pd, P2_rest = _tip_motion(machine, q, qd, alpha_r)
+    Fall = r["Fall"]  # [F | F' | F''], (3, 9), stacked along the reference once (see _run)
     e, de = r["P"] - P, r["Pd"] - Pd
-    eF = F.T @ e
-    deF = F.T @ de + Fd.T @ e
+    # the six frame products F^T e, F^T e', F'^T e, F'^T e', F''^T e, F''^T e' in one reduction
+    G = jnp.sum(Fall[:, :, None] * jnp.stack([e, de], -1)[:, None, :], axis=0)
+    eF = G[0:3, 0]
+    deF = G[0:3, 1] + G[3:6, 0]
     IF = IF + T * eF
     tg = g.tip
     CP, CI = 2 * tg.zeta * tg.wn, tg.wn**2
     S = deF + CP * eF + CI * IF  # eq 5.5
     mF = direction_inertia(plant)
     dF = dh[:3] + T * tg.Gamma * S  # eq 5.8
-    rho = 2 * Fd.T @ de + Fdd.T @ e + CP * deF + CI * eF + (tg.Ks * S + dF) / mF
-    Pdd_des = r["Pdd"] + F @ rho
+    rho = 2 * G[3:6, 1] + G[6:9, 0] + CP * deF + CI * eF + (tg.Ks * S + dF) / mF
+    Pdd_des = r["Pdd"] + jnp.sum(Fall[:, :3] * rho[None, :], axis=1)
     # J_xyz = R(a, c)^T diag(-1, -1, 1) is orthogonal (eq 4.6), so its inverse is its transpose
-    qdd_c = _J_xyz(q).T @ (Pdd_des - P2_rest)
+    qdd_c = _J_xyz_T(q, Pdd_des - P2_rest)
     u_c = m[:3] * qdd_c + c[:3] * qd[:3]  # eq 5.15, Cartesian rows
     return jnp.concatenate([u_c, u_r]), jnp.concatenate([dF, dh_r]), IF, Ieps
 
@@ -166,13 +218,14 @@ def simulate_closed_loop(plant: FiveAxisPlant, reference: ContourReference, cont
         reference: :class:`ContourReference` (its ``sample_period`` is the control period T).
         controller: :class:`AxisSMC` (5 axes, SISO) or :class:`ContourGains` (Fig 5.4 scheme).
         machine: A/C kinematics (needed by the contour controller; default all offsets zero).
-        u_max: amplifier voltage limit [V] (None: no saturation).
+        u_max: amplifier voltage limit [V], scalar or one per axis (None: no saturation).
         friction_width: 0 for the exact sign of eq 6.2, else the ``tanh`` width [mm/s] (for gradients).
         divergence_limit: axis error [mm or rad] beyond which the run is flagged diverged.
     Returns:
         :class:`ClosedLoopResult`.
     Raises:
-        ParameterError: a SISO gain set without 5 axes, or a non-positive limit.
+        ParameterError: a SISO gain set without 5 axes, a non-positive limit, the contour controller on
+            a joint-only reference, or reference rows of different lengths or with non-finite values.
     """
     machine = TableTiltingAC() if machine is None else machine
     if isinstance(controller, AxisSMC) and controller.lam.shape != (5,):
@@ -181,21 +234,53 @@ def simulate_closed_loop(plant: FiveAxisPlant, reference: ContourReference, cont
         raise ParameterError(f"controller must be AxisSMC or ContourGains, got {type(controller).__name__}")
     if reference.q.shape[1:] != (5,):
         raise ParameterError(f"reference must have 5 axes, got q of shape {reference.q.shape}")
-    if u_max is not None and not u_max > 0:
-        raise ParameterError(f"u_max must be > 0 V, got {u_max!r}")
+    _check_reference(reference)
+    if isinstance(controller, ContourGains) and not reference.has_frame:
+        raise ParameterError("the contour controller needs a reference with the tip path's Frenet frame "
+                             "(parametric_reference / eq436_reference); this one is joint-only (joint_reference)")
+    if u_max is not None:
+        u_max = np.broadcast_to(np.asarray(u_max, dtype=np.float64), (5,)) if np.ndim(u_max) == 0 else np.asarray(u_max, dtype=np.float64)
+        if u_max.shape != (5,):
+            raise ParameterError(f"u_max must be a scalar or one limit per axis (x, y, z, a, c), got shape {u_max.shape}")
+        if not np.all(np.isfinite(u_max) & (u_max > 0)):
+            raise ParameterError(f"u_max must be > 0 V and finite for every axis, got {u_max}")
     if not divergence_limit > 0:
         raise ParameterError(f"divergence_limit must be > 0, got {divergence_limit!r}")
-    return _run(plant, reference, controller, machine, jnp.inf if u_max is None else float(u_max),
+    return _run(plant, reference, controller, machine, jnp.full(5, jnp.inf) if u_max is None else jnp.asarray(u_max),
                 float(friction_width), float(divergence_limit))
+
+
+_REFERENCE_FIELDS = ("t", "q", "qd", "qdd", "P", "Pd", "Pdd", "F", "Fd", "Fdd", "v", "vd")
+
+
+def _check_reference(reference: ContourReference) -> None:
+    """Every row of the reference has the same length and (when the arrays are concrete, i.e. outside a
+    trace) finite values; raises :class:`ParameterError` naming the field and the first bad sample."""
+    N = reference.t.shape[0]
+    for name in _REFERENCE_FIELDS:
+        x = getattr(reference, name)
+        if x.shape[:1] != (N,):
+            raise ParameterError(f"ContourReference.{name} has {x.shape[0] if x.ndim else 0} rows, t has {N}")
+        if isinstance(x, jax.core.Tracer):
+            continue
+        bad = ~np.isfinite(np.asarray(x).reshape(N, -1)).all(axis=1)
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise ParameterError(f"ContourReference.{name} is not finite at sample {k} (t = {float(reference.t[k]):.6g} s)"
+                                 f"{'' if bad.sum() == 1 else f' and {int(bad.sum()) - 1} more samples'}")
 
 
 @eqx.filter_jit
 def _run(plant, reference, controller, machine, u_max, friction_width, divergence_limit):
     T = reference.sample_period
     Ad, Bd = plant.discretize(T)
-    rows = dict(q=reference.q, qd=reference.qd, qdd=reference.qdd, P=reference.P, Pd=reference.Pd,
-                Pdd=reference.Pdd, F=reference.F, Fd=reference.Fd, Fdd=reference.Fdd, v=reference.v, vd=reference.vd)
     contour = isinstance(controller, ContourGains)
+    # each loop reads only the reference rows its law uses; the contour law's frame and its derivatives
+    # are stacked once here, outside the loop, so that one reduction per period gives all six products
+    rows = dict(q=reference.q, qd=reference.qd, qdd=reference.qdd)
+    if contour:
+        rows.update(P=reference.P, Pd=reference.Pd, Pdd=reference.Pdd, v=reference.v, vd=reference.vd,
+                    Fall=jnp.concatenate([reference.F, reference.Fd, reference.Fdd], axis=-1))
 
     def sign(v):
         return jnp.tanh(v / friction_width) if friction_width > 0 else jnp.sign(v)
@@ -210,13 +295,15 @@ def _run(plant, reference, controller, machine, u_max, friction_width, divergenc
         u = jnp.clip(u, -u_max, u_max)
         sat = jnp.sum(jnp.abs(u) >= u_max)
         w = u - plant.coulomb * sign(qd)
-        x = jnp.einsum("aij,aj->ai", Ad, jnp.stack([q, qd], -1)) + Bd * w[:, None]
-        bad = ~jnp.all(jnp.isfinite(u)) | ~jnp.all(jnp.isfinite(x)) | jnp.any(jnp.abs(r["q"] - q) > divergence_limit)
+        # exact ZOH step per axis, elementwise (a batched 2 x 2 dot is a library call per period on CPU)
+        qn = Ad[:, 0, 0] * q + Ad[:, 0, 1] * qd + Bd[:, 0] * w
+        qdn = Ad[:, 1, 0] * q + Ad[:, 1, 1] * qd + Bd[:, 1] * w
+        bad = ~jnp.all(jnp.isfinite(u)) | ~jnp.all(jnp.isfinite(qn)) | ~jnp.all(jnp.isfinite(qdn)) | jnp.any(jnp.abs(r["q"] - q) > divergence_limit)
         now = div | bad
         kdiv = jnp.where(now & ~div, k, kdiv)
         keep = lambda new, old: jnp.where(now, old, new)  # noqa: E731  frozen once diverged
         u_out = jnp.where(now, 0.0, u)
-        carry = (keep(x[:, 0], q), keep(x[:, 1], qd), keep(dh_n, dh), keep(IF_n, IF), keep(Ieps_n, Ieps), now, kdiv, k + 1)
+        carry = (keep(qn, q), keep(qdn, qd), keep(dh_n, dh), keep(IF_n, IF), keep(Ieps_n, Ieps), now, kdiv, k + 1)
         return carry, (q, qd, u_out, dh, sat)
 
     N = reference.t.shape[0]

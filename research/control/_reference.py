@@ -45,6 +45,8 @@ class ContourReference(eqx.Module):
         P, Pd, Pdd: ``(N, 3)`` reference tool tip [mm] and derivatives. F, Fd, Fdd: ``(N, 3, 3)`` Frenet
         frame (columns t, n, b) and its time derivatives [1, 1/s, 1/s^2]. v, vd: ``(N, 2)`` unit rotary
         reference direction of eq 5.20 and its derivative [1/s]. sample_period: ``T`` [s].
+        has_frame: False for a joint-only reference (:func:`joint_reference`), whose tip and frame rows are
+        zero and which only the SISO controller may run.
     """
 
     t: Array
@@ -60,6 +62,7 @@ class ContourReference(eqx.Module):
     v: Array
     vd: Array
     sample_period: float = eqx.field(static=True, default=1e-3)
+    has_frame: bool = eqx.field(static=True, default=True)
 
     @property
     def n_samples(self) -> int:
@@ -193,3 +196,25 @@ def eq436_reference(machine: TableTiltingAC | None = None, *, feed: float = 50.0
     s = fir_interpolate(Polyline([[0.0], [length]]), feed, [T1, T1 / 2], 0.0, sample_period)
     l, ld, ldd, lddd = (np.asarray(x)[:, 0] / EQ436_TIP_SPEED for x in (s.q, s.v, s.a, s.j))
     return parametric_reference(_eq436_tip, _eq436_a, _eq436_c, l, ld, ldd, lddd, np.asarray(s.t), machine, sample_period)
+
+
+def joint_reference(trajectory: Trajectory, sample_period: float) -> ContourReference:
+    """A joint-only reference for the SISO controller: ``trajectory`` (axes x, y, z, a, c) evaluated at
+    every control period ``sample_period`` [s] by :meth:`Trajectory.evaluate` (exact profile, or the
+    cubic Hermite interpolant of its samples), with zero tip / frame rows and ``has_frame = False``.
+
+    Raises:
+        ParameterError: a trajectory without the five axes, or a non-positive period.
+    """
+    if tuple(trajectory.axes) != AXES5:
+        raise ParameterError(f"joint_reference needs axes {AXES5}, got {tuple(trajectory.axes)}")
+    if not (np.isfinite(sample_period) and sample_period > 0):
+        raise ParameterError(f"sample_period must be > 0 s, got {sample_period!r}")
+    t0, t1 = float(np.asarray(trajectory.t)[0]), float(np.asarray(trajectory.t)[-1])
+    t = t0 + np.arange(int(np.floor((t1 - t0) / sample_period + 1e-9)) + 1) * sample_period
+    ev = trajectory.evaluator()
+    q, qd, qdd = (np.asarray(ev(t, nu), dtype=np.float64) for nu in range(3))
+    N = t.size
+    z3, z33, z2 = jnp.zeros((N, 3)), jnp.zeros((N, 3, 3)), jnp.zeros((N, 2))
+    return ContourReference(jnp.asarray(t), jnp.asarray(q), jnp.asarray(qd), jnp.asarray(qdd), z3, z3, z3, z33, z33, z33,
+                            z2, z2, sample_period=float(sample_period), has_frame=False)

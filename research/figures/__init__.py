@@ -37,6 +37,8 @@ FIGURE_MODULES = (
     "research.figures.sencer2009_fig5_9",
     "research.figures.sencer2009_fig5_10",
     "research.figures.sencer2009_fig5_feedforward",
+    "research.figures.sencer2009_fig6_13",
+    "research.figures.sencer2009_fig3_13",
 )
 
 

@@ -136,14 +136,36 @@ def test_straight_stretch_raises_frenet_frame_error():
 
 def test_cartesian_jacobian_is_orthogonal_and_matches_kinematics():
     """The tip law inverts J_xyz by its transpose: J_xyz = R^T diag(-1, -1, 1) (eq 4.6) is orthogonal and
-    equals the closed-form dP/dq of research.paths.kinematics5 for any offsets."""
-    from research.control._loop import _J_xyz
+    equals the closed-form dP/dq of research.paths.kinematics5 for any offsets (J^T read column by
+    column from the law's J_xyz^T v)."""
+    from research.control._loop import _J_xyz_T
 
     q = jnp.array([12.0, -3.0, 40.0, 1.3, -0.4])
     m = TableTiltingAC(L_ya=10.0, L_ac=25.0, L_t=5.0)
-    J = np.asarray(_J_xyz(q))
+    JT = np.column_stack([np.asarray(_J_xyz_T(q, jnp.asarray(e))) for e in np.eye(3)])
+    J = JT.T
     np.testing.assert_allclose(J, np.asarray(m.tip_jacobian(q))[:, :3], atol=1e-14)
     np.testing.assert_allclose(J.T @ J, np.eye(3), atol=1e-14)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_closed_form_tip_motion_equals_taylor_mode_kinematics(seed):
+    """The law's scalar closed form of P, P' and P''_rest (the part of P'' not made by the Cartesian
+    accelerations, eq 4.10) equals an independent computation: jax.experimental.jet (Taylor mode) of
+    research.paths.kinematics5's forward map (eq 4.5) with the Cartesian accelerations set to zero,
+    for random poses, rates and rotary accelerations and non-zero offsets, to 1e-12 relative."""
+    from jax.experimental.jet import jet
+
+    from research.control._loop import _tip_motion
+
+    rng = np.random.default_rng(seed)
+    m = TableTiltingAC(L_ya=10.0, L_ac=25.0, L_t=5.0)
+    q = jnp.asarray(rng.normal(size=5) * [50, 50, 50, 1, 3])
+    qd = jnp.asarray(rng.normal(size=5) * [50, 50, 50, 1, 1])
+    alpha = jnp.asarray(rng.normal(size=2) * 10)
+    P, (Pd, P2) = jet(lambda x: m.forward(x)[0], (q,), ((qd, jnp.concatenate([jnp.zeros(3), alpha])),))
+    for mine, ref in zip(_tip_motion(m, q, qd, alpha), (P, Pd, P2)):
+        np.testing.assert_allclose(np.asarray(mine), np.asarray(ref), rtol=1e-12, atol=1e-12 * float(jnp.max(jnp.abs(ref))))
 
 
 def test_lyapunov_function_decreases_for_a_constant_disturbance():
