@@ -43,6 +43,7 @@ import numpy as np
 from pydantic import BaseModel, StrictFloat, StrictInt, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from research.errors import ConfigError, PathError
+from research.experiments.config_control import CONTROL_METRIC_UNITS, ControlConfig
 from research.experiments.config_stages import (
     BlendConfig,
     ClosedLoopConfig,
@@ -88,6 +89,7 @@ METRIC_UNITS = {
     "mode_damping": "-",
     "tuned_delay": "s",
 }
+METRIC_UNITS |= CONTROL_METRIC_UNITS  # [control] stage (thesis ch 5)
 #: what ``name`` (the results folder and figure file stem) may be: starts with a letter or digit, at most 64
 #: characters of letters, digits, ``_``, ``-`` and ``.`` (so never ``..`` or a path)
 NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$"
@@ -334,6 +336,8 @@ class ExperimentConfig(_Strict):
     vibration: VibrationConfig | None = Field(None, description="resonance test -> modes -> eq 10 delays")
     contour: ContourConfig | None = Field(None, description="contour-error stage (needs a drive other than ideal)")
     compensation: CompensationConfig | None = Field(None, description="CEC stage (needs a drive other than ideal)")
+    control: ControlConfig | None = Field(None, description="thesis ch 5 closed loop on the Fig 5.5 path (SISO SMC or "
+                                                            "5-axis contour controller)")
     metrics: list[Literal[tuple(METRIC_UNITS)]] | None = Field(None, description="metrics to report (default: all)")
     output: OutputConfig = OutputConfig()
     sweep: SweepConfig | None = None
@@ -353,9 +357,10 @@ class ExperimentConfig(_Strict):
     @model_validator(mode="after")
     def _something_to_do(self):
         drive_study = self.drive is not None and self.drive.frequency_response is not None
-        if self.path is None and self.identification is None and self.vibration is None and not drive_study:
-            raise ValueError("give a [path] (motion study), an [identification] table, a [vibration] table or a "
-                             "[drive.frequency_response] table")
+        if (self.path is None and self.identification is None and self.vibration is None and self.control is None
+                and not drive_study):
+            raise ValueError("give a [path] (motion study), an [identification] table, a [vibration] table, a "
+                             "[control] table or a [drive.frequency_response] table")
         if drive_study and self.drive.model == "ideal":
             raise ValueError("[drive.frequency_response] needs a drive model, not \"ideal\"")
         if self.drive is not None and self.drive.model == "identified" and (

@@ -28,6 +28,7 @@ import numpy as np
 
 from research.experiments.config import METRIC_UNITS, ExperimentConfig, build_path, named_axes, read_program
 from research.drives import residual_vibration_sampled
+from research.experiments.stage_control import control_stage
 from research.experiments.stages import (
     compensation_stage,
     contour_stage,
@@ -70,6 +71,11 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
     if cfg.vibration is not None:
         log("vibration: resonance test -> modes -> eq 10 delays")
         found, details["vibration"], more = vibration_stage(cfg.vibration, base)
+        scalars |= found
+        arrays |= more
+    if cfg.control is not None:
+        log(f"control: {cfg.control.controller} controller on the Fig 5.5 path at {cfg.control.feed_mm_per_s:g} mm/s")
+        found, details["control"], more = control_stage(cfg.control)
         scalars |= found
         arrays |= more
     if cfg.drive is not None and cfg.drive.frequency_response is not None:
