@@ -28,7 +28,8 @@ CONTROL_METRIC_UNITS = {
     "tip_estimate_error_max": "mm",
     "orientation_error_max": "rad",
     "orientation_error_mean": "rad",
-    "axis_error_max": "mm (x, y, z) / rad (a, c)",
+    "axis_error_max": "mm",  # X, Y, Z
+    "rotary_axis_error_max": "rad",  # A, C
     "control_voltage_max": "V",
     "diverged": "-",
 }

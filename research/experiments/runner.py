@@ -35,7 +35,7 @@ from research.trajectory import Trajectory
 DEFAULT_CACHE = Path(".cache") / "results"
 DEFAULT_FIGURES = Path("paper_figures")
 #: ``details`` entries of stages that are not interpolator runs
-STAGE_DETAILS = ("identification", "vibration")
+STAGE_DETAILS = ("identification", "vibration", "control")
 #: the visible results folder of the command line (one folder per experiment)
 DEFAULT_RESULTS = Path("results")
 
@@ -110,7 +110,7 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
     store = ResultStore(Path(cache_dir) / "store")
     key = config_key(cfg, base, kind="run")
     entry = None if force else store.get(key)
-    want_figure = cfg.output.figure and cfg.path is not None
+    want_figure = cfg.output.figure and (cfg.path is not None or cfg.control is not None)
     stem = cfg.name
     if cfg.sweep is not None:  # the sweep's own outputs keep their names; this run is the base point
         stem = f"{cfg.name}_base"
@@ -245,7 +245,12 @@ def _figure(cfg: ExperimentConfig, ev) -> bytes:
     from research.experiments.run_figure import plot_run
 
     name = f"{cfg.name}: base point of the sweep (no [sweep] applied)" if cfg.sweep is not None else cfg.name
-    fig = plot_run(ev.objects["path"], ev.objects["runs"], title=f"{name}\n{cfg.reproduces}")
+    if cfg.path is None:  # a [control] study without a tool path: the ch 5 error panels
+        from research.experiments.control_figure import plot_control
+
+        fig = plot_control(ev.arrays, ev.record["details"]["control"], title=f"{name}\n{cfg.reproduces}")
+    else:
+        fig = plot_run(ev.objects["path"], ev.objects["runs"], title=f"{name}\n{cfg.reproduces}")
     buf = io.BytesIO()
     save(fig, buf)
     return buf.getvalue()

@@ -78,7 +78,8 @@ def control_stage(cc: ControlConfig) -> tuple[dict[str, float], dict, dict[str, 
                "tip_estimate_error_max": s["estimate_error_max"]["estimate"],
                "orientation_error_max": s["orientation_max"], "orientation_error_mean": s["orientation_mean"],
                "diverged": float(s["diverged"])}
-    scalars |= {f"axis_error_max.{a}": v for a, v in zip(AXES, s["axis_max"])}
+    scalars |= {f"axis_error_max.{a}": v for a, v in zip(AXES[:3], s["axis_max"][:3])}
+    scalars |= {f"rotary_axis_error_max.{a}": v for a, v in zip(AXES[3:], s["axis_max"][3:])}
     scalars |= {f"control_voltage_max.{a}": v for a, v in zip(AXES, s["u_max"])}
     details = {"controller": cc.controller, "coulomb_V": [float(c) for c in np.atleast_1d(coulomb)],
                "control_period_s": T, "mirror_passes": cc.mirror_passes, "summary": s}
