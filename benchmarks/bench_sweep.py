@@ -33,7 +33,7 @@ import jax.numpy as jnp
 import numpy as np
 
 import research  # noqa: F401  (x64)
-from research.experiments.fir_model import residual_vibration_sampled
+from research.drives import residual_vibration_sampled
 from research.experiments.sweep import run_sweep
 from research.experiments.sweep_vmap import _batch
 from research.interpolators import plan_fir

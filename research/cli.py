@@ -1,6 +1,7 @@
 """Command line: ``python -m research run CONFIG``, ``python -m research sweep CONFIG``,
 ``python -m research figures``, ``python -m research store verify|gc`` and
-``python -m research tune LOG --path NAME`` (FIR delays from an accelerometer log, issue 20).
+``python -m research tune LOG --path NAME`` (FIR delays from an accelerometer log, issue 20) and
+``python -m research export TRAJECTORY.npz --csv FILE --gcode FILE`` (issue 16 item 7).
 
 Errors of the input or the file system (:class:`~research.errors.ResearchError`, any ``OSError``) print
 one line ``error: ...`` and exit with status 2; ``--debug`` prints the traceback as well."""
@@ -48,6 +49,10 @@ def main(argv: list[str] | None = None) -> int:
     figs.add_argument("--fast", action="store_true", help="coarser grids, for smoke tests")
     figs.add_argument("--out", type=Path, default=Path("paper_figures"), help="output folder (default paper_figures)")
     figs.add_argument("--list", action="store_true", help="list the registered figures and exit")
+    figs.add_argument("--cache", type=Path, default=Path(".cache/results"),
+                      help="results store of the config figures (default .cache/results)")
+    figs.add_argument("--results", type=Path, default=Path("results"),
+                      help="readable results of the config figures: <results>/<name>/ (default results)")
 
     st = sub.add_parser("store", help="check or clean the results store")
     st_sub = st.add_subparsers(dest="action", required=True)
@@ -76,9 +81,17 @@ def main(argv: list[str] | None = None) -> int:
                     help="boxcar: whole record (sweeps, tones; default); hann: Welch (random excitation)")
     tn.add_argument("--resolution-hz", type=float, help="PSD bin width [Hz] (default: 1 / record length)")
 
+    ex = sub.add_parser("export", help="a stored trajectory (.npz, e.g. results/<name>/trajectory.npz) to CSV and/or "
+                                       "a G-code stream")
+    ex.add_argument("trajectory", type=Path, help="trajectory file written by a run (Trajectory.save)")
+    ex.add_argument("--csv", type=Path, help="CSV to write: t, q, v, a, j per axis, units in the header")
+    ex.add_argument("--gcode", type=Path, help="G-code stream to write: one G1 per sample at its mean speed")
+    ex.add_argument("--tolerance-um", type=float, default=0.0, help="G64 P tolerance of the stream [um] (0: G61)")
+
     args = parser.parse_args(argv)
     try:
-        return {"run": _run, "sweep": _sweep, "figures": _figures, "store": _store, "tune": _tune}[args.command](args)
+        return {"run": _run, "sweep": _sweep, "figures": _figures, "store": _store, "tune": _tune,
+                "export": _export}[args.command](args)
     except (ResearchError, OSError) as e:
         if args.debug:
             traceback.print_exc()
@@ -139,7 +152,7 @@ def _sweep(args) -> int:
 
 
 def _figures(args) -> int:
-    from research.figures import catalog, figure_module
+    from research.figures import catalog, figure_module, render
 
     figures = catalog()  # names and descriptions from the modules' source: nothing heavy is imported
     if args.list:
@@ -158,20 +171,47 @@ def _figures(args) -> int:
               f"{figures[name].reproduces}", flush=True)
         start = time.perf_counter()
         module = figure_module(name)
-        files = module.make_figure(args.out, fast=args.fast)
+        done = render(name, args.out, fast=args.fast, cache_dir=args.cache, results_dir=args.results)
         seconds = time.perf_counter() - start
-        print(f"[{i}/{len(names)}] {name}: done in {seconds:.1f} s: " + ", ".join(str(f) for f in files), flush=True)
+        cached = " (from the store)" if done.run is not None and done.run.cached else ""
+        print(f"[{i}/{len(names)}] {name}: done in {seconds:.1f} s{cached}: " + ", ".join(str(f) for f in done.files),
+              flush=True)
+        checks = done.run.paper_checks() if done.run is not None else []
+        for c in checks:
+            print(f"      paper: {c.line()}", flush=True)
         manifest.append({
             "name": name,
             "reproduces": module.REPRODUCES,
             # the experiment config the figure is made from (a module CONFIG), else its parameters' module
             "config": getattr(module, "CONFIG", None) or f"{module.__name__} (module constants)",
             "module": module.__name__,
-            "files": [Path(f).name for f in files],
+            "files": [Path(f).name for f in done.files],
             "fast": bool(args.fast),
             "seconds": round(seconds, 2),
+            "paper": [{"key": c.key, "value": c.value, "expected": c.expected, "tolerance": c.tolerance,
+                       "source": c.source, "ok": c.ok} for c in checks],
         })
     (args.out / "manifest.json").write_text(json.dumps(manifest, indent=2))
+    return 0
+
+
+def _export(args) -> int:
+    """``export``: a saved trajectory to CSV and/or G-code."""
+    from research.experiments.export import trajectory_csv, trajectory_gcode
+    from research.trajectory import Trajectory
+
+    if args.csv is None and args.gcode is None:
+        raise ResearchError("export: give --csv FILE and/or --gcode FILE")
+    try:
+        traj = Trajectory.load(args.trajectory)
+    except (KeyError, ValueError) as e:
+        raise ResearchError(f"{args.trajectory}: not a trajectory file written by a run ({e})") from None
+    if args.csv is not None:
+        args.csv.write_text(trajectory_csv(traj))
+        print(f"wrote {args.csv} ({traj.n_samples} samples, axes {', '.join(traj.axes)})")
+    if args.gcode is not None:
+        args.gcode.write_text(trajectory_gcode(traj, args.tolerance_um * 1e-3))
+        print(f"wrote {args.gcode}")
     return 0
 
 

@@ -22,6 +22,7 @@ from research.drives._controllers import PIDController, PPICascade
 from research.drives._frequency import FrequencyResponse, PoleZeroReport, frequency_response, pole_zero_report
 from research.drives._friction import coulomb_sign, smooth_sign
 from research.drives._modes import FlexibleMode
+from research.drives._residual_vibration import fir_pulse_residual, residual_vibration_sampled
 from research.drives._rigid_body import RigidBodyAxis
 from research.drives._sensors import THESIS_LINEAR_ENCODER, THESIS_ROTARY_ENCODER, Encoder, measure
 from research.drives._simulate import DriveResponse, discretize, simulate
@@ -43,9 +44,11 @@ __all__ = [
     "coulomb_sign",
     "denominator_from_poles",
     "discretize",
+    "fir_pulse_residual",
     "frequency_response",
     "measure",
     "pole_zero_report",
+    "residual_vibration_sampled",
     "simulate",
     "smooth_sign",
     "table_4_1_axis",

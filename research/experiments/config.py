@@ -43,6 +43,18 @@ import numpy as np
 from pydantic import BaseModel, StrictFloat, StrictInt, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from research.errors import ConfigError, PathError
+from research.experiments.config_control import CONTROL_METRIC_UNITS, ControlConfig
+from research.experiments.config_stages import (
+    BlendConfig,
+    ClosedLoopConfig,
+    CompensationConfig,
+    FrequencyResponseConfig,
+    ContourConfig,
+    LimitsConfig,
+    SCurveConfig,
+    SigmoidConfig,
+    VibrationConfig,
+)
 from research.paths import PATHS, Polyline, named_path
 
 #: metric names a config may ask for (``metrics = [...]``); units in :data:`METRIC_UNITS`
@@ -57,7 +69,27 @@ METRIC_UNITS = {
     "zeta_error": "-",
     "p_error": "-",
     "dc_error": "-",
+    # contour stage (drive's actual motion): exact error against the CAM path, and each estimator's
+    # largest estimate and largest difference to the exact error against the reference curve
+    "max_actual_contour_error": "mm",
+    "rms_actual_contour_error": "mm",
+    "max_estimate": "mm",
+    "max_estimator_error": "mm",
+    # compensation stage (CEC): max |e_T| before and after, and the drive simulations it took
+    "cec_error_before": "mm",
+    "cec_error_after": "mm",
+    "cec_simulations": "-",
+    # drive frequency response: poles of eq 6.13 and the -3 dB tracking bandwidth
+    "drive_wn_hz": "Hz",
+    "drive_zeta": "-",
+    "drive_p_hz": "Hz",
+    "drive_bandwidth_hz": "Hz",
+    # vibration stage: estimated modes and their eq 10 delays
+    "mode_frequency_hz": "Hz",
+    "mode_damping": "-",
+    "tuned_delay": "s",
 }
+METRIC_UNITS |= CONTROL_METRIC_UNITS  # [control] stage (thesis ch 5)
 #: what ``name`` (the results folder and figure file stem) may be: starts with a letter or digit, at most 64
 #: characters of letters, digits, ``_``, ``-`` and ``.`` (so never ``..`` or a path)
 NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$"
@@ -67,7 +99,9 @@ MAX_COORDINATE_MM = 1e6
 #: 10 m/s beyond any machine tool (mm/min typed in a mm/s key); outside it a config is refused
 FEED_RANGE_MM_PER_S = (1.0, 10_000.0)
 DRIVE_MODELS = ("ideal", "sencer2009_table6_1", "sencer2009_table6_1_ppi", "sencer2009_table6_2", "sencer2009_table6_2_pid",
-                "identified")
+                "sencer2009_table6_3", "sencer2009_table6_3_ppi", "parameters", "identified")
+#: catalog drives with one model per axis (thesis Table 6.3: axes x, y, z, a, c)
+PER_AXIS_DRIVES = {"sencer2009_table6_3": "table_6_3_closed_loop", "sencer2009_table6_3_ppi": "table_6_3_ppi"}
 
 
 class _Strict(BaseModel):
@@ -131,6 +165,8 @@ class FIRConfig(_Strict):
     tolerance_um: float = Field(500.0, ge=0, description="cornering tolerance epsilon [um]")
     sample_period_ms: float = Field(1.0, gt=0, description="interpolation period Ts [ms]")
     refine: bool = Field(True, description="short-segment rule (verified overlap)")
+    limits: LimitsConfig | None = Field(None, description="axis limits the FIR also holds (plan_fir(limits=...), "
+                                                          "beyond the paper; none: the paper's planner)")
 
     @model_validator(mode="after")
     def _positive_delays(self):
@@ -179,7 +215,10 @@ def _plausible_units(feed: float, delays_ms: list[float], sample_period_ms: floa
                              f"{sample_period_ms:g} ms{hint}")
 
 
-Interpolator = Annotated[Union[FIRConfig, TimeOptimalConfig], Field(discriminator="kind")]
+Interpolator = Annotated[Union[FIRConfig, TimeOptimalConfig, SCurveConfig, BlendConfig, SigmoidConfig],
+                         Field(discriminator="kind")]
+#: the interpolator kinds a config may name
+INTERPOLATOR_KINDS = ("fir", "time_optimal", "scurve", "blend", "sigmoid")
 
 
 class ModeConfig(_Strict):
@@ -192,11 +231,23 @@ class ModeConfig(_Strict):
 
 class DriveConfig(_Strict):
     """Drive model the references run through. ``ideal``: the axes follow the reference exactly and the
-    modes see the reference acceleration; otherwise a thesis catalog drive on every axis."""
+    modes see the reference acceleration; a thesis catalog drive (Table 6.1 / 6.2 on every axis, Table 6.3
+    per axis); ``parameters``: the eq 6.3 model in ``[drive.parameters]``; ``identified``: the drive the
+    config's ``[identification]`` fits."""
 
     model: Literal[DRIVE_MODELS] = Field("ideal", description=f"one of {DRIVE_MODELS}")
+    parameters: ClosedLoopConfig | None = Field(None, description="eq 6.3 parameters (model = \"parameters\")")
     modes: list[ModeConfig] = Field([], description="structural modes")
     settle_time_s: float = Field(1.5, gt=0, description="rest simulated after the motion [s] (catalog drives)")
+    frequency_response: FrequencyResponseConfig | None = Field(
+        None, description="tracking / disturbance responses, poles and bandwidth of the drive (a drive model, not ideal)")
+
+    @model_validator(mode="after")
+    def _parameters_with_model(self):
+        if (self.model == "parameters") != (self.parameters is not None):
+            raise ValueError("model = \"parameters\" and a [drive.parameters] table go together "
+                             f"(got model = {self.model!r}, parameters {'given' if self.parameters else 'missing'})")
+        return self
 
 
 class IdentificationConfig(_Strict):
@@ -248,8 +299,27 @@ class SweepConfig(_Strict):
         return {k: v.values() if isinstance(v, Range) else list(v) for k, v in self.parameters.items()}
 
 
+class PaperNumber(_Strict):
+    """A number the paper prints that this config reproduces (issue 16 item 3): checked against the stored
+    result by the figure's test and shown in the run summary."""
+
+    key: str = Field(..., description="a result scalar (e.g. \"half.cycle_time\") or a path into the record's details "
+                                      "(\"details.<label>.<field>[i]...\")")
+    value: float = Field(..., description="the paper's value, in the unit of the result (mm, s, mm/s^n, -)")
+    tolerance: float = Field(..., ge=0, description="accepted |result - value| (same unit): the paper's rounding, or a "
+                                                    "stated model difference")
+    source: str = Field(..., min_length=1, description="where the paper prints it (section, figure or eq, and the line)")
+
+
 class OutputConfig(_Strict):
+    """What a run writes besides ``results.json`` (none of it changes the results key)."""
+
     figure: bool = Field(True, description="write a figure to paper_figures/")
+    export: list[Literal["csv", "gcode"]] = Field(
+        [], description="trajectories to export per interpolator into results/<name>/: <label>.csv (t, q, v, a, j per "
+                        "axis, units in the header) and <label>.ngc (a G-code stream, one G1 per sample)")
+    gcode_tolerance_um: float = Field(0.0, ge=0, description="G64 P tolerance of the G-code stream [um] (0: G61, "
+                                                             "exact path)")
 
 
 class ExperimentConfig(_Strict):
@@ -263,9 +333,15 @@ class ExperimentConfig(_Strict):
                                              description="one table, or an array of tables [[interpolator]]; kind defaults to fir")
     drive: DriveConfig | None = None
     identification: IdentificationConfig | None = None
+    vibration: VibrationConfig | None = Field(None, description="resonance test -> modes -> eq 10 delays")
+    contour: ContourConfig | None = Field(None, description="contour-error stage (needs a drive other than ideal)")
+    compensation: CompensationConfig | None = Field(None, description="CEC stage (needs a drive other than ideal)")
+    control: ControlConfig | None = Field(None, description="thesis ch 5 closed loop on the Fig 5.5 path (SISO SMC or "
+                                                            "5-axis contour controller)")
     metrics: list[Literal[tuple(METRIC_UNITS)]] | None = Field(None, description="metrics to report (default: all)")
     output: OutputConfig = OutputConfig()
     sweep: SweepConfig | None = None
+    paper: list[PaperNumber] = Field([], description="paper numbers this config reproduces ([[paper]] tables)")
 
     @model_validator(mode="before")
     @classmethod
@@ -280,14 +356,23 @@ class ExperimentConfig(_Strict):
 
     @model_validator(mode="after")
     def _something_to_do(self):
-        if self.path is None and self.identification is None:
-            raise ValueError("give a [path] (motion study) or an [identification] table (or both)")
+        drive_study = self.drive is not None and self.drive.frequency_response is not None
+        if (self.path is None and self.identification is None and self.vibration is None and self.control is None
+                and not drive_study):
+            raise ValueError("give a [path] (motion study), an [identification] table, a [vibration] table, a "
+                             "[control] table or a [drive.frequency_response] table")
+        if drive_study and self.drive.model == "ideal":
+            raise ValueError("[drive.frequency_response] needs a drive model, not \"ideal\"")
         if self.drive is not None and self.drive.model == "identified" and (
                 self.identification is None or self.identification.method != "simulation_error"
                 or self.identification.structure != "eq6.3"):
             raise ValueError("drive.model = \"identified\" runs the path through the drive identified in the same "
                              "config: it needs an [identification] table with method = \"simulation_error\" and "
                              "structure = \"eq6.3\" (the structure the drive simulator takes)")
+        for stage in ("contour", "compensation"):
+            if getattr(self, stage) is not None and (self.path is None or self.drive is None or self.drive.model == "ideal"):
+                raise ValueError(f"the [{stage}] stage works on the drive's actual motion: it needs a [path] and a [drive] "
+                                 "with a model other than \"ideal\"")
         labels = [i.label or i.kind for i in self.interpolators]
         if len(set(labels)) != len(labels):
             raise ValueError(f"interpolator labels must be unique, got {labels}; set label = \"...\"")
@@ -364,13 +449,15 @@ def input_files(cfg: ExperimentConfig) -> dict[str, str]:
         files["path.gcode"] = cfg.path.gcode
     if cfg.identification is not None and cfg.identification.log_file is not None:
         files["identification.log_file"] = cfg.identification.log_file
+    if cfg.vibration is not None and cfg.vibration.log_file is not None:
+        files["vibration.log_file"] = cfg.vibration.log_file
     return files
 
 
 def _describe(err: dict, file: Path, single_interpolator: bool) -> str:
     loc = list(err["loc"])
     if loc[:1] == ["interpolator"]:  # drop the union tag, and the list index of a single [interpolator] table
-        loc = ["interpolator"] + [p for p in loc[1 + single_interpolator:] if p not in ("fir", "time_optimal")]
+        loc = ["interpolator"] + [p for p in loc[1 + single_interpolator:] if p not in INTERPOLATOR_KINDS]
     key = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in loc).lstrip(".") or "(top level)"
     msg = err["msg"].removeprefix("Value error, ")
     kind, value = err["type"], err.get("input")

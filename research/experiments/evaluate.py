@@ -1,8 +1,9 @@
 """Evaluate one validated experiment config (the general path of runs and sweeps).
 
-path -> each interpolator -> :func:`~research.metrics.summarize` -> drive (structural modes:
-residual vibration; catalog drive: tracking error) ; identification (synthetic log with known truth,
-or a logged file) -> relative errors of the identified poles and friction.
+identification (synthetic log with known truth, or a logged file: relative errors of the identified
+poles and friction) ; path -> each interpolator -> :func:`~research.metrics.summarize` -> drive
+(structural modes: residual vibration; a drive model: tracking error) -> contour (exact error and
+estimators) -> compensation (CEC). The stages are in :mod:`research.experiments.stages`.
 
 :func:`evaluate` is a pure function of the config and the input files: it returns a JSON-ready
 record (``scalars``: flat ``{metric: float}``; ``details``: per-interpolator corners, peaks, ...)
@@ -25,9 +26,18 @@ from pathlib import Path
 
 import numpy as np
 
-from research.experiments.config import METRIC_UNITS, ExperimentConfig, build_path, read_program
-from research.experiments.fir_model import residual_vibration_sampled
-from research.metrics import MotionMetrics, summarize
+from research.experiments.config import METRIC_UNITS, ExperimentConfig, build_path, named_axes, read_program
+from research.drives import residual_vibration_sampled
+from research.experiments.stage_control import control_stage
+from research.experiments.stages import (
+    compensation_stage,
+    contour_stage,
+    drive_model,
+    frequency_response_stage,
+    interpolate,
+    vibration_stage,
+)
+from research.metrics import summarize
 from research.trajectory import Trajectory
 
 SETTLE_MARGIN_S = 0.05  # residual vibration is measured from the end of motion + this [s]
@@ -58,6 +68,23 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
         ident = _identify(cfg.identification, base, objects)
         details["identification"] = ident
         scalars |= {k: v for k, v in ident.items() if k.endswith("_error")}
+    if cfg.vibration is not None:
+        log("vibration: resonance test -> modes -> eq 10 delays")
+        found, details["vibration"], more = vibration_stage(cfg.vibration, base)
+        scalars |= found
+        arrays |= more
+    if cfg.control is not None:
+        log(f"control: {cfg.control.controller} controller on the Fig 5.5 path at {cfg.control.feed_mm_per_s:g} mm/s")
+        found, details["control"], more = control_stage(cfg.control)
+        scalars |= found
+        arrays |= more
+    if cfg.drive is not None and cfg.drive.frequency_response is not None:
+        log(f"drive {cfg.drive.model}: frequency response")
+        axes = named_axes(cfg) if cfg.path is not None else ("x",)
+        found, more = frequency_response_stage(cfg.drive.frequency_response,
+                                               drive_model(cfg.drive, axes, objects.get("identified_drive")), axes)
+        scalars |= found
+        arrays |= more
     if cfg.path is not None:
         if cfg.path.gcode is not None:  # one read: chords for the metrics, blocks for the FIR planner
             program = read_program(cfg.path, base)
@@ -71,15 +98,34 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
             label = ic.label or ic.kind
             prefix = f"{label}." if several else ""
             log(f"interpolator {label}: {path.n_segments} segments")
-            traj, info, plan = _interpolate(ic, path, program_feeds, blocks)
+            traj, info, plan = interpolate(ic, path, program_feeds, blocks)
             metrics = summarize(traj, path)
             objects.setdefault("runs", []).append((label, plan, traj, metrics))
             details[label] = info | {"metrics": metrics.as_dict(), "turning_angle_deg": np.degrees(path.turning_angles).tolist()}
             scalars |= {prefix + k: float(getattr(metrics, k)) for k in ("cycle_time", "max_corner_error", "max_contour_error", "peak_feed")}
             arrays |= {f"{label}.{k}": np.asarray(getattr(traj, k)) for k in ("t", "q", "v", "a", "j")}
-            if cfg.drive is not None:
-                log(f"drive {cfg.drive.model}: {len(cfg.drive.modes)} modes")
-                scalars |= {prefix + k: v for k, v in _drive(cfg, traj, objects.get("identified_drive")).items()}
+            if cfg.drive is None:
+                continue
+            log(f"drive {cfg.drive.model}: {len(cfg.drive.modes)} modes")
+            drive = drive_model(cfg.drive, traj.axes, objects.get("identified_drive"))
+            found, actual = _drive(cfg, traj, drive)
+            scalars |= {prefix + k: v for k, v in found.items()}
+            if actual is not None:
+                arrays[f"{label}.actual"] = actual[: traj.n_samples]
+            if cfg.contour is not None:
+                log(f"contour {label}: exact" + "".join(f", {e}" for e in cfg.contour.estimators))
+                found, more = contour_stage(cfg.contour, path, traj, actual)
+                scalars |= {prefix + k: v for k, v in found.items()}
+                arrays |= {f"{label}.{k}": v for k, v in more.items()}
+            if cfg.compensation is not None:
+                log(f"compensation {label}: CEC {cfg.compensation.method}")
+                found, cec = compensation_stage(cfg.compensation, path, traj, drive)
+                scalars |= {prefix + k: v for k, v in found.items()}
+                objects.setdefault("compensation", {})[label] = cec
+                details[label]["compensation"] = {"method": cec.method, "steps": cec.steps, "converged": cec.converged,
+                                                  "history": list(cec.history)}
+                arrays |= {f"{label}.cec.q": np.asarray(cec.setpoint.q), f"{label}.cec.actual": np.asarray(cec.response.position),
+                           f"{label}.cec.error_before": cec.before.distance, f"{label}.cec.error_after": cec.after.distance}
     if cfg.metrics is not None:
         scalars = {k: v for k, v in scalars.items() if _metric_name(k) in cfg.metrics}
     units = {k: METRIC_UNITS[_metric_name(k)] for k in scalars}
@@ -90,68 +136,39 @@ def _metric_name(key: str) -> str:
     return next(p for p in key.split(".") if p in METRIC_UNITS)
 
 
-def _interpolate(ic, path, program_feeds, blocks=None):
-    """``(trajectory, details, plan or None)`` of one interpolator config.
+def _drive(cfg: ExperimentConfig, traj: Trajectory, drive) -> tuple[dict[str, float], np.ndarray | None]:
+    """Residual vibration per mode (and its max), and the tracking error of a drive model [mm]
+    (``drive``: from :func:`~research.experiments.stages.drive_model`, ``None`` for the ideal drive).
 
-    The FIR planner gets a G-code program's blocks (arcs as arcs), its F words unless the config
-    sets a feed, and its ``G64 P`` tolerances where the program gives them (the config's
-    ``tolerance_um`` elsewhere); metrics are taken against the chords (``chord_tolerance_um``)."""
-    if ic.kind == "fir":
-        from research.interpolators import plan_fir
-
-        # an explicit feed in the config wins; otherwise a G-code program's own F words are used
-        explicit = "feed_mm_per_s" in ic.model_fields_set
-        tolerance = ic.tolerance_um * 1e-3
-        if blocks is not None:
-            target, feeds, g64 = blocks
-            feed = ic.feed_mm_per_s if explicit else feeds
-            tolerance = np.where(np.isfinite(g64), g64, tolerance)
-        else:
-            target = path
-            feed = program_feeds if (program_feeds is not None and not explicit) else ic.feed_mm_per_s
-        plan = plan_fir(target, feed, np.asarray(ic.delays_ms) * 1e-3, tolerance, refine=ic.refine)
-        traj = plan.trajectory(ic.sample_period_ms * 1e-3)
-        info = {"feeds": np.asarray(plan.feeds).tolist(), "overlap_times": np.asarray(plan.overlaps).tolist(),
-                "corner_errors": np.asarray(plan.corner_errors).tolist()}
-        return traj, info, plan
-    from research.limits import AxisLimits
-    from research.optimal import time_optimal
-
-    limits = AxisLimits.fir_envelope(path.dim, ic.feed_mm_per_s, np.asarray(ic.envelope_delays_ms) * 1e-3)
-    res = time_optimal(path, limits, ic.tolerance_um * 1e-3, feed=ic.feed_mm_per_s, window=ic.window,
-                       intervals_per_segment=ic.intervals_per_segment, sample_period=ic.sample_period_ms * 1e-3)
-    info = {"status": res.status, "iterations": res.iterations, "solve_time": res.solve_time,
-            "worst_check_ratio": float(res.verification.worst_ratio)}
-    return res.trajectory, info, None
-
-
-def _drive(cfg: ExperimentConfig, traj: Trajectory, identified=None) -> dict[str, float]:
-    """Residual vibration per mode (and its max), and the tracking error of a catalog drive [mm]
-    (``drive.model = "identified"``: the eq 6.3 model identified by the same config, ``identified``)."""
+    Returns:
+        ``(scalars, actual positions on the held grid or None)``.
+    """
     d = cfg.drive
     out = {}
     a = np.asarray(traj.a)
-    if d.model == "ideal":
+    actual = None
+    if drive is None:
         for m in d.modes:
             k = traj.axes.index(m.axis)
             out[f"residual_vibration.{m.axis}"] = residual_vibration_sampled(traj.t, a[:, k], m.frequency_hz, m.damping)
     else:
-        from research.drives import FlexibleMode, simulate, virtual_drive
+        from research.drives import FlexibleMode, simulate
 
-        drive = identified if d.model == "identified" else virtual_drive(d.model)
         held = _hold(traj, float(traj.duration) + d.settle_time_s)
         resp = simulate(drive, held)
+        actual = np.asarray(resp.position)
         out["max_tracking_error"] = float(np.max(np.abs(np.asarray(resp.tracking_error))))
         after = np.asarray(held.t) > float(traj.duration) + SETTLE_MARGIN_S
         for m in d.modes:
             k = traj.axes.index(m.axis)
             one = Trajectory(held.t, held.q[:, k:k + 1], held.v[:, k:k + 1], held.a[:, k:k + 1], held.j[:, k:k + 1],
                              held.duration, None, (m.axis,), held.sample_period)
-            defl = np.asarray(simulate(drive, one, modes=FlexibleMode.from_hz(m.frequency_hz, m.damping)).deflection)
+            axis_drive = drive[k] if isinstance(drive, tuple) else drive
+            defl = np.asarray(simulate(axis_drive, one, modes=FlexibleMode.from_hz(m.frequency_hz, m.damping)).deflection)
             out[f"residual_vibration.{m.axis}"] = float(np.max(np.abs(defl[after, 0])))
     if d.modes:
         out["residual_vibration"] = max(out[f"residual_vibration.{m.axis}"] for m in d.modes)
-    return out
+    return out, actual
 
 
 def _hold(traj: Trajectory, horizon: float) -> Trajectory:

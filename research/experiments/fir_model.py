@@ -8,7 +8,8 @@ structural mode's ``(f, zeta)``:
   ``T_k`` from eq 13/14 (:func:`~research.interpolators.overlap_time`);
 * corner error ``|dF| H2(T_k / 2)`` (eq 13/14, :func:`~research.interpolators.cornering_error`):
   ``eps`` itself unless even full overlap stays inside the tolerance;
-* residual vibration of a base-excited mode ``d'' + 2 zeta wn d' + wn^2 d = -x''`` (the beams of §4)
+* residual vibration of a base-excited mode ``d'' + 2 zeta wn d' + wn^2 d = -x''`` (the beams of §4;
+  the closed form is :func:`research.drives.fir_pulse_residual`)
   once the motion has stopped. The filtered acceleration is ``a(t) = sum_m dv_m h(t - t_m)`` (pulse
   edges ``t_m``, velocity jumps ``dv_m``, chain impulse response ``h``), so the free vibration left
   at the end ``t_e = t_last + T_d`` has the complex amplitude
@@ -42,6 +43,7 @@ import jax
 import jax.numpy as jnp
 from jax import Array
 
+from research.drives import fir_pulse_residual
 from research.interpolators import cornering_error, overlap_time
 
 #: differentiable inputs of :func:`fir_metrics`, in the order of :func:`sensitivities`' columns
@@ -89,24 +91,12 @@ def fir_metrics(points: Array, feed, delays: Array, tolerance, mode_hz: Array, m
         "overlaps": overlaps,
         "exact": jnp.all(pulse >= Td),
     }
-    residual = _residual(u, feed, starts, ends, last, delays, jnp.asarray(mode_hz, dtype=jnp.float64),
-                         jnp.asarray(mode_damping, dtype=jnp.float64), axes)
+    hz = jnp.asarray(mode_hz, dtype=jnp.float64)
+    steps = feed * u[:, jnp.asarray(axes, dtype=int)].T if hz.shape[0] else jnp.zeros((0, u.shape[0]))
+    residual = fir_pulse_residual(steps, starts, ends, last, delays, hz, jnp.asarray(mode_damping, dtype=jnp.float64))
     out["residual"] = residual
     out["residual_vibration"] = jnp.max(residual, initial=0.0)
     return out
-
-
-def _residual(u, feed, starts, ends, last, delays, hz, zeta, axes):
-    """Envelope ``|B| / w_d`` [mm] of each mode's free vibration at the end of motion (module docstring)."""
-    if hz.shape[0] == 0:
-        return jnp.zeros(0)
-    wn = 2 * jnp.pi * hz
-    wd = wn * jnp.sqrt(1.0 - zeta**2)
-    lam = (-zeta * wn + 1j * wd)[:, None]  # (K, 1)
-    filt = jnp.prod(jnp.expm1(lam * delays[None, :]) / (lam * delays[None, :]), axis=1)  # (K,)
-    edges = jnp.exp(lam * (last - starts)[None, :]) - jnp.exp(lam * (last - ends)[None, :])  # (K, M)
-    dv = feed * u[:, jnp.asarray(axes)].T  # (K, M): the mode's axis velocity of each pulse
-    return jnp.abs(jnp.sum(dv * edges, axis=1) * filt) / wd
 
 
 def sensitivities(points: Array, feed, delays, tolerance, mode_hz, mode_damping, *, axes) -> dict[str, Array]:
@@ -129,16 +119,3 @@ def sensitivities(points: Array, feed, delays, tolerance, mode_hz, mode_damping,
     jac = jax.jacfwd(f)(x)  # (3, 2 + n)
     names = ["F"] + [f"T{i + 1}" for i in range(n)] + ["eps"]
     return {f"d_{m}/d_{p}": jac[i, j] for i, m in enumerate(SCALARS) for j, p in enumerate(names)}
-
-
-def residual_vibration_sampled(t, acceleration, frequency_hz: float, damping: float) -> float:
-    """Envelope [mm] of a mode's free vibration after a sampled acceleration [mm/s^2] ends, by the
-    trapezoid rule on ``B = int a(tau) exp(lam (t_end - tau)) d tau`` (module docstring); error
-    ``O((wn Ts)^2)``. The general-path counterpart of the closed form, for any interpolator."""
-    import numpy as np
-
-    t, a = np.asarray(t, dtype=np.float64), np.asarray(acceleration, dtype=np.float64)
-    wn = 2 * np.pi * frequency_hz
-    wd = wn * np.sqrt(1 - damping**2)
-    lam = -damping * wn + 1j * wd
-    return float(abs(np.trapezoid(a * np.exp(lam * (t[-1] - t)), t)) / wd)

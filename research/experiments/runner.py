@@ -28,11 +28,14 @@ import numpy as np
 
 from research.experiments.config import ExperimentConfig, input_files, load_config
 from research.experiments.evaluate import evaluate
+from research.experiments.paper_numbers import check_paper_numbers
 from research.experiments.store import COSMETIC, ResultStore, atomic_write, code_version, file_digest, result_key
 from research.trajectory import Trajectory
 
 DEFAULT_CACHE = Path(".cache") / "results"
 DEFAULT_FIGURES = Path("paper_figures")
+#: ``details`` entries of stages that are not interpolator runs
+STAGE_DETAILS = ("identification", "vibration", "control")
 #: the visible results folder of the command line (one folder per experiment)
 DEFAULT_RESULTS = Path("results")
 
@@ -60,6 +63,14 @@ class RunResult:
     def trajectory(self) -> Trajectory:
         """The first interpolator's sampled trajectory (read back from ``trajectory.npz``)."""
         return Trajectory.load(self.results_file.parent / "trajectory.npz")
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The stored arrays (``arrays.npz``: ``<label>.t/q/v/a/j``, drive and stage outputs); empty if none."""
+        return _read_npz(self.results_file.parent / "arrays.npz")
+
+    def paper_checks(self) -> list:
+        """The config's ``[[paper]]`` numbers against this result (:func:`check_paper_numbers`)."""
+        return check_paper_numbers(self.config, self.record)
 
 
 def hashed_config(cfg: ExperimentConfig) -> dict:
@@ -99,7 +110,7 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
     store = ResultStore(Path(cache_dir) / "store")
     key = config_key(cfg, base, kind="run")
     entry = None if force else store.get(key)
-    want_figure = cfg.output.figure and cfg.path is not None
+    want_figure = cfg.output.figure and (cfg.path is not None or cfg.control is not None)
     stem = cfg.name
     if cfg.sweep is not None:  # the sweep's own outputs keep their names; this run is the base point
         stem = f"{cfg.name}_base"
@@ -150,13 +161,45 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
         figure_file = atomic_write(Path(figures_dir) / f"{stem}.png", png)
         atomic_write(out / "figure.png", png)
         written.append("figure.png")
+    written += _export(cfg, record, out)
     atomic_write(out / "config.toml", Path(config_file).read_bytes())
     result = RunResult(cfg, key, record, cached, results_file, figure_file)
+    result.paper_checks()  # a [[paper]] key the result does not have is a ConfigError now, not in a test later
     atomic_write(out / "report.md", _report(result, config_file, written + ["config.toml"]).encode())
     log(f"[3/3] results in {out}/ (results.json, report.md, config.toml"
         + "".join(f", {n}" for n in written[1:]) + ")" + (f"; figure: {figure_file}" if figure_file else "")
         + ("; (cached)" if cached else ""))
     return result
+
+
+def _export(cfg: ExperimentConfig, record: dict, out: Path) -> list[str]:
+    """``output.export``: each interpolator's stored trajectory as ``<label>.csv`` / ``<label>.ngc`` in ``out``."""
+    if not cfg.output.export:
+        return []
+    from research.experiments.export import trajectory_csv, trajectory_gcode
+
+    arrays = _read_npz(out / "arrays.npz")
+    written = []
+    for ic in cfg.interpolators:
+        label = ic.label or ic.kind
+        d = record["details"][label]
+        t = arrays[f"{label}.t"]
+        traj = Trajectory(t, *(arrays[f"{label}.{k}"] for k in ("q", "v", "a", "j")), np.float64(d["metrics"]["cycle_time"]),
+                          None, tuple(d["metrics"]["axes"]), ic.sample_period_ms * 1e-3)
+        if "csv" in cfg.output.export:
+            atomic_write(out / f"{label}.csv", trajectory_csv(traj).encode())
+            written.append(f"{label}.csv")
+        if "gcode" in cfg.output.export:
+            atomic_write(out / f"{label}.ngc", trajectory_gcode(traj, cfg.output.gcode_tolerance_um * 1e-3).encode())
+            written.append(f"{label}.ngc")
+    return written
+
+
+def _read_npz(file: Path) -> dict[str, np.ndarray]:
+    if not file.exists():
+        return {}
+    with np.load(file, allow_pickle=False) as data:
+        return {k: data[k] for k in data.files}
 
 
 def _npz(arrays: dict) -> bytes | None:
@@ -186,7 +229,7 @@ def _report(result: RunResult, config_file, files: list[str]) -> str:
 
 def _legacy_view(record: dict) -> dict:
     """``metrics`` and ``corners`` of the first interpolator, at the top level (the README's layout)."""
-    runs = [v for k, v in record["details"].items() if k != "identification"]
+    runs = [v for k, v in record["details"].items() if k not in STAGE_DETAILS]
     if not runs:
         return {}
     first = runs[0]
@@ -197,13 +240,17 @@ def _legacy_view(record: dict) -> dict:
 
 
 def _figure(cfg: ExperimentConfig, ev) -> bytes:
-    """PNG of the first interpolator's run (Sencer 2015 Fig 6a-b layout)."""
-    from research.figures._style import save
-    from research.figures.fir_run import plot_fir_run
+    """PNG of the run (Sencer 2015 Fig 6a-b layout, every interpolator in the path and feed panels)."""
+    from research.experiments.plot_style import save
+    from research.experiments.run_figure import plot_run
 
-    label, plan, traj, metrics = ev.objects["runs"][0]
     name = f"{cfg.name}: base point of the sweep (no [sweep] applied)" if cfg.sweep is not None else cfg.name
-    fig = plot_fir_run(ev.objects["path"], plan, traj, metrics, title=f"{name}\n{cfg.reproduces}")
+    if cfg.path is None:  # a [control] study without a tool path: the ch 5 error panels
+        from research.experiments.control_figure import plot_control
+
+        fig = plot_control(ev.arrays, ev.record["details"]["control"], title=f"{name}\n{cfg.reproduces}")
+    else:
+        fig = plot_run(ev.objects["path"], ev.objects["runs"], title=f"{name}\n{cfg.reproduces}")
     buf = io.BytesIO()
     save(fig, buf)
     return buf.getvalue()
@@ -217,19 +264,21 @@ def format_summary(result: RunResult) -> str:
     if cfg.sweep is not None:
         rows.append(("note", f"base point only: [sweep] over {len(cfg.sweep.parameters)} field(s) not run "
                              "(python -m research sweep CONFIG runs it)"))
-    runs = {k: v for k, v in rec["details"].items() if k != "identification"}
+    runs = {k: v for k, v in rec["details"].items() if k not in STAGE_DETAILS}
     for (label, d), ic in zip(runs.items(), cfg.interpolators):
         m = d["metrics"]
         tag = f"{label}: " if len(runs) > 1 else ""
         n = len(d["turning_angle_deg"])
         rows.append((f"{tag}segments / corners", f"{n + 1} / {n}"))
+        rows.append((f"{tag}interpolator", ic.kind))
         if ic.kind == "fir":
             rows += [(f"{tag}feed F [mm/s]", _range(np.asarray(d["feeds"]))),
                      (f"{tag}FIR delays T_i [ms]", ", ".join(f"{x:g}" for x in ic.delays_ms))]
-        else:
+        elif ic.kind == "time_optimal":
             rows.append((f"{tag}OCP status / iterations", f"{d['status']} / {d['iterations']}"))
+        if hasattr(ic, "tolerance_um"):
+            rows.append((f"{tag}tolerance eps [um]", f"{ic.tolerance_um:g}"))
         rows += [
-            (f"{tag}tolerance eps [um]", f"{ic.tolerance_um:g}"),
             (f"{tag}cycle time [s]", f"{m['cycle_time']:.6f}"),
             (f"{tag}max corner error [um]", f"{m['max_corner_error'] * 1e3:.3f}"),
             (f"{tag}max contour error [um]", f"{m['max_contour_error'] * 1e3:.3f}"),
@@ -245,6 +294,9 @@ def format_summary(result: RunResult) -> str:
         if k.split(".")[-1] not in shown:
             unit = rec["units"][k]
             rows.append((f"{k} [um]", f"{v * 1e3:.3f}") if unit == "mm" else (f"{k} [{unit}]", f"{v:.6g}"))
+    for c in result.paper_checks():
+        rows.append((f"paper: {c.key}", f"{c.value:.6g} (paper {c.expected:.6g} +- {c.tolerance:.3g}, {c.source}): "
+                                        + ("PASS" if c.ok else "MISS")))
     width = max(len(r[0]) for r in rows)
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
 

@@ -53,7 +53,7 @@ import research
 from research.errors import StoreError
 
 #: fields of a config that do not change its results (not hashed)
-COSMETIC = ("name", "reproduces", "description", "output", "sweep")
+COSMETIC = ("name", "reproduces", "description", "output", "sweep", "paper")
 
 
 @lru_cache(maxsize=1)

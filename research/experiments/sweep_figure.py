@@ -1,4 +1,5 @@
-"""Figure of a sweep: each metric against the swept fields (line for one field, map for a grid of two).
+"""Figure of a sweep: each metric against the swept fields (line for one field, map for a grid of two,
+lines for a grid with a field of few values).
 
 Example: ``plot_sweep(result, Path("paper_figures/sensitivity_delays.png"))`` after
 :func:`~research.experiments.sweep.run_sweep`.
@@ -68,11 +69,69 @@ def field_label(field: str, cfg) -> str:
     return desc + (f" ({'; '.join(where)})" if where else "")
 
 
-def plot_sweep(result, target: Path) -> Path:
-    """Write the sweep's figure (PNG) to ``target`` atomically and return it."""
-    from research.figures._style import figure, save
+#: a grid field with at most this many values is drawn as one line per value (no invented map cells)
+MAX_LINES = 6
+#: a panel whose values spread less than this (relative) is constant: no colour map, no contours
+CONSTANT_SPREAD = 1e-6
+#: values spanning more than this ratio (all > 0) get a log colour scale
+LOG_SPAN = 10.0
 
-    fields = result.fields
+
+def colour_scale(z: np.ndarray) -> str:
+    """``"constant"`` (spread below :data:`CONSTANT_SPREAD` of the largest value: solver noise, not a
+    result), ``"log"`` (positive values spanning more than :data:`LOG_SPAN`) or ``"linear"``."""
+    v = z[np.isfinite(z)]
+    if v.size == 0:
+        return "constant"
+    top = np.max(np.abs(v))
+    if np.ptp(v) <= CONSTANT_SPREAD * max(top, np.finfo(float).tiny):
+        return "constant"
+    return "log" if np.min(v) > 0 and np.max(v) / np.min(v) > LOG_SPAN else "linear"
+
+
+def base_value(field: str, cfg):
+    """The base config's value of a swept field (the paper's point for a paper config), or ``None``."""
+    from research.experiments.sweep_points import parse_field
+
+    try:
+        node = cfg.model_dump()
+        for part in parse_field(field):
+            if isinstance(node, list) and isinstance(part, str) and len(node) == 1:
+                node = node[0]
+            node = node[part]
+    except (ValueError, KeyError, IndexError, TypeError):
+        return None
+    return node if isinstance(node, (int, float)) and not isinstance(node, bool) else None
+
+
+def eq10_nulls(field: str, cfg, lo: float, hi: float) -> list[tuple[float, str]]:
+    """Where Sencer 2015 eq 10 puts a zero of the FIR chain on a mode of the config's drive, for a swept
+    FIR delay: ``T = k / f`` [ms] within ``[lo, hi]``, labelled with the mode."""
+    import re
+
+    if not re.fullmatch(r"interpolator(\[\d+\])?\.delays_ms\[\d+\]", field) or cfg.drive is None:
+        return []
+    out = []
+    for m in cfg.drive.modes:
+        for k in range(1, 6):
+            T = 1e3 * k / m.frequency_hz
+            if lo <= T <= hi:
+                out.append((T, f"eq 10: {k}/f_{m.axis} = {T:.1f} ms"))
+    return out
+
+
+def plot_sweep(result, target: Path) -> Path:
+    """Write the sweep's figure (PNG) to ``target`` atomically and return it.
+
+    One panel per metric: a line against one field; for a grid of two fields a colour map (log scale
+    where the values span decades, no map for a constant metric) with the base config's point marked
+    and eq 10's nulls drawn on swept FIR delays, or one line per value when a field has at most
+    :data:`MAX_LINES` values."""
+    from matplotlib.colors import LogNorm
+
+    from research.experiments.plot_style import figure, save
+
+    fields, cfg = result.fields, result.config
     ok = [r for r in result.rows if r["status"] == "ok"]
     metrics = [k for k in ok[0] if k not in fields and not k.startswith("d_") and k != "index"
                and isinstance(ok[0][k], float)][:6]
@@ -80,27 +139,60 @@ def plot_sweep(result, target: Path) -> Path:
     cols = min(n, 3)
     fig, axs = figure((n + cols - 1) // cols, cols, figsize=(4.2 * cols, 3.4 * ((n + cols - 1) // cols)), squeeze=False)
     x = [result.column(f) for f in fields]
-    grid = result.config.sweep.mode == "grid" and len(fields) == 2
+    grid = cfg.sweep.mode == "grid" and len(fields) == 2
+    base = [base_value(f, cfg) for f in fields]
     for ax, m in zip(axs.ravel(), metrics):
         scale, unit = _SCALE.get(_UNITS.get(m.split(".")[0], "-"), (1.0, "-"))
         y = result.column(m) * scale
-        if grid:
+        kind = colour_scale(y)
+        if kind == "constant":
+            ax.text(0.5, 0.5, f"{m} = {np.nanmax(y):.6g} {unit} at every point\n(spread below "
+                              f"{CONSTANT_SPREAD:g} of it)", transform=ax.transAxes, ha="center", va="center", fontsize=8)
+            ax.set(xticks=[], yticks=[])
+        elif grid and min(np.unique(x[0]).size, np.unique(x[1]).size) <= MAX_LINES:
+            few = 0 if np.unique(x[0]).size <= np.unique(x[1]).size else 1
+            other = 1 - few
+            for i, v in enumerate(np.unique(x[few])):
+                sel = x[few] == v
+                order = np.argsort(x[other][sel])
+                ax.plot(x[other][sel][order], y[sel][order], "o-", ms=3, color=f"C{i}", label=f"{v:g}")
+            ax.legend(title=field_label(fields[few], cfg), fontsize=6, title_fontsize=6)
+            ax.set(xlabel=field_label(fields[other], cfg), ylabel=f"{m} [{unit}]")
+            if kind == "log":
+                ax.set_yscale("log")
+        elif grid:
             u0, u1 = np.unique(x[0]), np.unique(x[1])
             z = np.full((u1.size, u0.size), np.nan)
             z[np.searchsorted(u1, x[1]), np.searchsorted(u0, x[0])] = y
-            im = ax.pcolormesh(u0, u1, z, shading="nearest", cmap="viridis")
-            if np.isfinite(z).sum() > 3 and np.nanmax(z) > np.nanmin(z):
-                ax.contour(u0, u1, z, colors="w", linewidths=0.5, levels=8)
-            fig.colorbar(im, ax=ax, label=f"{m} [{unit}]")
-            ax.set(xlabel=field_label(fields[0], result.config), ylabel=field_label(fields[1], result.config))
+            norm = LogNorm(np.nanmin(z), np.nanmax(z)) if kind == "log" else None
+            im = ax.pcolormesh(u0, u1, z, shading="nearest", cmap="viridis", norm=norm)
+            if np.isfinite(z).sum() > 3:
+                levels = np.geomspace(np.nanmin(z), np.nanmax(z), 9)[1:-1] if kind == "log" else 8
+                ax.contour(u0, u1, z, colors="w", linewidths=0.5, levels=levels)
+            fig.colorbar(im, ax=ax, label=f"{m} [{unit}]" + (" (log scale)" if kind == "log" else ""))
+            ax.set(xlabel=field_label(fields[0], cfg), ylabel=field_label(fields[1], cfg))
+            for T, text in eq10_nulls(fields[0], cfg, u0.min(), u0.max()):
+                ax.axvline(T, color="w", ls="--", lw=0.7)
+                ax.text(T, u1.max(), text, color="w", rotation=90, va="top", ha="right", fontsize=5)
+            for T, text in eq10_nulls(fields[1], cfg, u1.min(), u1.max()):
+                ax.axhline(T, color="w", ls="--", lw=0.7)
+                ax.text(u0.max(), T, text, color="w", va="bottom", ha="right", fontsize=5)
+            if None not in base:
+                ax.plot(*base, "r*", ms=9, mec="w", label="base config")
+                ax.legend(loc="lower right", fontsize=6)
         else:
             order = np.argsort(x[0])
             ax.plot(x[0][order], y[order], ".-" if len(fields) == 1 else ".", ms=3)
-            ax.set(xlabel=field_label(fields[0], result.config), ylabel=f"{m} [{unit}]")
+            if base[0] is not None and len(fields) == 1:
+                ax.axvline(base[0], color="r", ls=":", lw=0.8, label="base config")
+                ax.legend(fontsize=6)
+            ax.set(xlabel=field_label(fields[0], cfg), ylabel=f"{m} [{unit}]")
+            if kind == "log":
+                ax.set_yscale("log")
         ax.set_title(m)
     for ax in axs.ravel()[n:]:
         ax.axis("off")
-    fig.suptitle(f"{result.config.name}: {result.config.reproduces}", fontsize=8)
+    fig.suptitle(f"{cfg.name}: {cfg.reproduces}", fontsize=8)
     buf = io.BytesIO()
     save(fig, buf)
     return atomic_write(target, buf.getvalue())

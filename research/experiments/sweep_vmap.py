@@ -28,6 +28,8 @@ def eligible(cfg: ExperimentConfig) -> str | None:
         return "identification studies need the general path"
     if len(cfg.interpolators) != 1 or cfg.interpolators[0].kind != "fir":
         return "the fast path models one FIR interpolator"
+    if cfg.interpolators[0].limits is not None:
+        return "the limit-holding FIR (interpolator.limits) needs the general path"
     if cfg.path.gcode is not None and "feed_mm_per_s" not in cfg.interpolators[0].model_fields_set:
         return "per-block G-code feeds need the general path"
     if cfg.drive is not None and cfg.drive.model != "ideal":

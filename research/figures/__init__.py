@@ -1,5 +1,11 @@
-"""Regenerated paper figures: one module per figure, each with ``NAME``, ``REPRODUCES`` and
-``make_figure(out_dir, fast=False) -> list[Path]``. ``python -m research figures`` runs them all.
+"""Regenerated paper figures: one module per figure, each with ``NAME`` and ``REPRODUCES``, and either
+
+- ``CONFIG`` (an experiment config under ``experiments/``, with the paper numbers it reproduces) and
+  ``plot(record, arrays) -> Figure``: :func:`render` runs the config through the results store (an
+  unchanged config and code is not recomputed) and draws the stored result; or
+- ``make_figure(out_dir, fast=False) -> list[Path]`` (figures not yet expressed as a config).
+
+``python -m research figures`` renders them all.
 
 :func:`catalog` reads ``NAME``, ``REPRODUCES`` and ``CONFIG`` from the modules' source (literal
 assignments, no import), so listing the figures costs milliseconds; :func:`registry` and
@@ -89,6 +95,44 @@ def catalog() -> dict[str, FigureEntry]:
                                 f"found {sorted(found)}")
         out[found["NAME"]] = FigureEntry(found["NAME"], dotted, found["REPRODUCES"], found.get("CONFIG"))
     return out
+
+
+#: the repository root: ``CONFIG`` paths are relative to it
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@dataclass(frozen=True)
+class Rendered:
+    """What :func:`render` produced: the files written and, for a config figure, its run result."""
+
+    files: list[Path]
+    run: object | None = None
+
+
+def render(name: str, out_dir: Path, *, fast: bool = False, cache_dir: Path | None = None,
+           results_dir: Path | None = None, log=None) -> Rendered:
+    """Write the registered figure ``name`` to ``out_dir/<name>.png``.
+
+    A config figure runs its ``CONFIG`` through :func:`research.experiments.run_experiment` (store under
+    ``cache_dir``, readable results under ``results_dir``) and plots the stored record and arrays; ``fast``
+    does not apply to it. Other figures call their ``make_figure(out_dir, fast)``.
+
+    Raises:
+        ResearchError: unknown name; ConfigError from the config.
+    """
+    from research.experiments.plot_style import save
+    from research.experiments.runner import DEFAULT_CACHE, DEFAULT_RESULTS, run_experiment
+
+    module = figure_module(name)
+    config = getattr(module, "CONFIG", None)
+    if config is None or not hasattr(module, "plot"):
+        return Rendered(list(module.make_figure(out_dir, fast=fast)))
+    run = run_experiment(ROOT / config, cache_dir=DEFAULT_CACHE if cache_dir is None else cache_dir,
+                         results_dir=DEFAULT_RESULTS if results_dir is None else results_dir,
+                         log=log or (lambda s: None))
+    out = Path(out_dir) / f"{name}.png"
+    save(module.plot(run.record, run.arrays()), out)
+    return Rendered([out], run)
 
 
 def figure_module(name: str) -> ModuleType:

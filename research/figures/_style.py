@@ -1,44 +1,6 @@
-"""Shared matplotlib style for every regenerated paper figure."""
+"""The shared figure style, kept in :mod:`research.experiments.plot_style` (figures read from the
+experiments layer; nothing there imports :mod:`research.figures`)."""
 
-from __future__ import annotations
+from research.experiments.plot_style import AXIS_COLOURS, STYLE, figure, mosaic, save
 
-import matplotlib
-
-matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt  # noqa: E402
-
-STYLE = {
-    "figure.dpi": 110,
-    "savefig.dpi": 150,
-    "savefig.bbox": "tight",
-    "font.size": 9,
-    "axes.titlesize": 9,
-    "axes.labelsize": 9,
-    "legend.fontsize": 8,
-    "axes.grid": True,
-    "grid.alpha": 0.3,
-    "lines.linewidth": 1.2,
-}
-
-#: axis colours used across figures
-AXIS_COLOURS = {"x": "tab:blue", "y": "tab:red", "z": "tab:green"}
-
-
-def figure(*args, **kwargs):
-    """``plt.subplots`` under the shared style."""
-    with plt.rc_context(STYLE):
-        return plt.subplots(*args, layout="constrained", **kwargs)
-
-
-def mosaic(layout, **kwargs):
-    """``plt.subplot_mosaic`` under the shared style."""
-    with plt.rc_context(STYLE):
-        return plt.subplot_mosaic(layout, layout="constrained", **kwargs)
-
-
-def save(fig, path) -> None:
-    """Save under the shared style and close the figure."""
-    with plt.rc_context(STYLE):
-        fig.savefig(path)
-    plt.close(fig)
+__all__ = ["AXIS_COLOURS", "STYLE", "figure", "mosaic", "save"]

@@ -91,12 +91,18 @@ def make_figure(out_dir: Path, fast: bool = False) -> list[Path]:
     ax[0, 1].set(xlabel="time [s]", ylabel="tracking error [mm]",
                  title="actual (Table 6.1 drive) - nominal motion", xlim=(0.0, 0.6))
     for k, (label, unit) in enumerate((("acceleration", "mm/s^2"), ("jerk", "mm/s^3"))):
+        # magnitudes on a log axis: the linear interpolators' per-move spikes (16 moves per period) would
+        # otherwise fill the panel as solid blocks over the sigmoid's smooth profile (drawn last, on top)
         a = ax[1, k]
-        for name, d in styles:
-            a.plot(t, d[2 + k], lw=0.8, label=name)
-        a.set(xlabel="time [s]", ylabel=f"{label} [{unit}]", title=f"reference {label}", xlim=(0.0, 0.6))
+        for i, (name, d) in reversed(list(enumerate(styles))):
+            mag = np.abs(d[2 + k])
+            a.semilogy(t, np.where(mag > 0, mag, np.nan), lw=1.4 if i == 0 else 0.6, color=f"C{i}", zorder=3 - i,
+                       label=f"{name}: peak {mag.max():.3g}")
+        top = max(np.abs(d[2 + k]).max() for _, d in styles)
+        a.set(xlabel="time [s]", ylabel=f"|{label}| [{unit}] (log scale)", title=f"reference |{label}| (three decades "
+              "below the largest peak)", xlim=(0.0, 0.6), ylim=(top * 1e-3, top * 3))
     for a in ax.ravel():
-        a.legend(loc="best")
+        a.legend(loc="lower right" if a in ax[1] else "best", fontsize=6)
     m = c["metrics"]
     text = "\n".join(
         f"{name}: cycle {r['cycle_time_s']:.3f} s, max |actual - nominal| {r['max_abs_tracking_error_mm']:.3f} mm "

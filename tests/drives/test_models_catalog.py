@@ -173,9 +173,3 @@ def test_unknown_hold_and_friction():
     with pytest.raises(ParameterError, match="friction must be one of"):
         simulate(table_6_1_closed_loop(), tr, friction="viscous")
 
-
-def test_drive_bode_figure(tmp_path):
-    from research.figures.drive_bode import make_figure
-
-    paths = make_figure(tmp_path, fast=True)
-    assert len(paths) == 1 and paths[0].suffix == ".png" and paths[0].stat().st_size > 5000

@@ -12,7 +12,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from research.experiments.fir_model import fir_metrics, residual_vibration_sampled, sensitivities
+from research.drives import residual_vibration_sampled
+from research.experiments.fir_model import fir_metrics, sensitivities
 from research.interpolators import plan_fir
 from research.paths import named_path
 

@@ -1,0 +1,77 @@
+"""Figure of one run (``python -m research run``): path, first corner, feed, axis kinematics.
+
+In the layout of Sencer 2015 Fig 6a-b: the commanded and interpolated path with a zoom on the
+first corner, the feed along time, and the axis acceleration and jerk of the first interpolator.
+With several interpolators every one is drawn in the path, corner and feed panels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.patches import Circle
+
+from research.experiments.plot_style import AXIS_COLOURS, figure
+from research.paths import Polyline
+
+
+def plot_run(path: Polyline, runs: list, title: str = ""):
+    """Return a matplotlib figure of the run (not saved).
+
+    Args:
+        path: the commanded polyline [mm].
+        runs: ``(label, plan or None, Trajectory, MotionMetrics)`` per interpolator (the first gets the
+            kinematics panel; ``plan``: the :class:`~research.interpolators.FIRPlan` of an FIR run).
+        title: figure title.
+    """
+    fig, ax = figure(2, 2, figsize=(10, 7))
+    label0, plan0, traj0, metrics0 = runs[0]
+    several = len(runs) > 1
+    a = ax[0, 0]
+    y = (lambda p: p[:, 1]) if path.dim > 1 else (lambda p: 0 * p[:, 0])
+    a.plot(path.points[:, 0], y(path.points), "k--", lw=0.8, label="G01 path")
+    for i, (label, _, traj, _) in enumerate(runs):
+        q = np.asarray(traj.q)
+        a.plot(q[:, 0], y(q), f"C{i}", label=label if several else f"{label} trajectory")
+    a.set(xlabel=f"{path.axes[0]} [mm]", ylabel=f"{path.axes[1] if path.dim > 1 else ''} [mm]", title="tool path")
+    a.set_aspect("equal", adjustable="datalim")
+    a.legend(loc="best")
+    a = ax[0, 1]
+    if path.n_segments > 1 and path.dim > 1:
+        c = path.corners[0]
+        r = max(4 * max(float(m.corner_errors[0]) for *_, m in runs), 1e-3)
+        a.plot(path.points[:, 0], path.points[:, 1], "k--", lw=0.8, label="G01 path")
+        for i, (label, _, traj, m) in enumerate(runs):
+            q = np.asarray(traj.q)
+            a.plot(q[:, 0], q[:, 1], f"C{i}.-", ms=2, label=f"{label}: {float(m.corner_errors[0]) * 1e3:.1f} um")
+            a.add_patch(Circle(c[:2], float(m.corner_errors[0]), fill=False, ls=":", color=f"C{i}"))
+        overlap = f", T_k = {float(plan0.overlaps[0]) * 1e3:.1f} ms" if plan0 is not None else ""
+        a.set(xlim=(c[0] - r, c[0] + r), ylim=(c[1] - r, c[1] + r), xlabel=f"{path.axes[0]} [mm]",
+              ylabel=f"{path.axes[1]} [mm]", title=f"first corner (dotted: corner error, samples Ts = "
+                                                    f"{traj0.sample_period * 1e3:g} ms){overlap}")
+        a.set_aspect("equal")
+        a.legend(loc="best", title="corner error")
+    else:
+        a.axis("off")
+    a = ax[1, 0]
+    for i, (label, _, traj, m) in enumerate(runs):
+        a.plot(traj.t, traj.feed, f"C{i}" if several else "k", label=f"{label}: {m.cycle_time:.4f} s" if several else "feed |v|")
+    if not several:
+        for k, name in enumerate(traj0.axes):
+            a.plot(traj0.t, np.asarray(traj0.v)[:, k], color=AXIS_COLOURS.get(name), lw=0.8, label=f"v_{name}")
+    a.set(xlabel="time [s]", ylabel="velocity [mm/s]",
+          title="feed (legend: cycle time)" if several else f"feed and axis velocity; cycle time {metrics0.cycle_time:.4f} s")
+    a.legend(loc="best")
+    a = ax[1, 1]
+    t0 = np.asarray(traj0.t)
+    for k, name in enumerate(traj0.axes):
+        a.plot(t0, np.asarray(traj0.a)[:, k], color=AXIS_COLOURS.get(name), label=f"a_{name}")
+    a.set(xlabel="time [s]", ylabel="acceleration [mm/s^2]", title=f"{label0}: axis acceleration (solid), jerk (dotted)")
+    b = a.twinx()
+    for k, name in enumerate(traj0.axes):
+        b.plot(t0, np.asarray(traj0.j)[:, k], color=AXIS_COLOURS.get(name), lw=0.5, ls=":")
+    b.set_ylabel("jerk [mm/s^3] (dotted)")
+    b.grid(False)
+    a.legend(loc="best")
+    if title:
+        fig.suptitle(title, fontsize=8)
+    return fig

@@ -1,0 +1,88 @@
+"""The ``[control]`` stage: thesis ch 5 closed loop from a :class:`~research.experiments.config_control.ControlConfig`.
+
+Builds the controller from the config (thesis tables unless overridden), runs the Fig 5.5 path through
+the Table 5.1 drives (:func:`research.control.run_case`, or :func:`research.control.tracking_mirror_passes`
+when ``mirror_passes > 0``) and returns the §5.4 metrics: tool-tip contour error (exact, max and mean),
+the ch 4 compensated estimate's largest error, orientation contour error, peak axis errors and
+voltages, and whether the loop diverged.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from research.experiments.config_control import ControlConfig
+
+AXES = ("x", "y", "z", "a", "c")
+
+
+def controller_from_config(cc: ControlConfig):
+    """The :class:`~research.control.AxisSMC` or :class:`~research.control.ContourGains` the config describes."""
+    from research.control import AxisSMC, ContourGains, TipGains, table_5_2, table_5_3
+
+    if cc.controller == "siso":
+        base = table_5_2()
+        pick = lambda given, default: np.asarray(default) if given is None else np.asarray(given, dtype=np.float64)  # noqa: E731
+        return AxisSMC(pick(cc.siso_bandwidth_rad_per_s, base.lam), pick(cc.siso_Ks, base.Ks), pick(cc.siso_Gamma, base.Gamma))
+    base = table_5_3(cc.tip_damping)
+    pick = lambda given, default: np.asarray(default) if given is None else np.asarray(given, dtype=np.float64)  # noqa: E731
+    tip = TipGains(pick(cc.tip_bandwidth_rad_per_s, base.tip.wn), pick(cc.tip_Ks, base.tip.Ks),
+                   pick(cc.tip_Gamma, base.tip.Gamma), cc.tip_damping)
+    rotary = base.rotary
+    if cc.siso_bandwidth_rad_per_s or cc.siso_Ks or cc.siso_Gamma:  # A and C of the contour scheme are SISO SMC
+        rot = lambda given, default: np.asarray(default) if given is None else np.asarray(given[3:], dtype=np.float64)  # noqa: E731
+        rotary = AxisSMC(rot(cc.siso_bandwidth_rad_per_s, rotary.lam), rot(cc.siso_Ks, rotary.Ks),
+                         rot(cc.siso_Gamma, rotary.Gamma), n=2)
+    return ContourGains(tip, rotary, tuple(cc.orientation_weights_per_s))
+
+
+def control_stage(cc: ControlConfig) -> tuple[dict[str, float], dict, dict[str, np.ndarray]]:
+    """Run the closed loop of ``cc``.
+
+    Returns:
+        ``(scalars, details, arrays)``: scalars named as :data:`CONTROL_METRIC_UNITS` (per-axis ones
+        suffixed ``.x`` ... ``.c``); details: the controller, friction used and the summary; arrays
+        ``control.t`` [s], ``control.axis_error`` ``(M, 5)`` [mm, rad], ``control.tip_contour_error``
+        [mm], ``control.orientation_error`` [rad], ``control.u`` ``(M, 5)`` [V], read at 1 kHz.
+    Raises:
+        UnstableGainsError: a gain set whose sampled loop is unstable at the control period (the
+        eigenvalue is named); ParameterError: inconsistent gains.
+    """
+    from research.control import (
+        check_controller,
+        eq436_reference,
+        identify_coulomb,
+        measure,
+        run_case,
+        thesis_plant,
+        tracking_mirror_passes,
+    )
+
+    T = cc.control_period_ms * 1e-3
+    plant = thesis_plant()
+    coulomb = identify_coulomb(plant, T=T) if cc.coulomb_V is None else np.asarray(cc.coulomb_V, dtype=np.float64)
+    controller = controller_from_config(cc)
+    if cc.mirror_passes == 0:
+        limit = cc.amplifier_limit_V
+        u_max = None if limit is None else np.broadcast_to(np.asarray(limit, dtype=np.float64), (5,))
+        case = run_case(controller, feed=cc.feed_mm_per_s, coulomb=coulomb, plant=plant, T=T,
+                        acceleration=cc.acceleration_mm_per_s2, u_max=u_max)
+    else:
+        loaded = plant.with_coulomb(coulomb)
+        check_controller(controller, loaded, T)
+        ref, traj = eq436_reference(feed=cc.feed_mm_per_s, acceleration=cc.acceleration_mm_per_s2, sample_period=T)
+        runs = tracking_mirror_passes(loaded, ref, controller, cc.mirror_passes)
+        case = measure(ref, traj, runs[-1])
+    s = case.summary()
+    scalars = {"tip_contour_error_max": s["contour_max"], "tip_contour_error_mean": s["contour_mean"],
+               "tip_estimate_error_max": s["estimate_error_max"]["estimate"],
+               "orientation_error_max": s["orientation_max"], "orientation_error_mean": s["orientation_mean"],
+               "diverged": float(s["diverged"])}
+    scalars |= {f"axis_error_max.{a}": v for a, v in zip(AXES[:3], s["axis_max"][:3])}
+    scalars |= {f"rotary_axis_error_max.{a}": v for a, v in zip(AXES[3:], s["axis_max"][3:])}
+    scalars |= {f"control_voltage_max.{a}": v for a, v in zip(AXES, s["u_max"])}
+    details = {"controller": cc.controller, "coulomb_V": [float(c) for c in np.atleast_1d(coulomb)],
+               "control_period_s": T, "mirror_passes": cc.mirror_passes, "summary": s}
+    arrays = {"control.t": case.t, "control.axis_error": case.axis_error, "control.tip_contour_error": case.contour,
+              "control.orientation_error": case.orientation, "control.u": case.u}
+    return scalars, details, arrays

@@ -1,0 +1,239 @@
+"""The stages of an experiment, each a call into the package on the package's own types:
+
+- :func:`interpolate`: an interpolator config -> :class:`~research.trajectory.Trajectory` (FIR, with
+  limits or not; time-optimal; S-curve; geometric blend; sigmoid);
+- :func:`drive_model`: a ``[drive]`` table -> a drive model (:class:`~research.drives.ClosedLoopModel`,
+  a physical cascade, or one per axis), ``None`` for the ideal drive;
+- :func:`contour_stage`: exact contour error of the actual motion and the thesis' estimators;
+- :func:`compensation_stage`: CEC (:mod:`research.contour`) of the setpoint through the drive.
+
+Each returns its scalars (keys of :data:`~research.experiments.config.METRIC_UNITS`, mm and s) and
+the objects later stages or figures use.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from research.experiments.config import PER_AXIS_DRIVES
+from research.trajectory import Trajectory
+
+
+def envelope(ic, n_axes: int):
+    """The axis limits of an S-curve / blend config: its ``limits`` or the FIR envelope (Sencer 2015 §2.1)."""
+    from research.limits import AxisLimits
+
+    if ic.limits is not None:
+        return ic.limits.axis_limits(n_axes)
+    return AxisLimits.fir_envelope(n_axes, ic.feed_mm_per_s, np.asarray(ic.envelope_delays_ms) * 1e-3)
+
+
+def interpolate(ic, path, program_feeds, blocks=None):
+    """``(trajectory, details, plan or None)`` of one interpolator config.
+
+    The FIR planner gets a G-code program's blocks (arcs as arcs), its F words unless the config
+    sets a feed, and its ``G64 P`` tolerances where the program gives them (the config's
+    ``tolerance_um`` elsewhere); metrics are taken against the chords (``chord_tolerance_um``)."""
+    Ts = ic.sample_period_ms * 1e-3
+    explicit = "feed_mm_per_s" in ic.model_fields_set
+    feed = program_feeds if (program_feeds is not None and not explicit) else ic.feed_mm_per_s
+    if ic.kind == "fir":
+        from research.interpolators import plan_fir
+
+        tolerance = ic.tolerance_um * 1e-3
+        target = path
+        if blocks is not None:
+            target, feeds, g64 = blocks
+            feed = ic.feed_mm_per_s if explicit else feeds
+            tolerance = np.where(np.isfinite(g64), g64, tolerance)
+        limits = None if ic.limits is None else ic.limits.axis_limits(path.dim)
+        plan = plan_fir(target, feed, np.asarray(ic.delays_ms) * 1e-3, tolerance, refine=ic.refine, limits=limits)
+        info = {"feeds": np.asarray(plan.feeds).tolist(), "overlap_times": np.asarray(plan.overlaps).tolist(),
+                "corner_errors": np.asarray(plan.corner_errors).tolist()}
+        return plan.trajectory(Ts), info, plan
+    if ic.kind == "scurve":
+        from research.interpolators import scurve_interpolate
+
+        limits = envelope(ic, path.dim)
+        return scurve_interpolate(path, feed, limits, Ts), {"limits": _limits_dict(limits)}, None
+    if ic.kind == "blend":
+        from research.interpolators import blend_interpolate
+
+        limits = envelope(ic, path.dim)
+        return blend_interpolate(path, feed, ic.tolerance_um * 1e-3, limits, Ts), {"limits": _limits_dict(limits)}, None
+    if ic.kind == "sigmoid":
+        return _sigmoid_moves(ic, path)
+    from research.limits import AxisLimits
+    from research.optimal import time_optimal
+
+    limits = AxisLimits.fir_envelope(path.dim, ic.feed_mm_per_s, np.asarray(ic.envelope_delays_ms) * 1e-3)
+    res = time_optimal(path, limits, ic.tolerance_um * 1e-3, feed=ic.feed_mm_per_s, window=ic.window,
+                       intervals_per_segment=ic.intervals_per_segment, sample_period=Ts)
+    info = {"status": res.status, "iterations": res.iterations, "solve_time": res.solve_time,
+            "worst_check_ratio": float(res.verification.worst_ratio)}
+    return res.trajectory, info, None
+
+
+def _limits_dict(limits) -> dict:
+    return {k: getattr(limits, k).tolist() for k in ("velocity", "acceleration", "jerk")}
+
+
+def _sigmoid_moves(ic, path):
+    """Each segment a rest-to-rest DiMarco move (:func:`~research.interpolators.mtp_motion`), one after
+    the other, sampled on one grid ``k Ts``: ``q = P_k + u_k s_k(t - t_k)``. A move ends once inside
+    its settle band (``settle_tol`` = 0.1 um of mtp_motion), so consecutive moves join within 0.1 um."""
+    from research.interpolators import mtp_motion
+
+    moves = [mtp_motion(float(L), ic.feed_mm_per_s, ic.amplitude_mm, ic.frequency_hz,
+                        acceleration=ic.acceleration_mm_per_s2, jerk=ic.jerk_mm_per_s3, order=ic.order)
+             for L in path.lengths]
+    durations = np.array([m.duration for m in moves])
+    starts = np.concatenate([[0.0], np.cumsum(durations)])
+    Ts = ic.sample_period_ms * 1e-3
+    t = np.arange(int(np.ceil(starts[-1] / Ts - 1e-9)) + 1) * Ts
+    k = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(moves) - 1)
+    out = np.zeros((4, t.size, path.dim))
+    for i, m in enumerate(moves):
+        on = k == i
+        d = m.derivatives(np.minimum(t[on] - starts[i], durations[i]))
+        for nu in range(4):
+            out[nu, on] = (path.points[i] if nu == 0 else 0.0) + d[nu][:, None] * path.directions[i]
+    traj = Trajectory(t, out[0], out[1], out[2], out[3], np.float64(starts[-1]), None, path.axes, float(Ts))
+    return traj, {"move_durations": durations.tolist()}, None
+
+
+def drive_model(d, axes: tuple[str, ...], identified=None):
+    """The drive a ``[drive]`` table names, for the path's ``axes``: ``None`` (ideal), one model for
+    every axis, or a tuple with one per axis (thesis Table 6.3)."""
+    from research import drives
+
+    if d.model == "ideal":
+        return None
+    if d.model == "identified":
+        return identified
+    if d.model == "parameters":
+        return d.parameters.model()
+    if d.model in PER_AXIS_DRIVES:
+        return tuple(getattr(drives, PER_AXIS_DRIVES[d.model])(a) for a in axes)
+    return drives.virtual_drive(d.model)
+
+
+def contour_stage(cc, path, traj: Trajectory, actual: np.ndarray) -> tuple[dict, dict]:
+    """Exact contour error of ``actual`` (the drive's positions on ``traj``'s grid) against the CAM
+    ``path`` (Prévost 2012 §2.2), and the thesis' Frenet estimates (eq 4.20-4.27) with the largest
+    difference to the exact error against the reference curve ``traj`` traces (what they estimate).
+
+    Returns:
+        ``(scalars [mm], arrays)``: ``max_actual_contour_error``, ``rms_actual_contour_error``,
+        ``max_estimate.<name>``, ``max_estimator_error.<name>``; arrays ``contour.exact`` and
+        ``contour.<name>`` per sample [mm].
+    """
+    from research.contour import contour_error, frenet_contour_estimates, tip_reference
+
+    n = traj.n_samples
+    actual = np.asarray(actual)[:n]
+    exact = contour_error(path, actual)
+    scalars = {"max_actual_contour_error": exact.max,
+               "rms_actual_contour_error": float(np.sqrt(np.mean(exact.distance ** 2)))}
+    arrays = {"contour.exact": exact.distance, "contour.t": np.asarray(traj.t)}
+    if cc.estimators:
+        to_reference = contour_error(traj, actual).distance
+        est = frenet_contour_estimates(tip_reference(traj), np.asarray(traj.t), actual, cc.min_speed_ratio)
+        arrays["contour.exact_to_reference"] = to_reference
+        for name in cc.estimators:
+            e = np.asarray(getattr(est, name))
+            scalars[f"max_estimate.{name}"] = float(np.max(e))
+            scalars[f"max_estimator_error.{name}"] = float(np.max(np.abs(e - to_reference)))
+            arrays[f"contour.{name}"] = e
+    return scalars, arrays
+
+
+def compensation_stage(cc, path, traj: Trajectory, drive):
+    """CEC of the setpoint ``traj`` through ``drive`` towards the CAM ``path`` (Prévost 2012 eq 4).
+
+    Returns:
+        ``(scalars, result)``: ``cec_error_before`` / ``cec_error_after`` (max exact ``|e_T|`` [mm]) and
+        ``cec_simulations``; the :class:`~research.contour.CompensationResult` (its ``setpoint`` is the
+        compensated :class:`Trajectory`).
+    """
+    from research.contour import cec_problem, mirror_compensation, mirror_passes, mirror_single_pass
+
+    problem = cec_problem(path, traj, drive, friction=cc.friction, spacing=cc.spacing_mm)
+    if cc.method == "single_pass":
+        res = mirror_single_pass(problem)
+    elif cc.method == "passes":
+        res = mirror_passes(problem, cc.passes)
+    else:
+        res = mirror_compensation(problem, method=cc.method, tolerance=cc.tolerance_um * 1e-3,
+                                  max_steps=cc.max_steps, throw=False)
+    scalars = {"cec_error_before": res.before.max, "cec_error_after": res.after.max,
+               "cec_simulations": float(res.simulations)}
+    return scalars, res
+
+
+def frequency_response_stage(fc, drive, axes: tuple[str, ...]) -> tuple[dict, dict]:
+    """Tracking and disturbance responses (thesis eq 6.1) of ``drive`` (one model, or one per axis) on
+    ``fc``'s frequencies, its poles (eq 6.13) and the -3 dB bandwidth of ``|x/x_r|`` (the first frequency
+    where it falls below 1/sqrt(2), by log-linear interpolation; left out if it stays above in the range).
+
+    Returns:
+        ``(scalars, arrays)``: ``drive_wn_hz``, ``drive_zeta``, ``drive_p_hz``, ``drive_bandwidth_hz``
+        (suffixed ``.<axis>`` for per-axis drives); arrays ``bode.f``, ``bode.tracking`` and
+        ``bode.disturbance`` (complex, per axis for per-axis drives).
+    """
+    from research.drives import frequency_response
+
+    f = np.logspace(np.log10(fc.start_hz), np.log10(fc.stop_hz), fc.num)
+    models = dict(zip(axes, drive)) if isinstance(drive, tuple) else {"": drive}
+    scalars, arrays = {}, {"bode.f": f}
+    for axis, model in models.items():
+        tag = f".{axis}" if axis else ""
+        fr = frequency_response(model, f)
+        track = np.asarray(fr.tracking)
+        wn, zeta, p = model.closed_loop_model().pole_parameters()
+        mag = np.abs(track)
+        below = np.flatnonzero(mag < 1 / np.sqrt(2))
+        scalars |= {f"drive_wn_hz{tag}": float(wn) / (2 * np.pi), f"drive_zeta{tag}": float(zeta),
+                    f"drive_p_hz{tag}": float(p) / (2 * np.pi)}
+        if below.size and below[0] > 0:
+            i = below[0]
+            x = np.log(f[i - 1:i + 1])
+            scalars[f"drive_bandwidth_hz{tag}"] = float(np.exp(np.interp(-np.log(np.sqrt(2)), np.log(mag[[i, i - 1]]), x[::-1])))
+        arrays |= {f"bode.tracking{tag}": track, f"bode.disturbance{tag}": np.asarray(fr.disturbance)}
+    return scalars, arrays
+
+
+def vibration_stage(vc, base) -> tuple[dict, dict, dict]:
+    """Resonance test -> modes (:func:`research.vibration.estimate_modes`) -> eq 10 delays
+    (:func:`research.vibration.tune_delays`) for the dominant mode of each axis.
+
+    Returns:
+        ``(scalars, details, arrays)``: ``mode_frequency_hz.<axis>``, ``mode_damping.<axis>``,
+        ``tuned_delay.T<i>`` [s]; details ``{"modes": [...], "tuned": {...}, "log": ...}``; arrays
+        ``vibration.<axis>.f / psd / threshold``.
+    """
+    from research.vibration import TrueMode, estimate_modes, load_accel_log, synthetic_accel_log, tune_delays
+
+    if vc.log_file is not None:
+        log = load_accel_log(base / vc.log_file, unit=vc.unit)
+    else:
+        log = synthetic_accel_log([TrueMode(m.axis, m.frequency_hz, m.damping) for m in vc.modes], excitation="sweep",
+                                  f0=vc.f0_hz, f1=vc.f1_hz, duration=vc.duration_s, rate=vc.rate_hz, snr_db=vc.snr_db,
+                                  seed=vc.seed)
+    survey = estimate_modes(log)
+    dominant = survey.dominant()
+    tuned = tune_delays(list(dominant.values()), k=vc.k)
+    scalars, arrays = {}, {}
+    for axis, m in dominant.items():
+        scalars |= {f"mode_frequency_hz.{axis}": float(m.frequency_hz), f"mode_damping.{axis}": float(m.damping)}
+    scalars |= {f"tuned_delay.T{i + 1}": float(T) for i, T in enumerate(tuned.delays_s)}
+    for axis, spec in survey.spectra.items():
+        arrays |= {f"vibration.{axis}.f": spec.frequency_hz, f"vibration.{axis}.psd": spec.psd,
+                   f"vibration.{axis}.threshold": spec.threshold}
+    details = {"log": {"source": log.source, "samples": int(log.t.size), "sample_rate_hz": float(1 / log.sample_period)},
+               "modes": [{"axis": m.axis, "frequency_hz": m.frequency_hz, "frequency_sd_hz": m.frequency_sd_hz,
+                          "damping": m.damping, "damping_sd": m.damping_sd, "peak_psd": m.peak_psd, "flags": list(m.flags)}
+                         for s in survey.spectra.values() for m in s.modes],
+               "tuned": {"delays_s": list(tuned.delays_s), "axes": list(tuned.axes),
+                         "frequencies_hz": list(tuned.frequencies_hz), "k": [int(k) for k in tuned.k]}}
+    return scalars, details, arrays

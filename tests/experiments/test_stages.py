@@ -1,0 +1,185 @@
+"""Config stages beyond the FIR planner (issue 16 item 1): every interpolator, drives from the catalog or
+from parameters, the contour and compensation stages; expected values from closed forms, the package's
+ready-made cases or the papers (quoted), never from this code's earlier output."""
+
+import numpy as np
+import pytest
+
+from research.errors import ConfigError
+from research.experiments.config import validate
+from research.experiments.evaluate import evaluate
+
+TABLE_6_1 = dict(a1_per_s=238.4335, a2_per_s2=48421.5859, a3_per_s3=2487140.30, b0=0.0, b1_per_s=117.5424,
+                 b2_per_s2=37258.9796, dc_mm_per_s2=2.6815)  # thesis Table 6.1 "Actual" column
+
+
+def run(**tables):
+    cfg = validate({"name": "t", "reproduces": "-"} | tables, "t.toml")
+    return cfg, evaluate(cfg, ".")
+
+
+@pytest.mark.parametrize("tables, message", [
+    ({"interpolator": {"kind": "scurve", "limts": {}}}, r"key 'interpolator.limts': unknown key \(typo\? did you mean 'limits'\?\)"),
+    ({"interpolator": {"kind": "fir", "limits": {"velocity_mm_per_s": 1.0, "acceleration_mm_per_s": 1.0}}},
+     r"'interpolator.limits.acceleration_mm_per_s'.*did you mean 'acceleration_mm_per_s2'"),
+    ({"interpolator": {"kind": "sigmoid", "amplitude_mm": 0.1}}, r"frequency_hz = 0 Hz: a modulation"),
+    ({"interpolator": {"kind": "spline"}}, r"'interpolator'.*does not match any of the expected tags: 'fir', 'time_optimal', "
+                                          r"'scurve', 'blend', 'sigmoid'"),
+    ({"drive": {"model": "parameters", "parameters": {"a1_per_s": 1.0, "damping": 0.5}}}, r"all three of one form"),
+    ({"drive": {"model": "parameters"}}, r"model = \"parameters\" and a \[drive.parameters\] table go together"),
+    ({"contour": {}}, r"the \[contour\] stage works on the drive's actual motion"),
+    ({"drive": {"model": "ideal"}, "compensation": {}}, r"the \[compensation\] stage .*other than \"ideal\""),
+    ({"drive": {"model": "sencer2009_table6_1"}, "compensation": {"methd": "newton"}},
+     r"key 'compensation.methd': unknown key \(typo\? did you mean 'method'\?\)"),
+    ({"drive": {"model": "sencer2009_table6_1"}, "contour": {"estimators": ["exact"]}}, r"key 'contour.estimators\[0\]'"),
+    ({"vibration": {}}, r"key 'vibration': give either log_file or modes"),
+    ({"vibration": {"modes": [{"axis": "x", "frequency_hz": 11.4}], "f1_hz": 1.0}}, r"f1_hz = 1 Hz must be above f0_hz"),
+    ({"vibration": {"modes": [{"axis": "q", "frequency_hz": 11.4}]}}, r"key 'vibration.modes\[0\].axis'"),
+])
+def test_stage_tables_are_validated(tables, message):
+    with pytest.raises(ConfigError, match=message):
+        validate({"name": "t", "reproduces": "-", "path": {"name": "corner90"}} | tables, "t.toml")
+
+
+def test_scurve_blend_and_sigmoid_in_one_config():
+    """S-curve: rest at each vertex; under the FIR envelope V = F, A = F/T1, J = F/(T1 T2) (Sencer 2015 §2.1)
+    a 50 mm move of corner90 is too short to reach V (V (V/A + A/J) = 59 mm), so it peaks at v_p with
+    L = v_p (v_p/A + A/J) (A reached: v_p >= A^2/J) and takes 2 (v_p/A + A/J);
+    blend: the corner deviation is the tolerance; sigmoid: rest at each vertex (within the 0.1 um settle
+    band) with the axis acceleration within a_max."""
+    F, T1, T2 = 250.0, 0.148, 0.089
+    cfg, ev = run(path={"name": "corner90"}, interpolator=[
+        {"kind": "scurve"}, {"kind": "blend", "tolerance_um": 200.0},
+        {"kind": "sigmoid", "feed_mm_per_s": 100.0, "acceleration_mm_per_s2": 1500.0}])
+    s = ev.record["scalars"]
+    A, J, L = F / T1, F / (T1 * T2), 50.0
+    vp = (-A * A / J + np.sqrt((A * A / J) ** 2 + 4 * L * A)) / 2
+    assert A * A / J <= vp < F
+    assert s["scurve.cycle_time"] == pytest.approx(2 * 2 * (vp / A + A / J), abs=1e-9)
+    assert s["scurve.max_corner_error"] < 1e-9
+    assert s["blend.max_corner_error"] == pytest.approx(0.2, abs=1e-6)
+    assert s["sigmoid.max_corner_error"] < 1e-4
+    a = ev.arrays["sigmoid.a"]
+    assert np.abs(a).max() <= 1500.0 * (1 + 1e-9)
+    q = ev.arrays["sigmoid.q"]
+    assert np.linalg.norm(q[-1] - [0.0, 50.0]) < 1e-4
+    assert [r[0] for r in ev.objects["runs"]] == ["scurve", "blend", "sigmoid"]
+
+
+def test_limit_holding_fir_keeps_the_limits():
+    """plan_fir(limits=...) through a config: the sampled axis acceleration and jerk stay within the limits
+    (the paper's planner at these delays exceeds the acceleration bound: F/T1 = 1689 mm/s^2 > 1000)."""
+    lim = {"velocity_mm_per_s": 250.0, "acceleration_mm_per_s2": 1000.0, "jerk_mm_per_s3": 20000.0}
+    _, ev = run(path={"name": "diamond"}, interpolator=[{"kind": "fir"}, {"kind": "fir", "label": "held", "limits": lim}])
+    assert np.abs(ev.arrays["fir.a"]).max() > 1000.0
+    assert np.abs(ev.arrays["held.a"]).max() <= 1000.0 * (1 + 1e-6)
+    assert np.abs(ev.arrays["held.j"]).max() <= 20000.0 * (1 + 1e-6)
+
+
+def test_drive_from_parameters_equals_the_catalog_drive():
+    """Table 6.1 written out as eq 6.3 coefficients, and as its poles through eq 6.13 computed here, give the
+    catalog drive's tracking error."""
+    base = dict(path={"name": "corner90"}, interpolator={"sample_period_ms": 1.0})
+    _, cat = run(drive={"model": "sencer2009_table6_1", "settle_time_s": 0.2}, **base)
+    _, par = run(drive={"model": "parameters", "settle_time_s": 0.2, "parameters": TABLE_6_1}, **base)
+    roots = np.roots([1.0, TABLE_6_1["a1_per_s"], TABLE_6_1["a2_per_s2"], TABLE_6_1["a3_per_s3"]])
+    pair, real = roots[np.abs(roots.imag) > 0][0], roots[np.abs(roots.imag) == 0][0]
+    poles = {"natural_frequency_hz": abs(pair) / (2 * np.pi), "damping": -pair.real / abs(pair),
+             "real_pole_hz": -real.real / (2 * np.pi)}
+    _, pol = run(drive={"model": "parameters", "settle_time_s": 0.2, "parameters": poles | {
+        k: TABLE_6_1[k] for k in ("b0", "b1_per_s", "b2_per_s2", "dc_mm_per_s2")}}, **base)
+    e = cat.record["scalars"]["max_tracking_error"]
+    assert e > 0.1
+    assert par.record["scalars"]["max_tracking_error"] == pytest.approx(e, rel=1e-12)
+    assert pol.record["scalars"]["max_tracking_error"] == pytest.approx(e, rel=1e-6)
+
+
+def test_contour_stage_exact_error_and_estimators():
+    """The exact contour error equals a brute-force distance of the stored actual positions to every segment;
+    the compensated estimate is the closest to the exact error (thesis eq 4.27: the compensated frame's
+    components "more accurately approximate the actual amplitude of contour error along arbitrary tool-paths")."""
+    from research.contour import brute_force_contour_error
+    from research.paths import named_path
+
+    _, ev = run(path={"name": "diamond"}, drive={"model": "parameters", "settle_time_s": 0.2, "parameters": TABLE_6_1},
+                contour={})
+    s = ev.record["scalars"]
+    brute = brute_force_contour_error(named_path("diamond"), ev.arrays["fir.actual"])
+    assert s["max_actual_contour_error"] == pytest.approx(brute.max(), abs=1e-9)
+    assert s["rms_actual_contour_error"] == pytest.approx(np.sqrt(np.mean(brute ** 2)), abs=1e-9)
+    assert s["max_estimator_error.compensated"] < s["max_estimator_error.basic"]
+    assert ev.record["units"]["max_estimate.shifted"] == "mm"
+
+
+def test_compensation_stage_matches_prevost_application_2():
+    """The Prévost Application 2 config gives the package's ready-made case (research.contour's
+    prevost2012_application2 + mirror_single_pass): the same max |e_T| before and after one pass, lower after
+    (Prévost §4.2: "reduced by twice but is not null")."""
+    from research.contour import mirror_single_pass, prevost2012_application2
+    from research.experiments.config import load_config
+    from pathlib import Path
+
+    cfg, base = load_config(Path(__file__).resolve().parents[2] / "experiments" / "prevost2012_corner_cec.toml")
+    s = evaluate(cfg, base).record["scalars"]
+    ref = mirror_single_pass(prevost2012_application2().problem)
+    assert s["cec_error_before"] == pytest.approx(ref.before.max, rel=1e-6)
+    assert s["cec_error_after"] == pytest.approx(ref.after.max, rel=1e-6)
+    assert s["cec_error_after"] < s["cec_error_before"]
+
+
+def test_frequency_response_stage_of_a_drive_alone():
+    """A drive-only config: the poles of eq 6.13 from the coefficients (computed here with numpy.roots), and
+    |x/x_r| at the reported bandwidth is 1/sqrt(2) (evaluated here from the eq 6.3 transfer function)."""
+    _, ev = run(drive={"model": "parameters", "parameters": TABLE_6_1, "frequency_response": {"num": 800}})
+    s = ev.record["scalars"]
+    roots = np.roots([1.0, TABLE_6_1["a1_per_s"], TABLE_6_1["a2_per_s2"], TABLE_6_1["a3_per_s3"]])
+    pair = roots[np.abs(roots.imag) > 0][0]
+    assert s["drive_wn_hz"] == pytest.approx(abs(pair) / (2 * np.pi), rel=1e-9)
+    assert s["drive_zeta"] == pytest.approx(-pair.real / abs(pair), rel=1e-9)
+    w = 2j * np.pi * s["drive_bandwidth_hz"]
+    num = np.polyval([TABLE_6_1["b0"], TABLE_6_1["b1_per_s"], TABLE_6_1["b2_per_s2"], TABLE_6_1["a3_per_s3"]], w)
+    den = np.polyval([1.0, TABLE_6_1["a1_per_s"], TABLE_6_1["a2_per_s2"], TABLE_6_1["a3_per_s3"]], w)
+    assert abs(num / den) == pytest.approx(1 / np.sqrt(2), rel=1e-4)
+    with pytest.raises(ConfigError, match=r"needs a drive model, not \"ideal\""):
+        validate({"name": "t", "reproduces": "-", "drive": {"frequency_response": {}}}, "t.toml")
+
+
+def test_limit_holding_fir_is_not_sent_to_the_fast_path():
+    """The closed forms of the vmap fast path model the paper's planner, not plan_fir(limits=...)."""
+    from research.experiments.sweep_vmap import eligible
+
+    cfg = validate({"name": "t", "reproduces": "-", "path": {"name": "diamond"}}, "t.toml")
+    assert eligible(cfg) is None
+    held = validate({"name": "t", "reproduces": "-", "path": {"name": "diamond"}, "interpolator": {
+        "limits": {"velocity_mm_per_s": 250.0, "acceleration_mm_per_s2": 1000.0}}}, "t.toml")
+    assert "limit-holding" in eligible(held)
+
+
+def test_compensation_passes_match_the_package():
+    """method = "passes" gives research.contour.mirror_passes on the same problem: the same history of max |e_T|."""
+    from research.contour import cec_problem, mirror_passes
+    from research.interpolators import fir_interpolate
+    from research.drives import virtual_drive
+    from research.paths import named_path
+
+    _, ev = run(path={"name": "corner90"}, interpolator={"feed_mm_per_s": 100.0, "delays_ms": [24.0, 12.0],
+                                                         "tolerance_um": 50.0, "sample_period_ms": 4.0},
+                drive={"model": "sencer2009_table6_1", "settle_time_s": 0.1}, compensation={"method": "passes", "passes": 2})
+    traj = fir_interpolate(named_path("corner90"), 100.0, [0.024, 0.012], 0.05, 0.004)
+    ref = mirror_passes(cec_problem(named_path("corner90"), traj, virtual_drive("sencer2009_table6_1")), 2)
+    got = ev.record["details"]["fir"]["compensation"]
+    assert got["method"] == "passes" and got["history"] == pytest.approx(list(ref.history), rel=1e-9)
+    assert ev.record["scalars"]["cec_error_after"] == pytest.approx(ref.after.max, rel=1e-9)
+
+
+def test_table_6_3_drive_is_one_model_per_axis():
+    from research.drives import table_6_3_closed_loop
+    from research.experiments.stages import drive_model
+
+    cfg = validate({"name": "t", "reproduces": "-", "path": {"name": "corner90"}, "drive": {"model": "sencer2009_table6_3"}},
+                   "t.toml")
+    models = drive_model(cfg.drive, ("x", "y"))
+    assert isinstance(models, tuple) and len(models) == 2
+    for m, axis in zip(models, "xy"):
+        assert m.pole_parameters() == pytest.approx(table_6_3_closed_loop(axis).pole_parameters(), rel=1e-12)
+    assert models[0].pole_parameters() != pytest.approx(models[1].pole_parameters(), rel=1e-3)
