@@ -26,7 +26,7 @@ What is approximated, and by how much (measured in ``tests/optimal``):
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -39,6 +39,7 @@ from research.interpolators.scurve import (
 from research.limits import AxisLimits
 from research.optimal._arrays import frozen
 from research.optimal._ocp import Geometry, PhaseGrid, ProblemSpec, flow
+from research.optimal._vibration import check_modes, mode_flow, mode_states, residual_amplitude
 from research.optimal._warm import grid_from_trajectory
 from research.optimal._windowing import (
     WindowFailure,
@@ -62,6 +63,9 @@ class Verification:
         deviation_ratio: ``max_deviation / eps``.
         velocity_ratio, acceleration_ratio, jerk_ratio: ``(d,)`` per-axis peak / limit.
         feed_ratio: peak ``|v|`` / ``F`` (``nan`` without a feed limit).
+        residual_vibration: ``(m,)`` envelope of each structural mode's free vibration at the end
+            (eq V3) [mm], re-simulated from rest on the solution's jerk; empty without modes.
+        peak_deflection: ``(m,)`` peak ``|delta|`` of each mode during the motion [mm].
     """
 
     max_deviation: float
@@ -70,6 +74,8 @@ class Verification:
     acceleration_ratio: np.ndarray
     jerk_ratio: np.ndarray
     feed_ratio: float
+    residual_vibration: np.ndarray = field(default_factory=lambda: frozen(np.zeros(0)))
+    peak_deflection: np.ndarray = field(default_factory=lambda: frozen(np.zeros(0)))
 
     @property
     def worst_ratio(self) -> float:
@@ -100,6 +106,7 @@ class TimeOptimalResult:
         intervals_per_segment: ``N``.
         tolerance: ``eps`` [mm].
         verification: dense check of tube and limits between grid points.
+        modes: the structural modes in the dynamics (``()``: the plain OCP).
     """
 
     trajectory: Trajectory
@@ -112,6 +119,7 @@ class TimeOptimalResult:
     intervals_per_segment: int
     tolerance: float
     verification: Verification = field(repr=False)
+    modes: tuple = ()
 
     @property
     def cycle_time(self) -> float:
@@ -132,6 +140,9 @@ def time_optimal(
     sample_period: float = 1e-3,
     solver_options: dict | None = None,
     checks_per_interval: int = 3,
+    modes=(),
+    residual_vibration: float | None = 0.0,
+    max_deflection: float | None = None,
 ) -> TimeOptimalResult:
     """Minimum-time motion along ``path`` that stays within ``tolerance`` of it.
 
@@ -151,6 +162,11 @@ def time_optimal(
         solver_options: IPOPT options overriding the defaults (``print_level`` 0, ``tol`` 1e-8, ...).
         checks_per_interval: points inside each interval where tube, velocity and feed are also
             imposed (on the exact cubic), so the motion between grid points keeps them too.
+        modes: :class:`StructuralMode` s in the dynamics (the vibration-aware OCP, ``_vibration``):
+            each a base-excited 2nd-order system driven by its axis' acceleration (eq V1-V2).
+        residual_vibration: bound ``r`` [mm] on every mode's residual vibration envelope at the end
+            of the motion (eq V3); ``0``: the modes end at rest; ``None``: free. Only with ``modes``.
+        max_deflection: bound ``D`` [mm] on every mode's deflection during the motion, or ``None``.
 
     Returns:
         A :class:`TimeOptimalResult`.
@@ -169,6 +185,12 @@ def time_optimal(
         ('Solve_Succeeded', True)
     """
     _check(path, limits, tolerance, feed, intervals_per_segment, window, overlap, sample_period, checks_per_interval)
+    modes = check_modes(modes, path.dim)
+    for name, bound in (("residual_vibration", residual_vibration), ("max_deflection", max_deflection)):
+        if bound is not None and not (np.isfinite(bound) and bound >= 0 and (bound > 0 or name == "residual_vibration")):
+            raise ParameterError(f"{name} must be None or a finite bound in mm (>= 0 for the residual, > 0 for the deflection), got {bound!r}")
+    if modes and tolerance == 0:
+        raise ParameterError("modes need tolerance > 0: the eps = 0 exact stop is solved without an NLP")
     if tolerance == 0:
         return _exact_stop(path, limits, feed, intervals_per_segment, sample_period)
     d, M, N = path.dim, path.n_segments, int(intervals_per_segment)
@@ -176,6 +198,8 @@ def time_optimal(
     if warm_start is None:
         warm_start = _scurve_warm_start(path, limits, feed)
     guess = grid_from_trajectory(warm_start, path, N)
+    if modes:
+        guess = replace(guess, modes=mode_states(guess.states, guess.jerks, np.repeat(guess.durations / N, N), modes))
     geometry = Geometry(
         path.points[:-1], path.points[1:], path.directions, path.lengths,
         np.maximum((path.lengths - 2 * tolerance) / min(cap, float(np.linalg.norm(limits.velocity))), 1e-6),
@@ -188,6 +212,8 @@ def time_optimal(
         jerk=tuple(map(float, limits.jerk)), feed=None if feed is None else float(feed),
         tolerance=float(tolerance), checks=int(checks_per_interval),
         length_scale=float(np.median(path.lengths)) * n_max, time_scale=float(np.median(guess.durations)),
+        modes=modes, residual=None if residual_vibration is None else float(residual_vibration),
+        deflection=None if max_deflection is None else float(max_deflection),
     )
     start = np.zeros((3, d))
     start[0] = path.points[0]
@@ -208,18 +234,22 @@ def time_optimal(
         windows=tuple(reports),
         intervals_per_segment=N,
         tolerance=float(tolerance),
-        verification=verify(solution, N, path, limits, tolerance, feed),
+        verification=verify(solution, N, path, limits, tolerance, feed, modes),
+        modes=modes,
     )
 
 
-def verify(grid: PhaseGrid, intervals: int, path: Polyline, limits: AxisLimits, tolerance: float, feed: float | None) -> Verification:
+def verify(grid: PhaseGrid, intervals: int, path: Polyline, limits: AxisLimits, tolerance: float, feed: float | None,
+           modes=()) -> Verification:
     """Resample the exact piecewise-cubic solution at 16 points per interval and compare it with
-    the tube and the limits (the between-grid-points check of issue 6).
+    the tube and the limits (the between-grid-points check of issue 6); re-simulate the modes from
+    rest on the solution's jerk (eq V2, not the NLP's mode variables).
 
     Args:
         grid: solution on the phase grid.
         intervals: ``N`` per phase.
         path, limits, tolerance, feed: the problem data (``tolerance`` [mm], ``feed`` [mm/s]).
+        modes: structural modes whose residual vibration and peak deflection are reported.
 
     Returns:
         A :class:`Verification`.
@@ -233,6 +263,7 @@ def verify(grid: PhaseGrid, intervals: int, path: Polyline, limits: AxisLimits, 
     def peak(y):
         return np.abs(y).max(axis=0)
 
+    residual, deflection = _mode_check(grid, h, modes, theta)
     return Verification(
         max_deviation=dev,
         deviation_ratio=dev / tolerance if tolerance > 0 else (0.0 if dev == 0 else np.inf),
@@ -240,7 +271,24 @@ def verify(grid: PhaseGrid, intervals: int, path: Polyline, limits: AxisLimits, 
         acceleration_ratio=frozen(peak(a) / limits.acceleration),
         jerk_ratio=frozen(peak(grid.jerks) / limits.jerk),
         feed_ratio=float(np.linalg.norm(v, axis=1).max() / feed) if feed is not None else float("nan"),
+        residual_vibration=frozen(residual), peak_deflection=frozen(deflection),
     )
+
+
+def _mode_check(grid: PhaseGrid, h: np.ndarray, modes, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Residual envelope (eq V3) and peak in-motion ``|delta|`` [mm] of each mode, re-simulated from
+    rest and resampled at the fractions ``theta`` of every interval."""
+    if not modes:
+        return np.zeros(0), np.zeros(0)
+    nodes = mode_states(grid.states, grid.jerks, h, modes)
+    residual, deflection = np.empty(len(modes)), np.empty(len(modes))
+    for k, md in enumerate(modes):
+        d, r = nodes[:-1, 0, k, None], nodes[:-1, 1, k, None]
+        a0, j = grid.states[:-1, 2, md.axis, None], grid.jerks[:, md.axis, None]
+        dense, _ = mode_flow(d, r, a0, j, h[:, None] * theta[None, :], md.wn, md.damping)
+        deflection[k] = np.abs(dense).max()
+        residual[k] = residual_amplitude(nodes[-1, 0, k], nodes[-1, 1, k], md.wn, md.damping)
+    return residual, deflection
 
 
 # -- helpers -----------------------------------------------------------------------------------
