@@ -24,13 +24,14 @@ class ConvergedOptimum:
 
     Attributes:
         result: the solution at the finest ``N`` solved.
-        history: ``((N, cycle_time [s], iterations), ...)`` of every solve, coarse to fine.
+        history: ``((N, cycle_time [s], iterations, IPOPT time [s]), ...)`` of every solve, coarse
+            to fine.
         converged: the last refinement changed the cycle time by less than ``rel_change``.
         relative_change: ``|T_N - T_prev| / T_N`` of the last refinement.
     """
 
     result: TimeOptimalResult
-    history: tuple[tuple[int, float, int], ...]
+    history: tuple[tuple[int, float, int, float], ...]
     converged: bool
     relative_change: float
 
@@ -38,6 +39,16 @@ class ConvergedOptimum:
     def cycle_time(self) -> float:
         """Cycle time at the finest ``N`` [s]."""
         return self.result.cycle_time
+
+    @property
+    def solve_time(self) -> float:
+        """IPOPT time summed over every solve of the refinement [s]."""
+        return float(sum(h[3] for h in self.history))
+
+    @property
+    def iterations(self) -> int:
+        """IPOPT iterations summed over every solve of the refinement."""
+        return int(sum(h[2] for h in self.history))
 
     @property
     def intervals(self) -> int:
@@ -74,12 +85,12 @@ def converged_time_optimal(path, limits, tolerance, *, start_intervals: int = 16
         raise ParameterError(f"rel_change must be finite and > 0, got {rel_change!r}")
     N = start_intervals
     res = time_optimal(path, limits, tolerance, intervals_per_segment=N, warm_start=warm_start, **kwargs)
-    history = [(N, res.cycle_time, res.iterations)]
+    history = [(N, res.cycle_time, res.iterations, res.solve_time)]
     change = math.inf
     while change >= rel_change and N < max_intervals:
         N = min(max(math.ceil(growth * N), N + 1), max_intervals)
         finer = time_optimal(path, limits, tolerance, intervals_per_segment=N, warm_start=res.trajectory, **kwargs)
         change = abs(finer.cycle_time - res.cycle_time) / finer.cycle_time
         res = finer
-        history.append((N, res.cycle_time, res.iterations))
+        history.append((N, res.cycle_time, res.iterations, res.solve_time))
     return ConvergedOptimum(res, tuple(history), change < rel_change, change)
