@@ -27,6 +27,11 @@ Phases: phase ``k`` follows segment ``k`` of the window (``P_k -> P_{k+1}``, uni
   (the path end point for the last window; for the others a terminal state from which the rest
   of the path is always feasible, see ``_windowing``).
 
+With structural modes (``ProblemSpec.modes``, the vibration-aware OCP) each mode's ``(delta, delta')``
+is a state too, moved by its exact flow under the interval's linear acceleration (``_vibration``,
+eq V2); its residual vibration at the path end and, optionally, its deflection at the nodes and
+check points are bounded.
+
 Variables are scaled (positions by a path length scale, velocity / acceleration / jerk by their
 limits, time by a typical phase duration) so IPOPT sees numbers of order one; the tube and corner
 constraints are divided by ``eps`` (``eps^2``). The problem is built once per window shape with the

@@ -9,19 +9,26 @@ any other trajectory along the path (e.g. FIR overlap), over the whole path or i
 limits and tolerance no interpolator can be faster than the OCP, up to the discretisation of the
 jerk on ``N`` equal intervals per segment (finer ``N``: closer to the continuous optimum).
 
-What is approximated, and by how much (measured in ``tests/optimal``):
+What is approximated, and by how much (measured in ``tests/optimal`` and ``bench_optimal``):
 
 - the grid: jerk switching times fall between grid points, so the cycle time is an upper bound on
   the continuous optimum; on a 100 mm line (Sencer 2015 envelope) it is 0.3 % above the S-curve
-  optimum with ``N = 24`` and 0.06 % with ``N = 48``; on corner90 ``N = 24`` is 0.13 % above
-  ``N = 48``;
+  optimum with ``N = 24`` and 0.06 % with ``N = 48``; on the diamond with the 20/10 ms FIR's peaks
+  ``N = 16`` is 2.1 % above ``N = 81``. :func:`~research.optimal.converged_time_optimal` refines
+  ``N`` until the cycle time changes by < 0.1 % (issue 19);
 - between grid points the tube and the velocity / feed limits are imposed at ``checks_per_interval``
-  points only; the dense check (:class:`Verification`) has found at most 0.3 % excess on the
-  benchmark paths (acceleration and jerk are exact: linear and constant on each interval);
+  points only; the dense check (:class:`Verification`) finds at most 0.9 % excess at ``N = 16-24``
+  on the 20/10 ms sets and 0.22 % at converged ``N`` on the benchmark paths (acceleration and jerk
+  are exact: linear and constant on each interval);
 - the tube is the rectangle (cylinder) of each segment between its end caps, not the full
   ``eps``-capsule: the motion may not overshoot a vertex on the outer side of a corner;
 - windows end at rest on their last vertex (``_windowing``), which slows the committed part only
   when the look-ahead is shorter than the braking distance.
+
+With ``modes`` it is the vibration-aware OCP (issue 19): every structural mode (a base-excited
+2nd-order system driven by its axis' acceleration, ``_vibration``) is part of the state with its
+exact flow on each interval, its residual vibration at the end bounded (default: zero) and,
+optionally, its deflection during the motion.
 """
 
 from __future__ import annotations
@@ -39,7 +46,7 @@ from research.interpolators.scurve import (
 from research.limits import AxisLimits
 from research.optimal._arrays import frozen
 from research.optimal._ocp import Geometry, PhaseGrid, ProblemSpec, flow
-from research.optimal._vibration import check_modes, mode_flow, mode_states, residual_amplitude
+from research.optimal._vibration import check_modes, grid_vibration, mode_states
 from research.optimal._warm import grid_from_trajectory
 from research.optimal._windowing import (
     WindowFailure,
@@ -263,7 +270,7 @@ def verify(grid: PhaseGrid, intervals: int, path: Polyline, limits: AxisLimits, 
     def peak(y):
         return np.abs(y).max(axis=0)
 
-    residual, deflection = _mode_check(grid, h, modes, theta)
+    residual, deflection = grid_vibration(grid.states, grid.jerks, h, modes, theta)
     return Verification(
         max_deviation=dev,
         deviation_ratio=dev / tolerance if tolerance > 0 else (0.0 if dev == 0 else np.inf),
@@ -273,22 +280,6 @@ def verify(grid: PhaseGrid, intervals: int, path: Polyline, limits: AxisLimits, 
         feed_ratio=float(np.linalg.norm(v, axis=1).max() / feed) if feed is not None else float("nan"),
         residual_vibration=frozen(residual), peak_deflection=frozen(deflection),
     )
-
-
-def _mode_check(grid: PhaseGrid, h: np.ndarray, modes, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Residual envelope (eq V3) and peak in-motion ``|delta|`` [mm] of each mode, re-simulated from
-    rest and resampled at the fractions ``theta`` of every interval."""
-    if not modes:
-        return np.zeros(0), np.zeros(0)
-    nodes = mode_states(grid.states, grid.jerks, h, modes)
-    residual, deflection = np.empty(len(modes)), np.empty(len(modes))
-    for k, md in enumerate(modes):
-        d, r = nodes[:-1, 0, k, None], nodes[:-1, 1, k, None]
-        a0, j = grid.states[:-1, 2, md.axis, None], grid.jerks[:, md.axis, None]
-        dense, _ = mode_flow(d, r, a0, j, h[:, None] * theta[None, :], md.wn, md.damping)
-        deflection[k] = np.abs(dense).max()
-        residual[k] = residual_amplitude(nodes[-1, 0, k], nodes[-1, 1, k], md.wn, md.damping)
-    return residual, deflection
 
 
 # -- helpers -----------------------------------------------------------------------------------
