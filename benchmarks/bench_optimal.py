@@ -9,7 +9,7 @@ Usage::
 Part 1 (issue 19, items 1 and 3). On corner90, the diamond, the zigzag and ``cam30``
 (``research.experiments.optimality``; ``--quick``: corner90 and the diamond, 148/89 ms only) at
 F = 250 mm/s, eps = 0.5 mm, for the FIR delays 148/89 ms (Sencer 2015 §4) and 20/10 ms, under the
-FIR's own per-axis peaks (limit convention "a"):
+FIR's own per-axis peaks (limit convention "a"), every OCP on the whole path (one NLP):
 
 * FIR / vibration-aware OCP and FIR / plain OCP (plain and limit-holding FIR), with the residual
   vibration of the Sencer 2015 beams (11.4 Hz X, 6.8 Hz Y, 2 % damping assumed) left by each; both
@@ -78,10 +78,9 @@ def yardstick_ratios(quick: bool) -> None:
         print(head)
         for name in names:
             path = cam_like_path(30) if name == "cam30" else named_path(name)
-            window = 10 if path.n_segments > 12 else None
             t0 = time.perf_counter()
             rows, sticks = run_path(name, path, feed=PAPER["feed"], delays=delays, tolerance=PAPER["tolerance"],
-                                    conventions=("a",), window=window, log=lambda s: None)
+                                    conventions=("a",), log=lambda s: None)
             by = {r.method: r for r in rows}
             fir, held = by["FIR overlap (paper)"], by["FIR overlap, limits held"]
             plain, vib = sticks
