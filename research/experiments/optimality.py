@@ -116,7 +116,7 @@ def yardsticks(path: Polyline, limits: AxisLimits, tolerance: float, feed: float
 
     grid = dict(start_intervals=start_intervals, rel_change=rel_change, max_intervals=max_intervals)
     plain = converged_time_optimal(path, limits, tolerance, feed=feed, window=window, warm_start=warm_start, **grid)
-    vib = converged_time_optimal(path, limits, tolerance, feed=feed, window=window, warm_start=plain.result.trajectory,
+    vib = converged_time_optimal(path, limits, tolerance, feed=feed, window=window, warm_start=plain.result,
                                  modes=modes, residual_vibration=0.0, **grid)
     return plain, vib
 

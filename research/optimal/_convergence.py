@@ -89,7 +89,7 @@ def converged_time_optimal(path, limits, tolerance, *, start_intervals: int = 16
     change = math.inf
     while change >= rel_change and N < max_intervals:
         N = min(max(math.ceil(growth * N), N + 1), max_intervals)
-        finer = time_optimal(path, limits, tolerance, intervals_per_segment=N, warm_start=res.trajectory, **kwargs)
+        finer = time_optimal(path, limits, tolerance, intervals_per_segment=N, warm_start=res, **kwargs)
         change = abs(finer.cycle_time - res.cycle_time) / finer.cycle_time
         res = finer
         history.append((N, res.cycle_time, res.iterations, res.solve_time))

@@ -47,7 +47,7 @@ from research.limits import AxisLimits
 from research.optimal._arrays import frozen
 from research.optimal._ocp import Geometry, PhaseGrid, ProblemSpec, flow
 from research.optimal._vibration import check_modes, grid_vibration, mode_states
-from research.optimal._warm import grid_from_trajectory
+from research.optimal._warm import grid_from_result, grid_from_trajectory
 from research.optimal._windowing import (
     WindowFailure,
     WindowReport,
@@ -143,7 +143,7 @@ def time_optimal(
     intervals_per_segment: int = 24,
     window: int | None = None,
     overlap: int = 4,
-    warm_start: Trajectory | None = None,
+    warm_start: Trajectory | TimeOptimalResult | None = None,
     sample_period: float = 1e-3,
     solver_options: dict | None = None,
     checks_per_interval: int = 3,
@@ -163,8 +163,9 @@ def time_optimal(
             single segment needs >= 3).
         window: segments per receding window (``None``: the whole path in one NLP).
         overlap: segments of look-ahead solved again by the next window (``0 <= overlap < window``).
-        warm_start: a trajectory along the path (FIR, S-curve, ...) mapped onto the phase grid;
-            default: the exact-stop S-curve under the same limits (a feasible point).
+        warm_start: a trajectory along the path (FIR, S-curve, ...) mapped onto the phase grid, or
+            a :class:`TimeOptimalResult` on the same path (its phase boundaries kept, e.g. another
+            ``N``); default: the exact-stop S-curve under the same limits (a feasible point).
         sample_period: ``Ts`` of the returned trajectory [s].
         solver_options: IPOPT options overriding the defaults (``print_level`` 0, ``tol`` 1e-8, ...).
         checks_per_interval: points inside each interval where tube, velocity and feed are also
@@ -202,9 +203,12 @@ def time_optimal(
         return _exact_stop(path, limits, feed, intervals_per_segment, sample_period)
     d, M, N = path.dim, path.n_segments, int(intervals_per_segment)
     cap = feed if feed is not None else float(np.linalg.norm(limits.velocity))
-    if warm_start is None:
-        warm_start = _scurve_warm_start(path, limits, feed)
-    guess = grid_from_trajectory(warm_start, path, N)
+    if isinstance(warm_start, TimeOptimalResult):
+        if warm_start.phase_durations.size != M:
+            raise ParameterError(f"warm_start is a solution with {warm_start.phase_durations.size} phases, the path has {M} segments")
+        guess = grid_from_result(warm_start.phase_durations, warm_start.trajectory, path, N)
+    else:
+        guess = grid_from_trajectory(warm_start if warm_start is not None else _scurve_warm_start(path, limits, feed), path, N)
     if modes:
         guess = replace(guess, modes=mode_states(guess.states, guess.jerks, np.repeat(guess.durations / N, N), modes))
     geometry = Geometry(
