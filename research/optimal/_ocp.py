@@ -76,8 +76,8 @@ class ProblemSpec:
         checks: check points inside each interval (at fractions ``i / (checks + 1)``).
         length_scale, time_scale: scales of position [mm] and phase duration [s].
         modes: structural modes in the dynamics (``_vibration``, eq V1-V2); ``()``: none.
-        residual: bound ``r`` [mm] on each mode's residual vibration at the end (eq V3; ``0``:
-            the mode ends at rest), or ``None``; imposed only when ``terminal``.
+        residual: bounds ``r_k`` [mm], one per mode, on its residual vibration at the end (eq V3;
+            ``0``: the mode ends at rest), or ``None``; imposed only when ``terminal``.
         deflection: bound ``D`` [mm] on ``|delta|`` of each mode at nodes and check points, or ``None``.
         terminal: the window ends at the end of the path (where the residual bound applies).
     """
@@ -94,7 +94,7 @@ class ProblemSpec:
     length_scale: float
     time_scale: float
     modes: tuple = ()
-    residual: float | None = None
+    residual: tuple | None = None
     deflection: float | None = None
     terminal: bool = True
 
@@ -298,10 +298,10 @@ class PhaseProblem:
                     dc, _ = mode_flow(dl[:-1], rt[:-1], a0, j, h * (i / (s.checks + 1)), md.wn, md.damping, ca)
                     self._constrain(f"mode {k} deflection (check {i})", dc / D, -1.0, 1.0, interval_phase)
             if s.residual is not None and s.terminal:
-                if s.residual == 0:
+                if s.residual[k] == 0:
                     self._constrain(f"mode {k} residual vibration", Y[2 * k : 2 * k + 2, K], 0.0, 0.0, np.full(2, s.n_phases - 1))
                 else:
-                    amp2 = residual_amplitude(dl[K], rt[K], md.wn, md.damping, ca) ** 2 / s.residual**2
+                    amp2 = residual_amplitude(dl[K], rt[K], md.wn, md.damping, ca) ** 2 / s.residual[k] ** 2
                     self._constrain(f"mode {k} residual vibration", amp2, -np.inf, 1.0, np.array([s.n_phases - 1]))
 
     # -- solving -----------------------------------------------------------------------------

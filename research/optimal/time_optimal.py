@@ -148,7 +148,7 @@ def time_optimal(
     solver_options: dict | None = None,
     checks_per_interval: int = 3,
     modes=(),
-    residual_vibration: float | None = 0.0,
+    residual_vibration=0.0,
     max_deflection: float | None = None,
 ) -> TimeOptimalResult:
     """Minimum-time motion along ``path`` that stays within ``tolerance`` of it.
@@ -173,7 +173,8 @@ def time_optimal(
         modes: :class:`StructuralMode` s in the dynamics (the vibration-aware OCP, ``_vibration``):
             each a base-excited 2nd-order system driven by its axis' acceleration (eq V1-V2).
         residual_vibration: bound ``r`` [mm] on every mode's residual vibration envelope at the end
-            of the motion (eq V3); ``0``: the modes end at rest; ``None``: free. Only with ``modes``.
+            of the motion (eq V3), or one bound per mode; ``0``: the modes end at rest; ``None``:
+            free. Only with ``modes``.
         max_deflection: bound ``D`` [mm] on every mode's deflection during the motion, or ``None``.
 
     Returns:
@@ -194,9 +195,13 @@ def time_optimal(
     """
     _check(path, limits, tolerance, feed, intervals_per_segment, window, overlap, sample_period, checks_per_interval)
     modes = check_modes(modes, path.dim)
-    for name, bound in (("residual_vibration", residual_vibration), ("max_deflection", max_deflection)):
-        if bound is not None and not (np.isfinite(bound) and bound >= 0 and (bound > 0 or name == "residual_vibration")):
-            raise ParameterError(f"{name} must be None or a finite bound in mm (>= 0 for the residual, > 0 for the deflection), got {bound!r}")
+    residual = None if residual_vibration is None else np.atleast_1d(np.asarray(residual_vibration, dtype=np.float64))
+    if residual is not None and residual.size == 1:
+        residual = np.repeat(residual, len(modes))
+    if residual is not None and not (residual.shape == (len(modes),) and np.all(np.isfinite(residual) & (residual >= 0))):
+        raise ParameterError(f"residual_vibration must be None or finite bounds >= 0 mm (one, or one per mode), got {residual_vibration!r}")
+    if max_deflection is not None and not (np.isfinite(max_deflection) and max_deflection > 0):
+        raise ParameterError(f"max_deflection must be None or a finite bound > 0 mm, got {max_deflection!r}")
     if modes and tolerance == 0:
         raise ParameterError("modes need tolerance > 0: the eps = 0 exact stop is solved without an NLP")
     if tolerance == 0:
@@ -223,7 +228,7 @@ def time_optimal(
         jerk=tuple(map(float, limits.jerk)), feed=None if feed is None else float(feed),
         tolerance=float(tolerance), checks=int(checks_per_interval),
         length_scale=float(np.median(path.lengths)) * n_max, time_scale=float(np.median(guess.durations)),
-        modes=modes, residual=None if residual_vibration is None else float(residual_vibration),
+        modes=modes, residual=None if residual is None else tuple(map(float, residual)),
         deflection=None if max_deflection is None else float(max_deflection),
     )
     start = np.zeros((3, d))
