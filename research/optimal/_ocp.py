@@ -48,9 +48,9 @@ import numpy as np
 
 from research.optimal._vibration import mode_flow, residual_amplitude
 
-#: IPOPT options. ``mu_strategy = "adaptive"`` (Nocedal, Waechter, Waltz 2009): on the benchmark
-#: paths it takes 13-31 iterations per solve against 35-63 with the monotone (Fiacco-McCormick)
-#: barrier (``benchmarks/bench_optimal.py`` prints both on the same NLPs).
+#: IPOPT options. ``mu_strategy = "adaptive"`` (Nocedal, Waechter, Waltz 2009): on corner90 and the
+#: diamond (N = 16, 24, FIR warm start) 20-24 iterations against 36-40 with the monotone
+#: (Fiacco-McCormick) barrier on the same NLPs (``benchmarks/bench_optimal.py`` prints both).
 DEFAULT_IPOPT = {
     "print_level": 0,
     "mu_strategy": "adaptive",
