@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from research.errors import ParameterError
 from research.experiments.store import atomic_write
 from research.interpolators import blend_interpolate, fir_interpolate, plan_fir, scurve_interpolate
 from research.limits import AxisLimits
@@ -137,7 +138,7 @@ def run_path(name: str, path: Polyline, *, feed: float, delays, tolerance: float
     """
     fir = fir_interpolate(path, feed, delays, tolerance)
     if residual not in ("zero", "fir"):
-        raise ValueError(f"residual must be 'zero' or 'fir', got {residual!r}")
+        raise ParameterError(f"residual must be 'zero' or 'fir', got {residual!r}")
     bound = 0.0 if residual == "zero" else trajectory_vibration(fir, modes)[0]
     rows, sticks = [], []
     for conv in conventions:
@@ -165,7 +166,7 @@ def run_path(name: str, path: Polyline, *, feed: float, delays, tolerance: float
             ratios = limit_ratios(traj, limits)
             worst = max(float(np.max(r)) for r in ratios.values())
             corners = corner_errors(traj, path)
-            residual, deflection = trajectory_vibration(traj, modes)
+            left, deflection = trajectory_vibration(traj, modes)
             rows.append(StudyRow(
                 path=name, convention=conv, method=method, cycle_time=float(traj.duration),
                 ratio_to_ocp=float(traj.duration) / plain.cycle_time,
@@ -174,7 +175,7 @@ def run_path(name: str, path: Polyline, *, feed: float, delays, tolerance: float
                 max_corner_error=float(corners.max()) if corners.size else 0.0,
                 peak_acceleration=peak_axis_values(traj, 2).tolist(), peak_jerk=peak_axis_values(traj, 3).tolist(),
                 worst_limit_ratio=worst, within_limits=worst <= 1 + LIMIT_CHECK,
-                residual_vibration=residual.tolist(), deflection_in_motion=deflection.tolist(),
+                residual_vibration=left.tolist(), deflection_in_motion=deflection.tolist(),
             ))
     return rows, sticks
 
