@@ -268,18 +268,19 @@ class PhaseProblem:
         self._constrain("phase duration", tau - self.min_tau, 0.0, np.inf, np.arange(n))
 
         if s.modes:
-            self._modes(p, a, u, h, interval_phase)
+            self._modes(a, u, h, interval_phase)
         opti.minimize(ca.sum2(tau))
         opti.solver("ipopt", {"expand": True, "print_time": False}, ipopt_options)
 
-    def _modes(self, p, a, u, h, interval_phase) -> None:
+    def _modes(self, a, u, h, interval_phase) -> None:
         """Mode states, their exact flow (eq V2), in-motion deflection and residual (eq V3) bounds."""
         s, opti = self.spec, self.opti
         K, m = s.n_phases * s.intervals, len(s.modes)
         amax = np.asarray(s.acceleration, dtype=np.float64)
         wn = np.array([md.wn for md in s.modes])
+        a_mode = amax[[md.axis for md in s.modes]]
         # scales: the quasi-static deflection a_max / wn^2 and its rate a_max / wn
-        self.mode_scales = np.stack([amax[[md.axis for md in s.modes]] / wn**2, amax[[md.axis for md in s.modes]] / wn])
+        self.mode_scales = np.stack([a_mode / wn**2, a_mode / wn])
         Y = self.Y = opti.variable(2 * m, K + 1)
         self.y0 = opti.parameter(2 * m, 1)
         self._constrain("initial mode state", Y[:, 0] - self.y0, 0.0, 0.0, np.zeros(2 * m, dtype=int))
