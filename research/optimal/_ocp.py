@@ -27,6 +27,11 @@ Phases: phase ``k`` follows segment ``k`` of the window (``P_k -> P_{k+1}``, uni
   (the path end point for the last window; for the others a terminal state from which the rest
   of the path is always feasible, see ``_windowing``).
 
+With structural modes (``ProblemSpec.modes``, the vibration-aware OCP) each mode's ``(delta, delta')``
+is a state too, moved by its exact flow under the interval's linear acceleration (``_vibration``,
+eq V2); its residual vibration at the path end and, optionally, its deflection at the nodes and
+check points are bounded.
+
 Variables are scaled (positions by a path length scale, velocity / acceleration / jerk by their
 limits, time by a typical phase duration) so IPOPT sees numbers of order one; the tube and corner
 constraints are divided by ``eps`` (``eps^2``). The problem is built once per window shape with the
@@ -41,8 +46,14 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from research.optimal._vibration import mode_flow, residual_amplitude
+
+#: IPOPT options. ``mu_strategy = "adaptive"`` (Nocedal, Waechter, Waltz 2009): on corner90 and the
+#: diamond (N = 16, 24, FIR warm start) 20-24 iterations against 36-40 with the monotone
+#: (Fiacco-McCormick) barrier on the same NLPs (``benchmarks/bench_optimal.py`` prints both).
 DEFAULT_IPOPT = {
     "print_level": 0,
+    "mu_strategy": "adaptive",
     "sb": "yes",
     "max_iter": 3000,
     "tol": 1e-8,
@@ -64,6 +75,11 @@ class ProblemSpec:
         tolerance: tube radius ``eps`` [mm], > 0.
         checks: check points inside each interval (at fractions ``i / (checks + 1)``).
         length_scale, time_scale: scales of position [mm] and phase duration [s].
+        modes: structural modes in the dynamics (``_vibration``, eq V1-V2); ``()``: none.
+        residual: bounds ``r_k`` [mm], one per mode, on its residual vibration at the end (eq V3;
+            ``0``: the mode ends at rest), or ``None``; imposed only when ``terminal``.
+        deflection: bound ``D`` [mm] on ``|delta|`` of each mode at nodes and check points, or ``None``.
+        terminal: the window ends at the end of the path (where the residual bound applies).
     """
 
     n_phases: int
@@ -77,6 +93,10 @@ class ProblemSpec:
     checks: int
     length_scale: float
     time_scale: float
+    modes: tuple = ()
+    residual: tuple | None = None
+    deflection: float | None = None
+    terminal: bool = True
 
 
 @dataclass(frozen=True)
@@ -99,11 +119,14 @@ class PhaseGrid:
         durations: ``(n,)`` phase durations ``T_k`` [s].
         states: ``(n N + 1, 3, d)`` node states ``[p, v, a]`` [mm, mm/s, mm/s^2].
         jerks: ``(n N, d)`` jerk on each interval [mm/s^3].
+        modes: ``(n N + 1, 2, m)`` mode states ``(delta, delta')`` [mm, mm/s] at the nodes, or
+            ``None`` without modes.
     """
 
     durations: np.ndarray
     states: np.ndarray
     jerks: np.ndarray
+    modes: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -244,17 +267,54 @@ class PhaseProblem:
         self._constrain("end point", (p[:, K] - self.end[:, n - 1]) / Sp, 0.0, 0.0, np.full(d, n - 1))
         self._constrain("phase duration", tau - self.min_tau, 0.0, np.inf, np.arange(n))
 
+        if s.modes:
+            self._modes(a, u, h, interval_phase)
         opti.minimize(ca.sum2(tau))
         opti.solver("ipopt", {"expand": True, "print_time": False}, ipopt_options)
 
+    def _modes(self, a, u, h, interval_phase) -> None:
+        """Mode states, their exact flow (eq V2), in-motion deflection and residual (eq V3) bounds."""
+        s, opti = self.spec, self.opti
+        K, m = s.n_phases * s.intervals, len(s.modes)
+        amax = np.asarray(s.acceleration, dtype=np.float64)
+        wn = np.array([md.wn for md in s.modes])
+        a_mode = amax[[md.axis for md in s.modes]]
+        # scales: the quasi-static deflection a_max / wn^2 and its rate a_max / wn
+        self.mode_scales = np.stack([a_mode / wn**2, a_mode / wn])
+        Y = self.Y = opti.variable(2 * m, K + 1)
+        self.y0 = opti.parameter(2 * m, 1)
+        self._constrain("initial mode state", Y[:, 0] - self.y0, 0.0, 0.0, np.zeros(2 * m, dtype=int))
+        node_phase = np.minimum(np.arange(K + 1) // s.intervals, s.n_phases - 1)
+        for k, md in enumerate(s.modes):
+            Sd, Sr = self.mode_scales[:, k]
+            dl, rt = Sd * Y[2 * k, :], Sr * Y[2 * k + 1, :]
+            a0, j = a[md.axis, :-1], u[md.axis, :]
+            d1, r1 = mode_flow(dl[:-1], rt[:-1], a0, j, h, md.wn, md.damping, ca)
+            self._constrain(f"mode {k} dynamics delta", (dl[1:] - d1) / Sd, 0.0, 0.0, interval_phase)
+            self._constrain(f"mode {k} dynamics rate", (rt[1:] - r1) / Sr, 0.0, 0.0, interval_phase)
+            if s.deflection is not None:
+                D = s.deflection
+                self._constrain(f"mode {k} deflection", dl / D, -1.0, 1.0, node_phase)
+                for i in range(1, s.checks + 1):
+                    dc, _ = mode_flow(dl[:-1], rt[:-1], a0, j, h * (i / (s.checks + 1)), md.wn, md.damping, ca)
+                    self._constrain(f"mode {k} deflection (check {i})", dc / D, -1.0, 1.0, interval_phase)
+            if s.residual is not None and s.terminal:
+                if s.residual[k] == 0:
+                    self._constrain(f"mode {k} residual vibration", Y[2 * k : 2 * k + 2, K], 0.0, 0.0, np.full(2, s.n_phases - 1))
+                else:
+                    amp2 = residual_amplitude(dl[K], rt[K], md.wn, md.damping, ca) ** 2 / s.residual[k] ** 2
+                    self._constrain(f"mode {k} residual vibration", amp2, -np.inf, 1.0, np.array([s.n_phases - 1]))
+
     # -- solving -----------------------------------------------------------------------------
-    def solve(self, geometry: Geometry, initial_state: np.ndarray, guess: PhaseGrid) -> tuple[PhaseGrid, SolveStats]:
+    def solve(self, geometry: Geometry, initial_state: np.ndarray, guess: PhaseGrid,
+              initial_modes: np.ndarray | None = None) -> tuple[PhaseGrid, SolveStats]:
         """Solve for one window.
 
         Args:
             geometry: the window's segments.
             initial_state: ``(3, d)`` state ``[p, v, a]`` at the start of the window.
-            guess: initial guess on this window's grid.
+            guess: initial guess on this window's grid (``guess.modes`` required with modes).
+            initial_modes: ``(2, m)`` mode states at the start (default: at rest).
 
         Returns:
             ``(solution, stats)``.
@@ -275,6 +335,10 @@ class PhaseProblem:
         opti.set_initial(self.Z, self._scaled(guess.states, origin))
         opti.set_initial(self.W, guess.jerks.T / float(np.max(s.jerk)))
         opti.set_initial(self.tau, guess.durations[None, :] / s.time_scale)
+        if s.modes:
+            y0 = np.zeros((2, len(s.modes))) if initial_modes is None else np.asarray(initial_modes, dtype=np.float64)
+            opti.set_value(self.y0, (y0 / self.mode_scales).T.ravel())
+            opti.set_initial(self.Y, (guess.modes / self.mode_scales).transpose(2, 1, 0).reshape(-1, guess.modes.shape[0]))
         t0 = time.perf_counter()
         try:
             sol = opti.solve()
@@ -296,7 +360,11 @@ class PhaseProblem:
         states = (Z.T.reshape(-1, 3, s.dim) * scale) + np.stack([origin, 0 * origin, 0 * origin])
         jerks = np.asarray(value(self.W)).reshape(s.dim, -1).T * float(np.max(s.jerk))
         durations = np.atleast_1d(np.asarray(value(self.tau)).ravel()) * s.time_scale
-        return PhaseGrid(durations, states, jerks), stats
+        modes = None
+        if s.modes:
+            Y = np.asarray(value(self.Y)).reshape(2 * len(s.modes), -1)
+            modes = Y.reshape(len(s.modes), 2, -1).transpose(2, 1, 0) * self.mode_scales
+        return PhaseGrid(durations, states, jerks, modes), stats
 
     def _scaled(self, states: np.ndarray, origin: np.ndarray) -> np.ndarray:
         """``(m, 3, d)`` physical states -> ``(3 d, m)`` scaled decision values."""

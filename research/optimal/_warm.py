@@ -2,8 +2,11 @@
 
 Phase boundaries: phase ``k`` of the OCP ends near vertex ``P_{k+1}``; for the warm start it ends
 at the time the trajectory comes closest to that vertex. The search for vertex ``k`` is limited to
-the samples whose travelled distance ``integral |v| dt`` lies within half a segment of the vertex's
-arc length, so a path that comes back near an earlier vertex cannot confuse it. Inside each phase
+the samples whose travelled distance ``integral |v| dt``, rescaled to the path's length (a motion
+that cuts corners travels less, and on many short segments the shortfall adds up to more than half
+a segment), lies within half a segment of the vertex's arc length, so a path that comes back near
+an earlier vertex cannot confuse it. A solution of the OCP itself carries its phase boundaries
+(:func:`grid_from_result`). Inside each phase
 the ``N`` equal intervals get the trajectory's state at their nodes (from the exact profile when
 the trajectory has one) and the mean jerk ``(a_{i+1} - a_i) / h`` that joins them.
 """
@@ -32,7 +35,8 @@ def phase_boundaries(traj: Trajectory, path: Polyline) -> np.ndarray:
         on the exact profile when there is one), and the trajectory's duration.
 
     Raises:
-        ParameterError: the trajectory has other axes or does not pass the vertices in order.
+        ParameterError: the trajectory has other axes, does not start and end on the path's end
+            points, or does not pass the vertices in order.
     """
     if traj.n_axes != path.dim:
         raise ParameterError(f"warm_start has {traj.n_axes} axes but the path has {path.dim}")
@@ -43,7 +47,13 @@ def phase_boundaries(traj: Trajectory, path: Polyline) -> np.ndarray:
         q = f(t, 0)
     else:
         t, q = np.asarray(traj.t), np.asarray(traj.q)
+    for name, i, k in (("start", 0, 0), ("end", -1, -1)):
+        if np.linalg.norm(q[i] - path.points[k]) > 1e-6 * max(path.length, 1.0):
+            raise ParameterError(f"warm_start does not follow the path: it {name}s at {q[i].tolist()}, "
+                                 f"not on the path's {name} point {path.points[k].tolist()}")
     travelled = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(q, axis=0), axis=1))])
+    if travelled[-1] > 0:
+        travelled *= path.length / travelled[-1]
     S, L = path.arc_length, path.lengths
     idx, first = [], 0
     for k in range(1, path.n_segments):
@@ -76,7 +86,17 @@ def phase_boundaries(traj: Trajectory, path: Polyline) -> np.ndarray:
 
 def grid_from_trajectory(traj: Trajectory, path: Polyline, intervals: int) -> PhaseGrid:
     """The warm-start trajectory on the phase grid of ``path`` with ``intervals`` per phase."""
-    times = phase_boundaries(traj, path)
+    return grid_at(traj, phase_boundaries(traj, path), path, intervals)
+
+
+def grid_from_result(durations: np.ndarray, traj: Trajectory, path: Polyline, intervals: int) -> PhaseGrid:
+    """A solution of the OCP (its phase ``durations`` [s] and trajectory) on a grid of ``intervals``
+    per phase: the same phase boundaries, the exact profile at the new nodes."""
+    return grid_at(traj, np.concatenate([[0.0], np.cumsum(durations)]), path, intervals)
+
+
+def grid_at(traj: Trajectory, times: np.ndarray, path: Polyline, intervals: int) -> PhaseGrid:
+    """``traj`` on the phase grid whose phase boundaries are ``times`` ``(M + 1,)`` [s]."""
     durations = np.diff(times)
     frac = np.arange(intervals) / intervals
     nodes = np.concatenate([(times[:-1, None] + durations[:, None] * frac[None, :]).ravel(), times[-1:]])

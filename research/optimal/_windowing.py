@@ -12,7 +12,8 @@ Every window ends at rest on its last vertex. That terminal state makes the sche
 feasible (the next window can always repeat the committed tail of the previous solution, stop on
 the same vertex and go on from rest), and it costs nothing on the committed part as long as the
 look-ahead is longer than the braking distance (about ``F (T_a + T_j) / 2`` for an S-curve stop;
-30 mm at 250 mm/s and the Sencer 2015 envelope). The last window runs to the path end.
+30 mm at 250 mm/s and the Sencer 2015 envelope). The last window runs to the path end; only there
+is a residual-vibration bound imposed (structural modes, ``_vibration``).
 """
 
 from __future__ import annotations
@@ -87,31 +88,35 @@ def solve_windows(
         geometry: all segments of the path.
         spec: problem constants; ``n_phases`` is replaced by each window's size.
         guess: warm start on the whole path's phase grid.
-        initial_state: ``(3, d)`` start state (the first vertex, at rest).
+        initial_state: ``(3, d)`` start state (the first vertex, at rest); the modes start from
+            ``guess.modes[0]`` and their state is carried across windows like ``[p, v, a]``.
         schedule: from :func:`window_schedule`.
         ipopt_options: IPOPT options.
 
     Returns:
         ``(solution on the whole grid, window reports, time spent building NLPs [s])``.
     """
-    N = spec.intervals
+    N, M = spec.intervals, guess.durations.size
     durations, states, jerks = guess.durations.copy(), guess.states.copy(), guess.jerks.copy()
-    problems: dict[int, PhaseProblem] = {}
+    modes = None if guess.modes is None else guess.modes.copy()
+    problems: dict[tuple[int, bool], PhaseProblem] = {}
     build_time = 0.0
     reports = []
     state = np.asarray(initial_state, dtype=np.float64)
+    mode_state = None if modes is None else modes[0].copy()
     for first, stop, commit in schedule:
-        n = stop - first
-        if n not in problems:
+        n, terminal = stop - first, stop == M
+        if (n, terminal) not in problems:
             t0 = time.perf_counter()
-            problems[n] = PhaseProblem(replace(spec, n_phases=n), ipopt_options)
+            problems[n, terminal] = PhaseProblem(replace(spec, n_phases=n, terminal=terminal), ipopt_options)
             build_time += time.perf_counter() - t0
         window_geometry = Geometry(*(np.asarray(x)[first:stop] for x in (
             geometry.start, geometry.end, geometry.direction, geometry.length, geometry.min_duration)))
-        window_guess = PhaseGrid(durations[first:stop], states[first * N : stop * N + 1].copy(), jerks[first * N : stop * N])
+        window_modes = None if modes is None else modes[first * N : stop * N + 1].copy()
+        window_guess = PhaseGrid(durations[first:stop], states[first * N : stop * N + 1].copy(), jerks[first * N : stop * N], window_modes)
         window_guess.states[0] = state
         try:
-            solution, stats = problems[n].solve(window_geometry, state, window_guess)
+            solution, stats = problems[n, terminal].solve(window_geometry, state, window_guess, mode_state)
         except SolveFailure as failure:
             raise WindowFailure(failure, first, stop) from None
         solution.states[0] = state  # the joint state is the committed one, bit for bit
@@ -119,8 +124,12 @@ def solve_windows(
         states[first * N : stop * N + 1] = solution.states
         jerks[first * N : stop * N] = solution.jerks
         state = solution.states[(commit - first) * N].copy()
+        if modes is not None:
+            solution.modes[0] = mode_state
+            modes[first * N : stop * N + 1] = solution.modes
+            mode_state = solution.modes[(commit - first) * N].copy()
         reports.append(_report(first, stop, commit, stats, float(solution.durations.sum())))
-    return PhaseGrid(durations, states, jerks), reports, build_time
+    return PhaseGrid(durations, states, jerks, modes), reports, build_time
 
 
 def _report(first: int, stop: int, commit: int, stats: SolveStats, duration: float) -> WindowReport:

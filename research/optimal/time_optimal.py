@@ -9,24 +9,31 @@ any other trajectory along the path (e.g. FIR overlap), over the whole path or i
 limits and tolerance no interpolator can be faster than the OCP, up to the discretisation of the
 jerk on ``N`` equal intervals per segment (finer ``N``: closer to the continuous optimum).
 
-What is approximated, and by how much (measured in ``tests/optimal``):
+What is approximated, and by how much (measured in ``tests/optimal`` and ``bench_optimal``):
 
 - the grid: jerk switching times fall between grid points, so the cycle time is an upper bound on
   the continuous optimum; on a 100 mm line (Sencer 2015 envelope) it is 0.3 % above the S-curve
-  optimum with ``N = 24`` and 0.06 % with ``N = 48``; on corner90 ``N = 24`` is 0.13 % above
-  ``N = 48``;
+  optimum with ``N = 24`` and 0.06 % with ``N = 48``; on the diamond with the 20/10 ms FIR's peaks
+  ``N = 16`` is 2.1 % above ``N = 81``. :func:`~research.optimal.converged_time_optimal` refines
+  ``N`` until the cycle time changes by < 0.1 % (issue 19);
 - between grid points the tube and the velocity / feed limits are imposed at ``checks_per_interval``
-  points only; the dense check (:class:`Verification`) has found at most 0.3 % excess on the
-  benchmark paths (acceleration and jerk are exact: linear and constant on each interval);
+  points only; the dense check (:class:`Verification`) finds at most 0.9 % excess at ``N = 16-24``
+  on the 20/10 ms sets and 0.22 % at converged ``N`` on the benchmark paths (acceleration and jerk
+  are exact: linear and constant on each interval);
 - the tube is the rectangle (cylinder) of each segment between its end caps, not the full
   ``eps``-capsule: the motion may not overshoot a vertex on the outer side of a corner;
 - windows end at rest on their last vertex (``_windowing``), which slows the committed part only
   when the look-ahead is shorter than the braking distance.
+
+With ``modes`` it is the vibration-aware OCP (issue 19): every structural mode (a base-excited
+2nd-order system driven by its axis' acceleration, ``_vibration``) is part of the state with its
+exact flow on each interval, its residual vibration at the end bounded (default: zero) and,
+optionally, its deflection during the motion.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -39,7 +46,8 @@ from research.interpolators.scurve import (
 from research.limits import AxisLimits
 from research.optimal._arrays import frozen
 from research.optimal._ocp import Geometry, PhaseGrid, ProblemSpec, flow
-from research.optimal._warm import grid_from_trajectory
+from research.optimal._vibration import check_modes, grid_vibration, mode_states
+from research.optimal._warm import grid_from_result, grid_from_trajectory
 from research.optimal._windowing import (
     WindowFailure,
     WindowReport,
@@ -62,6 +70,9 @@ class Verification:
         deviation_ratio: ``max_deviation / eps``.
         velocity_ratio, acceleration_ratio, jerk_ratio: ``(d,)`` per-axis peak / limit.
         feed_ratio: peak ``|v|`` / ``F`` (``nan`` without a feed limit).
+        residual_vibration: ``(m,)`` envelope of each structural mode's free vibration at the end
+            (eq V3) [mm], re-simulated from rest on the solution's jerk; empty without modes.
+        peak_deflection: ``(m,)`` peak ``|delta|`` of each mode during the motion [mm].
     """
 
     max_deviation: float
@@ -70,6 +81,8 @@ class Verification:
     acceleration_ratio: np.ndarray
     jerk_ratio: np.ndarray
     feed_ratio: float
+    residual_vibration: np.ndarray = field(default_factory=lambda: frozen(np.zeros(0)))
+    peak_deflection: np.ndarray = field(default_factory=lambda: frozen(np.zeros(0)))
 
     @property
     def worst_ratio(self) -> float:
@@ -100,6 +113,7 @@ class TimeOptimalResult:
         intervals_per_segment: ``N``.
         tolerance: ``eps`` [mm].
         verification: dense check of tube and limits between grid points.
+        modes: the structural modes in the dynamics (``()``: the plain OCP).
     """
 
     trajectory: Trajectory
@@ -112,6 +126,7 @@ class TimeOptimalResult:
     intervals_per_segment: int
     tolerance: float
     verification: Verification = field(repr=False)
+    modes: tuple = ()
 
     @property
     def cycle_time(self) -> float:
@@ -128,10 +143,13 @@ def time_optimal(
     intervals_per_segment: int = 24,
     window: int | None = None,
     overlap: int = 4,
-    warm_start: Trajectory | None = None,
+    warm_start: Trajectory | TimeOptimalResult | None = None,
     sample_period: float = 1e-3,
     solver_options: dict | None = None,
     checks_per_interval: int = 3,
+    modes=(),
+    residual_vibration=0.0,
+    max_deflection: float | None = None,
 ) -> TimeOptimalResult:
     """Minimum-time motion along ``path`` that stays within ``tolerance`` of it.
 
@@ -145,12 +163,19 @@ def time_optimal(
             single segment needs >= 3).
         window: segments per receding window (``None``: the whole path in one NLP).
         overlap: segments of look-ahead solved again by the next window (``0 <= overlap < window``).
-        warm_start: a trajectory along the path (FIR, S-curve, ...) mapped onto the phase grid;
-            default: the exact-stop S-curve under the same limits (a feasible point).
+        warm_start: a trajectory along the path (FIR, S-curve, ...) mapped onto the phase grid, or
+            a :class:`TimeOptimalResult` on the same path (its phase boundaries kept, e.g. another
+            ``N``); default: the exact-stop S-curve under the same limits (a feasible point).
         sample_period: ``Ts`` of the returned trajectory [s].
         solver_options: IPOPT options overriding the defaults (``print_level`` 0, ``tol`` 1e-8, ...).
         checks_per_interval: points inside each interval where tube, velocity and feed are also
             imposed (on the exact cubic), so the motion between grid points keeps them too.
+        modes: :class:`StructuralMode` s in the dynamics (the vibration-aware OCP, ``_vibration``):
+            each a base-excited 2nd-order system driven by its axis' acceleration (eq V1-V2).
+        residual_vibration: bound ``r`` [mm] on every mode's residual vibration envelope at the end
+            of the motion (eq V3), or one bound per mode; ``0``: the modes end at rest; ``None``:
+            free. Only with ``modes``.
+        max_deflection: bound ``D`` [mm] on every mode's deflection during the motion, or ``None``.
 
     Returns:
         A :class:`TimeOptimalResult`.
@@ -169,13 +194,28 @@ def time_optimal(
         ('Solve_Succeeded', True)
     """
     _check(path, limits, tolerance, feed, intervals_per_segment, window, overlap, sample_period, checks_per_interval)
+    modes = check_modes(modes, path.dim)
+    residual = None if residual_vibration is None else np.atleast_1d(np.asarray(residual_vibration, dtype=np.float64))
+    if residual is not None and residual.size == 1:
+        residual = np.repeat(residual, len(modes))
+    if residual is not None and not (residual.shape == (len(modes),) and np.all(np.isfinite(residual) & (residual >= 0))):
+        raise ParameterError(f"residual_vibration must be None or finite bounds >= 0 mm (one, or one per mode), got {residual_vibration!r}")
+    if max_deflection is not None and not (np.isfinite(max_deflection) and max_deflection > 0):
+        raise ParameterError(f"max_deflection must be None or a finite bound > 0 mm, got {max_deflection!r}")
+    if modes and tolerance == 0:
+        raise ParameterError("modes need tolerance > 0: the eps = 0 exact stop is solved without an NLP")
     if tolerance == 0:
         return _exact_stop(path, limits, feed, intervals_per_segment, sample_period)
     d, M, N = path.dim, path.n_segments, int(intervals_per_segment)
     cap = feed if feed is not None else float(np.linalg.norm(limits.velocity))
-    if warm_start is None:
-        warm_start = _scurve_warm_start(path, limits, feed)
-    guess = grid_from_trajectory(warm_start, path, N)
+    if isinstance(warm_start, TimeOptimalResult):
+        if warm_start.phase_durations.size != M:
+            raise ParameterError(f"warm_start is a solution with {warm_start.phase_durations.size} phases, the path has {M} segments")
+        guess = grid_from_result(warm_start.phase_durations, warm_start.trajectory, path, N)
+    else:
+        guess = grid_from_trajectory(warm_start if warm_start is not None else _scurve_warm_start(path, limits, feed), path, N)
+    if modes:
+        guess = replace(guess, modes=mode_states(guess.states, guess.jerks, np.repeat(guess.durations / N, N), modes))
     geometry = Geometry(
         path.points[:-1], path.points[1:], path.directions, path.lengths,
         np.maximum((path.lengths - 2 * tolerance) / min(cap, float(np.linalg.norm(limits.velocity))), 1e-6),
@@ -188,6 +228,8 @@ def time_optimal(
         jerk=tuple(map(float, limits.jerk)), feed=None if feed is None else float(feed),
         tolerance=float(tolerance), checks=int(checks_per_interval),
         length_scale=float(np.median(path.lengths)) * n_max, time_scale=float(np.median(guess.durations)),
+        modes=modes, residual=None if residual is None else tuple(map(float, residual)),
+        deflection=None if max_deflection is None else float(max_deflection),
     )
     start = np.zeros((3, d))
     start[0] = path.points[0]
@@ -208,18 +250,22 @@ def time_optimal(
         windows=tuple(reports),
         intervals_per_segment=N,
         tolerance=float(tolerance),
-        verification=verify(solution, N, path, limits, tolerance, feed),
+        verification=verify(solution, N, path, limits, tolerance, feed, modes),
+        modes=modes,
     )
 
 
-def verify(grid: PhaseGrid, intervals: int, path: Polyline, limits: AxisLimits, tolerance: float, feed: float | None) -> Verification:
+def verify(grid: PhaseGrid, intervals: int, path: Polyline, limits: AxisLimits, tolerance: float, feed: float | None,
+           modes=()) -> Verification:
     """Resample the exact piecewise-cubic solution at 16 points per interval and compare it with
-    the tube and the limits (the between-grid-points check of issue 6).
+    the tube and the limits (the between-grid-points check of issue 6); re-simulate the modes from
+    rest on the solution's jerk (eq V2, not the NLP's mode variables).
 
     Args:
         grid: solution on the phase grid.
         intervals: ``N`` per phase.
         path, limits, tolerance, feed: the problem data (``tolerance`` [mm], ``feed`` [mm/s]).
+        modes: structural modes whose residual vibration and peak deflection are reported.
 
     Returns:
         A :class:`Verification`.
@@ -233,6 +279,7 @@ def verify(grid: PhaseGrid, intervals: int, path: Polyline, limits: AxisLimits, 
     def peak(y):
         return np.abs(y).max(axis=0)
 
+    residual, deflection = grid_vibration(grid.states, grid.jerks, h, modes, theta)
     return Verification(
         max_deviation=dev,
         deviation_ratio=dev / tolerance if tolerance > 0 else (0.0 if dev == 0 else np.inf),
@@ -240,6 +287,7 @@ def verify(grid: PhaseGrid, intervals: int, path: Polyline, limits: AxisLimits, 
         acceleration_ratio=frozen(peak(a) / limits.acceleration),
         jerk_ratio=frozen(peak(grid.jerks) / limits.jerk),
         feed_ratio=float(np.linalg.norm(v, axis=1).max() / feed) if feed is not None else float("nan"),
+        residual_vibration=frozen(residual), peak_deflection=frozen(deflection),
     )
 
 
