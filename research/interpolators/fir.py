@@ -373,24 +373,45 @@ def _look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_i
     # what the other direction changes in the window add at full overlap: eq 13/14's dwell gets the
     # rest of the tolerance (triangle inequality), and is valid only where some is left
     budget = tol_v - np.linalg.norm(d_all - Fv[:, None] * du * h_full, axis=1)
-    need = np.linalg.norm(d_all, axis=1) > tol_v
+    e_all = np.linalg.norm(d_all, axis=1)
+    need = e_all > tol_v
     f_w = Fv.copy()
-    f_w[need] = every.largest_feed(s_v[need], Fv[need], tol_v[need])
+    f_w[need] = every.largest_feed(s_v[need], Fv[need], tol_v[need], e_all[need])
+    reach = Fv * every.rho.max()  # a window at a feed <= Fv sums the turns strictly inside s_v +- reach
+    memo = {}
+
+    def feeds_without(gap):
+        """Window feeds of the vertices that do not dwell, on the chain without the dwell turns:
+        only windows that reach a removed turn change (the others sum the same turns)."""
+        key = gap.tobytes()
+        if key not in memo:
+            removed = s_v[gap]
+            hit = np.searchsorted(removed, s_v + reach, side="left") > np.searchsorted(removed, s_v - reach, side="right")
+            f = f_w.copy()
+            q = np.flatnonzero(hit & ~gap)
+            if q.size:
+                f[q] = chain(~gap).largest_feed(s_v[q], Fv[q], tol_v[q])
+            memo[key] = f[~gap]
+        return memo[key]
+
+    # eq 13/14 overlaps for the two tolerances a dwell may use (one evaluation each)
+    Tk_budget, Tk_whole = (np.asarray(overlap_time(np.maximum(b, 0.0), dF, delays)) for b in (budget, tol_v))
     out = []
-    for rule_budget, choice in ((budget, "cost"), (tol_v, "cost"), (tol_v, "all"), (tol_v, "none")):
-        c = _dwell_rule(tp, table, F_cmd, F, Fv, dF, f_w, need, rule_budget, delays, tol_v, s_v, chain, choice)
+    for rule_budget, Tk, choice in ((budget, Tk_budget, "cost"), (tol_v, Tk_whole, "cost"), (tol_v, Tk_whole, "all"),
+                                    (tol_v, Tk_whole, "none")):
+        c = _dwell_rule(tp, table, F_cmd, F, Fv, f_w, need, rule_budget, Tk, delays, tol_v, s_v, feeds_without, choice)
         if not any(np.array_equal(c[3], o[3]) and np.array_equal(c[4], o[4]) for o in out):
             out.append(c)
     return out
 
 
-def _dwell_rule(tp, table, F_cmd, F, Fv, dF, f_w, need, budget, delays, tol_v, s_v, chain, choice="cost"):
-    """One candidate of :func:`_look_ahead` for the tolerance ``budget`` a dwell corner may use;
-    ``choice`` says which vertices that need a slow-down dwell instead: those where the dwell is
-    estimated cheaper (``"cost"``), all that can (``"all"``), none that need not (``"none"``)."""
+def _dwell_rule(tp, table, F_cmd, F, Fv, f_w, need, budget, Tk, delays, tol_v, s_v, feeds_without, choice="cost"):
+    """One candidate of :func:`_look_ahead` for the tolerance ``budget`` a dwell corner may use
+    (``Tk``: its eq 13/14 overlaps); ``choice`` says which vertices that need a slow-down dwell
+    instead: those where the dwell is estimated cheaper (``"cost"``), all that can (``"all"``),
+    none that need not (``"none"``)."""
     M = tp.n_blocks
     Td = float(delays.sum())
-    Tk = np.asarray(overlap_time(np.maximum(budget, 0.0), dF, delays))
     # dwell where it costs less than the slow-down: T_d - T_k against the time lost on the stretch
     # the vertex's window slows, f T_d, or its share of the blocks when neighbouring windows join
     L = tp.lengths
@@ -402,7 +423,7 @@ def _dwell_rule(tp, table, F_cmd, F, Fv, dF, f_w, need, budget, delays, tol_v, s
     gap |= need & ((f_w <= 0) | (tol_v <= 0))  # no feed keeps a turn within a zero tolerance: exact stop
     query = np.flatnonzero(~gap)
     # without dwells the chain is every turn, whose feeds are already known
-    f = chain(~gap).largest_feed(s_v[query], Fv[query], tol_v[query]) if gap.any() else f_w
+    f = feeds_without(gap)
     # the estimate holds a constant feed through the window: a vertex between blocks of different
     # feeds (a line entering a slower arc) gets the lower one on both sides of it
     slow = f < np.maximum(F[:-1], F[1:])[query] * (1 - 1e-12)
