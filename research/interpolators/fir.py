@@ -442,17 +442,10 @@ def _dwell_rule(tp, table, F_cmd, F, Fv, f_w, need, budget, Tk, delays, tol_v, s
     reach_l = np.minimum(cum[k_l + 1] - lo, np.maximum(0.5 * Td - (t_cum[j + 1] - t_cum[k_l + 1]), 0.0) * f)
     inside_r = (hi < cum[k_r + 1]) & (reach_r > 0)
     inside_l = (lo > cum[k_l]) & (reach_l > 0)
-    head_len, head_f, head_cap = _end_piece(k_r[inside_r], reach_r[inside_r], f[inside_r], L, body, F)
-    tail_len, tail_f, tail_cap = _end_piece(k_l[inside_l], reach_l[inside_l], f[inside_l], L, body, F)
-    body = np.minimum(body, np.minimum(head_cap, tail_cap))
-    head_f, tail_f = np.minimum(head_f, body), np.minimum(tail_f, body)
     arc = tp.is_arc
-    whole = ~arc & (head_len + tail_len >= L)
-    merged = np.minimum(np.minimum(head_f, tail_f), body)
-    head_f, body, tail_f = (np.where(whole, merged, np.where(arc, F, x)) for x in (head_f, body, tail_f))
-    head = np.where(whole | arc, 0.0, head_len / L)
-    tail = np.where(whole | arc, 0.0, tail_len / L)
-    factor = np.stack([head_f, body, tail_f], axis=1) / F_cmd[:, None]
+    head, tail, piece_f = _line_pieces(k_r[inside_r], reach_r[inside_r], f[inside_r], k_l[inside_l], reach_l[inside_l],
+                                       f[inside_l], L, body, F, arc)
+    factor = piece_f / F_cmd[:, None]
     # sub-arcs a window [lo, hi] overlaps: those ending after lo and starting before hi (path order)
     span = table.arc_span
     a_first = np.searchsorted(span[:, 1], lo, side="right")
@@ -463,37 +456,77 @@ def _dwell_rule(tp, table, F_cmd, F, Fv, f_w, need, budget, Tk, delays, tol_v, s
     return factor, head, tail, ~gap, np.where(gap, np.clip(tol_v - budget, 0.0, tol_v), 0.0), arc_rel
 
 
-def _end_piece(blocks, reach, feeds, L, body, F):
-    """Head (or tail) piece of each line from the windows that reach into it.
+def _line_pieces(h_blk, h_reach, h_feed, t_blk, t_reach, t_feed, L, body, F, arc):
+    """Head, body and tail pieces of every line from the windows that reach into it.
 
-    A window reaching ``reach`` [mm] into block ``blocks`` needs the feed ``<= feeds`` over that
-    stretch. One end piece of length ``l`` at the slowest of those feeds covers every window that
-    reaches at most ``l``; the longer ones cap the body instead. ``l`` is the reach that minimises
-    the block's time ``l / f_end + (L - l) / body`` (a long fast window and a short slow one
-    should not make a long slow piece).
+    A window reaching ``reach`` [mm] into a line from its start (``h_*``) or from its end (``t_*``)
+    needs the feed ``<= feed`` over that stretch; ``body`` caps the whole line (windows that cover
+    it). The feed the windows allow at a point of the line is a staircase: the minimum over the
+    windows that cover the point. Three pieces can follow a staircase of at most three steps
+    exactly (one window at each end, overlapping or not, or two steps at one end); otherwise the
+    pieces take the cut points, among the staircase's steps, that give the least block time
+    ``sum length / feed`` with each piece at the lowest feed it covers (never above a window's
+    feed; a staircase of end pieces, not one piece at the slowest feed of all the windows).
 
     Returns:
-        ``(length, feed, body_cap)``, each ``(M,)`` [mm, mm/s, mm/s] (0, ``F``, inf without windows).
+        ``(head, tail, feeds)``: head and tail shares ``(M,)`` of the block length and the feeds
+        ``(M, 3)`` [mm/s] of head, body and tail (``F`` and shares 0 on arcs and untouched lines).
     """
     M = L.size
-    length, feed, cap = np.zeros(M), F.copy(), np.full(M, np.inf)
-    if blocks.size == 0:
-        return length, feed, cap
-    np.maximum.at(length, blocks, reach)
-    np.minimum.at(feed, blocks, feeds)
-    count = np.bincount(blocks, minlength=M)
-    order = np.lexsort((-reach, blocks))  # by block, farthest reach first
-    b_s, r_s, f_s = blocks[order], reach[order], feeds[order]
-    starts = np.concatenate([[0], np.cumsum(count)])
-    for k in np.flatnonzero(count > 1):
-        r, fk = r_s[starts[k]:starts[k + 1]], f_s[starts[k]:starts[k + 1]]
-        g = float(fk.min())
-        # option i: the piece takes reach r[i]; the windows reaching farther (r[:i]) cap the body
-        caps = np.concatenate([[np.inf], np.minimum.accumulate(fk)[:-1]])
-        cost = r / g + (L[k] - r) / np.minimum(body[k], caps)
-        i = int(np.argmin(cost))
-        length[k], cap[k] = r[i], caps[i]
-    return length, feed, cap
+    n_h, n_t = np.bincount(h_blk, minlength=M), np.bincount(t_blk, minlength=M)
+    r_h, f_h, r_t, f_t = np.zeros(M), np.full(M, np.inf), np.zeros(M), np.full(M, np.inf)
+    np.maximum.at(r_h, h_blk, h_reach)
+    np.minimum.at(f_h, h_blk, h_feed)
+    np.maximum.at(r_t, t_blk, t_reach)
+    np.minimum.at(f_t, t_blk, t_feed)
+    b = np.minimum(body, F)
+    # one window at each end (or none): the staircase has at most three steps
+    a_cut = np.minimum(r_h, L - r_t)  # the head piece ends where the tail's reach begins, if earlier
+    b_cut = np.maximum(L - r_t, r_h)
+    head_f = np.minimum(np.where(a_cut > 0, f_h, b), b)
+    mid_f = np.minimum(b, np.minimum(np.where(r_h + r_t > L, f_h, np.inf), np.where(r_h + r_t > L, f_t, np.inf)))
+    tail_f = np.minimum(np.where(b_cut < L, f_t, b), b)
+    head, tail = a_cut / L, (L - b_cut) / L
+    feeds = np.stack([head_f, mid_f, tail_f], axis=1)
+    for k in np.flatnonzero(~arc & ((n_h > 1) | (n_t > 1))):
+        head[k], tail[k], feeds[k] = _staircase_cut(h_reach[h_blk == k], h_feed[h_blk == k], t_reach[t_blk == k],
+                                                   t_feed[t_blk == k], float(L[k]), float(b[k]))
+    feeds[arc] = F[arc, None]
+    head[arc], tail[arc] = 0.0, 0.0
+    # an empty end piece takes the feed of the nearest piece that is not: eq 13/14 reads a block's
+    # entry and exit feeds from its first and last pieces
+    mid = 1.0 - head - tail > 0
+    h, m, t = feeds.T
+    feeds = np.stack([np.where(head > 0, h, np.where(mid, m, t)), m, np.where(tail > 0, t, np.where(mid, m, h))], axis=1)
+    return head, tail, feeds
+
+
+def _staircase_cut(r_h, f_h, r_t, f_t, length: float, cap: float):
+    """Best three pieces ``(head share, tail share, feeds (3,))`` under the staircase of windows
+    ``(r_h, f_h)`` from the line's start and ``(r_t, f_t)`` from its end (see :func:`_line_pieces`):
+    cut points among the steps, each piece at the minimum feed the windows allow over it."""
+    x = np.unique(np.clip(np.concatenate([[0.0, length], r_h, length - r_t]), 0.0, length))
+    left, right = x[:-1], x[1:]
+    # allowed feed on each elementary interval: windows that cover it
+    cover_h = r_h[None, :] >= right[:, None]
+    cover_t = (length - r_t)[None, :] <= left[:, None]
+    allowed = np.minimum(np.min(np.where(cover_h, f_h[None, :], np.inf), axis=1, initial=np.inf),
+                         np.min(np.where(cover_t, f_t[None, :], np.inf), axis=1, initial=np.inf))
+    allowed = np.maximum(np.minimum(allowed, cap), 1e-300)
+    n = allowed.size
+    # piece [i, j) of elementary intervals: min feed by a running minimum
+    low = np.full((n + 1, n + 1), np.inf)
+    for i in range(n):
+        low[i, i + 1:] = np.minimum.accumulate(allowed[i:])
+    pos = np.concatenate([[0.0], right])
+    span = pos[None, :] - pos[:, None]
+    with np.errstate(invalid="ignore"):
+        cost = np.where(span > 0, span / low, 0.0)  # time of piece [i, j)
+    # cuts 0 <= a <= b <= n: pieces [0, a), [a, b), [b, n)
+    total = cost[0, :, None] + cost + cost[None, :, n]
+    a, bb = np.unravel_index(np.argmin(np.where(np.triu(np.ones((n + 1, n + 1), bool)), total, np.inf)), total.shape)
+    feeds = np.array([low[0, a] if a > 0 else cap, low[a, bb] if bb > a else cap, low[bb, n] if bb < n else cap])
+    return pos[a] / length, (length - pos[bb]) / length, feeds
 
 
 def _arc_turns(tp: ToolPath, tol: float):
