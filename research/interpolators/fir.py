@@ -488,9 +488,13 @@ def _line_pieces(h_blk, h_reach, h_feed, t_blk, t_reach, t_feed, L, body, F, arc
     tail_f = np.minimum(np.where(b_cut < L, f_t, b), b)
     head, tail = a_cut / L, (L - b_cut) / L
     feeds = np.stack([head_f, mid_f, tail_f], axis=1)
-    for k in np.flatnonzero(~arc & ((n_h > 1) | (n_t > 1))):
-        head[k], tail[k], feeds[k] = _staircase_cut(h_reach[h_blk == k], h_feed[h_blk == k], t_reach[t_blk == k],
-                                                   t_feed[t_blk == k], float(L[k]), float(b[k]))
+    multi = np.flatnonzero(~arc & ((n_h > 1) | (n_t > 1)))
+    if multi.size:
+        slot = np.full(M, -1)
+        slot[multi] = np.arange(multi.size)
+        head[multi], tail[multi], feeds[multi] = _staircase_cut(
+            _pad_rows(slot, h_blk, h_reach, 0.0), _pad_rows(slot, h_blk, h_feed, np.inf),
+            _pad_rows(slot, t_blk, t_reach, 0.0), _pad_rows(slot, t_blk, t_feed, np.inf), L[multi], b[multi])
     feeds[arc] = F[arc, None]
     head[arc], tail[arc] = 0.0, 0.0
     # an empty end piece takes the feed of the nearest piece that is not: eq 13/14 reads a block's
@@ -501,32 +505,63 @@ def _line_pieces(h_blk, h_reach, h_feed, t_blk, t_reach, t_feed, L, body, F, arc
     return head, tail, feeds
 
 
-def _staircase_cut(r_h, f_h, r_t, f_t, length: float, cap: float):
-    """Best three pieces ``(head share, tail share, feeds (3,))`` under the staircase of windows
-    ``(r_h, f_h)`` from the line's start and ``(r_t, f_t)`` from its end (see :func:`_line_pieces`):
-    cut points among the steps, each piece at the minimum feed the windows allow over it."""
-    x = np.unique(np.clip(np.concatenate([[0.0, length], r_h, length - r_t]), 0.0, length))
-    left, right = x[:-1], x[1:]
-    # allowed feed on each elementary interval: windows that cover it
-    cover_h = r_h[None, :] >= right[:, None]
-    cover_t = (length - r_t)[None, :] <= left[:, None]
-    allowed = np.minimum(np.min(np.where(cover_h, f_h[None, :], np.inf), axis=1, initial=np.inf),
-                         np.min(np.where(cover_t, f_t[None, :], np.inf), axis=1, initial=np.inf))
-    allowed = np.maximum(np.minimum(allowed, cap), 1e-300)
-    n = allowed.size
-    # piece [i, j) of elementary intervals: min feed by a running minimum
-    low = np.full((n + 1, n + 1), np.inf)
-    for i in range(n):
-        low[i, i + 1:] = np.minimum.accumulate(allowed[i:])
-    pos = np.concatenate([[0.0], right])
-    span = pos[None, :] - pos[:, None]
-    with np.errstate(invalid="ignore"):
-        cost = np.where(span > 0, span / low, 0.0)  # time of piece [i, j)
-    # cuts 0 <= a <= b <= n: pieces [0, a), [a, b), [b, n)
-    total = cost[0, :, None] + cost + cost[None, :, n]
-    a, bb = np.unravel_index(np.argmin(np.where(np.triu(np.ones((n + 1, n + 1), bool)), total, np.inf)), total.shape)
-    feeds = np.array([low[0, a] if a > 0 else cap, low[a, bb] if bb > a else cap, low[bb, n] if bb < n else cap])
-    return pos[a] / length, (length - pos[bb]) / length, feeds
+def _pad_rows(slot, blk, values, fill):
+    """``(B, K)`` rows of ``values`` grouped by ``slot[blk]`` (entries whose slot is -1 dropped),
+    padded with ``fill``."""
+    s = slot[blk]
+    keep = s >= 0
+    s, v = s[keep], values[keep]
+    order = np.argsort(s, kind="stable")
+    s, v = s[order], v[order]
+    B = int(slot.max()) + 1
+    count = np.bincount(s, minlength=B)
+    rank = np.arange(s.size) - np.repeat(np.cumsum(count) - count, count)
+    out = np.full((B, max(int(count.max(initial=0)), 1)), fill)
+    out[s, rank] = v
+    return out
+
+
+def _staircase_cut(r_h, f_h, r_t, f_t, length, cap):
+    """Best three pieces of lines under the staircase of their windows (see :func:`_line_pieces`):
+    cut points among the steps, each piece at the minimum feed the windows allow over it.
+
+    Args:
+        r_h, f_h: ``(B, H)`` reach [mm] from each line's start and feed [mm/s] of its head windows
+            (padding: reach 0); r_t, f_t: ``(B, T)`` the same from each line's end.
+        length: ``(B,)`` line lengths [mm]; cap: ``(B,)`` feed cap of the whole line [mm/s].
+
+    Returns:
+        ``(head share (B,), tail share (B,), feeds (B, 3))``.
+    """
+    r_h, f_h, r_t, f_t = (np.atleast_2d(np.asarray(a, dtype=np.float64)) for a in (r_h, f_h, r_t, f_t))
+    length, cap = np.atleast_1d(np.asarray(length, dtype=np.float64)), np.atleast_1d(np.asarray(cap, dtype=np.float64))
+    B = length.size
+    x = np.sort(np.clip(np.concatenate([np.zeros((B, 1)), length[:, None], r_h, length[:, None] - r_t], axis=1),
+                        0.0, length[:, None]), axis=1)  # (B, n) cut candidates, duplicates allowed
+    n = x.shape[1]
+    left, right = x[:, :-1], x[:, 1:]
+    # allowed feed on each elementary interval: the windows that cover it (none on an empty one)
+    f_cov_h = np.min(np.where(r_h[:, None, :] >= right[:, :, None], f_h[:, None, :], np.inf), axis=2, initial=np.inf)
+    f_cov_t = np.min(np.where((length[:, None] - r_t)[:, None, :] <= left[:, :, None], f_t[:, None, :], np.inf), axis=2,
+                     initial=np.inf)
+    allowed = np.where(right > left, np.maximum(np.minimum(np.minimum(f_cov_h, f_cov_t), cap[:, None]), 1e-300), np.inf)
+    # low[:, i, j]: lowest allowed feed over intervals i .. j - 1 (piece from x_i to x_j)
+    low = np.full((B, n, n), np.inf)
+    for i in range(n - 1):
+        low[:, i, i + 1:] = np.minimum.accumulate(allowed[:, i:], axis=1)
+    span = x[:, None, :] - x[:, :, None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cost = np.where(span > 0, span / low, 0.0)
+    # cuts a <= c: pieces [x_0, x_a], [x_a, x_c], [x_c, x_n-1]
+    total = cost[:, 0, :, None] + cost + cost[:, None, :, n - 1]
+    total = np.where(np.triu(np.ones((n, n), dtype=bool))[None], total, np.inf)
+    best = np.argmin(total.reshape(B, -1), axis=1)
+    a, c = np.divmod(best, n)
+    rows = np.arange(B)
+    xa, xc = x[rows, a], x[rows, c]
+    feeds = np.stack([np.where(xa > 0, low[rows, 0, a], cap), np.where(xc > xa, low[rows, a, c], cap),
+                      np.where(xc < length, low[rows, c, n - 1], cap)], axis=1)
+    return xa / length, (length - xc) / length, np.minimum(feeds, cap[:, None])
 
 
 def _arc_turns(tp: ToolPath, tol: float):

@@ -272,7 +272,8 @@ def test_staircase_cut_follows_every_window_and_beats_every_cut_on_the_steps():
         f_h = rng.uniform(5, 120, r_h.size)
         r_t = rng.uniform(0, length, rng.integers(0, 4))
         f_t = rng.uniform(5, 120, r_t.size)
-        head, tail, feeds = _staircase_cut(r_h, f_h, r_t, f_t, length, cap)
+        head, tail, feeds = (v[0] for v in _staircase_cut(r_h[None], f_h[None], r_t[None], f_t[None],
+                                                          np.array([length]), np.array([cap])))
         allowed = np.full(xs.size, cap)
         for r, f in zip(r_h, f_h):
             allowed = np.where(xs < r, np.minimum(allowed, f), allowed)
