@@ -36,6 +36,8 @@ CAM programs (beyond the paper, which assumes every block longer than the window
 
 from __future__ import annotations
 
+import heapq
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -201,10 +203,11 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                                             jnp.asarray(corner), tol_vertex_p, delays)
         return frac, piece_tv, cruise, overlaps[: M - 1]
 
-    def predicted_time(candidate) -> float:
-        """Cycle time of a candidate before verification: a lower bound on its verified time,
-        because repairs only shrink overlaps and lower feeds."""
-        frac, piece_tv, _, overlaps = timing(*candidate[:4], np.ones(M - 1), *candidate[4:])
+    def predicted_time(candidate, shrink=None) -> float:
+        """Cycle time of a candidate (or of a repaired one, with its overlap ``shrink``) before
+        verification: a lower bound on its verified time, because repairs only shrink overlaps and
+        lower feeds."""
+        frac, piece_tv, _, overlaps = timing(*candidate[:4], np.ones(M - 1) if shrink is None else shrink, *candidate[4:])
         return float(np.sum(frac * np.asarray(_primal(piece_tv))) + np.sum(Td_np - np.asarray(_primal(overlaps))) + Td_np)
 
     def schedule(factor, head, tail, full, shrink, others, arc_rel):
@@ -216,7 +219,9 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         return feeds_cmd * jnp.asarray(cruise), overlaps, ends[:M] - starts[:M], starts[:M], position, centre[: M - 1]
 
     def settle(factor, head, tail, full, others, arc_rel):
-        """Verify and repair one candidate plan; returns ``(state, rounds, deviation)``."""
+        """Verify and repair one candidate plan, one round per step: a generator that yields the
+        predicted time of the repaired plan after each failed round (a lower bound on its final
+        time) and returns ``(state, rounds, deviation)``."""
         factor, shrink = factor.copy(), np.ones(M - 1)
         state = schedule(factor, head, tail, full, shrink, others, arc_rel)
         rounds, deviation = 0, float("nan")
@@ -261,23 +266,28 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                     factor[k] *= min(0.98 * np.sqrt(tb_np[k] / arc_slow[k]), 0.98)
                 if too_fast.any():  # shrink by 15 % a round, then exact stops
                     shrink = np.where(too_fast, shrink * (0.85 if rounds <= _LIMIT_ROUNDS else 0.0), shrink)
+                yield predicted_time((factor, head, tail, full, others, arc_rel), shrink)
                 state = schedule(factor, head, tail, full, shrink, others, arc_rel)
         return state, rounds, deviation
 
     candidates = [(factor, head, tail, full, others, None)]
     if refine and M > 1:
         candidates = _look_ahead(tp, table, F_np, base, d_np, tv_np, t_in, t_out)
-    # branch and bound: verify candidates in order of predicted time, and only while one could still
-    # beat the best verified plan (its prediction is a lower bound on its verified time)
+    # branch and bound, one verification round at a time: the candidate (or repaired candidate) of
+    # least predicted time goes next, until none could still beat the best verified plan (a
+    # prediction is a lower bound on the verified time); a candidate whose repairs push its bound
+    # past the best verified plan is dropped without rebuilding its profile
     best, best_time = None, np.inf
-    order = sorted((predicted_time(c), i, c) for i, c in enumerate(candidates)) if len(candidates) > 1 else [(0.0, 0, candidates[0])]
-    for pred, _, c in order:
-        if pred >= best_time:
-            break
-        result = settle(*c)
-        t = float(_primal(result[0][4].end - result[0][4].start))
-        if t < best_time:
-            best, best_time = result, t
+    queue = [(predicted_time(c) if len(candidates) > 1 else 0.0, i, settle(*c)) for i, c in enumerate(candidates)]
+    heapq.heapify(queue)
+    while queue and queue[0][0] < best_time:
+        bound, i, steps = heapq.heappop(queue)
+        try:
+            heapq.heappush(queue, (max(bound, next(steps)), i, steps))
+        except StopIteration as done:
+            t = float(_primal(done.value[0][4].end - done.value[0][4].start))
+            if t < best_time:
+                best, best_time = done.value, t
     state, rounds, deviation = best
     feeds, overlaps, pulse, starts, position, centre = state
     return FIRPlan(starts, pulse, overlaps, feeds, delays, position, centre, jnp.asarray(tp.vertices),
