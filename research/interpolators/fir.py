@@ -54,7 +54,7 @@ from research.interpolators._fir_verify import corner_distances, path_deviations
 from research.limits import AxisLimits
 from research.paths.polyline import Polyline
 from research.paths.toolpath import ToolPath
-from research.piecewise import NumpyPiecewise
+from research.piecewise import NumpyPiecewise, bucket_size
 from research.trajectory import Trajectory
 
 _SCALING_ROUNDS = 6  # rounds that shrink overlaps / feeds before violators become exact stops
@@ -294,6 +294,9 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                    float(deviation), int(rounds), tp.axes)
 
 
+_overlap_jit = jax.jit(overlap_time)  # eq 13/14 on concrete, padded arrays (one dispatch)
+
+
 @jax.jit
 def _timing_kernel(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, corner, tol_vertex, delays):
     """Pulse length of every piece and overlap of every corner (padded shapes, one dispatch).
@@ -404,8 +407,10 @@ def _look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_i
             memo[key] = f[~gap]
         return memo[key]
 
-    # eq 13/14 overlaps for the two tolerances a dwell may use (one evaluation each)
-    Tk_budget, Tk_whole = (np.asarray(overlap_time(np.maximum(b, 0.0), dF, delays)) for b in (budget, tol_v))
+    # eq 13/14 overlaps for the two tolerances a dwell may use (one compiled call, padded shapes)
+    pad = bucket_size(M - 1, 16) - (M - 1)
+    both = np.pad(np.stack([np.maximum(budget, 0.0), tol_v]), ((0, 0), (0, pad)), constant_values=1.0)
+    Tk_budget, Tk_whole = np.asarray(_overlap_jit(both, np.tile(np.pad(dF, (0, pad), constant_values=1.0), (2, 1)), delays))[:, : M - 1]
     out = []
     for rule_budget, Tk, choice in ((budget, Tk_budget, "cost"), (tol_v, Tk_whole, "cost"), (tol_v, Tk_whole, "all"),
                                     (tol_v, Tk_whole, "none")):
