@@ -184,9 +184,10 @@ class NumpyPiecewise:
         if nu > deg:
             value = np.zeros((flat.size, coeffs.shape[2]))
         else:
-            value = coeffs[piece, deg, :] * math.perm(deg, nu)
+            c = coeffs[piece]  # one gather of whole rows
+            value = c[:, deg, :] * math.perm(deg, nu)
             for m in range(deg - 1, nu - 1, -1):
-                value = value * tau + coeffs[piece, m, :] * math.perm(m, nu)
+                value = value * tau + c[:, m, :] * math.perm(m, nu)
             if nu:
                 value = np.where(((flat >= breaks[0]) & (flat <= breaks[-1]))[:, None], value, 0.0)
         return value.reshape(t.shape + (coeffs.shape[2],))

@@ -20,11 +20,12 @@ forms of the FIR chain's kernel give feeds that keep the tolerance there:
   sinc shrink above (to the chord error); for chords that zigzag about a smooth curve (rounded
   CAM coordinates) the alternating ``du_i`` cancel, which the per-corner rule cannot see.
   ``|d_j|`` bounds the distance from the vertex to the trajectory; the largest feed with
-  ``|d_j(F)| <= eps`` is found by bisection (:func:`chain_feeds`), each evaluation ``O(2^n)`` per
-  vertex through prefix sums of ``du_i s_i^m`` (``H2`` is a truncated power of degree ``n + 1``).
+  ``|d_j(F)| <= eps`` is found by a bracketing root search (:meth:`ChainError.largest_feed`), each
+  evaluation a direct sum over the window's turns (or prefix sums of ``du_i s_i^m`` for windows of
+  very many turns: ``H2`` is a truncated power of degree ``n + 1``).
 
 Where a single sharp corner needs a slow-down, the paper's dwell (partial overlap, eq 13/14) is
-cheaper; :func:`plan_corners` picks per corner the option of lower estimated time. Everything is
+cheaper; the look-ahead of ``fir`` picks per corner the option of lower estimated time. Everything is
 verified on the exact profile afterwards (``fir``), so these feeds are a starting point whose
 quality sets the cycle time, not the tolerance.
 """
@@ -39,7 +40,9 @@ import numpy as np
 
 _ARC_STEPS = 60  # arc feeds to machine precision (cheap: one evaluation per arc and step)
 _DIRECT = 64  # windows of at most this many direction changes are summed directly
-_BISECTION_STEPS = 24  # feed resolution (F_max - F eps / |d|) / 2^24, below 1e-7 F
+_BISECTION_STEPS = 36  # feed resolution (F_max - F eps / |d|) / 2^36, below 1e-10 F
+_CLOSE = 0.5 ** 30  # a feed whose |d_j| is this close below eps (log ratio) is the root (to ~1e-9 F)
+_TINY = 1e-12  # floor of |d_j| / eps in the log-space secant (an error 1e-12 eps is no error)
 
 
 def _subsets(delays: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -120,9 +123,10 @@ class ChainError:
         """``d_j`` ``(J, d)`` [mm] at arc lengths ``s_query`` [mm] for feeds ``feed`` [mm/s].
 
         Windows holding at most :data:`_DIRECT` direction changes are summed directly (exact in
-        floating point whatever the window's size against the path); larger ones through the
-        prefix sums, whose binomial re-centring loses ``(|s| / R)^(n+1)`` ulps (small there,
-        because a window of many turns is long)."""
+        floating point whatever the window's size against the path), each over its own turns only
+        (a ragged sum: the work is the total number of turns in the windows, not the largest window
+        times the query count); larger ones through the prefix sums, whose binomial re-centring
+        loses ``(|s| / R)^(n+1)`` ulps (small there, because a window of many turns is long)."""
         q = np.asarray(s_query, dtype=np.float64) - self.origin
         F = np.broadcast_to(np.asarray(feed, dtype=np.float64), q.shape)
         R = F * self.rho.max()
@@ -131,20 +135,28 @@ class ChainError:
         small = count <= _DIRECT
         out = np.zeros((q.size, self.du.shape[1]))
         if small.any():
-            out[small] = self._direct(q[small], F[small], first[small], max(int(count[small].max()), 1))
+            out[small] = self._direct(q[small], F[small], first[small], count[small])
         if not small.all():
             out[~small] = self._prefix(q[~small], F[~small])
         return out
 
-    def _direct(self, q, F, first, width: int = _DIRECT):
-        idx = first[:, None] + np.arange(width)[None, :]
-        valid = idx < self.s.size
-        idx = np.minimum(idx, self.s.size - 1)
+    def _direct(self, q, F, first, count):
+        """Ragged direct sums: query ``j`` sums the ``count[j]`` turns from ``first[j]`` on."""
+        J, d = q.size, self.du.shape[1]
+        total = int(count.sum())
+        if total == 0:
+            return np.zeros((J, d))
+        owner = np.repeat(np.arange(J), count)
+        offset = np.arange(total) - np.repeat(np.cumsum(count) - count, count)
+        idx = first[owner] + offset
         with np.errstate(divide="ignore", invalid="ignore"):
-            x = np.where(F[:, None] > 0, np.abs(self.s[idx] - q[:, None]) / F[:, None], np.inf)
-        h = sum(sign * np.maximum(rho - x, 0.0) ** self.p for rho, sign in zip(self.rho, self.sign)) * self.norm
-        h = np.where(valid, h, 0.0)
-        return F[:, None] * np.einsum("jk,jkd->jd", h, self.du[idx])
+            x = np.where(F[owner] > 0, np.abs(self.s[idx] - q[owner]) / F[owner], np.inf)
+        h = np.zeros(total)
+        for rho, sign in zip(self.rho, self.sign):
+            r = np.maximum(rho - x, 0.0)
+            h += sign * r ** self.p
+        w = (h * self.norm * F[owner])[:, None] * self.du[idx]
+        return np.stack([np.bincount(owner, weights=w[:, k], minlength=J) for k in range(d)], axis=1)
 
     def _prefix(self, q, F):
         total = np.zeros((q.size, self.prefix[0].shape[1]))
@@ -162,39 +174,51 @@ class ChainError:
             scale = np.where(F > 0, F ** (1 - self.p), 0.0) * self.norm
         return total * scale[:, None]
 
-    def largest_feed(self, s_query: np.ndarray, feed_max: np.ndarray, tolerance: np.ndarray) -> np.ndarray:
+    def largest_feed(self, s_query: np.ndarray, feed_max: np.ndarray, tolerance: np.ndarray,
+                     error_max: np.ndarray | None = None) -> np.ndarray:
         """Largest feed ``<= feed_max`` with ``|d_j| <= tolerance``, by a bracketing root search that
         keeps the tolerance at its lower end. The bracket starts at ``F eps / |d_j(F)|``, feasible
         whenever the error grows at least linearly in feed (eq 13/14 corners: linearly; chains and
         arcs: quadratically), else at 0 (``d_j -> 0`` as ``F -> 0``). Each step is a false-position
         step with the Illinois modification (the retained end's residual is halved, which makes
-        the convergence superlinear; Dowell & Jarratt 1971), kept at least 1 % of the bracket away
-        from its ends; it stops when the bracket is ``2^-BISECTION_STEPS`` of its start, the
-        resolution of :data:`_BISECTION_STEPS` halvings, or after ``2 * _BISECTION_STEPS`` steps."""
+        the convergence superlinear; Dowell & Jarratt 1971), taken on ``log |d_j|`` against
+        ``log F`` while the bracket's low end is above 0 (the error is a power of the feed, 1 at
+        an isolated corner and 2 along a chain of small turns, so the secant there lands close to
+        the root at once), and kept half a resolution away from its ends. It stops when the
+        bracket is ``2^-BISECTION_STEPS`` of its start (the resolution of :data:`_BISECTION_STEPS`
+        halvings), when the low end's error is within ``2^-BISECTION_STEPS`` (relative) of the
+        tolerance (a feed that close to the root: the error grows at least linearly), or after
+        ``2 * _BISECTION_STEPS`` steps.
+
+        ``error_max``: ``|d_j(feed_max)|`` where the caller has it already (saves one evaluation)."""
         hi = np.asarray(feed_max, dtype=np.float64).copy()
         tol = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), hi.shape)
-        e = self(s_query, hi)
+        e = self(s_query, hi) if error_max is None else np.asarray(error_max, dtype=np.float64)
         ok = e <= tol
         lo = np.where(ok, hi, 0.0)
-        todo = np.flatnonzero(~ok)
+        todo = np.flatnonzero(~ok & (tol > 0))  # a zero tolerance with a turn in the window: feed 0
         if todo.size:
             sq, h, t = s_query[todo], hi[todo], tol[todo]
-            g_h = e[todo] - t
+            g_h = np.log(e[todo] / t)  # > 0
             l = h * t / e[todo]
-            g_l = self(sq, l) - t
-            bad = g_l > 0
-            l, g_l = np.where(bad, 0.0, l), np.where(bad, -t, g_l)
+            e_l = self(sq, l)
+            bad = e_l > t
+            l = np.where(bad, 0.0, l)
+            g_l = np.where(bad, -np.inf, np.log(np.maximum(e_l, _TINY * t) / t))
             width = (h - l) * 0.5 ** _BISECTION_STEPS
             side = np.zeros(l.shape, dtype=np.int8)  # which end moved last: -1 low, +1 high
-            active = np.flatnonzero(h - l > width)
+            active = np.flatnonzero((h - l > width) & (g_l < -_CLOSE))
             for _ in range(2 * _BISECTION_STEPS):
                 if active.size == 0:
                     break
                 la, ha, gl, gh = l[active], h[active], g_l[active], g_h[active]
-                x = ha - gh * (ha - la) / (gh - gl)
-                guard = 0.01 * (ha - la)
-                x = np.clip(x, la + guard, ha - guard)
-                gx = self(sq[active], x) - t[active]
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    xl = np.log(la)
+                    x = np.exp(xl + (np.log(ha) - xl) * (-gl) / (gh - gl))
+                x = np.where(la > 0, x, 0.5 * ha)  # no power law through F = 0: bisect
+                guard = 0.5 * width[active]
+                x = np.clip(np.nan_to_num(x, nan=0.5 * (la + ha)), la + guard, ha - guard)
+                gx = np.log(np.maximum(self(sq[active], x), _TINY * t[active]) / t[active])
                 good = gx <= 0
                 sa = side[active]
                 # Illinois: an end kept twice in a row has its residual halved
@@ -202,7 +226,7 @@ class ChainError:
                 g_l[active] = np.where(good, gx, np.where(sa == 1, 0.5 * gl, gl))
                 l[active], h[active] = np.where(good, x, la), np.where(good, ha, x)
                 side[active] = np.where(good, -1, 1)
-                active = active[h[active] - l[active] > width[active]]
+                active = active[(h[active] - l[active] > width[active]) & (g_l[active] < -_CLOSE)]
             lo[todo] = l
         return lo
 

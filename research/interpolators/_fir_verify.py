@@ -91,9 +91,7 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
     q = position(t)
     # first the blocks the window is centred on (almost every sample is within tolerance of them),
     # then, for the rest, the k nearest path samples as well
-    rows = np.repeat(np.arange(t.size), 3)
-    cand = np.clip(block[:, None] + np.arange(-1, 2)[None, :], 0, M - 1).ravel()
-    dist = path._block_distance(q[rows], cand).reshape(-1, 3).min(axis=1)
+    dist = _three_block_distance(path, q, block)
     limit = tol_block[block]
     near = np.full(t.size, -1)
     if M > 1:
@@ -107,13 +105,44 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
     if bad.any():
         dist[bad] = np.minimum(dist[bad], path.distance_bound(q[bad], near=block[bad]))
         bad = dist > limit * (1.0 + 1e-9) + 1e-9
+    i = np.flatnonzero(bad)
+    # a violation near a corner instant, or on a line, is charged to a vertex; inside an arc to the arc
+    to_vertex = (near[i] >= 0) | ~path.is_arc[block[i]]
+    iv, ib = i[to_vertex], i[~to_vertex]
     at_vertex: dict[int, float] = {}
+    if M > 1 and iv.size:
+        jj = np.where(near[iv] >= 0, near[iv], np.clip(block[iv], 0, M - 2))
+        worst = np.full(M - 1, -np.inf)
+        np.maximum.at(worst, jj, dist[iv])
+        at_vertex = {int(v): float(worst[v]) for v in np.flatnonzero(worst > -np.inf)}
     at_block: dict[int, float] = {}
-    for i in np.flatnonzero(bad):
-        if near[i] >= 0 or not path.is_arc[block[i]]:
-            jj = int(near[i]) if near[i] >= 0 else int(min(max(block[i], 0), M - 2))
-            if M > 1:
-                at_vertex[jj] = max(at_vertex.get(jj, 0.0), float(dist[i]))
-        else:
-            at_block[int(block[i])] = max(at_block.get(int(block[i]), 0.0), float(dist[i]))
+    if ib.size:
+        worst = np.full(M, -np.inf)
+        np.maximum.at(worst, block[ib], dist[ib])
+        at_block = {int(b): float(worst[b]) for b in np.flatnonzero(worst > -np.inf)}
     return float(dist.max()), at_vertex, at_block
+
+
+def _three_block_distance(path: ToolPath, q: np.ndarray, block: np.ndarray) -> np.ndarray:
+    """Distance [mm] from each point ``q`` ``(N, d)`` to the nearest of blocks ``block - 1 .. block + 1``.
+
+    Lines in one vectorised projection on the segment; arc candidates through
+    ``ToolPath._block_distance`` (exact for planar arcs)."""
+    M = path.n_blocks
+    if "neighbour_segments" not in path._cache:  # (M, 3, .) rows of blocks k - 1, k, k + 1 (clipped)
+        nb = np.clip(np.arange(M)[:, None] + np.arange(-1, 2)[None, :], 0, M - 1)
+        ab = path.ends - path.starts
+        ab2 = np.einsum("kd,kd->k", ab, ab)
+        inv = np.where(ab2 > 0, 1.0 / np.where(ab2 > 0, ab2, 1.0), 0.0)
+        path._cache["neighbour_segments"] = (nb, path.starts[nb], ab[nb], inv[nb], path.is_arc[nb])
+    nb, a3, ab3, inv3, arc3 = path._cache["neighbour_segments"]
+    w = q[:, None, :] - a3[block]
+    ab = ab3[block]
+    u = np.clip(np.einsum("nkd,nkd->nk", w, ab) * inv3[block], 0.0, 1.0)
+    w -= u[:, :, None] * ab
+    d2 = np.einsum("nkd,nkd->nk", w, w)
+    arc = arc3[block]
+    if arc.any():
+        rows = np.nonzero(arc)
+        d2[rows] = path._block_distance(q[rows[0]], nb[block[rows[0]], rows[1]]) ** 2
+    return np.sqrt(d2.min(axis=1))

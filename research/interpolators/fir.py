@@ -36,6 +36,8 @@ CAM programs (beyond the paper, which assumes every block longer than the window
 
 from __future__ import annotations
 
+import heapq
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -52,7 +54,7 @@ from research.interpolators._fir_verify import corner_distances, path_deviations
 from research.limits import AxisLimits
 from research.paths.polyline import Polyline
 from research.paths.toolpath import ToolPath
-from research.piecewise import NumpyPiecewise
+from research.piecewise import NumpyPiecewise, bucket_size
 from research.trajectory import Trajectory
 
 _SCALING_ROUNDS = 6  # rounds that shrink overlaps / feeds before violators become exact stops
@@ -201,10 +203,11 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                                             jnp.asarray(corner), tol_vertex_p, delays)
         return frac, piece_tv, cruise, overlaps[: M - 1]
 
-    def predicted_time(candidate) -> float:
-        """Cycle time of a candidate before verification: a lower bound on its verified time,
-        because repairs only shrink overlaps and lower feeds."""
-        frac, piece_tv, _, overlaps = timing(*candidate[:4], np.ones(M - 1), *candidate[4:])
+    def predicted_time(candidate, shrink=None) -> float:
+        """Cycle time of a candidate (or of a repaired one, with its overlap ``shrink``) before
+        verification: a lower bound on its verified time, because repairs only shrink overlaps and
+        lower feeds."""
+        frac, piece_tv, _, overlaps = timing(*candidate[:4], np.ones(M - 1) if shrink is None else shrink, *candidate[4:])
         return float(np.sum(frac * np.asarray(_primal(piece_tv))) + np.sum(Td_np - np.asarray(_primal(overlaps))) + Td_np)
 
     def schedule(factor, head, tail, full, shrink, others, arc_rel):
@@ -216,7 +219,9 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         return feeds_cmd * jnp.asarray(cruise), overlaps, ends[:M] - starts[:M], starts[:M], position, centre[: M - 1]
 
     def settle(factor, head, tail, full, others, arc_rel):
-        """Verify and repair one candidate plan; returns ``(state, rounds, deviation)``."""
+        """Verify and repair one candidate plan, one round per step: a generator that yields the
+        predicted time of the repaired plan after each failed round (a lower bound on its final
+        time) and returns ``(state, rounds, deviation)``."""
         factor, shrink = factor.copy(), np.ones(M - 1)
         state = schedule(factor, head, tail, full, shrink, others, arc_rel)
         rounds, deviation = 0, float("nan")
@@ -261,27 +266,35 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                     factor[k] *= min(0.98 * np.sqrt(tb_np[k] / arc_slow[k]), 0.98)
                 if too_fast.any():  # shrink by 15 % a round, then exact stops
                     shrink = np.where(too_fast, shrink * (0.85 if rounds <= _LIMIT_ROUNDS else 0.0), shrink)
+                yield predicted_time((factor, head, tail, full, others, arc_rel), shrink)
                 state = schedule(factor, head, tail, full, shrink, others, arc_rel)
         return state, rounds, deviation
 
     candidates = [(factor, head, tail, full, others, None)]
     if refine and M > 1:
         candidates = _look_ahead(tp, table, F_np, base, d_np, tv_np, t_in, t_out)
-    # branch and bound: verify candidates in order of predicted time, and only while one could still
-    # beat the best verified plan (its prediction is a lower bound on its verified time)
+    # branch and bound, one verification round at a time: the candidate (or repaired candidate) of
+    # least predicted time goes next, until none could still beat the best verified plan (a
+    # prediction is a lower bound on the verified time); a candidate whose repairs push its bound
+    # past the best verified plan is dropped without rebuilding its profile
     best, best_time = None, np.inf
-    order = sorted((predicted_time(c), i, c) for i, c in enumerate(candidates)) if len(candidates) > 1 else [(0.0, 0, candidates[0])]
-    for pred, _, c in order:
-        if pred >= best_time:
-            break
-        result = settle(*c)
-        t = float(_primal(result[0][4].end - result[0][4].start))
-        if t < best_time:
-            best, best_time = result, t
+    queue = [(predicted_time(c) if len(candidates) > 1 else 0.0, i, settle(*c)) for i, c in enumerate(candidates)]
+    heapq.heapify(queue)
+    while queue and queue[0][0] < best_time:
+        bound, i, steps = heapq.heappop(queue)
+        try:
+            heapq.heappush(queue, (max(bound, next(steps)), i, steps))
+        except StopIteration as done:
+            t = float(_primal(done.value[0][4].end - done.value[0][4].start))
+            if t < best_time:
+                best, best_time = done.value, t
     state, rounds, deviation = best
     feeds, overlaps, pulse, starts, position, centre = state
     return FIRPlan(starts, pulse, overlaps, feeds, delays, position, centre, jnp.asarray(tp.vertices),
                    float(deviation), int(rounds), tp.axes)
+
+
+_overlap_jit = jax.jit(overlap_time)  # eq 13/14 on concrete, padded arrays (one dispatch)
 
 
 @jax.jit
@@ -373,24 +386,47 @@ def _look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_i
     # what the other direction changes in the window add at full overlap: eq 13/14's dwell gets the
     # rest of the tolerance (triangle inequality), and is valid only where some is left
     budget = tol_v - np.linalg.norm(d_all - Fv[:, None] * du * h_full, axis=1)
-    need = np.linalg.norm(d_all, axis=1) > tol_v
+    e_all = np.linalg.norm(d_all, axis=1)
+    need = e_all > tol_v
     f_w = Fv.copy()
-    f_w[need] = every.largest_feed(s_v[need], Fv[need], tol_v[need])
+    f_w[need] = every.largest_feed(s_v[need], Fv[need], tol_v[need], e_all[need])
+    reach = Fv * every.rho.max()  # a window at a feed <= Fv sums the turns strictly inside s_v +- reach
+    memo = {}
+
+    def feeds_without(gap):
+        """Window feeds of the vertices that do not dwell, on the chain without the dwell turns:
+        only windows that reach a removed turn change (the others sum the same turns)."""
+        key = gap.tobytes()
+        if key not in memo:
+            removed = s_v[gap]
+            hit = np.searchsorted(removed, s_v + reach, side="left") > np.searchsorted(removed, s_v - reach, side="right")
+            f = f_w.copy()
+            q = np.flatnonzero(hit & ~gap)
+            if q.size:
+                f[q] = chain(~gap).largest_feed(s_v[q], Fv[q], tol_v[q])
+            memo[key] = f[~gap]
+        return memo[key]
+
+    # eq 13/14 overlaps for the two tolerances a dwell may use (one compiled call, padded shapes)
+    pad = bucket_size(M - 1, 16) - (M - 1)
+    both = np.pad(np.stack([np.maximum(budget, 0.0), tol_v]), ((0, 0), (0, pad)), constant_values=1.0)
+    Tk_budget, Tk_whole = np.asarray(_overlap_jit(both, np.tile(np.pad(dF, (0, pad), constant_values=1.0), (2, 1)), delays))[:, : M - 1]
     out = []
-    for rule_budget, choice in ((budget, "cost"), (tol_v, "cost"), (tol_v, "all"), (tol_v, "none")):
-        c = _dwell_rule(tp, table, F_cmd, F, Fv, dF, f_w, need, rule_budget, delays, tol_v, s_v, chain, choice)
+    for rule_budget, Tk, choice in ((budget, Tk_budget, "cost"), (tol_v, Tk_whole, "cost"), (tol_v, Tk_whole, "all"),
+                                    (tol_v, Tk_whole, "none")):
+        c = _dwell_rule(tp, table, F_cmd, F, Fv, f_w, need, rule_budget, Tk, delays, tol_v, s_v, feeds_without, choice)
         if not any(np.array_equal(c[3], o[3]) and np.array_equal(c[4], o[4]) for o in out):
             out.append(c)
     return out
 
 
-def _dwell_rule(tp, table, F_cmd, F, Fv, dF, f_w, need, budget, delays, tol_v, s_v, chain, choice="cost"):
-    """One candidate of :func:`_look_ahead` for the tolerance ``budget`` a dwell corner may use;
-    ``choice`` says which vertices that need a slow-down dwell instead: those where the dwell is
-    estimated cheaper (``"cost"``), all that can (``"all"``), none that need not (``"none"``)."""
+def _dwell_rule(tp, table, F_cmd, F, Fv, f_w, need, budget, Tk, delays, tol_v, s_v, feeds_without, choice="cost"):
+    """One candidate of :func:`_look_ahead` for the tolerance ``budget`` a dwell corner may use
+    (``Tk``: its eq 13/14 overlaps); ``choice`` says which vertices that need a slow-down dwell
+    instead: those where the dwell is estimated cheaper (``"cost"``), all that can (``"all"``),
+    none that need not (``"none"``)."""
     M = tp.n_blocks
     Td = float(delays.sum())
-    Tk = np.asarray(overlap_time(np.maximum(budget, 0.0), dF, delays))
     # dwell where it costs less than the slow-down: T_d - T_k against the time lost on the stretch
     # the vertex's window slows, f T_d, or its share of the blocks when neighbouring windows join
     L = tp.lengths
@@ -402,7 +438,7 @@ def _dwell_rule(tp, table, F_cmd, F, Fv, dF, f_w, need, budget, delays, tol_v, s
     gap |= need & ((f_w <= 0) | (tol_v <= 0))  # no feed keeps a turn within a zero tolerance: exact stop
     query = np.flatnonzero(~gap)
     # without dwells the chain is every turn, whose feeds are already known
-    f = chain(~gap).largest_feed(s_v[query], Fv[query], tol_v[query]) if gap.any() else f_w
+    f = feeds_without(gap)
     # the estimate holds a constant feed through the window: a vertex between blocks of different
     # feeds (a line entering a slower arc) gets the lower one on both sides of it
     slow = f < np.maximum(F[:-1], F[1:])[query] * (1 - 1e-12)
@@ -421,17 +457,10 @@ def _dwell_rule(tp, table, F_cmd, F, Fv, dF, f_w, need, budget, delays, tol_v, s
     reach_l = np.minimum(cum[k_l + 1] - lo, np.maximum(0.5 * Td - (t_cum[j + 1] - t_cum[k_l + 1]), 0.0) * f)
     inside_r = (hi < cum[k_r + 1]) & (reach_r > 0)
     inside_l = (lo > cum[k_l]) & (reach_l > 0)
-    head_len, head_f, head_cap = _end_piece(k_r[inside_r], reach_r[inside_r], f[inside_r], L, body, F)
-    tail_len, tail_f, tail_cap = _end_piece(k_l[inside_l], reach_l[inside_l], f[inside_l], L, body, F)
-    body = np.minimum(body, np.minimum(head_cap, tail_cap))
-    head_f, tail_f = np.minimum(head_f, body), np.minimum(tail_f, body)
     arc = tp.is_arc
-    whole = ~arc & (head_len + tail_len >= L)
-    merged = np.minimum(np.minimum(head_f, tail_f), body)
-    head_f, body, tail_f = (np.where(whole, merged, np.where(arc, F, x)) for x in (head_f, body, tail_f))
-    head = np.where(whole | arc, 0.0, head_len / L)
-    tail = np.where(whole | arc, 0.0, tail_len / L)
-    factor = np.stack([head_f, body, tail_f], axis=1) / F_cmd[:, None]
+    head, tail, piece_f = _line_pieces(k_r[inside_r], reach_r[inside_r], f[inside_r], k_l[inside_l], reach_l[inside_l],
+                                       f[inside_l], L, body, F, arc)
+    factor = piece_f / F_cmd[:, None]
     # sub-arcs a window [lo, hi] overlaps: those ending after lo and starting before hi (path order)
     span = table.arc_span
     a_first = np.searchsorted(span[:, 1], lo, side="right")
@@ -442,37 +471,112 @@ def _dwell_rule(tp, table, F_cmd, F, Fv, dF, f_w, need, budget, delays, tol_v, s
     return factor, head, tail, ~gap, np.where(gap, np.clip(tol_v - budget, 0.0, tol_v), 0.0), arc_rel
 
 
-def _end_piece(blocks, reach, feeds, L, body, F):
-    """Head (or tail) piece of each line from the windows that reach into it.
+def _line_pieces(h_blk, h_reach, h_feed, t_blk, t_reach, t_feed, L, body, F, arc):
+    """Head, body and tail pieces of every line from the windows that reach into it.
 
-    A window reaching ``reach`` [mm] into block ``blocks`` needs the feed ``<= feeds`` over that
-    stretch. One end piece of length ``l`` at the slowest of those feeds covers every window that
-    reaches at most ``l``; the longer ones cap the body instead. ``l`` is the reach that minimises
-    the block's time ``l / f_end + (L - l) / body`` (a long fast window and a short slow one
-    should not make a long slow piece).
+    A window reaching ``reach`` [mm] into a line from its start (``h_*``) or from its end (``t_*``)
+    needs the feed ``<= feed`` over that stretch; ``body`` caps the whole line (windows that cover
+    it). The feed the windows allow at a point of the line is a staircase: the minimum over the
+    windows that cover the point. Three pieces can follow a staircase of at most three steps
+    exactly (one window at each end, overlapping or not, or two steps at one end); otherwise the
+    pieces take the cut points, among the staircase's steps, that give the least block time
+    ``sum length / feed`` with each piece at the lowest feed it covers (never above a window's
+    feed; a staircase of end pieces, not one piece at the slowest feed of all the windows).
 
     Returns:
-        ``(length, feed, body_cap)``, each ``(M,)`` [mm, mm/s, mm/s] (0, ``F``, inf without windows).
+        ``(head, tail, feeds)``: head and tail shares ``(M,)`` of the block length and the feeds
+        ``(M, 3)`` [mm/s] of head, body and tail (``F`` and shares 0 on arcs and untouched lines).
     """
     M = L.size
-    length, feed, cap = np.zeros(M), F.copy(), np.full(M, np.inf)
-    if blocks.size == 0:
-        return length, feed, cap
-    np.maximum.at(length, blocks, reach)
-    np.minimum.at(feed, blocks, feeds)
-    count = np.bincount(blocks, minlength=M)
-    order = np.lexsort((-reach, blocks))  # by block, farthest reach first
-    b_s, r_s, f_s = blocks[order], reach[order], feeds[order]
-    starts = np.concatenate([[0], np.cumsum(count)])
-    for k in np.flatnonzero(count > 1):
-        r, fk = r_s[starts[k]:starts[k + 1]], f_s[starts[k]:starts[k + 1]]
-        g = float(fk.min())
-        # option i: the piece takes reach r[i]; the windows reaching farther (r[:i]) cap the body
-        caps = np.concatenate([[np.inf], np.minimum.accumulate(fk)[:-1]])
-        cost = r / g + (L[k] - r) / np.minimum(body[k], caps)
-        i = int(np.argmin(cost))
-        length[k], cap[k] = r[i], caps[i]
-    return length, feed, cap
+    n_h, n_t = np.bincount(h_blk, minlength=M), np.bincount(t_blk, minlength=M)
+    r_h, f_h, r_t, f_t = np.zeros(M), np.full(M, np.inf), np.zeros(M), np.full(M, np.inf)
+    np.maximum.at(r_h, h_blk, h_reach)
+    np.minimum.at(f_h, h_blk, h_feed)
+    np.maximum.at(r_t, t_blk, t_reach)
+    np.minimum.at(f_t, t_blk, t_feed)
+    b = np.minimum(body, F)
+    # one window at each end (or none): the staircase has at most three steps
+    a_cut = np.minimum(r_h, L - r_t)  # the head piece ends where the tail's reach begins, if earlier
+    b_cut = np.maximum(L - r_t, r_h)
+    head_f = np.minimum(np.where(a_cut > 0, f_h, b), b)
+    mid_f = np.minimum(b, np.minimum(np.where(r_h + r_t > L, f_h, np.inf), np.where(r_h + r_t > L, f_t, np.inf)))
+    tail_f = np.minimum(np.where(b_cut < L, f_t, b), b)
+    head, tail = a_cut / L, (L - b_cut) / L
+    feeds = np.stack([head_f, mid_f, tail_f], axis=1)
+    multi = np.flatnonzero(~arc & ((n_h > 1) | (n_t > 1)))
+    if multi.size:
+        slot = np.full(M, -1)
+        slot[multi] = np.arange(multi.size)
+        head[multi], tail[multi], feeds[multi] = _staircase_cut(
+            _pad_rows(slot, h_blk, h_reach, 0.0), _pad_rows(slot, h_blk, h_feed, np.inf),
+            _pad_rows(slot, t_blk, t_reach, 0.0), _pad_rows(slot, t_blk, t_feed, np.inf), L[multi], b[multi])
+    feeds[arc] = F[arc, None]
+    head[arc], tail[arc] = 0.0, 0.0
+    # an empty end piece takes the feed of the nearest piece that is not: eq 13/14 reads a block's
+    # entry and exit feeds from its first and last pieces
+    mid = 1.0 - head - tail > 0
+    h, m, t = feeds.T
+    feeds = np.stack([np.where(head > 0, h, np.where(mid, m, t)), m, np.where(tail > 0, t, np.where(mid, m, h))], axis=1)
+    return head, tail, feeds
+
+
+def _pad_rows(slot, blk, values, fill):
+    """``(B, K)`` rows of ``values`` grouped by ``slot[blk]`` (entries whose slot is -1 dropped),
+    padded with ``fill``."""
+    s = slot[blk]
+    keep = s >= 0
+    s, v = s[keep], values[keep]
+    order = np.argsort(s, kind="stable")
+    s, v = s[order], v[order]
+    B = int(slot.max()) + 1
+    count = np.bincount(s, minlength=B)
+    rank = np.arange(s.size) - np.repeat(np.cumsum(count) - count, count)
+    out = np.full((B, max(int(count.max(initial=0)), 1)), fill)
+    out[s, rank] = v
+    return out
+
+
+def _staircase_cut(r_h, f_h, r_t, f_t, length, cap):
+    """Best three pieces of lines under the staircase of their windows (see :func:`_line_pieces`):
+    cut points among the steps, each piece at the minimum feed the windows allow over it.
+
+    Args:
+        r_h, f_h: ``(B, H)`` reach [mm] from each line's start and feed [mm/s] of its head windows
+            (padding: reach 0); r_t, f_t: ``(B, T)`` the same from each line's end.
+        length: ``(B,)`` line lengths [mm]; cap: ``(B,)`` feed cap of the whole line [mm/s].
+
+    Returns:
+        ``(head share (B,), tail share (B,), feeds (B, 3))``.
+    """
+    r_h, f_h, r_t, f_t = (np.atleast_2d(np.asarray(a, dtype=np.float64)) for a in (r_h, f_h, r_t, f_t))
+    length, cap = np.atleast_1d(np.asarray(length, dtype=np.float64)), np.atleast_1d(np.asarray(cap, dtype=np.float64))
+    B = length.size
+    x = np.sort(np.clip(np.concatenate([np.zeros((B, 1)), length[:, None], r_h, length[:, None] - r_t], axis=1),
+                        0.0, length[:, None]), axis=1)  # (B, n) cut candidates, duplicates allowed
+    n = x.shape[1]
+    left, right = x[:, :-1], x[:, 1:]
+    # allowed feed on each elementary interval: the windows that cover it (none on an empty one)
+    f_cov_h = np.min(np.where(r_h[:, None, :] >= right[:, :, None], f_h[:, None, :], np.inf), axis=2, initial=np.inf)
+    f_cov_t = np.min(np.where((length[:, None] - r_t)[:, None, :] <= left[:, :, None], f_t[:, None, :], np.inf), axis=2,
+                     initial=np.inf)
+    allowed = np.where(right > left, np.maximum(np.minimum(np.minimum(f_cov_h, f_cov_t), cap[:, None]), 1e-300), np.inf)
+    # low[:, i, j]: lowest allowed feed over intervals i .. j - 1 (piece from x_i to x_j)
+    low = np.full((B, n, n), np.inf)
+    for i in range(n - 1):
+        low[:, i, i + 1:] = np.minimum.accumulate(allowed[:, i:], axis=1)
+    span = x[:, None, :] - x[:, :, None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cost = np.where(span > 0, span / low, 0.0)
+    # cuts a <= c: pieces [x_0, x_a], [x_a, x_c], [x_c, x_n-1]
+    total = cost[:, 0, :, None] + cost + cost[:, None, :, n - 1]
+    total = np.where(np.triu(np.ones((n, n), dtype=bool))[None], total, np.inf)
+    best = np.argmin(total.reshape(B, -1), axis=1)
+    a, c = np.divmod(best, n)
+    rows = np.arange(B)
+    xa, xc = x[rows, a], x[rows, c]
+    feeds = np.stack([np.where(xa > 0, low[rows, 0, a], cap), np.where(xc > xa, low[rows, a, c], cap),
+                      np.where(xc < length, low[rows, c, n - 1], cap)], axis=1)
+    return xa / length, (length - xc) / length, np.minimum(feeds, cap[:, None])
 
 
 def _arc_turns(tp: ToolPath, tol: float):

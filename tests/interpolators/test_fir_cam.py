@@ -176,17 +176,17 @@ def _seeded_program(rng, arcs: bool) -> ToolPath:
     return tp
 
 
-def test_property_cycle_time_rarely_increases_with_eps():
+def test_property_cycle_time_does_not_increase_with_eps_on_seeded_programs():
     """The issue's property, cycle time never longer at a looser tolerance (1.5 eps), on 30 seeded
-    random programs (15 of lines, 15 of lines and arcs; eps log-uniform in 5-500 um, F 20-300 mm/s).
+    random programs (15 of lines, 15 of lines and arcs; eps log-uniform in 5-500 um, F 20-300 mm/s):
+    none is slower.
 
-    It does NOT hold everywhere yet, so this is a bound on how often and how much it fails, set
-    from a larger measurement with the same generator: lines 7 of 250 programs slower at 1.5 eps
-    (0.1-12 %; before sub-arcs, end pieces and the extra dwell candidates 10 of 250, up to 31 %),
-    lines and arcs 2 of 310 (1.2 %, 15.7 %; before 13 of 310, up to 994 %). At those rates 30
-    programs give about 0.5 violations; the test allows 2, each under 20 %. The remaining cases
-    come from one head or tail piece per line standing for a staircase of window feeds (open in
-    the FIR-on-CAM issue)."""
+    It is not yet a law. Measured with the same generator on 600 other seeded programs: seed 1,
+    lines 2 of 150 slower (0.5 %, 2.5 %), lines and arcs 2 of 150 (0.15 %, 1.1 %) (before the
+    staircase of end pieces 3 of 150, 0.6-13.6 %, and 2 of 150); seed 2, 1 of 150 (1.1 %) and
+    1 of 150 (5.6 %): about 1 %, so 30 programs give about 0.3 slower on average. What is left comes from the dwell
+    candidates: where eq 13/14 allows full overlap at the looser eps but the window still needs a
+    slow-down, the dwell (a small gap that the verification would shrink) is no longer offered."""
     rng = np.random.default_rng(20261202)
     rises = []
     for i in range(30):
@@ -195,9 +195,7 @@ def test_property_cycle_time_rarely_increases_with_eps():
         tight = float(plan_fir(tp, feed, DELAYS, eps).cycle_time)
         looser = float(plan_fir(tp, feed, DELAYS, 1.5 * eps).cycle_time)
         rises.append(looser / tight - 1.0)
-    rises = np.asarray(rises)
-    assert np.sum(rises > 1e-9) <= 2, rises
-    assert np.max(rises) < 0.2, rises
+    assert np.max(rises) <= 1e-9, rises
 
 
 def test_per_block_tolerance_g64_p():
@@ -259,3 +257,53 @@ def test_chord_tolerance_costs_what_the_sagitta_takes_from_eps(chord_tol):
     chords, _ = tp.to_polyline(chord_tol)
     ratio = float(plan_fir(chords, 150.0, DELAYS, eps).cycle_time) / arc_time
     assert ratio == pytest.approx(np.sqrt(eps / (eps - 2.0 * chord_tol / 3.0)), abs=0.01)
+
+
+def test_staircase_cut_follows_every_window_and_beats_every_cut_on_the_steps():
+    """The three pieces of a line under the windows reaching into it (a staircase of allowed
+    feeds from each end): never above the feed any covering window allows (checked on a dense
+    grid), and no slower than the best cut among the staircase's steps found by brute force here
+    (each piece at the lowest allowed feed over it)."""
+    from research.interpolators.fir import _staircase_cut
+    rng = np.random.default_rng(5)
+    length, cap = 5.0, 100.0
+    xs = (np.arange(20000) + 0.5) * length / 20000
+    for _ in range(60):
+        r_h = rng.uniform(0, length, rng.integers(0, 4))
+        f_h = rng.uniform(5, 120, r_h.size)
+        r_t = rng.uniform(0, length, rng.integers(0, 4))
+        f_t = rng.uniform(5, 120, r_t.size)
+        head, tail, feeds = (v[0] for v in _staircase_cut(r_h[None], f_h[None], r_t[None], f_t[None],
+                                                          np.array([length]), np.array([cap])))
+        allowed = np.full(xs.size, cap)
+        for r, f in zip(r_h, f_h):
+            allowed = np.where(xs < r, np.minimum(allowed, f), allowed)
+        for r, f in zip(r_t, f_t):
+            allowed = np.where(xs > length - r, np.minimum(allowed, f), allowed)
+        profile = np.where(xs < head * length, feeds[0], np.where(xs > (1 - tail) * length, feeds[2], feeds[1]))
+        assert np.all(profile <= allowed * (1 + 1e-12))
+        steps = np.unique(np.concatenate([[0.0, length], r_h, length - r_t]))
+        best = np.inf
+        for a in steps:
+            for b in steps[steps >= a]:
+                t = sum((hi - lo) / allowed[(xs > lo) & (xs < hi)].min() for lo, hi in ((0, a), (a, b), (b, length))
+                        if np.any((xs > lo) & (xs < hi)))
+                best = min(best, t)
+        mine = (head / feeds[0] + (1 - head - tail) / feeds[1] + tail / feeds[2]) * length
+        assert mine <= best * (1 + 1e-9)
+
+
+def test_end_pieces_are_a_staircase_regression():
+    """Regression (FIR-on-CAM issue, monotone in eps): a 7 mm line followed by 0.1-0.5 mm zigzag
+    chords at F 113 mm/s. At the looser tolerance the chain runs faster, so a second, slower window
+    (from the second vertex) reaches 0.14 mm into the line's tail beside the first one's 1.7 mm; one
+    tail piece at the slower of the two feeds made the line's tail slow for 1.7 mm and the program
+    13.6 % slower at eps 0.148 mm than at 0.098 mm. The property: not slower at the looser eps."""
+    points = [[0.0, 0.0], [7.019818009443818, 0.0], [7.513993048129025, -0.07609882482978393],
+              [7.50546712460814, 0.02353705539474167], [7.506184230839875, -0.076460373365464],
+              [7.406476769031079, -0.08410380581740975], [7.3256350893526285, -0.02524275904820281],
+              [7.333530326053374, -0.04361842876223479]]
+    path = Polyline(points)
+    tight = float(plan_fir(path, 112.984, DELAYS, 0.0984).cycle_time)
+    looser = float(plan_fir(path, 112.984, DELAYS, 0.1476).cycle_time)
+    assert looser <= tight * (1 + 1e-12), (tight, looser)
