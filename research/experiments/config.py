@@ -231,10 +231,15 @@ class DriveConfig(_Strict):
     """Drive model the references run through. ``ideal``: the axes follow the reference exactly and the
     modes see the reference acceleration; a thesis catalog drive (Table 6.1 / 6.2 on every axis, Table 6.3
     per axis); ``parameters``: the eq 6.3 model in ``[drive.parameters]``; ``identified``: the drive the
-    config's ``[identification]`` fits."""
+    config's ``[identification]`` fits, or the model file ``identified_file`` (written by
+    :func:`research.identification.save_identified`, e.g. ``drive_model.json`` of an earlier run)."""
 
     model: Literal[DRIVE_MODELS] = Field("ideal", description=f"one of {DRIVE_MODELS}")
     parameters: ClosedLoopConfig | None = Field(None, description="eq 6.3 parameters (model = \"parameters\")")
+    identified_file: str | None = Field(
+        None, description="identified-model file written by save_identified (model = \"identified\"), relative to the "
+                          "config file, e.g. \"../results/<name>/drive_model.json\" of an earlier run; its bytes are "
+                          "part of the results key")
     modes: list[ModeConfig] = Field([], description="structural modes")
     settle_time_s: float = Field(1.5, gt=0, description="rest simulated after the motion [s] (catalog drives)")
     frequency_response: FrequencyResponseConfig | None = Field(
@@ -245,6 +250,8 @@ class DriveConfig(_Strict):
         if (self.model == "parameters") != (self.parameters is not None):
             raise ValueError("model = \"parameters\" and a [drive.parameters] table go together "
                              f"(got model = {self.model!r}, parameters {'given' if self.parameters else 'missing'})")
+        if self.identified_file is not None and self.model != "identified":
+            raise ValueError(f"identified_file goes with model = \"identified\" (got model = {self.model!r})")
         return self
 
 
@@ -358,12 +365,17 @@ class ExperimentConfig(_Strict):
                              "[drive.frequency_response] table")
         if drive_study and self.drive.model == "ideal":
             raise ValueError("[drive.frequency_response] needs a drive model, not \"ideal\"")
-        if self.drive is not None and self.drive.model == "identified" and (
-                self.identification is None or self.identification.method != "simulation_error"
-                or self.identification.structure != "eq6.3"):
-            raise ValueError("drive.model = \"identified\" runs the path through the drive identified in the same "
-                             "config: it needs an [identification] table with method = \"simulation_error\" and "
-                             "structure = \"eq6.3\" (the structure the drive simulator takes)")
+        if self.drive is not None and self.drive.model == "identified":
+            if self.drive.identified_file is not None:
+                if self.identification is not None:
+                    raise ValueError("drive.model = \"identified\" has two sources: drive.identified_file and this "
+                                     "config's [identification]; keep one")
+            elif (self.identification is None or self.identification.method != "simulation_error"
+                  or self.identification.structure != "eq6.3"):
+                raise ValueError("drive.model = \"identified\" runs the path through an identified drive: give "
+                                 "drive.identified_file (a model file written by save_identified), or an "
+                                 "[identification] table with method = \"simulation_error\" and structure = \"eq6.3\" "
+                                 "(the structure the drive simulator takes)")
         for stage in ("contour", "compensation"):
             if getattr(self, stage) is not None and (self.path is None or self.drive is None or self.drive.model == "ideal"):
                 raise ValueError(f"the [{stage}] stage works on the drive's actual motion: it needs a [path] and a [drive] "
@@ -446,6 +458,8 @@ def input_files(cfg: ExperimentConfig) -> dict[str, str]:
         files["identification.log_file"] = cfg.identification.log_file
     if cfg.vibration is not None and cfg.vibration.log_file is not None:
         files["vibration.log_file"] = cfg.vibration.log_file
+    if cfg.drive is not None and cfg.drive.identified_file is not None:
+        files["drive.identified_file"] = cfg.drive.identified_file
     return files
 
 

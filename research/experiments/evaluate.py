@@ -33,6 +33,7 @@ from research.experiments.stages import (
     contour_stage,
     drive_model,
     frequency_response_stage,
+    identified_drive,
     interpolate,
     vibration_stage,
 )
@@ -67,6 +68,9 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
         ident = _identify(cfg.identification, base, objects)
         details["identification"] = ident
         scalars |= {k: v for k, v in ident.items() if k.endswith("_error")}
+    if cfg.drive is not None and cfg.drive.identified_file is not None:
+        log(f"drive: identified model {cfg.drive.identified_file}")
+        objects["identified_drive"] = identified_drive(cfg.drive, base)
     if cfg.vibration is not None:
         log("vibration: resonance test -> modes -> eq 10 delays")
         found, details["vibration"], more = vibration_stage(cfg.vibration, base)
@@ -203,6 +207,8 @@ def _identify(ic, base: Path, objects: dict | None = None) -> dict:
 
         sef = simulation_error_fit(log, ic.structure)
         if ic.structure != "eq6.3":
+            if objects is not None:
+                objects["drive_model.json"] = _model_file(sef, log, None if ic.log_file is None else base / ic.log_file)
             return {"parameters": sef.parameters, "rms_um": sef.rms_um, "converged": sef.converged,
                     "samples": int(log.n_samples)}
         fit = sef.to_identified_drive()
@@ -213,6 +219,9 @@ def _identify(ic, base: Path, objects: dict | None = None) -> dict:
     else:
         prob = ProjectedProblem.from_regression(build_regression(log))
         fit = particle_swarm(prob, seed=ic.seed) if ic.method == "pso" else bounded_fit(prob)
+    if objects is not None:  # the model as a file (save_identified) for results/<name>/drive_model.json
+        objects["drive_model.json"] = _model_file(sef if ic.method == "simulation_error" else fit, log,
+                                                  None if ic.log_file is None else base / ic.log_file)
     wn, zeta, p = fit.pole_parameters()
     out = {"wn_rad_per_s": wn, "zeta": zeta, "p_rad_per_s": p, "dc": float(fit.dc), "samples": int(log.n_samples)}
     if truth is not None:
@@ -220,3 +229,13 @@ def _identify(ic, base: Path, objects: dict | None = None) -> dict:
         got = {"wn": wn, "zeta": zeta, "p": p, "dc": float(fit.dc)}
         out |= {f"{k}_error": abs(got[k] - v) / abs(v) for k, v in true.items()}
     return out
+
+
+def _model_file(fit, log, log_file) -> bytes:
+    """The bytes :func:`research.identification.save_identified` writes for ``fit`` (identified on ``log``)."""
+    import tempfile
+
+    from research.identification import save_identified
+
+    with tempfile.TemporaryDirectory() as tmp:
+        return save_identified(fit, Path(tmp) / "drive_model.json", log=log, log_file=log_file).read_bytes()

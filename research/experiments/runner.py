@@ -131,6 +131,8 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
             buf = io.BytesIO()
             runs[0][2].save(buf)
             files["trajectory.npz"] = buf.getvalue()
+        if "drive_model.json" in ev.objects:
+            files["drive_model.json"] = ev.objects["drive_model.json"]
         if want_figure:
             files["figure.png"] = _figure(cfg, ev)
         if not (force and store.get(key) is not None):  # force recomputes without touching a stored entry
@@ -150,7 +152,7 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
     # files of a stored entry are read back through their manifest checksums (never served damaged)
     stored = (lambda name: entry.read_bytes(name) if entry.file(name) else None) if entry else files.get
     written = ["results.json"]
-    for name in ("trajectory.npz", "arrays.npz"):
+    for name in ("trajectory.npz", "arrays.npz", "drive_model.json"):
         data = stored(name) if entry or name != "arrays.npz" else _npz(ev.arrays)
         if data:
             atomic_write(out / name, data)

@@ -118,6 +118,26 @@ def drive_model(d, axes: tuple[str, ...], identified=None):
     return drives.virtual_drive(d.model)
 
 
+def identified_drive(d, base):
+    """The eq 6.3 :class:`~research.drives.ClosedLoopModel` in ``d.identified_file`` (a file written by
+    :func:`research.identification.save_identified`, relative to the config folder ``base``).
+
+    Raises:
+        ConfigError: the file is missing, corrupt or not a valid model (the loader's reason), or its model
+            cannot drive the simulator (not eq 6.3, or unstable); the message names the key and the file.
+    """
+    from research.errors import ConfigError, ParameterError
+    from research.identification import StructureFit, load_identified
+
+    file = base / d.identified_file
+    where = f"key 'drive.identified_file' = {d.identified_file!r} ({file})"
+    try:
+        fit = load_identified(file)
+        return fit.closed_loop_model() if isinstance(fit, StructureFit) else fit.model()
+    except (ConfigError, ParameterError) as e:
+        raise ConfigError(f"{where}: {e}") from None
+
+
 def contour_stage(cc, path, traj: Trajectory, actual: np.ndarray) -> tuple[dict, dict]:
     """Exact contour error of ``actual`` (the drive's positions on ``traj``'s grid) against the CAM
     ``path`` (Prévost 2012 §2.2), and the thesis' Frenet estimates (eq 4.20-4.27) with the largest
