@@ -5,6 +5,7 @@ is covered by its own test (so pytest-xdist spreads them), each under its module
 """
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -165,3 +166,20 @@ def test_store_verify_and_gc_commands(tmp_path, capsys):
     assert "would remove" in capsys.readouterr().out
     assert main(["store", "gc", *args]) == 0 and not store.folder(bad).exists()
     assert main(["store", "verify", *args]) == 0 and "1 valid entries, 0 problems" in capsys.readouterr().out
+
+
+def test_cached_run_does_not_import_jax(tmp_path):
+    """A ``run`` served from the store reads its record and writes the views: it imports neither the
+    evaluation nor JAX (issue 16: the cached re-run the README calls instant took 10 s importing them)."""
+    config = tmp_path / "e.toml"
+    config.write_text('name = "e"\nreproduces = "-"\n[path]\nname = "corner90"\n[output]\nfigure = false\n')
+    args = ["run", str(config), "--cache", str(tmp_path / "c"), "--results", str(tmp_path / "r")]
+    code = ("import sys; from research.cli import main; main(%r); "
+            "print('loaded:', sorted(m for m in ('jax', 'research.experiments.evaluate') if m in sys.modules))")
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    from research.experiments.runner import run_experiment
+
+    first = run_experiment(config, cache_dir=tmp_path / "c", results_dir=tmp_path / "r", log=lambda s: None)
+    assert not first.cached
+    again = subprocess.run([sys.executable, "-c", code % args], capture_output=True, text=True, check=True, cwd=tmp_path, env=env).stdout
+    assert "found in the store" in again and "(cached)" in again and "loaded: []" in again

@@ -23,14 +23,16 @@ import io
 import json
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from research.experiments.config import ExperimentConfig, input_files, load_config
-from research.experiments.evaluate import evaluate
 from research.experiments.paper_numbers import check_paper_numbers
 from research.experiments.store import COSMETIC, ResultStore, atomic_write, code_version, file_digest, result_key
-from research.trajectory import Trajectory
+
+if TYPE_CHECKING:
+    from research.trajectory import Trajectory
 
 DEFAULT_CACHE = Path(".cache") / "results"
 DEFAULT_FIGURES = Path("paper_figures")
@@ -62,6 +64,8 @@ class RunResult:
 
     def trajectory(self) -> Trajectory:
         """The first interpolator's sampled trajectory (read back from ``trajectory.npz``)."""
+        from research.trajectory import Trajectory
+
         return Trajectory.load(self.results_file.parent / "trajectory.npz")
 
     def arrays(self) -> dict[str, np.ndarray]:
@@ -120,7 +124,7 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
     log(f"[1/3] {cfg.name}: key {key[:12]} (code {code_version()}) " + ("found in the store" if entry else "computing"))
     files: dict[str, bytes] = {}
     if entry is None:
-        ev = evaluate(cfg, base, log=lambda s: log(f"      {s}"))
+        ev = _evaluate(cfg, base, log)
         record = {
             "experiment": cfg.name, "reproduces": cfg.reproduces, "key": key, "code_version": code_version(),
             "config": cfg.model_dump(mode="json"),
@@ -142,7 +146,7 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
     else:
         record, cached = entry.record, True
         if want_figure and entry.file("figure.png") is None:  # stored by a run with output.figure = false
-            ev = evaluate(cfg, base, log=lambda s: log(f"      {s}"))
+            ev = _evaluate(cfg, base, log)
             store.add_file(key, "figure.png", _figure(cfg, ev))
             entry, cached = store.get(key), False
     shown = ", ".join(f"{k} = {v:.6g} {record['units'][k]}" for k, v in record["scalars"].items())
@@ -174,11 +178,20 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
     return result
 
 
+def _evaluate(cfg: ExperimentConfig, base: Path, log):
+    """:func:`~research.experiments.evaluate.evaluate`, imported here: a run served from the store never
+    imports it (nor JAX through it)."""
+    from research.experiments.evaluate import evaluate
+
+    return evaluate(cfg, base, log=lambda s: log(f"      {s}"))
+
+
 def _export(cfg: ExperimentConfig, record: dict, out: Path) -> list[str]:
     """``output.export``: each interpolator's stored trajectory as ``<label>.csv`` / ``<label>.ngc`` in ``out``."""
     if not cfg.output.export:
         return []
     from research.experiments.export import trajectory_csv, trajectory_gcode
+    from research.trajectory import Trajectory
 
     arrays = _read_npz(out / "arrays.npz")
     written = []
