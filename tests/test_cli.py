@@ -90,8 +90,12 @@ def test_figures_list_is_fast_and_imports_no_figure_module():
 def test_figures_fast_writes_manifest(tmp_path, capsys):
     from research.cli import main
 
-    assert main(["figures", "--fast", "--out", str(tmp_path)] + [a for n in LIGHT for a in ("--only", n)]) == 0
-    lines = capsys.readouterr().out.splitlines()  # a line as each figure starts, then one as it finishes
+    store = ["--cache", str(tmp_path / "c"), "--results", str(tmp_path / "r")]  # config figures: stores in tmp_path
+    assert main(["figures", "--fast", "--out", str(tmp_path)] + store + [a for n in LIGHT for a in ("--only", n)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    lines = [ln for ln in out if ln.startswith("[")]  # a line as each figure starts, then one as it finishes
+    paper = [ln for ln in out if ln.strip().startswith("paper: ")]  # the config figure's checks (fig 3: eq 8-10)
+    assert paper and all(ln.endswith("PASS") for ln in paper)
     assert [ln.split(": ")[1].split(" ")[0] for ln in lines] == ["started", "done"] * len(LIGHT)
     assert lines[0].startswith(f"[1/2] {LIGHT[0]}: started") and lines[3].startswith(f"[2/2] {LIGHT[1]}: done in")
     manifest = json.loads((tmp_path / "manifest.json").read_text())
@@ -130,10 +134,11 @@ def test_os_error_is_one_line_and_debug_shows_the_traceback(tmp_path, capsys):
 
     blocker = tmp_path / "not_a_folder"
     blocker.write_text("x")
-    assert main(["figures", "--fast", "--out", str(blocker), "--only", LIGHT[0]]) == 2
+    store = ["--cache", str(tmp_path / "c"), "--results", str(tmp_path / "r")]
+    assert main(["figures", "--fast", "--out", str(blocker), "--only", LIGHT[0]] + store) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("error: ") and str(blocker) in err and "Traceback" not in err
-    assert main(["--debug", "figures", "--fast", "--out", str(blocker), "--only", LIGHT[0]]) == 2
+    assert main(["--debug", "figures", "--fast", "--out", str(blocker), "--only", LIGHT[0]] + store) == 2
     err = capsys.readouterr().err
     assert "Traceback" in err and err.strip().splitlines()[-1].startswith("error: ")
 

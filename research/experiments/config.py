@@ -52,6 +52,7 @@ from research.experiments.config_stages import (
     LimitsConfig,
     SCurveConfig,
     SigmoidConfig,
+    SpectrumConfig,
     VibrationConfig,
 )
 from research.paths import PATHS, Polyline, named_path
@@ -87,6 +88,9 @@ METRIC_UNITS = {
     "mode_frequency_hz": "Hz",
     "mode_damping": "-",
     "tuned_delay": "s",
+    # spectrum stage: FIR chain gain |M| (eq 9) at a mode, and its largest value at the zeros k / T_i
+    "spectrum_gain": "-",
+    "spectrum_null_gain": "-",
 }
 #: what ``name`` (the results folder and figure file stem) may be: starts with a letter or digit, at most 64
 #: characters of letters, digits, ``_``, ``-`` and ``.`` (so never ``..`` or a path)
@@ -339,6 +343,7 @@ class ExperimentConfig(_Strict):
     drive: DriveConfig | None = None
     identification: IdentificationConfig | None = None
     vibration: VibrationConfig | None = Field(None, description="resonance test -> modes -> eq 10 delays")
+    spectrum: SpectrumConfig | None = Field(None, description="FIR chain frequency response (eq 8-10)")
     contour: ContourConfig | None = Field(None, description="contour-error stage (needs a drive other than ideal)")
     compensation: CompensationConfig | None = Field(None, description="CEC stage (needs a drive other than ideal)")
     metrics: list[Literal[tuple(METRIC_UNITS)]] | None = Field(None, description="metrics to report (default: all)")
@@ -360,9 +365,10 @@ class ExperimentConfig(_Strict):
     @model_validator(mode="after")
     def _something_to_do(self):
         drive_study = self.drive is not None and self.drive.frequency_response is not None
-        if self.path is None and self.identification is None and self.vibration is None and not drive_study:
-            raise ValueError("give a [path] (motion study), an [identification] table, a [vibration] table or a "
-                             "[drive.frequency_response] table")
+        if (self.path is None and self.identification is None and self.vibration is None and self.spectrum is None
+                and not drive_study):
+            raise ValueError("give a [path] (motion study), an [identification] table, a [vibration] table, a "
+                             "[spectrum] table or a [drive.frequency_response] table")
         if drive_study and self.drive.model == "ideal":
             raise ValueError("[drive.frequency_response] needs a drive model, not \"ideal\"")
         if self.drive is not None and self.drive.model == "identified":

@@ -227,3 +227,28 @@ class VibrationConfig(_Strict):
         if not self.f1_hz > self.f0_hz:
             raise ValueError(f"f1_hz = {self.f1_hz:g} Hz must be above f0_hz = {self.f0_hz:g} Hz")
         return self
+
+
+class SpectrumConfig(_Strict):
+    """Frequency response of an FIR chain (Sencer 2015 eq 8-9) on ``num`` frequencies up to ``stop_hz``: each
+    filter alone and the chain, and, for ``modes_hz`` (one per filter), the eq 10 delays ``T_i = k / f_i`` and
+    their chain; the gain of every chain at every mode, and the largest chain gain at the zeros ``f = k / T_i``."""
+
+    delays_ms: list[float] = Field(PAPER_DELAYS_MS, min_length=1, description="FIR delays T_i [ms] (Sencer 2015 §4: 148, 89)")
+    modes_hz: list[float] = Field([], description="structural modes [Hz], one per filter (§4: Y 6.8, X 11.4), for eq 10")
+    k: int = Field(1, ge=1, description="eq 10 ripple index of the tuned delays")
+    zeros: int = Field(3, ge=1, description="zeros k / T_i, k = 1..zeros, at which the chain gain is reported")
+    stop_hz: float = Field(40.0, gt=0, description="highest frequency [Hz]")
+    num: int = Field(4000, ge=2, description="frequencies from 0 to stop_hz")
+
+    @model_validator(mode="after")
+    def _valid(self):
+        bad = [d for d in self.delays_ms if not d > 0]
+        if bad:
+            raise ValueError(f"delays_ms = {self.delays_ms} must all be > 0 ms")
+        if any(not m > 0 for m in self.modes_hz):
+            raise ValueError(f"modes_hz = {self.modes_hz} must all be > 0 Hz")
+        if self.modes_hz and len(self.modes_hz) != len(self.delays_ms):
+            raise ValueError(f"modes_hz has {len(self.modes_hz)} values for {len(self.delays_ms)} filters; eq 10 tunes "
+                             "one filter per mode")
+        return self

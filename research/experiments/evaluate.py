@@ -35,6 +35,7 @@ from research.experiments.stages import (
     frequency_response_stage,
     identified_drive,
     interpolate,
+    spectrum_stage,
     vibration_stage,
 )
 from research.metrics import summarize
@@ -74,6 +75,11 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
     if cfg.vibration is not None:
         log("vibration: resonance test -> modes -> eq 10 delays")
         found, details["vibration"], more = vibration_stage(cfg.vibration, base)
+        scalars |= found
+        arrays |= more
+    if cfg.spectrum is not None:
+        log("spectrum: FIR chain frequency response (eq 8-10)")
+        found, details["spectrum"], more = spectrum_stage(cfg.spectrum)
         scalars |= found
         arrays |= more
     if cfg.drive is not None and cfg.drive.frequency_response is not None:

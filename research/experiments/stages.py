@@ -257,3 +257,35 @@ def vibration_stage(vc, base) -> tuple[dict, dict, dict]:
                "tuned": {"delays_s": list(tuned.delays_s), "axes": list(tuned.axes),
                          "frequencies_hz": list(tuned.frequencies_hz), "k": [int(k) for k in tuned.k]}}
     return scalars, details, arrays
+
+
+def spectrum_stage(sc) -> tuple[dict, dict, dict]:
+    """FIR chain frequency response (Sencer 2015 eq 8-9, :func:`research.interpolators.magnitude_response`) and
+    the eq 10 delays of ``sc.modes_hz`` (:func:`research.interpolators.delays_for_modes`).
+
+    Returns:
+        ``(scalars, details, arrays)``: ``spectrum_gain.<chain>.mode<j>`` (|M| of chain ``T<i>`` (one filter),
+        ``given`` or ``tuned`` at mode j, counted from 1), ``spectrum_null_gain.T<i>`` (largest |M| of the given
+        chain at ``k / T_i``, k = 1..zeros), ``spectrum.tuned_delay.T<i>`` [s]; details ``{"delays_s", "modes_hz",
+        "tuned_delays_s"}``; arrays ``spectrum.f`` [Hz] and ``spectrum.<chain>`` (|M|).
+    """
+    from research.interpolators import delays_for_modes, magnitude_response
+
+    delays = np.asarray(sc.delays_ms) * 1e-3
+    chains = {f"T{i + 1}": delays[i:i + 1] for i in range(delays.size)} | {"given": delays}
+    details = {"delays_s": delays.tolist(), "modes_hz": list(sc.modes_hz)}
+    scalars = {}
+    if sc.modes_hz:
+        tuned = np.asarray(delays_for_modes(sc.modes_hz, k=sc.k), dtype=np.float64)
+        chains["tuned"] = tuned
+        details["tuned_delays_s"] = tuned.tolist()
+        scalars |= {f"spectrum.tuned_delay.T{i + 1}": float(T) for i, T in enumerate(tuned)}
+    f = np.linspace(0.0, sc.stop_hz, sc.num)
+    arrays = {"spectrum.f": f} | {f"spectrum.{c}": np.asarray(magnitude_response(2 * np.pi * f, d)) for c, d in chains.items()}
+    for c, d in chains.items():
+        for j, m in enumerate(sc.modes_hz):
+            scalars[f"spectrum_gain.{c}.mode{j + 1}"] = float(magnitude_response(2 * np.pi * m, d))
+    for i, T in enumerate(delays):
+        zeros = 2 * np.pi * np.arange(1, sc.zeros + 1) / T
+        scalars[f"spectrum_null_gain.T{i + 1}"] = float(np.max(np.asarray(magnitude_response(zeros, delays))))
+    return scalars, details, arrays
