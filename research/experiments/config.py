@@ -53,6 +53,7 @@ from research.experiments.config_stages import (
     SCurveConfig,
     SigmoidConfig,
     SpectrumConfig,
+    StartupConfig,
     VibrationConfig,
 )
 from research.paths import PATHS, Polyline, named_path
@@ -91,6 +92,10 @@ METRIC_UNITS = {
     # spectrum stage: FIR chain gain |M| (eq 9) at a mode, and its largest value at the zeros k / T_i
     "spectrum_gain": "-",
     "spectrum_null_gain": "-",
+    # startup stage: the peak of a sigmoid-blended move's feed and when it occurs
+    "startup_peak_feed": "mm/s",
+    "startup_peak_time": "s",
+    "startup_initial_acceleration": "mm/s^2",
 }
 #: what ``name`` (the results folder and figure file stem) may be: starts with a letter or digit, at most 64
 #: characters of letters, digits, ``_``, ``-`` and ``.`` (so never ``..`` or a path)
@@ -344,6 +349,7 @@ class ExperimentConfig(_Strict):
     identification: IdentificationConfig | None = None
     vibration: VibrationConfig | None = Field(None, description="resonance test -> modes -> eq 10 delays")
     spectrum: SpectrumConfig | None = Field(None, description="FIR chain frequency response (eq 8-10)")
+    startup: StartupConfig | None = Field(None, description="sigmoid start of a linear move (DiMarco 2015 eq 3-5)")
     contour: ContourConfig | None = Field(None, description="contour-error stage (needs a drive other than ideal)")
     compensation: CompensationConfig | None = Field(None, description="CEC stage (needs a drive other than ideal)")
     metrics: list[Literal[tuple(METRIC_UNITS)]] | None = Field(None, description="metrics to report (default: all)")
@@ -366,9 +372,9 @@ class ExperimentConfig(_Strict):
     def _something_to_do(self):
         drive_study = self.drive is not None and self.drive.frequency_response is not None
         if (self.path is None and self.identification is None and self.vibration is None and self.spectrum is None
-                and not drive_study):
+                and self.startup is None and not drive_study):
             raise ValueError("give a [path] (motion study), an [identification] table, a [vibration] table, a "
-                             "[spectrum] table or a [drive.frequency_response] table")
+                             "[spectrum] table, a [startup] table or a [drive.frequency_response] table")
         if drive_study and self.drive.model == "ideal":
             raise ValueError("[drive.frequency_response] needs a drive model, not \"ideal\"")
         if self.drive is not None and self.drive.model == "identified":

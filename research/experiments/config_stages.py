@@ -252,3 +252,21 @@ class SpectrumConfig(_Strict):
             raise ValueError(f"modes_hz has {len(self.modes_hz)} values for {len(self.delays_ms)} filters; eq 10 tunes "
                              "one filter per mode")
         return self
+
+
+class StartupConfig(_Strict):
+    """Start of a linear move ``x = m t`` blended in by ``1 - exp(-alpha t^order)`` (DiMarco 2015 eq 3-5,
+    :class:`research.interpolators.sigmoid.SigmoidMotion`) for each ``alpha``: position, feed and acceleration
+    on ``num`` samples over ``duration_s``, and each feed's peak (where the acceleration crosses zero)."""
+
+    feed_mm_per_s: float = Field(10.0, gt=0, description="nominal feed m [mm/s] (DiMarco §4: 10 mm/s)")
+    alphas: list[float] = Field([1.0, 10.0, 100.0, 1000.0], min_length=1, description="blend rates alpha [1/s^order]")
+    order: Literal[1, 2, 3] = Field(3, description="blend exponent (3: the sigmoid of eq 2)")
+    duration_s: float = Field(2.5, gt=0, description="time span [s]")
+    num: int = Field(5000, ge=3, description="samples over the span")
+
+    @model_validator(mode="after")
+    def _positive(self):
+        if any(not a > 0 for a in self.alphas):
+            raise ValueError(f"alphas = {self.alphas} must all be > 0")
+        return self

@@ -36,6 +36,7 @@ from research.experiments.stages import (
     identified_drive,
     interpolate,
     spectrum_stage,
+    startup_stage,
     vibration_stage,
 )
 from research.metrics import summarize
@@ -80,6 +81,11 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
     if cfg.spectrum is not None:
         log("spectrum: FIR chain frequency response (eq 8-10)")
         found, details["spectrum"], more = spectrum_stage(cfg.spectrum)
+        scalars |= found
+        arrays |= more
+    if cfg.startup is not None:
+        log("startup: sigmoid start of a linear move (DiMarco eq 3-5)")
+        found, details["startup"], more = startup_stage(cfg.startup)
         scalars |= found
         arrays |= more
     if cfg.drive is not None and cfg.drive.frequency_response is not None:

@@ -289,3 +289,34 @@ def spectrum_stage(sc) -> tuple[dict, dict, dict]:
         zeros = 2 * np.pi * np.arange(1, sc.zeros + 1) / T
         scalars[f"spectrum_null_gain.T{i + 1}"] = float(np.max(np.asarray(magnitude_response(zeros, delays))))
     return scalars, details, arrays
+
+
+def startup_stage(sc) -> tuple[dict, dict, dict]:
+    """The blended start ``x = m t (1 - exp(-alpha t^order))`` (DiMarco 2015 eq 3-5) for each alpha.
+
+    The feed's peak is the zero of the acceleration (Brent, ``xtol`` 1e-15 s) between the samples either side of the
+    sampled maximum (the sampled maximum itself when it sits at the span's end).
+
+    Returns:
+        ``(scalars, details, arrays)``: ``startup_peak_feed.alpha<i>`` [mm/s], ``startup_peak_time.alpha<i>`` [s],
+        ``startup_initial_acceleration.alpha<i>`` [mm/s^2] (i from 1, in the config's order); details
+        ``{"alphas", "feed_mm_per_s", "order"}``; arrays ``startup.t`` and ``startup.alpha<i>.x / v / a``.
+    """
+    from scipy.optimize import brentq
+
+    from research.interpolators.sigmoid import Blend, Ramp, SigmoidMotion
+
+    t = np.linspace(0.0, sc.duration_s, sc.num)
+    scalars, arrays = {}, {"startup.t": t}
+    for i, alpha in enumerate(sc.alphas, start=1):
+        motion = SigmoidMotion(((Ramp(sc.feed_mm_per_s), Blend(alpha, sc.order)),), 0.0)
+        x, v, a, _ = motion.derivatives(t)
+        k = int(np.argmax(v))
+        lo, hi = t[max(k - 1, 0)], t[min(k + 1, t.size - 1)]
+        acc = lambda s: float(motion.derivatives(s)[2])  # noqa: E731
+        peak = brentq(acc, lo, hi, xtol=1e-15) if acc(lo) > 0 > acc(hi) else float(t[k])  # else: at the span's end
+        scalars |= {f"startup_peak_feed.alpha{i}": float(motion.derivatives(peak)[1]), f"startup_peak_time.alpha{i}": peak,
+                    f"startup_initial_acceleration.alpha{i}": float(a[0])}
+        arrays |= {f"startup.alpha{i}.x": x, f"startup.alpha{i}.v": v, f"startup.alpha{i}.a": a}
+    details = {"alphas": list(sc.alphas), "feed_mm_per_s": sc.feed_mm_per_s, "order": sc.order}
+    return scalars, details, arrays
