@@ -52,6 +52,7 @@ from research.experiments.config_stages import (
     LimitsConfig,
     SCurveConfig,
     SigmoidConfig,
+    FiveAxisContourConfig,
     SpectrumConfig,
     StartupConfig,
     VibrationConfig,
@@ -96,6 +97,8 @@ METRIC_UNITS = {
     "startup_peak_feed": "mm/s",
     "startup_peak_time": "s",
     "startup_initial_acceleration": "mm/s^2",
+    # five-axis contour stage: mean |estimate - exact| while moving
+    "mean_estimator_error": "mm",
 }
 #: what ``name`` (the results folder and figure file stem) may be: starts with a letter or digit, at most 64
 #: characters of letters, digits, ``_``, ``-`` and ``.`` (so never ``..`` or a path)
@@ -350,6 +353,8 @@ class ExperimentConfig(_Strict):
     vibration: VibrationConfig | None = Field(None, description="resonance test -> modes -> eq 10 delays")
     spectrum: SpectrumConfig | None = Field(None, description="FIR chain frequency response (eq 8-10)")
     startup: StartupConfig | None = Field(None, description="sigmoid start of a linear move (DiMarco 2015 eq 3-5)")
+    five_axis_contour: FiveAxisContourConfig | None = Field(
+        None, description="thesis §4.5: eq 4.36 5-axis path, exact tip contour error vs Frenet estimates")
     contour: ContourConfig | None = Field(None, description="contour-error stage (needs a drive other than ideal)")
     compensation: CompensationConfig | None = Field(None, description="CEC stage (needs a drive other than ideal)")
     metrics: list[Literal[tuple(METRIC_UNITS)]] | None = Field(None, description="metrics to report (default: all)")
@@ -372,9 +377,10 @@ class ExperimentConfig(_Strict):
     def _something_to_do(self):
         drive_study = self.drive is not None and self.drive.frequency_response is not None
         if (self.path is None and self.identification is None and self.vibration is None and self.spectrum is None
-                and self.startup is None and not drive_study):
+                and self.startup is None and self.five_axis_contour is None and not drive_study):
             raise ValueError("give a [path] (motion study), an [identification] table, a [vibration] table, a "
-                             "[spectrum] table, a [startup] table or a [drive.frequency_response] table")
+                             "[spectrum] table, a [startup] table, a [five_axis_contour] table or a "
+                             "[drive.frequency_response] table")
         if drive_study and self.drive.model == "ideal":
             raise ValueError("[drive.frequency_response] needs a drive model, not \"ideal\"")
         if self.drive is not None and self.drive.model == "identified":

@@ -270,3 +270,16 @@ class StartupConfig(_Strict):
         if any(not a > 0 for a in self.alphas):
             raise ValueError(f"alphas = {self.alphas} must all be > 0")
         return self
+
+
+class FiveAxisContourConfig(_Strict):
+    """Thesis §4.5 / Fig 4.6 (:func:`research.contour.five_axis_contour_study`): the eq 4.36 5-axis path (50 mm/s,
+    1500 mm/s^2) through per-axis Table 6.3 drives, the exact tool-tip contour error against the basic (eq 4.20),
+    shifted (eq 4.22) and compensated (eq 4.27) Frenet estimates, and the eq 4.21 delay."""
+
+    drive: Literal["sencer2009_table6_3", "sencer2009_table6_3_ppi"] = Field(
+        "sencer2009_table6_3", description="per-axis drives (thesis Table 6.3 closed loop, or its P-PI cascade)")
+    sample_period_ms: float = Field(1.0, gt=0, description="sample period Ts [ms]")
+    friction: Literal["exact", "smooth"] = Field("exact", description="Coulomb sign in the simulation (eq 6.2)")
+    moving_speed_ratio: float = Field(0.01, gt=0, lt=1, description="samples whose linear-axis speed is above this "
+                                                                    "fraction of the 50 mm/s feed count as moving [-]")

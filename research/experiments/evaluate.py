@@ -35,6 +35,7 @@ from research.experiments.stages import (
     frequency_response_stage,
     identified_drive,
     interpolate,
+    five_axis_contour_stage,
     spectrum_stage,
     startup_stage,
     vibration_stage,
@@ -86,6 +87,11 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
     if cfg.startup is not None:
         log("startup: sigmoid start of a linear move (DiMarco eq 3-5)")
         found, details["startup"], more = startup_stage(cfg.startup)
+        scalars |= found
+        arrays |= more
+    if cfg.five_axis_contour is not None:
+        log("five_axis_contour: eq 4.36 path, exact tip contour error vs Frenet estimates (thesis §4.5)")
+        found, details["five_axis_contour"], more = five_axis_contour_stage(cfg.five_axis_contour)
         scalars |= found
         arrays |= more
     if cfg.drive is not None and cfg.drive.frequency_response is not None:

@@ -320,3 +320,29 @@ def startup_stage(sc) -> tuple[dict, dict, dict]:
         arrays |= {f"startup.alpha{i}.x": x, f"startup.alpha{i}.v": v, f"startup.alpha{i}.a": a}
     details = {"alphas": list(sc.alphas), "feed_mm_per_s": sc.feed_mm_per_s, "order": sc.order}
     return scalars, details, arrays
+
+
+def five_axis_contour_stage(fc) -> tuple[dict, dict, dict]:
+    """Thesis §4.5 (:func:`research.contour.five_axis_contour_study`) with ``fc``'s drives and sample period.
+
+    Returns:
+        ``(scalars, details, arrays)``: ``five_axis.max_actual_contour_error`` [mm] and, per estimator
+        (basic, shifted, compensated), ``five_axis.mean_estimator_error.<name>`` (mean |estimate - exact| over the
+        moving samples) and ``five_axis.max_estimator_error.<name>`` [mm]; details ``{"samples", "moving"}``;
+        arrays ``five_axis.t``, ``five_axis.exact``, ``five_axis.<name>``, ``five_axis.delay`` [s].
+    """
+    from research import drives
+    from research.contour import five_axis_contour_study
+
+    axes = ("x", "y", "z", "a", "c")  # the axis order of the eq 4.36 trajectory (thesis Table 6.3)
+    axis_drives = tuple(getattr(drives, PER_AXIS_DRIVES[fc.drive])(a) for a in axes)
+    st = five_axis_contour_study(drives=axis_drives, sample_period=fc.sample_period_ms * 1e-3, friction=fc.friction)
+    moving = np.linalg.norm(np.asarray(st.reference.v)[:, :3], axis=1) > fc.moving_speed_ratio * 50.0
+    scalars = {"five_axis.max_actual_contour_error": float(np.max(st.exact))}
+    arrays = {"five_axis.t": st.t, "five_axis.exact": st.exact, "five_axis.delay": np.asarray(st.estimates.delay)}
+    for name in ("basic", "shifted", "compensated"):
+        d = st.discrepancy(name)
+        scalars |= {f"five_axis.mean_estimator_error.{name}": float(np.mean(d[moving])),
+                    f"five_axis.max_estimator_error.{name}": float(np.max(d))}
+        arrays[f"five_axis.{name}"] = np.asarray(getattr(st.estimates, name))
+    return scalars, {"samples": int(st.t.size), "moving": int(np.count_nonzero(moving))}, arrays

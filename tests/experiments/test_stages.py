@@ -36,6 +36,7 @@ def run(**tables):
     ({"spectrum": {"delays_ms": [148.0, 89.0], "modes_hz": [6.8]}}, r"modes_hz has 1 values for 2 filters"),
     ({"spectrum": {"delays_ms": [148.0, -89.0]}}, r"delays_ms = \[148.0, -89.0\] must all be > 0 ms"),
     ({"startup": {"alphas": [1.0, 0.0]}}, r"alphas = \[1.0, 0.0\] must all be > 0"),
+    ({"five_axis_contour": {"drive": "sencer2009_table6_1"}}, r"key 'five_axis_contour.drive'"),
     ({"vibration": {"modes": [{"axis": "x", "frequency_hz": 11.4}], "f1_hz": 1.0}}, r"f1_hz = 1 Hz must be above f0_hz"),
     ({"vibration": {"modes": [{"axis": "q", "frequency_hz": 11.4}]}}, r"key 'vibration.modes\[0\].axis'"),
 ])
