@@ -326,6 +326,16 @@ class PaperNumber(_Strict):
     tolerance: float = Field(..., ge=0, description="accepted |result - value| (same unit): the paper's rounding, or a "
                                                     "stated model difference")
     source: str = Field(..., min_length=1, description="where the paper prints it (section, figure or eq, and the line)")
+    reproduced: bool = Field(True, description="false: the paper's number is reported, not reproduced (stated with its "
+                                               "reason; the summary shows the difference, the tests assert it is a miss)")
+    reason: str | None = Field(None, description="why a number is not reproduced (required with reproduced = false)")
+
+    @model_validator(mode="after")
+    def _reason(self):
+        if self.reproduced == (self.reason is not None and self.reason.strip() != ""):
+            raise ValueError("reproduced = false needs a reason = \"...\" (why the paper's number is not reproduced), "
+                             "and only then")
+        return self
 
 
 class OutputConfig(_Strict):

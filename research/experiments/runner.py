@@ -306,7 +306,7 @@ def format_summary(result: RunResult) -> str:
             rows.append((f"{k} [um]", f"{v * 1e3:.3f}") if unit == "mm" else (f"{k} [{unit}]", f"{v:.6g}"))
     for c in result.paper_checks():
         rows.append((f"paper: {c.key}", f"{c.value:.6g} (paper {c.expected:.6g} +- {c.tolerance:.3g}, {c.source}): "
-                                        + ("PASS" if c.ok else "MISS")))
+                                        + c.verdict))
     width = max(len(r[0]) for r in rows)
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
 
