@@ -80,6 +80,7 @@ METRIC_UNITS = {
     # compensation stage (CEC): max |e_T| before and after, and the drive simulations it took
     "cec_error_before": "mm",
     "cec_error_after": "mm",
+    "cec_error_ratio": "-",
     "cec_simulations": "-",
     # drive frequency response: poles of eq 6.13 and the -3 dB tracking bandwidth
     "drive_wn_hz": "Hz",

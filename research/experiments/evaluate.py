@@ -134,6 +134,8 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
                 scalars |= {prefix + k: v for k, v in found.items()}
                 arrays |= {f"{label}.{k}": v for k, v in more.items()}
             if cfg.compensation is not None:
+                from research.contour import contour_error
+
                 log(f"compensation {label}: CEC {cfg.compensation.method}")
                 found, cec = compensation_stage(cfg.compensation, path, traj, drive)
                 scalars |= {prefix + k: v for k, v in found.items()}
@@ -141,7 +143,10 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
                 details[label]["compensation"] = {"method": cec.method, "steps": cec.steps, "converged": cec.converged,
                                                   "history": list(cec.history)}
                 arrays |= {f"{label}.cec.q": np.asarray(cec.setpoint.q), f"{label}.cec.actual": np.asarray(cec.response.position),
-                           f"{label}.cec.error_before": cec.before.distance, f"{label}.cec.error_after": cec.after.distance}
+                           f"{label}.cec.error_before": cec.before.distance, f"{label}.cec.error_after": cec.after.distance,
+                           # e1 of Prevost 2012: the setpoint's distance to the CAM path, before and after
+                           f"{label}.cec.setpoint_error_before": contour_error(path, np.asarray(traj.q)).distance,
+                           f"{label}.cec.setpoint_error_after": contour_error(path, np.asarray(cec.setpoint.q)).distance}
     if cfg.metrics is not None:
         scalars = {k: v for k, v in scalars.items() if _metric_name(k) in cfg.metrics}
     units = {k: METRIC_UNITS[_metric_name(k)] for k in scalars}

@@ -172,8 +172,8 @@ def compensation_stage(cc, path, traj: Trajectory, drive):
     """CEC of the setpoint ``traj`` through ``drive`` towards the CAM ``path`` (Prévost 2012 eq 4).
 
     Returns:
-        ``(scalars, result)``: ``cec_error_before`` / ``cec_error_after`` (max exact ``|e_T|`` [mm]) and
-        ``cec_simulations``; the :class:`~research.contour.CompensationResult` (its ``setpoint`` is the
+        ``(scalars, result)``: ``cec_error_before`` / ``cec_error_after`` (max exact ``|e_T|`` [mm]), their ratio
+        ``cec_error_ratio`` and ``cec_simulations``; the :class:`~research.contour.CompensationResult` (its ``setpoint`` is the
         compensated :class:`Trajectory`).
     """
     from research.contour import cec_problem, mirror_compensation, mirror_passes, mirror_single_pass
@@ -188,6 +188,8 @@ def compensation_stage(cc, path, traj: Trajectory, drive):
                                   max_steps=cc.max_steps, throw=False)
     scalars = {"cec_error_before": res.before.max, "cec_error_after": res.after.max,
                "cec_simulations": float(res.simulations)}
+    if res.before.max > 0:  # left out when the setpoint already follows the path exactly
+        scalars["cec_error_ratio"] = float(res.after.max / res.before.max)
     return scalars, res
 
 
