@@ -55,20 +55,23 @@ class Evaluation:
     objects: dict = field(default_factory=dict)
 
 
-def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
+def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: bool = True) -> Evaluation:
     """Run everything ``cfg`` asks for. ``base``: folder that relative file names are read from.
 
     Args:
         cfg: a validated config.
         base: folder of the config file.
         log: optional progress callback taking one string.
+        model_file: the identification stage also writes its model (``save_identified``, with its fit report:
+            one more simulation of the log) as ``objects["drive_model.json"]``; sweeps, which keep only the
+            record, pass ``False``.
     """
     log = log or (lambda s: None)
     base = Path(base)
     scalars, details, arrays, objects = {}, {}, {}, {}
     if cfg.identification is not None:
         log(f"identification ({cfg.identification.method})")
-        ident = _identify(cfg.identification, base, objects)
+        ident = _identify(cfg.identification, base, objects, model_file)
         details["identification"] = ident
         scalars |= {k: v for k, v in ident.items() if k.endswith("_error")}
     if cfg.drive is not None and cfg.drive.identified_file is not None:
@@ -204,7 +207,7 @@ def _hold(traj: Trajectory, horizon: float) -> Trajectory:
     return Trajectory(np.arange(n) * traj.sample_period, q, v, a, j, traj.duration, None, traj.axes, traj.sample_period)
 
 
-def _identify(ic, base: Path, objects: dict | None = None) -> dict:
+def _identify(ic, base: Path, objects: dict | None = None, model_file: bool = True) -> dict:
     """Fit the drive; with a synthetic log, relative errors of ``wn, zeta, p, dc`` against the truth."""
     from research.drives import Encoder, virtual_drive
     from research.identification import (
@@ -230,7 +233,7 @@ def _identify(ic, base: Path, objects: dict | None = None) -> dict:
 
         sef = simulation_error_fit(log, ic.structure)
         if ic.structure != "eq6.3":
-            if objects is not None:
+            if objects is not None and model_file:
                 objects["drive_model.json"] = _model_file(sef, log, None if ic.log_file is None else base / ic.log_file)
             return {"parameters": sef.parameters, "rms_um": sef.rms_um, "converged": sef.converged,
                     "samples": int(log.n_samples)}
@@ -242,7 +245,7 @@ def _identify(ic, base: Path, objects: dict | None = None) -> dict:
     else:
         prob = ProjectedProblem.from_regression(build_regression(log))
         fit = particle_swarm(prob, seed=ic.seed) if ic.method == "pso" else bounded_fit(prob)
-    if objects is not None:  # the model as a file (save_identified) for results/<name>/drive_model.json
+    if objects is not None and model_file:  # the model as a file (save_identified): results/<name>/drive_model.json
         objects["drive_model.json"] = _model_file(sef if ic.method == "simulation_error" else fit, log,
                                                   None if ic.log_file is None else base / ic.log_file)
     wn, zeta, p = fit.pole_parameters()
