@@ -102,7 +102,8 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
         cache_dir: the store is ``<cache_dir>/store``.
         figures_dir: where the figure goes (``<name>.png``).
         results_dir: the readable results folder ``<results_dir>/<name>/`` (``results.json``,
-            ``trajectory.npz``, ``arrays.npz``, ``figure.png``, ``config.toml`` as run, ``report.md``);
+            ``trajectory.npz``, ``arrays.npz``, ``figure.png``, ``config.toml`` as run, ``report.md``, and
+            ``drive_model.json`` from an identification stage: the model as ``save_identified`` writes it);
             ``None``: ``<cache_dir>`` (the command line passes ``results/``, :data:`DEFAULT_RESULTS`).
         log: progress callback taking one string (``print`` by default).
         force: recompute even if the store has the result (the entry is kept; the new one is not stored).
