@@ -189,7 +189,7 @@ def _figures(args) -> int:
             "fast": bool(args.fast),
             "seconds": round(seconds, 2),
             "paper": [{"key": c.key, "value": c.value, "expected": c.expected, "tolerance": c.tolerance,
-                       "source": c.source, "ok": c.ok} for c in checks],
+                       "source": c.source, "ok": c.ok, "reproduced": c.reproduced, "reason": c.reason} for c in checks],
         })
     (args.out / "manifest.json").write_text(json.dumps(manifest, indent=2))
     return 0

@@ -5,6 +5,7 @@ is covered by its own test (so pytest-xdist spreads them), each under its module
 """
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -89,8 +90,12 @@ def test_figures_list_is_fast_and_imports_no_figure_module():
 def test_figures_fast_writes_manifest(tmp_path, capsys):
     from research.cli import main
 
-    assert main(["figures", "--fast", "--out", str(tmp_path)] + [a for n in LIGHT for a in ("--only", n)]) == 0
-    lines = capsys.readouterr().out.splitlines()  # a line as each figure starts, then one as it finishes
+    store = ["--cache", str(tmp_path / "c"), "--results", str(tmp_path / "r")]  # config figures: stores in tmp_path
+    assert main(["figures", "--fast", "--out", str(tmp_path)] + store + [a for n in LIGHT for a in ("--only", n)]) == 0
+    out = capsys.readouterr().out.splitlines()
+    lines = [ln for ln in out if ln.startswith("[")]  # a line as each figure starts, then one as it finishes
+    paper = [ln for ln in out if ln.strip().startswith("paper: ")]  # the config figure's checks (fig 3: eq 8-10)
+    assert paper and all(ln.endswith("PASS") for ln in paper)
     assert [ln.split(": ")[1].split(" ")[0] for ln in lines] == ["started", "done"] * len(LIGHT)
     assert lines[0].startswith(f"[1/2] {LIGHT[0]}: started") and lines[3].startswith(f"[2/2] {LIGHT[1]}: done in")
     manifest = json.loads((tmp_path / "manifest.json").read_text())
@@ -129,10 +134,11 @@ def test_os_error_is_one_line_and_debug_shows_the_traceback(tmp_path, capsys):
 
     blocker = tmp_path / "not_a_folder"
     blocker.write_text("x")
-    assert main(["figures", "--fast", "--out", str(blocker), "--only", LIGHT[0]]) == 2
+    store = ["--cache", str(tmp_path / "c"), "--results", str(tmp_path / "r")]
+    assert main(["figures", "--fast", "--out", str(blocker), "--only", LIGHT[0]] + store) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("error: ") and str(blocker) in err and "Traceback" not in err
-    assert main(["--debug", "figures", "--fast", "--out", str(blocker), "--only", LIGHT[0]]) == 2
+    assert main(["--debug", "figures", "--fast", "--out", str(blocker), "--only", LIGHT[0]] + store) == 2
     err = capsys.readouterr().err
     assert "Traceback" in err and err.strip().splitlines()[-1].startswith("error: ")
 
@@ -165,3 +171,20 @@ def test_store_verify_and_gc_commands(tmp_path, capsys):
     assert "would remove" in capsys.readouterr().out
     assert main(["store", "gc", *args]) == 0 and not store.folder(bad).exists()
     assert main(["store", "verify", *args]) == 0 and "1 valid entries, 0 problems" in capsys.readouterr().out
+
+
+def test_cached_run_does_not_import_jax(tmp_path):
+    """A ``run`` served from the store reads its record and writes the views: it imports neither the
+    evaluation nor JAX (issue 16: the cached re-run the README calls instant took 10 s importing them)."""
+    config = tmp_path / "e.toml"
+    config.write_text('name = "e"\nreproduces = "-"\n[path]\nname = "corner90"\n[output]\nfigure = false\n')
+    args = ["run", str(config), "--cache", str(tmp_path / "c"), "--results", str(tmp_path / "r")]
+    code = ("import sys; from research.cli import main; main(%r); "
+            "print('loaded:', sorted(m for m in ('jax', 'research.experiments.evaluate') if m in sys.modules))")
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    from research.experiments.runner import run_experiment
+
+    first = run_experiment(config, cache_dir=tmp_path / "c", results_dir=tmp_path / "r", log=lambda s: None)
+    assert not first.cached
+    again = subprocess.run([sys.executable, "-c", code % args], capture_output=True, text=True, check=True, cwd=tmp_path, env=env).stdout
+    assert "found in the store" in again and "(cached)" in again and "loaded: []" in again

@@ -2,21 +2,33 @@
 content-addressed results store, sweeps (``python -m research sweep``: ``jax.vmap`` fast path,
 Dask general path) and the closed-form differentiable FIR-cornering model the fast path uses."""
 
-from research.experiments.config import (
-    ExperimentConfig,
-    FIRConfig,
-    PathConfig,
-    SweepConfig,
-    build_path,
-    load_config,
-    validate,
-)
-from research.experiments.evaluate import Evaluation, evaluate
-from research.experiments.runner import RunResult, config_key, format_summary, run_experiment
-from research.experiments.store import ResultStore, code_version, result_key
+import importlib
+
+#: public name -> the module defining it; imported on first use (PEP 562), so that ``run`` served from the
+#: store does not import JAX through :mod:`~research.experiments.evaluate` (issue 16: a cached re-run is instant).
+#: ``evaluate`` / ``Evaluation`` are not re-exported: the function shares its module's name, and a lazy package
+#: attribute would be the module once the submodule is imported; use ``research.experiments.evaluate.evaluate``.
+_EXPORTS = {
+    "ExperimentConfig": "config", "FIRConfig": "config", "PathConfig": "config", "SweepConfig": "config",
+    "build_path": "config", "load_config": "config", "validate": "config",
+    "RunResult": "runner", "config_key": "runner", "format_summary": "runner", "run_experiment": "runner",
+    "ResultStore": "store", "code_version": "store", "result_key": "store",
+}
+
+
+def __getattr__(name: str):
+    if name not in _EXPORTS:
+        raise AttributeError(f"module 'research.experiments' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"research.experiments.{_EXPORTS[name]}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_EXPORTS))
+
 
 __all__ = [
-    "Evaluation",
     "ExperimentConfig",
     "FIRConfig",
     "PathConfig",
@@ -26,7 +38,6 @@ __all__ = [
     "build_path",
     "code_version",
     "config_key",
-    "evaluate",
     "format_summary",
     "load_config",
     "result_key",

@@ -53,6 +53,9 @@ from research.experiments.config_stages import (
     LimitsConfig,
     SCurveConfig,
     SigmoidConfig,
+    FiveAxisContourConfig,
+    SpectrumConfig,
+    StartupConfig,
     VibrationConfig,
 )
 from research.paths import PATHS, Polyline, named_path
@@ -78,6 +81,7 @@ METRIC_UNITS = {
     # compensation stage (CEC): max |e_T| before and after, and the drive simulations it took
     "cec_error_before": "mm",
     "cec_error_after": "mm",
+    "cec_error_ratio": "-",
     "cec_simulations": "-",
     # drive frequency response: poles of eq 6.13 and the -3 dB tracking bandwidth
     "drive_wn_hz": "Hz",
@@ -88,6 +92,15 @@ METRIC_UNITS = {
     "mode_frequency_hz": "Hz",
     "mode_damping": "-",
     "tuned_delay": "s",
+    # spectrum stage: FIR chain gain |M| (eq 9) at a mode, and its largest value at the zeros k / T_i
+    "spectrum_gain": "-",
+    "spectrum_null_gain": "-",
+    # startup stage: the peak of a sigmoid-blended move's feed and when it occurs
+    "startup_peak_feed": "mm/s",
+    "startup_peak_time": "s",
+    "startup_initial_acceleration": "mm/s^2",
+    # five-axis contour stage: mean |estimate - exact| while moving
+    "mean_estimator_error": "mm",
 }
 METRIC_UNITS |= CONTROL_METRIC_UNITS  # [control] stage (thesis ch 5)
 #: what ``name`` (the results folder and figure file stem) may be: starts with a letter or digit, at most 64
@@ -233,10 +246,15 @@ class DriveConfig(_Strict):
     """Drive model the references run through. ``ideal``: the axes follow the reference exactly and the
     modes see the reference acceleration; a thesis catalog drive (Table 6.1 / 6.2 on every axis, Table 6.3
     per axis); ``parameters``: the eq 6.3 model in ``[drive.parameters]``; ``identified``: the drive the
-    config's ``[identification]`` fits."""
+    config's ``[identification]`` fits, or the model file ``identified_file`` (written by
+    :func:`research.identification.save_identified`, e.g. ``drive_model.json`` of an earlier run)."""
 
     model: Literal[DRIVE_MODELS] = Field("ideal", description=f"one of {DRIVE_MODELS}")
     parameters: ClosedLoopConfig | None = Field(None, description="eq 6.3 parameters (model = \"parameters\")")
+    identified_file: str | None = Field(
+        None, description="identified-model file written by save_identified (model = \"identified\"), relative to the "
+                          "config file, e.g. \"../results/<name>/drive_model.json\" of an earlier run; its bytes are "
+                          "part of the results key")
     modes: list[ModeConfig] = Field([], description="structural modes")
     settle_time_s: float = Field(1.5, gt=0, description="rest simulated after the motion [s] (catalog drives)")
     frequency_response: FrequencyResponseConfig | None = Field(
@@ -247,6 +265,8 @@ class DriveConfig(_Strict):
         if (self.model == "parameters") != (self.parameters is not None):
             raise ValueError("model = \"parameters\" and a [drive.parameters] table go together "
                              f"(got model = {self.model!r}, parameters {'given' if self.parameters else 'missing'})")
+        if self.identified_file is not None and self.model != "identified":
+            raise ValueError(f"identified_file goes with model = \"identified\" (got model = {self.model!r})")
         return self
 
 
@@ -309,6 +329,16 @@ class PaperNumber(_Strict):
     tolerance: float = Field(..., ge=0, description="accepted |result - value| (same unit): the paper's rounding, or a "
                                                     "stated model difference")
     source: str = Field(..., min_length=1, description="where the paper prints it (section, figure or eq, and the line)")
+    reproduced: bool = Field(True, description="false: the paper's number is reported, not reproduced (stated with its "
+                                               "reason; the summary shows the difference, the tests assert it is a miss)")
+    reason: str | None = Field(None, description="why a number is not reproduced (required with reproduced = false)")
+
+    @model_validator(mode="after")
+    def _reason(self):
+        if self.reproduced == (self.reason is not None and self.reason.strip() != ""):
+            raise ValueError("reproduced = false needs a reason = \"...\" (why the paper's number is not reproduced), "
+                             "and only then")
+        return self
 
 
 class OutputConfig(_Strict):
@@ -334,6 +364,10 @@ class ExperimentConfig(_Strict):
     drive: DriveConfig | None = None
     identification: IdentificationConfig | None = None
     vibration: VibrationConfig | None = Field(None, description="resonance test -> modes -> eq 10 delays")
+    spectrum: SpectrumConfig | None = Field(None, description="FIR chain frequency response (eq 8-10)")
+    startup: StartupConfig | None = Field(None, description="sigmoid start of a linear move (DiMarco 2015 eq 3-5)")
+    five_axis_contour: FiveAxisContourConfig | None = Field(
+        None, description="thesis §4.5: eq 4.36 5-axis path, exact tip contour error vs Frenet estimates")
     contour: ContourConfig | None = Field(None, description="contour-error stage (needs a drive other than ideal)")
     compensation: CompensationConfig | None = Field(None, description="CEC stage (needs a drive other than ideal)")
     control: ControlConfig | None = Field(None, description="thesis ch 5 closed loop on the Fig 5.5 path (SISO SMC or "
@@ -357,18 +391,24 @@ class ExperimentConfig(_Strict):
     @model_validator(mode="after")
     def _something_to_do(self):
         drive_study = self.drive is not None and self.drive.frequency_response is not None
-        if (self.path is None and self.identification is None and self.vibration is None and self.control is None
-                and not drive_study):
+        if (self.path is None and self.identification is None and self.vibration is None and self.spectrum is None
+                and self.startup is None and self.five_axis_contour is None and self.control is None and not drive_study):
             raise ValueError("give a [path] (motion study), an [identification] table, a [vibration] table, a "
-                             "[control] table or a [drive.frequency_response] table")
+                             "[spectrum] table, a [startup] table, a [five_axis_contour] table, a [control] table or a "
+                             "[drive.frequency_response] table")
         if drive_study and self.drive.model == "ideal":
             raise ValueError("[drive.frequency_response] needs a drive model, not \"ideal\"")
-        if self.drive is not None and self.drive.model == "identified" and (
-                self.identification is None or self.identification.method != "simulation_error"
-                or self.identification.structure != "eq6.3"):
-            raise ValueError("drive.model = \"identified\" runs the path through the drive identified in the same "
-                             "config: it needs an [identification] table with method = \"simulation_error\" and "
-                             "structure = \"eq6.3\" (the structure the drive simulator takes)")
+        if self.drive is not None and self.drive.model == "identified":
+            if self.drive.identified_file is not None:
+                if self.identification is not None:
+                    raise ValueError("drive.model = \"identified\" has two sources: drive.identified_file and this "
+                                     "config's [identification]; keep one")
+            elif (self.identification is None or self.identification.method != "simulation_error"
+                  or self.identification.structure != "eq6.3"):
+                raise ValueError("drive.model = \"identified\" runs the path through an identified drive: give "
+                                 "drive.identified_file (a model file written by save_identified), or an "
+                                 "[identification] table with method = \"simulation_error\" and structure = \"eq6.3\" "
+                                 "(the structure the drive simulator takes)")
         for stage in ("contour", "compensation"):
             if getattr(self, stage) is not None and (self.path is None or self.drive is None or self.drive.model == "ideal"):
                 raise ValueError(f"the [{stage}] stage works on the drive's actual motion: it needs a [path] and a [drive] "
@@ -451,6 +491,8 @@ def input_files(cfg: ExperimentConfig) -> dict[str, str]:
         files["identification.log_file"] = cfg.identification.log_file
     if cfg.vibration is not None and cfg.vibration.log_file is not None:
         files["vibration.log_file"] = cfg.vibration.log_file
+    if cfg.drive is not None and cfg.drive.identified_file is not None:
+        files["drive.identified_file"] = cfg.drive.identified_file
     return files
 
 

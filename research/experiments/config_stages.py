@@ -227,3 +227,59 @@ class VibrationConfig(_Strict):
         if not self.f1_hz > self.f0_hz:
             raise ValueError(f"f1_hz = {self.f1_hz:g} Hz must be above f0_hz = {self.f0_hz:g} Hz")
         return self
+
+
+class SpectrumConfig(_Strict):
+    """Frequency response of an FIR chain (Sencer 2015 eq 8-9) on ``num`` frequencies up to ``stop_hz``: each
+    filter alone and the chain, and, for ``modes_hz`` (one per filter), the eq 10 delays ``T_i = k / f_i`` and
+    their chain; the gain of every chain at every mode, and the largest chain gain at the zeros ``f = k / T_i``."""
+
+    delays_ms: list[float] = Field(PAPER_DELAYS_MS, min_length=1, description="FIR delays T_i [ms] (Sencer 2015 §4: 148, 89)")
+    modes_hz: list[float] = Field([], description="structural modes [Hz], one per filter (§4: Y 6.8, X 11.4), for eq 10")
+    k: int = Field(1, ge=1, description="eq 10 ripple index of the tuned delays")
+    zeros: int = Field(3, ge=1, description="zeros k / T_i, k = 1..zeros, at which the chain gain is reported")
+    stop_hz: float = Field(40.0, gt=0, description="highest frequency [Hz]")
+    num: int = Field(4000, ge=2, description="frequencies from 0 to stop_hz")
+
+    @model_validator(mode="after")
+    def _valid(self):
+        bad = [d for d in self.delays_ms if not d > 0]
+        if bad:
+            raise ValueError(f"delays_ms = {self.delays_ms} must all be > 0 ms")
+        if any(not m > 0 for m in self.modes_hz):
+            raise ValueError(f"modes_hz = {self.modes_hz} must all be > 0 Hz")
+        if self.modes_hz and len(self.modes_hz) != len(self.delays_ms):
+            raise ValueError(f"modes_hz has {len(self.modes_hz)} values for {len(self.delays_ms)} filters; eq 10 tunes "
+                             "one filter per mode")
+        return self
+
+
+class StartupConfig(_Strict):
+    """Start of a linear move ``x = m t`` blended in by ``1 - exp(-alpha t^order)`` (DiMarco 2015 eq 3-5,
+    :class:`research.interpolators.sigmoid.SigmoidMotion`) for each ``alpha``: position, feed and acceleration
+    on ``num`` samples over ``duration_s``, and each feed's peak (where the acceleration crosses zero)."""
+
+    feed_mm_per_s: float = Field(10.0, gt=0, description="nominal feed m [mm/s] (DiMarco §4: 10 mm/s)")
+    alphas: list[float] = Field([1.0, 10.0, 100.0, 1000.0], min_length=1, description="blend rates alpha [1/s^order]")
+    order: Literal[1, 2, 3] = Field(3, description="blend exponent (3: the sigmoid of eq 2)")
+    duration_s: float = Field(2.5, gt=0, description="time span [s]")
+    num: int = Field(5000, ge=3, description="samples over the span")
+
+    @model_validator(mode="after")
+    def _positive(self):
+        if any(not a > 0 for a in self.alphas):
+            raise ValueError(f"alphas = {self.alphas} must all be > 0")
+        return self
+
+
+class FiveAxisContourConfig(_Strict):
+    """Thesis §4.5 / Fig 4.6 (:func:`research.contour.five_axis_contour_study`): the eq 4.36 5-axis path (50 mm/s,
+    1500 mm/s^2) through per-axis Table 6.3 drives, the exact tool-tip contour error against the basic (eq 4.20),
+    shifted (eq 4.22) and compensated (eq 4.27) Frenet estimates, and the eq 4.21 delay."""
+
+    drive: Literal["sencer2009_table6_3", "sencer2009_table6_3_ppi"] = Field(
+        "sencer2009_table6_3", description="per-axis drives (thesis Table 6.3 closed loop, or its P-PI cascade)")
+    sample_period_ms: float = Field(1.0, gt=0, description="sample period Ts [ms]")
+    friction: Literal["exact", "smooth"] = Field("exact", description="Coulomb sign in the simulation (eq 6.2)")
+    moving_speed_ratio: float = Field(0.01, gt=0, lt=1, description="samples whose linear-axis speed is above this "
+                                                                    "fraction of the 50 mm/s feed count as moving [-]")

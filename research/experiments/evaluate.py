@@ -34,7 +34,11 @@ from research.experiments.stages import (
     contour_stage,
     drive_model,
     frequency_response_stage,
+    identified_drive,
     interpolate,
+    five_axis_contour_stage,
+    spectrum_stage,
+    startup_stage,
     vibration_stage,
 )
 from research.metrics import summarize
@@ -52,22 +56,28 @@ class Evaluation:
     objects: dict = field(default_factory=dict)
 
 
-def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
+def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: bool = True) -> Evaluation:
     """Run everything ``cfg`` asks for. ``base``: folder that relative file names are read from.
 
     Args:
         cfg: a validated config.
         base: folder of the config file.
         log: optional progress callback taking one string.
+        model_file: the identification stage also writes its model (``save_identified``, with its fit report:
+            one more simulation of the log) as ``objects["drive_model.json"]``; sweeps, which keep only the
+            record, pass ``False``.
     """
     log = log or (lambda s: None)
     base = Path(base)
     scalars, details, arrays, objects = {}, {}, {}, {}
     if cfg.identification is not None:
         log(f"identification ({cfg.identification.method})")
-        ident = _identify(cfg.identification, base, objects)
+        ident = _identify(cfg.identification, base, objects, model_file)
         details["identification"] = ident
         scalars |= {k: v for k, v in ident.items() if k.endswith("_error")}
+    if cfg.drive is not None and cfg.drive.identified_file is not None:
+        log(f"drive: identified model {cfg.drive.identified_file}")
+        objects["identified_drive"] = identified_drive(cfg.drive, base)
     if cfg.vibration is not None:
         log("vibration: resonance test -> modes -> eq 10 delays")
         found, details["vibration"], more = vibration_stage(cfg.vibration, base)
@@ -76,6 +86,21 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
     if cfg.control is not None:
         log(f"control: {cfg.control.controller} controller on the Fig 5.5 path at {cfg.control.feed_mm_per_s:g} mm/s")
         found, details["control"], more = control_stage(cfg.control)
+        scalars |= found
+        arrays |= more
+    if cfg.spectrum is not None:
+        log("spectrum: FIR chain frequency response (eq 8-10)")
+        found, details["spectrum"], more = spectrum_stage(cfg.spectrum)
+        scalars |= found
+        arrays |= more
+    if cfg.startup is not None:
+        log("startup: sigmoid start of a linear move (DiMarco eq 3-5)")
+        found, details["startup"], more = startup_stage(cfg.startup)
+        scalars |= found
+        arrays |= more
+    if cfg.five_axis_contour is not None:
+        log("five_axis_contour: eq 4.36 path, exact tip contour error vs Frenet estimates (thesis §4.5)")
+        found, details["five_axis_contour"], more = five_axis_contour_stage(cfg.five_axis_contour)
         scalars |= found
         arrays |= more
     if cfg.drive is not None and cfg.drive.frequency_response is not None:
@@ -118,6 +143,8 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
                 scalars |= {prefix + k: v for k, v in found.items()}
                 arrays |= {f"{label}.{k}": v for k, v in more.items()}
             if cfg.compensation is not None:
+                from research.contour import contour_error
+
                 log(f"compensation {label}: CEC {cfg.compensation.method}")
                 found, cec = compensation_stage(cfg.compensation, path, traj, drive)
                 scalars |= {prefix + k: v for k, v in found.items()}
@@ -125,7 +152,10 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None) -> Evaluation:
                 details[label]["compensation"] = {"method": cec.method, "steps": cec.steps, "converged": cec.converged,
                                                   "history": list(cec.history)}
                 arrays |= {f"{label}.cec.q": np.asarray(cec.setpoint.q), f"{label}.cec.actual": np.asarray(cec.response.position),
-                           f"{label}.cec.error_before": cec.before.distance, f"{label}.cec.error_after": cec.after.distance}
+                           f"{label}.cec.error_before": cec.before.distance, f"{label}.cec.error_after": cec.after.distance,
+                           # e1 of Prevost 2012: the setpoint's distance to the CAM path, before and after
+                           f"{label}.cec.setpoint_error_before": contour_error(path, np.asarray(traj.q)).distance,
+                           f"{label}.cec.setpoint_error_after": contour_error(path, np.asarray(cec.setpoint.q)).distance}
     if cfg.metrics is not None:
         scalars = {k: v for k, v in scalars.items() if _metric_name(k) in cfg.metrics}
     units = {k: METRIC_UNITS[_metric_name(k)] for k in scalars}
@@ -183,7 +213,7 @@ def _hold(traj: Trajectory, horizon: float) -> Trajectory:
     return Trajectory(np.arange(n) * traj.sample_period, q, v, a, j, traj.duration, None, traj.axes, traj.sample_period)
 
 
-def _identify(ic, base: Path, objects: dict | None = None) -> dict:
+def _identify(ic, base: Path, objects: dict | None = None, model_file: bool = True) -> dict:
     """Fit the drive; with a synthetic log, relative errors of ``wn, zeta, p, dc`` against the truth."""
     from research.drives import Encoder, virtual_drive
     from research.identification import (
@@ -209,6 +239,8 @@ def _identify(ic, base: Path, objects: dict | None = None) -> dict:
 
         sef = simulation_error_fit(log, ic.structure)
         if ic.structure != "eq6.3":
+            if objects is not None and model_file:
+                objects["drive_model.json"] = _model_file(sef, log, None if ic.log_file is None else base / ic.log_file)
             return {"parameters": sef.parameters, "rms_um": sef.rms_um, "converged": sef.converged,
                     "samples": int(log.n_samples)}
         fit = sef.to_identified_drive()
@@ -219,6 +251,9 @@ def _identify(ic, base: Path, objects: dict | None = None) -> dict:
     else:
         prob = ProjectedProblem.from_regression(build_regression(log))
         fit = particle_swarm(prob, seed=ic.seed) if ic.method == "pso" else bounded_fit(prob)
+    if objects is not None and model_file:  # the model as a file (save_identified): results/<name>/drive_model.json
+        objects["drive_model.json"] = _model_file(sef if ic.method == "simulation_error" else fit, log,
+                                                  None if ic.log_file is None else base / ic.log_file)
     wn, zeta, p = fit.pole_parameters()
     out = {"wn_rad_per_s": wn, "zeta": zeta, "p_rad_per_s": p, "dc": float(fit.dc), "samples": int(log.n_samples)}
     if truth is not None:
@@ -226,3 +261,13 @@ def _identify(ic, base: Path, objects: dict | None = None) -> dict:
         got = {"wn": wn, "zeta": zeta, "p": p, "dc": float(fit.dc)}
         out |= {f"{k}_error": abs(got[k] - v) / abs(v) for k, v in true.items()}
     return out
+
+
+def _model_file(fit, log, log_file) -> bytes:
+    """The bytes :func:`research.identification.save_identified` writes for ``fit`` (identified on ``log``)."""
+    import tempfile
+
+    from research.identification import save_identified
+
+    with tempfile.TemporaryDirectory() as tmp:
+        return save_identified(fit, Path(tmp) / "drive_model.json", log=log, log_file=log_file).read_bytes()

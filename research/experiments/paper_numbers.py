@@ -31,15 +31,30 @@ class PaperCheck:
     expected: float
     tolerance: float
     source: str
+    reproduced: bool = True
+    reason: str | None = None
 
     @property
     def ok(self) -> bool:
         return abs(self.value - self.expected) <= self.tolerance
 
+    @property
+    def verdict(self) -> str:
+        """``PASS`` / ``MISS`` for a number the config reproduces; for one declared not reproduced,
+        ``NOT REPRODUCED (reason)``, or ``MISS`` should it now agree (the declaration is out of date)."""
+        if self.reproduced:
+            return "PASS" if self.ok else "MISS"
+        return f"NOT REPRODUCED ({self.reason})" if not self.ok else "MISS (declared not reproduced, but agrees)"
+
     def line(self) -> str:
-        """``key = value (paper expected +- tolerance, source): PASS|MISS``."""
+        """``key = value (paper expected +- tolerance, source): verdict``."""
         return (f"{self.key} = {self.value:.6g} (paper {self.expected:.6g} +- {self.tolerance:.3g}; {self.source}): "
-                + ("PASS" if self.ok else "MISS"))
+                + self.verdict)
+
+    @property
+    def holds(self) -> bool:
+        """What the figure tests assert: a reproduced number agrees, a number declared not reproduced does not."""
+        return self.ok == self.reproduced
 
 
 def lookup(record: dict, key: str) -> float:
@@ -70,4 +85,5 @@ def check_paper_numbers(cfg, record: dict) -> list[PaperCheck]:
     Raises:
         ConfigError: a key the record does not have.
     """
-    return [PaperCheck(p.key, lookup(record, p.key), p.value, p.tolerance, p.source) for p in cfg.paper]
+    return [PaperCheck(p.key, lookup(record, p.key), p.value, p.tolerance, p.source, p.reproduced, p.reason)
+            for p in cfg.paper]

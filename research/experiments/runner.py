@@ -23,19 +23,21 @@ import io
 import json
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from research.experiments.config import ExperimentConfig, input_files, load_config
-from research.experiments.evaluate import evaluate
 from research.experiments.paper_numbers import check_paper_numbers
 from research.experiments.store import COSMETIC, ResultStore, atomic_write, code_version, file_digest, result_key
-from research.trajectory import Trajectory
+
+if TYPE_CHECKING:
+    from research.trajectory import Trajectory
 
 DEFAULT_CACHE = Path(".cache") / "results"
 DEFAULT_FIGURES = Path("paper_figures")
 #: ``details`` entries of stages that are not interpolator runs
-STAGE_DETAILS = ("identification", "vibration", "control")
+STAGE_DETAILS = ("identification", "vibration", "spectrum", "startup", "five_axis_contour", "control")
 #: the visible results folder of the command line (one folder per experiment)
 DEFAULT_RESULTS = Path("results")
 
@@ -62,6 +64,8 @@ class RunResult:
 
     def trajectory(self) -> Trajectory:
         """The first interpolator's sampled trajectory (read back from ``trajectory.npz``)."""
+        from research.trajectory import Trajectory
+
         return Trajectory.load(self.results_file.parent / "trajectory.npz")
 
     def arrays(self) -> dict[str, np.ndarray]:
@@ -98,7 +102,8 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
         cache_dir: the store is ``<cache_dir>/store``.
         figures_dir: where the figure goes (``<name>.png``).
         results_dir: the readable results folder ``<results_dir>/<name>/`` (``results.json``,
-            ``trajectory.npz``, ``arrays.npz``, ``figure.png``, ``config.toml`` as run, ``report.md``);
+            ``trajectory.npz``, ``arrays.npz``, ``figure.png``, ``config.toml`` as run, ``report.md``, and
+            ``drive_model.json`` from an identification stage: the model as ``save_identified`` writes it);
             ``None``: ``<cache_dir>`` (the command line passes ``results/``, :data:`DEFAULT_RESULTS`).
         log: progress callback taking one string (``print`` by default).
         force: recompute even if the store has the result (the entry is kept; the new one is not stored).
@@ -120,7 +125,7 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
     log(f"[1/3] {cfg.name}: key {key[:12]} (code {code_version()}) " + ("found in the store" if entry else "computing"))
     files: dict[str, bytes] = {}
     if entry is None:
-        ev = evaluate(cfg, base, log=lambda s: log(f"      {s}"))
+        ev = _evaluate(cfg, base, log)
         record = {
             "experiment": cfg.name, "reproduces": cfg.reproduces, "key": key, "code_version": code_version(),
             "config": cfg.model_dump(mode="json"),
@@ -131,6 +136,8 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
             buf = io.BytesIO()
             runs[0][2].save(buf)
             files["trajectory.npz"] = buf.getvalue()
+        if "drive_model.json" in ev.objects:
+            files["drive_model.json"] = ev.objects["drive_model.json"]
         if want_figure:
             files["figure.png"] = _figure(cfg, ev)
         if not (force and store.get(key) is not None):  # force recomputes without touching a stored entry
@@ -140,7 +147,7 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
     else:
         record, cached = entry.record, True
         if want_figure and entry.file("figure.png") is None:  # stored by a run with output.figure = false
-            ev = evaluate(cfg, base, log=lambda s: log(f"      {s}"))
+            ev = _evaluate(cfg, base, log)
             store.add_file(key, "figure.png", _figure(cfg, ev))
             entry, cached = store.get(key), False
     shown = ", ".join(f"{k} = {v:.6g} {record['units'][k]}" for k, v in record["scalars"].items())
@@ -150,7 +157,7 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
     # files of a stored entry are read back through their manifest checksums (never served damaged)
     stored = (lambda name: entry.read_bytes(name) if entry.file(name) else None) if entry else files.get
     written = ["results.json"]
-    for name in ("trajectory.npz", "arrays.npz"):
+    for name in ("trajectory.npz", "arrays.npz", "drive_model.json"):
         data = stored(name) if entry or name != "arrays.npz" else _npz(ev.arrays)
         if data:
             atomic_write(out / name, data)
@@ -172,11 +179,20 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
     return result
 
 
+def _evaluate(cfg: ExperimentConfig, base: Path, log):
+    """:func:`~research.experiments.evaluate.evaluate`, imported here: a run served from the store never
+    imports it (nor JAX through it)."""
+    from research.experiments.evaluate import evaluate
+
+    return evaluate(cfg, base, log=lambda s: log(f"      {s}"))
+
+
 def _export(cfg: ExperimentConfig, record: dict, out: Path) -> list[str]:
     """``output.export``: each interpolator's stored trajectory as ``<label>.csv`` / ``<label>.ngc`` in ``out``."""
     if not cfg.output.export:
         return []
     from research.experiments.export import trajectory_csv, trajectory_gcode
+    from research.trajectory import Trajectory
 
     arrays = _read_npz(out / "arrays.npz")
     written = []
@@ -296,7 +312,7 @@ def format_summary(result: RunResult) -> str:
             rows.append((f"{k} [um]", f"{v * 1e3:.3f}") if unit == "mm" else (f"{k} [{unit}]", f"{v:.6g}"))
     for c in result.paper_checks():
         rows.append((f"paper: {c.key}", f"{c.value:.6g} (paper {c.expected:.6g} +- {c.tolerance:.3g}, {c.source}): "
-                                        + ("PASS" if c.ok else "MISS")))
+                                        + c.verdict))
     width = max(len(r[0]) for r in rows)
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
 

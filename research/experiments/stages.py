@@ -118,6 +118,26 @@ def drive_model(d, axes: tuple[str, ...], identified=None):
     return drives.virtual_drive(d.model)
 
 
+def identified_drive(d, base):
+    """The eq 6.3 :class:`~research.drives.ClosedLoopModel` in ``d.identified_file`` (a file written by
+    :func:`research.identification.save_identified`, relative to the config folder ``base``).
+
+    Raises:
+        ConfigError: the file is missing, corrupt or not a valid model (the loader's reason), or its model
+            cannot drive the simulator (not eq 6.3, or unstable); the message names the key and the file.
+    """
+    from research.errors import ConfigError, ParameterError
+    from research.identification import StructureFit, load_identified
+
+    file = base / d.identified_file
+    where = f"key 'drive.identified_file' = {d.identified_file!r} ({file})"
+    try:
+        fit = load_identified(file)
+        return fit.closed_loop_model() if isinstance(fit, StructureFit) else fit.model()
+    except (ConfigError, ParameterError) as e:
+        raise ConfigError(f"{where}: {e}") from None
+
+
 def contour_stage(cc, path, traj: Trajectory, actual: np.ndarray) -> tuple[dict, dict]:
     """Exact contour error of ``actual`` (the drive's positions on ``traj``'s grid) against the CAM
     ``path`` (Prévost 2012 §2.2), and the thesis' Frenet estimates (eq 4.20-4.27) with the largest
@@ -152,8 +172,8 @@ def compensation_stage(cc, path, traj: Trajectory, drive):
     """CEC of the setpoint ``traj`` through ``drive`` towards the CAM ``path`` (Prévost 2012 eq 4).
 
     Returns:
-        ``(scalars, result)``: ``cec_error_before`` / ``cec_error_after`` (max exact ``|e_T|`` [mm]) and
-        ``cec_simulations``; the :class:`~research.contour.CompensationResult` (its ``setpoint`` is the
+        ``(scalars, result)``: ``cec_error_before`` / ``cec_error_after`` (max exact ``|e_T|`` [mm]), their ratio
+        ``cec_error_ratio`` and ``cec_simulations``; the :class:`~research.contour.CompensationResult` (its ``setpoint`` is the
         compensated :class:`Trajectory`).
     """
     from research.contour import cec_problem, mirror_compensation, mirror_passes, mirror_single_pass
@@ -168,6 +188,8 @@ def compensation_stage(cc, path, traj: Trajectory, drive):
                                   max_steps=cc.max_steps, throw=False)
     scalars = {"cec_error_before": res.before.max, "cec_error_after": res.after.max,
                "cec_simulations": float(res.simulations)}
+    if res.before.max > 0:  # left out when the setpoint already follows the path exactly
+        scalars["cec_error_ratio"] = float(res.after.max / res.before.max)
     return scalars, res
 
 
@@ -237,3 +259,92 @@ def vibration_stage(vc, base) -> tuple[dict, dict, dict]:
                "tuned": {"delays_s": list(tuned.delays_s), "axes": list(tuned.axes),
                          "frequencies_hz": list(tuned.frequencies_hz), "k": [int(k) for k in tuned.k]}}
     return scalars, details, arrays
+
+
+def spectrum_stage(sc) -> tuple[dict, dict, dict]:
+    """FIR chain frequency response (Sencer 2015 eq 8-9, :func:`research.interpolators.magnitude_response`) and
+    the eq 10 delays of ``sc.modes_hz`` (:func:`research.interpolators.delays_for_modes`).
+
+    Returns:
+        ``(scalars, details, arrays)``: ``spectrum_gain.<chain>.mode<j>`` (|M| of chain ``T<i>`` (one filter),
+        ``given`` or ``tuned`` at mode j, counted from 1), ``spectrum_null_gain.T<i>`` (largest |M| of the given
+        chain at ``k / T_i``, k = 1..zeros), ``spectrum.tuned_delay.T<i>`` [s]; details ``{"delays_s", "modes_hz",
+        "tuned_delays_s"}``; arrays ``spectrum.f`` [Hz] and ``spectrum.<chain>`` (|M|).
+    """
+    from research.interpolators import delays_for_modes, magnitude_response
+
+    delays = np.asarray(sc.delays_ms) * 1e-3
+    chains = {f"T{i + 1}": delays[i:i + 1] for i in range(delays.size)} | {"given": delays}
+    details = {"delays_s": delays.tolist(), "modes_hz": list(sc.modes_hz)}
+    scalars = {}
+    if sc.modes_hz:
+        tuned = np.asarray(delays_for_modes(sc.modes_hz, k=sc.k), dtype=np.float64)
+        chains["tuned"] = tuned
+        details["tuned_delays_s"] = tuned.tolist()
+        scalars |= {f"spectrum.tuned_delay.T{i + 1}": float(T) for i, T in enumerate(tuned)}
+    f = np.linspace(0.0, sc.stop_hz, sc.num)
+    arrays = {"spectrum.f": f} | {f"spectrum.{c}": np.asarray(magnitude_response(2 * np.pi * f, d)) for c, d in chains.items()}
+    for c, d in chains.items():
+        for j, m in enumerate(sc.modes_hz):
+            scalars[f"spectrum_gain.{c}.mode{j + 1}"] = float(magnitude_response(2 * np.pi * m, d))
+    for i, T in enumerate(delays):
+        zeros = 2 * np.pi * np.arange(1, sc.zeros + 1) / T
+        scalars[f"spectrum_null_gain.T{i + 1}"] = float(np.max(np.asarray(magnitude_response(zeros, delays))))
+    return scalars, details, arrays
+
+
+def startup_stage(sc) -> tuple[dict, dict, dict]:
+    """The blended start ``x = m t (1 - exp(-alpha t^order))`` (DiMarco 2015 eq 3-5) for each alpha.
+
+    The feed's peak is the zero of the acceleration (Brent, ``xtol`` 1e-15 s) between the samples either side of the
+    sampled maximum (the sampled maximum itself when it sits at the span's end).
+
+    Returns:
+        ``(scalars, details, arrays)``: ``startup_peak_feed.alpha<i>`` [mm/s], ``startup_peak_time.alpha<i>`` [s],
+        ``startup_initial_acceleration.alpha<i>`` [mm/s^2] (i from 1, in the config's order); details
+        ``{"alphas", "feed_mm_per_s", "order"}``; arrays ``startup.t`` and ``startup.alpha<i>.x / v / a``.
+    """
+    from scipy.optimize import brentq
+
+    from research.interpolators.sigmoid import Blend, Ramp, SigmoidMotion
+
+    t = np.linspace(0.0, sc.duration_s, sc.num)
+    scalars, arrays = {}, {"startup.t": t}
+    for i, alpha in enumerate(sc.alphas, start=1):
+        motion = SigmoidMotion(((Ramp(sc.feed_mm_per_s), Blend(alpha, sc.order)),), 0.0)
+        x, v, a, _ = motion.derivatives(t)
+        k = int(np.argmax(v))
+        lo, hi = t[max(k - 1, 0)], t[min(k + 1, t.size - 1)]
+        acc = lambda s: float(motion.derivatives(s)[2])  # noqa: E731
+        peak = brentq(acc, lo, hi, xtol=1e-15) if acc(lo) > 0 > acc(hi) else float(t[k])  # else: at the span's end
+        scalars |= {f"startup_peak_feed.alpha{i}": float(motion.derivatives(peak)[1]), f"startup_peak_time.alpha{i}": peak,
+                    f"startup_initial_acceleration.alpha{i}": float(a[0])}
+        arrays |= {f"startup.alpha{i}.x": x, f"startup.alpha{i}.v": v, f"startup.alpha{i}.a": a}
+    details = {"alphas": list(sc.alphas), "feed_mm_per_s": sc.feed_mm_per_s, "order": sc.order}
+    return scalars, details, arrays
+
+
+def five_axis_contour_stage(fc) -> tuple[dict, dict, dict]:
+    """Thesis §4.5 (:func:`research.contour.five_axis_contour_study`) with ``fc``'s drives and sample period.
+
+    Returns:
+        ``(scalars, details, arrays)``: ``five_axis.max_actual_contour_error`` [mm] and, per estimator
+        (basic, shifted, compensated), ``five_axis.mean_estimator_error.<name>`` (mean |estimate - exact| over the
+        moving samples) and ``five_axis.max_estimator_error.<name>`` [mm]; details ``{"samples", "moving"}``;
+        arrays ``five_axis.t``, ``five_axis.exact``, ``five_axis.<name>``, ``five_axis.delay`` [s].
+    """
+    from research import drives
+    from research.contour import five_axis_contour_study
+
+    axes = ("x", "y", "z", "a", "c")  # the axis order of the eq 4.36 trajectory (thesis Table 6.3)
+    axis_drives = tuple(getattr(drives, PER_AXIS_DRIVES[fc.drive])(a) for a in axes)
+    st = five_axis_contour_study(drives=axis_drives, sample_period=fc.sample_period_ms * 1e-3, friction=fc.friction)
+    moving = np.linalg.norm(np.asarray(st.reference.v)[:, :3], axis=1) > fc.moving_speed_ratio * 50.0
+    scalars = {"five_axis.max_actual_contour_error": float(np.max(st.exact))}
+    arrays = {"five_axis.t": st.t, "five_axis.exact": st.exact, "five_axis.delay": np.asarray(st.estimates.delay)}
+    for name in ("basic", "shifted", "compensated"):
+        d = st.discrepancy(name)
+        scalars |= {f"five_axis.mean_estimator_error.{name}": float(np.mean(d[moving])),
+                    f"five_axis.max_estimator_error.{name}": float(np.max(d))}
+        arrays[f"five_axis.{name}"] = np.asarray(getattr(st.estimates, name))
+    return scalars, {"samples": int(st.t.size), "moving": int(np.count_nonzero(moving))}, arrays

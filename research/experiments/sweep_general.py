@@ -34,7 +34,7 @@ def point_task(config_json: dict, base_dir: str) -> dict:
 
     try:
         cfg = validate(config_json, Path(base_dir) / "sweep-point.toml")
-        return {"status": "ok"} | evaluate(cfg, base_dir).record
+        return {"status": "ok"} | evaluate(cfg, base_dir, model_file=False).record
     except Exception as e:  # a failing point is a result, not the end of the sweep
         return {"status": "error", "error": f"{type(e).__name__}: {e}",
                 "traceback": traceback.format_exc(limit=6)}

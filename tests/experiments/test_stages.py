@@ -33,6 +33,10 @@ def run(**tables):
      r"key 'compensation.methd': unknown key \(typo\? did you mean 'method'\?\)"),
     ({"drive": {"model": "sencer2009_table6_1"}, "contour": {"estimators": ["exact"]}}, r"key 'contour.estimators\[0\]'"),
     ({"vibration": {}}, r"key 'vibration': give either log_file or modes"),
+    ({"spectrum": {"delays_ms": [148.0, 89.0], "modes_hz": [6.8]}}, r"modes_hz has 1 values for 2 filters"),
+    ({"spectrum": {"delays_ms": [148.0, -89.0]}}, r"delays_ms = \[148.0, -89.0\] must all be > 0 ms"),
+    ({"startup": {"alphas": [1.0, 0.0]}}, r"alphas = \[1.0, 0.0\] must all be > 0"),
+    ({"five_axis_contour": {"drive": "sencer2009_table6_1"}}, r"key 'five_axis_contour.drive'"),
     ({"vibration": {"modes": [{"axis": "x", "frequency_hz": 11.4}], "f1_hz": 1.0}}, r"f1_hz = 1 Hz must be above f0_hz"),
     ({"vibration": {"modes": [{"axis": "q", "frequency_hz": 11.4}]}}, r"key 'vibration.modes\[0\].axis'"),
 ])
