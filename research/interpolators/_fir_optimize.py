@@ -53,12 +53,14 @@ from research.interpolators._fir_verify import corner_distances, path_deviations
 from research.interpolators.fir import CHECK_PERIOD, FIRPlan, _as_toolpath, _pulse_table, plan_fir
 from research.limits import AxisLimits
 from research.paths.polyline import Polyline
-from research.piecewise import NumpyPiecewise, bucket_size
+from research.piecewise import NumpyPiecewise
 
 #: constraint samples (peak pieces, deviation samples) merged into one row by their maximum
 _GROUP = 4
 #: bisection steps back towards the feasible start when the solver's answer breaks a constraint
 _BACKTRACK = 12
+#: re-solves with the constraints tightened by the exact check's excess (sampled constraints)
+_MARGIN_ROUNDS = 3
 #: an SLSQP iterate within this of its own constraints is worth the exact check
 _NLP_SLACK = 1e-7
 #: feeds are kept above this share of the commanded feed (a positive pulse length bound)
@@ -66,8 +68,8 @@ _FEED_FLOOR = 1e-3
 
 
 def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: AxisLimits | None = None, *,
-                 max_iter: int = 150, starts=("paper", "safe"), sample_period: float = 2e-3,
-                 check_period: float = CHECK_PERIOD, full_output: bool = False):
+                 max_iter: int = 150, starts=("paper", "safe"), sample_period: float = 1e-3,
+                 exact_peaks: bool = False, check_period: float = CHECK_PERIOD, full_output: bool = False):
     """FIR plan with per-corner overlaps and per-block feeds that minimise the cycle time.
 
     Args:
@@ -80,7 +82,10 @@ def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: 
         starts: where SLSQP starts, in turn: ``"paper"`` (eq 13/14 overlaps at ``F``, usually
             infeasible) and / or ``"safe"`` (the fastest feasible start plan); the fastest verified
             answer is kept (the problem is not smooth: peaks switch pieces as breaks cross).
-        sample_period: spacing [s] of the path-deviation samples inside the optimization.
+        sample_period: spacing [s] of the samples inside the optimization (path deviation, and
+            the limits unless ``exact_peaks``).
+        exact_peaks: hold the limits on every piece's exact peaks inside the optimization instead
+            of on the samples (exact but not smooth; the answer is checked exactly either way).
         check_period: spacing [s] of the final path-deviation check (as in :func:`plan_fir`).
         full_output: also return a dict ``{"start_time", "runs", "kept", "wall_time"}``: cycle time
             of the feasible start plan [s]; per start its SLSQP iterations, message, the solver's
@@ -109,7 +114,7 @@ def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: 
     if d_np.size > 3 or (limits is not None and d_np.size < 2 and np.any(np.isfinite(limits.jerk))):
         raise ParameterError("optimize_fir with limits supports 2 or 3 filters (exact peaks; one filter gives unbounded jerk)")
     t_wall = time.perf_counter()
-    problem = _Problem(path, float(feed), d_np, float(tolerance), limits, sample_period)
+    problem = _Problem(path, float(feed), d_np, float(tolerance), limits, sample_period, exact_peaks)
     x_safe, t_safe, x_start, held = problem.start(check_period)
     n_c, M = problem.M - 1, problem.M
     bounds = [(0.0, 1.0)] * n_c + [(_FEED_FLOOR, 1.0)] * (3 * M) + [(0.0, 1.0)] * (2 * M)
@@ -128,13 +133,23 @@ def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: 
             if problem.time(x) < t_best and np.min(problem.constraints(x)) >= -_NLP_SLACK:
                 iterates.append(x)
 
-        res = minimize(lambda x: problem.time(x) * scale, x_start if name == "paper" else x_safe,
-                       jac=lambda x: problem.time_grad(x) * scale, bounds=bounds, method="SLSQP",
-                       constraints=[{"type": "ineq", "fun": problem.constraints, "jac": problem.jacobian},
-                                    {"type": "ineq", "fun": lambda x: 1.0 + shares @ x, "jac": lambda x: shares}],
-                       options={"maxiter": int(max_iter), "ftol": 1e-10}, callback=keep)
-        x_opt = _clean(res.x, lower, upper, n_c, M)
-        run = {"start": name, "iterations": int(res.nit), "status": str(res.message),
+        x0, iterations, margin = (x_start if name == "paper" else x_safe), 0, 0.0
+        for _ in range(_MARGIN_ROUNDS + 1):
+            problem.data["margin"] = jnp.asarray(margin)
+            res = minimize(lambda x: problem.time(x) * scale, x0,
+                           jac=lambda x: problem.time_grad(x) * scale, bounds=bounds, method="SLSQP",
+                           constraints=[{"type": "ineq", "fun": problem.constraints, "jac": problem.jacobian},
+                                        {"type": "ineq", "fun": lambda x: 1.0 + shares @ x, "jac": lambda x: shares}],
+                           options={"maxiter": int(max_iter), "ftol": 1e-10}, callback=keep)
+            x0, iterations = _clean(res.x, lower, upper, n_c, M), iterations + int(res.nit)
+            # the samples miss what lies between them: tighten by twice the exact excess, solve again
+            excess = problem.excess(x0, check_period)
+            if excess <= LIMIT_RTOL or np.min(problem.constraints(x0)) < -1e-6:
+                break
+            margin += 2.0 * excess
+        problem.data["margin"] = jnp.asarray(0.0)
+        x_opt = x0
+        run = {"start": name, "iterations": iterations, "status": str(res.message), "margin": margin,
                "solver_time": problem.time(x_opt), "backtrack": 0.0, "time": t_safe}
         # verified in order of cycle time: the solver's answer, then its feasible-looking iterates
         for x in sorted([x_opt] + iterates, key=problem.time):
@@ -187,7 +202,8 @@ class _Problem:
     """The NLP of :func:`optimize_fir` in scaled variables ``x = [T_k / T_d (M - 1), F_h,k / F,
     F_b,k / F, F_t,k / F (M each), h_k, t_k (M each)]``."""
 
-    def __init__(self, path: Polyline, feed: float, delays: np.ndarray, eps: float, limits, sample_period: float):
+    def __init__(self, path: Polyline, feed: float, delays: np.ndarray, eps: float, limits, sample_period: float,
+                 exact_peaks: bool = False):
         self.path, self.F, self.eps, self.limits = path, feed, eps, limits
         self.tp = _as_toolpath(path)
         table = _pulse_table(self.tp)
@@ -197,8 +213,8 @@ class _Problem:
         self.L = self.tp.lengths
         self.vertices = jnp.asarray(self.tp.vertices)
         nominal = float(np.sum(self.L) / feed + M * self.Td)
-        # samples bucketed so that paths of similar size share the compiled functions
-        self.n_samples = bucket_size(int(np.ceil(nominal / sample_period / _GROUP)), 16) * _GROUP
+        # a power of two of samples, so that paths of similar duration share the compiled functions
+        self.n_samples = max(1 << int(np.ceil(np.log2(max(nominal / sample_period, 1.0)))), _GROUP)
         real = table.block < M
         self.data = {
             "start": jnp.asarray(self.tp.start), "geo": jnp.asarray(table.geo), "block": jnp.asarray(table.block),
@@ -208,7 +224,9 @@ class _Problem:
             "delays": self.delays, "feed": jnp.asarray(feed), "eps": jnp.asarray(eps), "vertices": self.vertices,
             "P0": jnp.asarray(path.points[:-1]), "P1": jnp.asarray(path.points[1:]),
             "lim": None if limits is None else jnp.asarray(np.stack([limits.velocity, limits.acceleration, limits.jerk])),
+            "margin": jnp.asarray(0.0),
         }
+        self.exact_peaks = exact_peaks
 
     # -- objective (eq 11) and constraints --------------------------------------------------------
     def time(self, x) -> float:
@@ -218,10 +236,20 @@ class _Problem:
         return np.asarray(_cycle_grad(jnp.asarray(x), self.data, self.M))
 
     def constraints(self, x) -> np.ndarray:
-        return np.asarray(_constraints(jnp.asarray(x), self.data, self.M, self.n_samples))
+        return np.asarray(_constraints(jnp.asarray(x), self.data, self.M, self.n_samples, self.exact_peaks))
 
     def jacobian(self, x) -> np.ndarray:
-        return np.asarray(_jacobian(jnp.asarray(x), self.data, self.M, self.n_samples))
+        return np.asarray(_jacobian(jnp.asarray(x), self.data, self.M, self.n_samples, self.exact_peaks))
+
+    def excess(self, x, check_period: float) -> float:
+        """Largest relative excess of the exact checks (error / eps - 1, peak / limit - 1)."""
+        plan = self.plan(x, check_period)
+        worst = max(float(np.max(np.asarray(plan.corner_errors), initial=0.0)), plan.path_deviation) / self.eps - 1.0
+        if self.limits is not None:
+            pos_np = NumpyPiecewise(np.asarray(plan.position.breaks), np.asarray(plan.position.coeffs))
+            span = corner_peak_ratios(pos_np, np.array([float(plan.position.start)]), np.array([float(plan.position.end)]), self.limits)
+            worst = max(worst, float(span[0]) - 1.0)
+        return worst
 
     # -- exact checks and plans ---------------------------------------------------------------------
     def plan(self, x, check_period: float) -> FIRPlan:
@@ -310,21 +338,31 @@ def _cycle(x, data, M: int):
 _cycle_grad = jax.jit(jax.grad(_cycle.__wrapped__), static_argnums=2)
 
 
-def _constraint_rows(x, data, M: int, n_samples: int):
-    """All constraints as ``g(x) >= 0``: vertices, path-deviation samples, piece peaks."""
+def _constraint_rows(x, data, M: int, n_samples: int, exact_peaks: bool):
+    """All constraints as ``g(x) >= 0``: vertices, path-deviation samples, and the limits, either
+    on every piece's exact peaks (not smooth: a peak jumps when breaks cross) or sampled (smooth:
+    velocity and acceleration at the samples, jerk as the acceleration's difference quotient
+    between samples, which is at most its peak); both less ``data["margin"]``."""
     starts, ends, position, centre = _profile(x, data, M)
-    eps, Td = data["eps"], data["Td"]
-    rows = [1.0 - corner_distances(position, data["vertices"], centre[: M - 1], 0.5 * Td) / eps]
+    eps, Td, margin = data["eps"], data["Td"], data["margin"]
+    rows = [1.0 - margin - corner_distances(position, data["vertices"], centre[: M - 1], 0.5 * Td) / eps]
     t0, t1 = position.breaks[0], position.breaks[-1]
     t = t0 + (jnp.arange(n_samples) + 0.5) / n_samples * (t1 - t0)
-    rows.append(1.0 - _group_max(_polyline_distance(position(t), data["P0"], data["P1"]), _GROUP) / eps)
-    if data["lim"] is not None:
-        rows.append(1.0 - _group_max(_piece_peak_ratios(position, data["lim"]), _GROUP))
+    q, v, a = position.derivatives(t, 3)
+    rows.append(1.0 - margin - _group_max(_polyline_distance(q, data["P0"], data["P1"]), _GROUP) / eps)
+    lim = data["lim"]
+    if lim is not None and exact_peaks:
+        rows.append(1.0 - margin - _group_max(_piece_peak_ratios(position, lim), _GROUP))
+    elif lim is not None:
+        j = jnp.diff(a, axis=0) * (n_samples / (t1 - t0))
+        for values, bound in ((v, lim[0]), (a, lim[1]), (j, lim[2])):
+            ratio = jnp.max(jnp.abs(values) / bound[None, :], axis=1)
+            rows.append(1.0 - margin - _group_max(ratio, _GROUP))
     return jnp.concatenate(rows)
 
 
-_constraints = jax.jit(_constraint_rows, static_argnums=(2, 3))
-_jacobian = jax.jit(jax.jacfwd(_constraint_rows), static_argnums=(2, 3))
+_constraints = jax.jit(_constraint_rows, static_argnums=(2, 3, 4))
+_jacobian = jax.jit(jax.jacfwd(_constraint_rows), static_argnums=(2, 3, 4))
 
 
 def _group_max(v, size: int):
