@@ -59,7 +59,7 @@ from research.piecewise import NumpyPiecewise
 _GROUP = 4
 #: bisection steps back towards the feasible start when the solver's answer breaks a constraint
 _BACKTRACK = 12
-#: re-solves with the constraints tightened by the exact check's excess (sampled constraints)
+#: re-solves with the constraints tightened by the exact check's excess (sampled deviation)
 _MARGIN_ROUNDS = 3
 #: an SLSQP iterate within this of its own constraints is worth the exact check
 _NLP_SLACK = 1e-7
@@ -68,8 +68,8 @@ _FEED_FLOOR = 1e-3
 
 
 def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: AxisLimits | None = None, *,
-                 max_iter: int = 150, starts=("paper", "safe"), sample_period: float = 1e-3,
-                 exact_peaks: bool = False, check_period: float = CHECK_PERIOD, full_output: bool = False):
+                 max_iter: int = 150, starts=("paper", "safe"), sample_period: float = 2e-3,
+                 check_period: float = CHECK_PERIOD, full_output: bool = False):
     """FIR plan with per-corner overlaps and per-block feeds that minimise the cycle time.
 
     Args:
@@ -82,10 +82,7 @@ def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: 
         starts: where SLSQP starts, in turn: ``"paper"`` (eq 13/14 overlaps at ``F``, usually
             infeasible) and / or ``"safe"`` (the fastest feasible start plan); the fastest verified
             answer is kept (the problem is not smooth: peaks switch pieces as breaks cross).
-        sample_period: spacing [s] of the samples inside the optimization (path deviation, and
-            the limits unless ``exact_peaks``).
-        exact_peaks: hold the limits on every piece's exact peaks inside the optimization instead
-            of on the samples (exact but not smooth; the answer is checked exactly either way).
+        sample_period: spacing [s] of the path-deviation samples inside the optimization.
         check_period: spacing [s] of the final path-deviation check (as in :func:`plan_fir`).
         full_output: also return a dict ``{"start_time", "runs", "kept", "wall_time"}``: cycle time
             of the feasible start plan [s]; per start its SLSQP iterations, message, the solver's
@@ -114,7 +111,7 @@ def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: 
     if d_np.size > 3 or (limits is not None and d_np.size < 2 and np.any(np.isfinite(limits.jerk))):
         raise ParameterError("optimize_fir with limits supports 2 or 3 filters (exact peaks; one filter gives unbounded jerk)")
     t_wall = time.perf_counter()
-    problem = _Problem(path, float(feed), d_np, float(tolerance), limits, sample_period, exact_peaks)
+    problem = _Problem(path, float(feed), d_np, float(tolerance), limits, sample_period)
     x_safe, t_safe, x_start, held = problem.start(check_period)
     n_c, M = problem.M - 1, problem.M
     bounds = [(0.0, 1.0)] * n_c + [(_FEED_FLOOR, 1.0)] * (3 * M) + [(0.0, 1.0)] * (2 * M)
@@ -142,7 +139,7 @@ def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: 
                                         {"type": "ineq", "fun": lambda x: 1.0 + shares @ x, "jac": lambda x: shares}],
                            options={"maxiter": int(max_iter), "ftol": 1e-10}, callback=keep)
             x0, iterations = _clean(res.x, lower, upper, n_c, M), iterations + int(res.nit)
-            # the samples miss what lies between them: tighten by twice the exact excess, solve again
+            # deviation samples miss what lies between them: tighten by twice the exact excess, solve again
             excess = problem.excess(x0, check_period)
             if excess <= LIMIT_RTOL or np.min(problem.constraints(x0)) < -1e-6:
                 break
@@ -202,8 +199,7 @@ class _Problem:
     """The NLP of :func:`optimize_fir` in scaled variables ``x = [T_k / T_d (M - 1), F_h,k / F,
     F_b,k / F, F_t,k / F (M each), h_k, t_k (M each)]``."""
 
-    def __init__(self, path: Polyline, feed: float, delays: np.ndarray, eps: float, limits, sample_period: float,
-                 exact_peaks: bool = False):
+    def __init__(self, path: Polyline, feed: float, delays: np.ndarray, eps: float, limits, sample_period: float):
         self.path, self.F, self.eps, self.limits = path, feed, eps, limits
         self.tp = _as_toolpath(path)
         table = _pulse_table(self.tp)
@@ -226,7 +222,6 @@ class _Problem:
             "lim": None if limits is None else jnp.asarray(np.stack([limits.velocity, limits.acceleration, limits.jerk])),
             "margin": jnp.asarray(0.0),
         }
-        self.exact_peaks = exact_peaks
 
     # -- objective (eq 11) and constraints --------------------------------------------------------
     def time(self, x) -> float:
@@ -236,10 +231,10 @@ class _Problem:
         return np.asarray(_cycle_grad(jnp.asarray(x), self.data, self.M))
 
     def constraints(self, x) -> np.ndarray:
-        return np.asarray(_constraints(jnp.asarray(x), self.data, self.M, self.n_samples, self.exact_peaks))
+        return np.asarray(_constraints(jnp.asarray(x), self.data, self.M, self.n_samples))
 
     def jacobian(self, x) -> np.ndarray:
-        return np.asarray(_jacobian(jnp.asarray(x), self.data, self.M, self.n_samples, self.exact_peaks))
+        return np.asarray(_jacobian(jnp.asarray(x), self.data, self.M, self.n_samples))
 
     def excess(self, x, check_period: float) -> float:
         """Largest relative excess of the exact checks (error / eps - 1, peak / limit - 1)."""
@@ -338,31 +333,24 @@ def _cycle(x, data, M: int):
 _cycle_grad = jax.jit(jax.grad(_cycle.__wrapped__), static_argnums=2)
 
 
-def _constraint_rows(x, data, M: int, n_samples: int, exact_peaks: bool):
-    """All constraints as ``g(x) >= 0``: vertices, path-deviation samples, and the limits, either
-    on every piece's exact peaks (not smooth: a peak jumps when breaks cross) or sampled (smooth:
-    velocity and acceleration at the samples, jerk as the acceleration's difference quotient
-    between samples, which is at most its peak); both less ``data["margin"]``."""
+def _constraint_rows(x, data, M: int, n_samples: int):
+    """All constraints as ``g(x) >= 0``, less ``data["margin"]``: vertices, path-deviation
+    samples, and the limits on every piece's exact peaks (not smooth: a peak jumps when breaks
+    cross; sampled limits with the jerk as a difference quotient were tried and let SLSQP diverge
+    on cam30)."""
     starts, ends, position, centre = _profile(x, data, M)
     eps, Td, margin = data["eps"], data["Td"], data["margin"]
     rows = [1.0 - margin - corner_distances(position, data["vertices"], centre[: M - 1], 0.5 * Td) / eps]
     t0, t1 = position.breaks[0], position.breaks[-1]
     t = t0 + (jnp.arange(n_samples) + 0.5) / n_samples * (t1 - t0)
-    q, v, a = position.derivatives(t, 3)
-    rows.append(1.0 - margin - _group_max(_polyline_distance(q, data["P0"], data["P1"]), _GROUP) / eps)
-    lim = data["lim"]
-    if lim is not None and exact_peaks:
-        rows.append(1.0 - margin - _group_max(_piece_peak_ratios(position, lim), _GROUP))
-    elif lim is not None:
-        j = jnp.diff(a, axis=0) * (n_samples / (t1 - t0))
-        for values, bound in ((v, lim[0]), (a, lim[1]), (j, lim[2])):
-            ratio = jnp.max(jnp.abs(values) / bound[None, :], axis=1)
-            rows.append(1.0 - margin - _group_max(ratio, _GROUP))
+    rows.append(1.0 - margin - _group_max(_polyline_distance(position(t), data["P0"], data["P1"]), _GROUP) / eps)
+    if data["lim"] is not None:
+        rows.append(1.0 - margin - _group_max(_piece_peak_ratios(position, data["lim"]), _GROUP))
     return jnp.concatenate(rows)
 
 
-_constraints = jax.jit(_constraint_rows, static_argnums=(2, 3, 4))
-_jacobian = jax.jit(jax.jacfwd(_constraint_rows), static_argnums=(2, 3, 4))
+_constraints = jax.jit(_constraint_rows, static_argnums=(2, 3))
+_jacobian = jax.jit(jax.jacfwd(_constraint_rows), static_argnums=(2, 3))
 
 
 def _group_max(v, size: int):

@@ -31,7 +31,7 @@ def random_path(seed: int, n: int = 4) -> Polyline:
     return Polyline(np.vstack([[0.0, 0.0], np.cumsum(steps, axis=0)]))
 
 
-@pytest.mark.parametrize("seed", [11, 12])
+@pytest.mark.parametrize("seed", [12, 13])  # same sample count: one compile
 def test_tolerance_limits_and_end_points_hold(seed):
     """On random paths under limits below the FIR envelope: every vertex and every sample within
     eps, every peak within its limit, start and end at the path's ends at rest, and never slower
