@@ -33,9 +33,9 @@ in all. Each bisected corner gives away at most ``2^-BISECTION_STEPS`` of its ov
 
 from __future__ import annotations
 
-import numpy as np
-
 from collections.abc import Callable
+
+import numpy as np
 
 from research.errors import ConvergenceError, ParameterError
 from research.limits import AxisLimits

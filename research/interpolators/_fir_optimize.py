@@ -48,7 +48,7 @@ from scipy.optimize import minimize
 from research.errors import ParameterError, PathError
 from research.interpolators._fir_blocks import build_profile
 from research.interpolators._fir_chain import check_delays
-from research.interpolators._fir_limits import LIMIT_RTOL, corner_peak_ratios, feed_caps
+from research.interpolators._fir_limits import DEGENERATE_PIECE, LIMIT_RTOL, corner_peak_ratios, feed_caps
 from research.interpolators._fir_verify import corner_distances, path_deviations
 from research.interpolators.fir import CHECK_PERIOD, FIRPlan, _as_toolpath, _pulse_table, plan_fir
 from research.limits import AxisLimits
@@ -377,8 +377,6 @@ def _piece_peak_ratios(position, lim):
     profile; pieces shorter than ``_fir_limits.DEGENERATE_PIECE`` give 0 (as in the exact check).
     Candidates: both ends and the real roots of the next derivative inside the piece (degree <= 2,
     closed form), the root held fixed under differentiation (envelope theorem)."""
-    from research.interpolators._fir_limits import DEGENERATE_PIECE
-
     c = position.coeffs  # (K, D + 1, A) ascending local
     h = jnp.diff(position.breaks)
     out = jnp.zeros(h.shape)
