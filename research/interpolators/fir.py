@@ -227,9 +227,9 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         return feeds_cmd * jnp.asarray(cruise), overlaps, ends[:M] - starts[:M], starts[:M], position, centre[: M - 1]
 
     def settle(factor, head, tail, full, others, arc_rel):
-        """Verify and repair one candidate plan; returns ``(state, rounds, deviation)``."""
+        """Verify and repair one candidate plan; returns ``(state, rounds, deviation, limit_repaired)``."""
         factor, shrink = factor.copy(), np.ones(M - 1)
-        bisection, checked = CornerBisection(M - 1), np.zeros(M, dtype=bool)
+        bisection, checked, repaired = CornerBisection(M - 1), np.zeros(M, dtype=bool), False
 
         def alone(g):  # ``_fir_limits`` phase 1: each block's own peaks (every corner an exact stop)
             *_, pulse, starts, position, _ = schedule(factor * g[:, None], head, tail, full, np.zeros(M - 1), others, arc_rel)
@@ -237,7 +237,8 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             return block_peak_ratios(pos_np, np.asarray(_primal(starts)), np.asarray(_primal(pulse)), Td_np, limits)
 
         if limits is not None and M == 1:
-            factor *= hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), np.ones(1, dtype=bool))[:, None]
+            g = hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), np.ones(1, dtype=bool))
+            factor, repaired = factor * g[:, None], bool(g[0] < 1.0)
         state = schedule(factor, head, tail, full, shrink, others, arc_rel)
         rounds, deviation = 0, float("nan")
         if refine or limits is not None:
@@ -269,6 +270,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         too_fast = True
                     else:
                         too_fast = bisection.update(ratios)
+                    repaired |= too_fast
                 if not (viol.any() or too_fast or arc_slow.any()):
                     break
                 if rounds == max_rounds:
@@ -292,30 +294,33 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                 for k in np.flatnonzero(arc_slow):
                     factor[k] *= min(0.98 * np.sqrt(tb_np[k] / arc_slow[k]), 0.98)
                 state = schedule(factor, head, tail, full, shrink * bisection.scale, others, arc_rel)
-        return state, rounds, deviation
+        return state, rounds, deviation, repaired
 
     def plans(base):
         if refine and M > 1:
             return _look_ahead(tp, table, F_np, base, d_np, tv_np, t_in, t_out)
         return [(np.repeat(base[:, None], 3, axis=1), head, tail, full, others, None)]
 
-    candidates = plans(base)
-    if limits is not None and np.any(safe_feed < F_np * base):
-        # also plan every block at its closed-form safe feed up front: slower blocks whose corners
-        # keep their overlap can beat exact stops; branch and bound keeps the faster
-        candidates += plans(np.minimum(base, safe_feed / F_np))
     # branch and bound: verify candidates in order of predicted time, and only while one could still
     # beat the best verified plan (its prediction is a lower bound on its verified time)
-    best, best_time = None, np.inf
-    order = sorted((predicted_time(c), i, c) for i, c in enumerate(candidates)) if len(candidates) > 1 else [(0.0, 0, candidates[0])]
-    for pred, _, c in order:
-        if pred >= best_time:
-            break
-        result = settle(*c)
-        t = float(_primal(result[0][4].end - result[0][4].start))
-        if t < best_time:
-            best, best_time = result, t
-    state, rounds, deviation = best
+    best, best_time, repaired = None, np.inf, False
+    for candidates in (plans(base), None):
+        if candidates is None:
+            if limits is None or not repaired or not np.any(safe_feed < F_np * base):
+                break
+            # a plan needed a limit repair: also plan every block at its closed-form safe feed up
+            # front (slower blocks whose corners keep their overlap can beat exact stops)
+            candidates = plans(np.minimum(base, safe_feed / F_np))
+        order = sorted((predicted_time(c), i, c) for i, c in enumerate(candidates)) if len(candidates) > 1 else [(0.0, 0, candidates[0])]
+        for pred, _, c in order:
+            if pred >= best_time:
+                break
+            result = settle(*c)
+            repaired |= result[3]
+            t = float(_primal(result[0][4].end - result[0][4].start))
+            if t < best_time:
+                best, best_time = result, t
+    state, rounds, deviation, _ = best
     feeds, overlaps, pulse, starts, position, centre = state
     return FIRPlan(starts, pulse, overlaps, feeds, delays, position, centre, jnp.asarray(tp.vertices),
                    float(deviation), int(rounds), tp.axes)
