@@ -28,7 +28,15 @@ most ``M`` times (once on the benchmark paths). Phase 2 takes at most ``BISECTIO
 for the bisections, then exact-stop rounds for corners still above a limit, each of which adds at
 least one exact stop (the profile away from a corner set to ``T_k = 0`` is unchanged up to a
 shift), so at most ``M - 1`` more (0-1 on the benchmark paths): ``BISECTION_STEPS + 2M + 1`` rounds
-in all. Each bisected corner gives away at most ``2^-BISECTION_STEPS`` of its overlap.
+in all. Each bisected corner gives away at most ``2^-BISECTION_STEPS`` of its overlap. Should
+exact stops still break a limit (a block checked alone in an earlier window, seen again in
+another), ``plan_fir`` slows every block those windows cover by ``0.98 / ratio`` a round, within
+its hard round bound (``ConvergenceError`` beyond it).
+
+Cost: each round re-verifies the tolerance too (``path_deviations``), so a path whose corners
+break the limits widely pays about ``BISECTION_STEPS`` verified rounds per candidate: on a seeded
+400-segment CAM-like path under the FIR envelope 5.8 s against 0.3 s for the old 15 % steps
+(cycle time 28.698 against 28.688 s).
 """
 
 from __future__ import annotations
