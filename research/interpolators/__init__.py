@@ -1,6 +1,7 @@
 """Interpolators: tool path -> :class:`~research.trajectory.Trajectory`.
 
-- FIR-overlap cornering (Sencer 2015): :func:`plan_fir`, :func:`fir_interpolate`.
+- FIR-overlap cornering (Sencer 2015): :func:`plan_fir`, :func:`fir_interpolate`; per-corner
+  overlaps and per-block feeds optimized for cycle time (a named extension): :func:`optimize_fir`.
 - Jerk-limited S-curve with exact stops (the "linear interpolator"): :func:`scurve_interpolate`,
   and the time-optimal double-S move with boundary speeds :func:`double_s`.
 - Geometric corner smoothing (Sencer 2015 Fig 6 baseline): :func:`blend_interpolate`.
@@ -15,6 +16,7 @@ from research.interpolators._fir_chain import (
     magnitude_response,
     total_delay,
 )
+from research.interpolators._fir_optimize import optimize_fir
 from research.interpolators._fir_overlap import cornering_error, overlap_time
 from research.interpolators.blend import blend_interpolate, corner_blends
 from research.interpolators.fir import FIRPlan, fir_by_convolution, fir_interpolate, plan_fir
@@ -46,6 +48,7 @@ __all__ = [
     "mtp_blending_baseline",
     "mtp_linear_baseline",
     "mtp_motion",
+    "optimize_fir",
     "overlap_time",
     "plan_fir",
     "scurve_interpolate",

@@ -48,7 +48,17 @@ from research.errors import ConvergenceError, ParameterError, PathError
 from research.interpolators._fir_blocks import PulseTable, build_profile
 from research.interpolators._fir_chain import check_delays, kernel_second_integral
 from research.interpolators._fir_feed import ChainError, arc_feed_caps, range_min
-from research.interpolators._fir_limits import arc_limit_caps, corner_peak_ratios, feed_caps
+from research.interpolators._fir_limits import (
+    BISECTION_STEPS,
+    LIMIT_RTOL,
+    CornerBisection,
+    arc_limit_caps,
+    block_peak_ratios,
+    blocks_in_windows,
+    corner_limit_ratios,
+    feed_caps,
+    hold_block_limits,
+)
 from research.interpolators._fir_overlap import overlap_time
 from research.interpolators._fir_verify import corner_distances, path_deviations
 from research.limits import AxisLimits
@@ -58,9 +68,10 @@ from research.piecewise import NumpyPiecewise, bucket_size
 from research.trajectory import Trajectory
 
 _SCALING_ROUNDS = 6  # rounds that shrink overlaps / feeds before violators become exact stops
-_LIMIT_ROUNDS = 16  # the same for corners that break axis limits (15 % overlap steps)
+_LIMIT_ROUNDS = BISECTION_STEPS + 2  # bisections of the overlaps of corners that break axis limits
 #: hard bound on verification rounds: the scaling rounds, the limit rounds, one exact-stop round
-#: and rounds that slow arcs whose own deviation exceeds the tolerance (geometric, <= 0.7 a round)
+#: and rounds that slow arcs whose own deviation exceeds the tolerance (geometric, <= 0.7 a round);
+#: with limits, ``M - 1`` more for corners that become exact stops one by one (``_fir_limits``)
 MAX_ROUNDS = _LIMIT_ROUNDS + 24
 CHECK_PERIOD = 1e-3  # default spacing [s] of the path-deviation check: the usual interpolation period
 
@@ -145,9 +156,10 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     """Feeds, overlap times, schedule and exact profile; see :func:`fir_interpolate` for the arguments.
 
     Args:
-        limits: per-axis limits to hold as well (beyond the paper, see ``_fir_limits``): each
-            block's feed is capped so that it keeps them alone, and the overlap of any corner whose
-            exact peaks break them is shrunk, down to an exact stop if need be.
+        limits: per-axis limits to hold as well (beyond the paper, see ``_fir_limits``): a block
+            whose own exact peaks break them is slowed, and the overlap of any corner whose exact
+            peaks break them is bisected, down to an exact stop if need be; a plan that holds them
+            is returned unchanged.
         check_period: spacing [s] of the trajectory samples whose distance to the path is checked.
 
     Differentiable with ``jax.grad`` / ``jax.jacfwd`` with respect to ``feed``, ``delays`` and
@@ -178,8 +190,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     if limits is not None:
         if limits.n_axes != tp.dim:
             raise ParameterError(f"limits have {limits.n_axes} axes but the path has {tp.dim}")
-        caps = np.where(tp.is_arc, arc_limit_caps(tp.radii, d_np, limits), feed_caps(tp.lengths, t_in, d_np, limits))
-        base = np.minimum(base, caps / F_np)
+        safe_feed = np.where(tp.is_arc, arc_limit_caps(tp.radii, d_np, limits), feed_caps(tp.lengths, t_in, d_np, limits))
     factor = np.repeat(base[:, None], 3, axis=1)
     head, tail = np.zeros(M), np.zeros(M)
     full = np.zeros(M - 1, dtype=bool)
@@ -220,15 +231,28 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
 
     def settle(factor, head, tail, full, others, arc_rel):
         """Verify and repair one candidate plan, one round per step: a generator that yields the
-        predicted time of the repaired plan after each failed round (a lower bound on its final
-        time) and returns ``(state, rounds, deviation)``."""
+        predicted time of the repaired plan after each failed round and returns ``(state, rounds,
+        deviation, limit_repaired)``. Without limits the prediction is a lower bound on the final time
+        (repairs only shrink overlaps and lower feeds); with limits it is not (a corner's bisection
+        may lengthen its overlap again), so the caller then bounds a candidate by its first prediction."""
         factor, shrink = factor.copy(), np.ones(M - 1)
+        bisection, checked, repaired = CornerBisection(M - 1), np.zeros(M, dtype=bool), False
+
+        def alone(g):  # ``_fir_limits`` phase 1: each block's own peaks (every corner an exact stop)
+            *_, pulse, starts, position, _ = schedule(factor * g[:, None], head, tail, full, np.zeros(M - 1), others, arc_rel)
+            pos_np = NumpyPiecewise(np.asarray(_primal(position.breaks)), np.asarray(_primal(position.coeffs)))
+            return block_peak_ratios(pos_np, np.asarray(_primal(starts)), np.asarray(_primal(pulse)), Td_np, limits)
+
+        if limits is not None and M == 1:
+            g = hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), np.ones(1, dtype=bool))
+            factor, repaired = factor * g[:, None], bool(g[0] < 1.0)
         state = schedule(factor, head, tail, full, shrink, others, arc_rel)
         rounds, deviation = 0, float("nan")
         if refine or limits is not None:
             cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
             limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
-            for rounds in range(1, MAX_ROUNDS + 1):
+            max_rounds = MAX_ROUNDS + (2 * M if limits is not None else 0)
+            for rounds in range(1, max_rounds + 1):
                 feeds, overlaps, pulse, starts, position, centre = state
                 pos_np = NumpyPiecewise(np.asarray(_primal(position.breaks)), np.asarray(_primal(position.coeffs)))
                 starts_np, centre_np = np.asarray(_primal(starts)), np.asarray(_primal(centre))
@@ -241,14 +265,31 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         viol[j], errors[j] = True, max(errors[j], e)
                     for k, e in at_block.items():
                         arc_slow[k] = e
-                too_fast = _limit_violations(pos_np, starts_np, np.asarray(_primal(pulse)), Td_np, limits, M)
-                if not (viol.any() or too_fast.any() or arc_slow.any()):
+                too_fast = False
+                if limits is not None and M > 1:
+                    pulse_np = np.asarray(_primal(pulse))
+                    ratios = corner_limit_ratios(pos_np, starts_np, pulse_np, Td_np, limits)
+                    bad = ratios > 1.0 + LIMIT_RTOL
+                    near = blocks_in_windows(bad, starts_np, pulse_np, Td_np) & ~checked
+                    g = hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), near) if near.any() else 1.0
+                    checked |= near
+                    if bad.any() and not near.any() and np.all(bisection.scale[bad] == 0.0):
+                        # exact stops still above a limit (blocks checked alone before, in other
+                        # windows): slow every block those windows cover, as peaks scale with feed
+                        g = np.where(blocks_in_windows(bad, starts_np, pulse_np, Td_np), 0.98 / np.max(ratios[bad]), 1.0)
+                    if np.any(g < 1.0):  # slowed blocks: check the corners again before bisecting
+                        factor *= np.reshape(g, (-1, 1))
+                        too_fast = True
+                    else:
+                        too_fast = bisection.update(ratios)
+                    repaired |= too_fast
+                if not (viol.any() or too_fast or arc_slow.any()):
                     break
-                if rounds == MAX_ROUNDS:
+                if rounds == max_rounds:
                     raise ConvergenceError(
-                        f"plan_fir: {int(viol.sum())} vertices, {int((arc_slow > 0).sum())} arcs and {int(too_fast.sum())} "
-                        f"corners still violate after {MAX_ROUNDS} rounds", residual=float(np.max(errors - limit_v, initial=0.0)),
-                        steps=rounds)
+                        f"plan_fir: {int(viol.sum())} vertices and {int((arc_slow > 0).sum())} arcs still violate the "
+                        f"tolerance{' (or corners a limit)' if too_fast else ''} after {max_rounds} rounds",
+                        residual=float(np.max(errors - limit_v, initial=0.0)), steps=rounds)
                 late = rounds > _SCALING_ROUNDS
                 n_f = d_np.size
                 for j in np.flatnonzero(viol):
@@ -264,31 +305,41 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         shrink[j] *= min(0.98 * ratio ** (1.0 / (n_f + 1)), 1.0)
                 for k in np.flatnonzero(arc_slow):
                     factor[k] *= min(0.98 * np.sqrt(tb_np[k] / arc_slow[k]), 0.98)
-                if too_fast.any():  # shrink by 15 % a round, then exact stops
-                    shrink = np.where(too_fast, shrink * (0.85 if rounds <= _LIMIT_ROUNDS else 0.0), shrink)
-                yield predicted_time((factor, head, tail, full, others, arc_rel), shrink)
-                state = schedule(factor, head, tail, full, shrink, others, arc_rel)
-        return state, rounds, deviation
+                yield predicted_time((factor, head, tail, full, others, arc_rel), shrink * bisection.scale)
+                state = schedule(factor, head, tail, full, shrink * bisection.scale, others, arc_rel)
+        return state, rounds, deviation, repaired
 
-    candidates = [(factor, head, tail, full, others, None)]
-    if refine and M > 1:
-        candidates = _look_ahead(tp, table, F_np, base, d_np, tv_np, t_in, t_out)
-    # branch and bound, one verification round at a time: the candidate (or repaired candidate) of
-    # least predicted time goes next, until none could still beat the best verified plan (a
-    # prediction is a lower bound on the verified time); a candidate whose repairs push its bound
-    # past the best verified plan is dropped without rebuilding its profile
-    best, best_time = None, np.inf
-    queue = [(predicted_time(c) if len(candidates) > 1 else 0.0, i, settle(*c)) for i, c in enumerate(candidates)]
-    heapq.heapify(queue)
-    while queue and queue[0][0] < best_time:
-        bound, i, steps = heapq.heappop(queue)
-        try:
-            heapq.heappush(queue, (max(bound, next(steps)), i, steps))
-        except StopIteration as done:
-            t = float(_primal(done.value[0][4].end - done.value[0][4].start))
-            if t < best_time:
-                best, best_time = done.value, t
-    state, rounds, deviation = best
+    def plans(base):
+        if refine and M > 1:
+            return _look_ahead(tp, table, F_np, base, d_np, tv_np, t_in, t_out)
+        return [(np.repeat(base[:, None], 3, axis=1), head, tail, full, others, None)]
+
+    def verify(candidates, best, best_time):
+        """Branch and bound, one verification round at a time: the candidate (or repaired candidate)
+        of least bound goes next, until none could still beat the best verified plan; a candidate
+        whose repairs push its bound past the best verified plan is dropped without rebuilding its
+        profile. Returns ``(best, best_time, any limit repaired)``."""
+        repaired = False
+        queue = [(predicted_time(c) if len(candidates) > 1 else 0.0, i, settle(*c)) for i, c in enumerate(candidates)]
+        heapq.heapify(queue)
+        while queue and queue[0][0] < best_time:
+            bound, i, steps = heapq.heappop(queue)
+            try:
+                step = next(steps)
+                heapq.heappush(queue, (bound if limits is not None else max(bound, step), i, steps))
+            except StopIteration as done:
+                repaired |= done.value[3]
+                t = float(_primal(done.value[0][4].end - done.value[0][4].start))
+                if t < best_time:
+                    best, best_time = done.value, t
+        return best, best_time, repaired
+
+    best, best_time, repaired = verify(plans(base), None, np.inf)
+    if limits is not None and repaired and np.any(safe_feed < F_np * base):
+        # a plan needed a limit repair: also plan every block at its closed-form safe feed up front
+        # (slower blocks whose corners keep their overlap can beat exact stops)
+        best, best_time, _ = verify(plans(np.minimum(base, safe_feed / F_np)), best, best_time)
+    state, rounds, deviation, _ = best
     feeds, overlaps, pulse, starts, position, centre = state
     return FIRPlan(starts, pulse, overlaps, feeds, delays, position, centre, jnp.asarray(tp.vertices),
                    float(deviation), int(rounds), tp.axes)
@@ -586,15 +637,6 @@ def _arc_turns(tp: ToolPath, tol: float):
     inner = inner[tp.is_arc[owner[inner]]]
     u = chords.directions
     return chords.arc_length[inner + 1], u[inner + 1] - u[inner]
-
-
-def _limit_violations(pos_np, starts, pulse_times, Td, limits, M: int) -> np.ndarray:
-    """Corners whose window ``[end of block k, start of block k+1 + T_d]`` holds a velocity,
-    acceleration or jerk above ``limits``."""
-    if limits is None or M < 2:
-        return np.zeros(max(M - 1, 0), dtype=bool)
-    e = starts + pulse_times
-    return corner_peak_ratios(pos_np, e[:-1], starts[1:] + Td, limits) > 1.0 + 1e-9
 
 
 def _primal(x):

@@ -11,7 +11,7 @@ import pytest
 from scipy import signal
 
 from research.errors import ParameterError
-from research.experiments.fir_model import residual_vibration_sampled
+from research.drives import residual_vibration_sampled
 from research.interpolators import scurve_profile
 from research.limits import AxisLimits
 from research.optimal import StructuralMode, converged_time_optimal, time_optimal, trajectory_vibration

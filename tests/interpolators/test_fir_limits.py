@@ -1,0 +1,111 @@
+"""Limit-holding FIR (``plan_fir(..., limits=...)``, ``_fir_limits``): post-hoc repair on exact peaks.
+
+Expected values come from independent computations: the sampled-and-refined peaks of
+``research.metrics`` (not the planner's exact roots), closed-form ratio functions for the
+bisections, and the plain plan itself for "nothing to repair"."""
+
+import numpy as np
+import pytest
+
+from research.errors import ConvergenceError
+from research.interpolators import plan_fir
+from research.interpolators._fir_limits import (
+    BISECTION_STEPS,
+    CornerBisection,
+    blocks_in_windows,
+    hold_block_limits,
+)
+from research.limits import AxisLimits
+from research.metrics import corner_errors, limit_ratios, peak_axis_values
+from research.paths import Polyline, named_path
+
+PAPER_DELAYS = (0.148, 0.089)
+
+
+def random_path(seed: int, n: int = 6) -> Polyline:
+    rng = np.random.default_rng(seed)
+    heading = np.cumsum(rng.uniform(-np.radians(120), np.radians(120), n))
+    steps = rng.uniform(3.0, 30.0, n)[:, None] * np.column_stack([np.cos(heading), np.sin(heading)])
+    return Polyline(np.vstack([[0.0, 0.0], np.cumsum(steps, axis=0)]))
+
+
+def test_never_slower_than_plain_where_plain_holds_zigzag():
+    """Issue 19: on the zigzag the plain FIR keeps the nominal envelope (worst ratio 0.894 by the
+    sampled check), and the limit-holding plan capped every block to 0.30 F up front (2.345 s
+    against 1.807 s). Now it returns the plain plan."""
+    path = named_path("zigzag")
+    limits = AxisLimits.fir_envelope(2, 250.0, PAPER_DELAYS)
+    plain = plan_fir(path, 250.0, PAPER_DELAYS, 0.5)
+    assert max(float(np.max(r)) for r in limit_ratios(plain.trajectory(1e-3), limits).values()) <= 1.0
+    held = plan_fir(path, 250.0, PAPER_DELAYS, 0.5, limits=limits)
+    assert float(held.cycle_time) <= float(plain.cycle_time) * (1 + 1e-12)
+    np.testing.assert_allclose(np.asarray(held.overlaps), np.asarray(plain.overlaps), rtol=1e-12)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_own_peaks_as_limits_change_nothing(seed):
+    """Limits equal to the plain plan's own peaks (measured by sampling) are held by it, so the
+    limit-holding plan is never slower (20/10 ms: short blocks peak lower inside the motion than
+    alone, which an up-front cap ignored: cam30 0.834 s against 0.499 s)."""
+    path = random_path(seed, 8)
+    plain = plan_fir(path, 250.0, (0.02, 0.01), 0.5)
+    limits = AxisLimits(*(peak_axis_values(plain.trajectory(1e-3), nu) for nu in (1, 2, 3)))
+    held = plan_fir(path, 250.0, (0.02, 0.01), 0.5, limits=limits)
+    assert float(held.cycle_time) <= float(plain.cycle_time) * (1 + 1e-12)
+
+
+@pytest.mark.parametrize("seed", [2, 3, 4])
+def test_random_tight_limits_are_held_with_the_tolerance(seed):
+    """Limits below the FIR envelope on some axes (velocity under F, acceleration and jerk under
+    the nominal ones): every peak within its limit (sampled check, 1e-6) and every corner within eps."""
+    rng = np.random.default_rng(seed)
+    path = random_path(seed)
+    F, eps = 250.0, 0.2
+    limits = AxisLimits(rng.uniform(0.5, 1.2, 2) * F, rng.uniform(0.5, 1.2, 2) * F / PAPER_DELAYS[0],
+                        rng.uniform(0.5, 1.2, 2) * F / (PAPER_DELAYS[0] * PAPER_DELAYS[1]))
+    plan = plan_fir(path, F, PAPER_DELAYS, eps, limits=limits)
+    tr = plan.trajectory(1e-3)
+    assert all(np.all(r <= 1 + 1e-6) for r in limit_ratios(tr, limits).values())
+    assert np.max(corner_errors(tr, path)) <= eps * (1 + 1e-6)
+
+
+def test_corner_bisection_converges_from_below():
+    """A ratio that exceeds the limit above a multiplier s* (here 1 + (s - s*)): the bisection ends
+    within 2^-BISECTION_STEPS of s*, on the safe side, after BISECTION_STEPS + 1 rounds."""
+    s_star = np.array([0.3, 0.77, 0.999])
+    bis = CornerBisection(3)
+    rounds = 0
+    while bis.update(1.0 + (bis.scale - s_star)):
+        rounds += 1
+        assert rounds <= BISECTION_STEPS + 2
+    assert rounds == BISECTION_STEPS + 1
+    assert np.all(bis.scale <= s_star) and np.all(s_star - bis.scale <= 2.0**-BISECTION_STEPS)
+
+
+def test_corner_bisection_goes_to_exact_stop_and_reports_a_stuck_corner():
+    """A corner above the limit at every overlap > 0 (the diamond's continuing axis doubles its
+    jerk for any T_k < 2 T_2) ends as an exact stop; above it even then, ConvergenceError."""
+    bis = CornerBisection(1)
+    while bis.update(np.where(bis.scale > 0, 1.41, 0.7)):
+        pass
+    assert bis.scale[0] == 0.0
+    with pytest.raises(ConvergenceError, match="as exact stops"):
+        bis.update(np.array([1.2]))
+
+
+def test_block_feed_bisection():
+    """Blocks alone whose ratio is r0 * g at feed multiplier g: the checked ones end at the largest
+    safe g within 2^-10 (lower bracket 0.5 / r0 given as 'safe'), the others keep 1."""
+    r0 = np.array([2.0, 1.25, 3.0, 0.8])
+    which = np.array([True, True, False, True])
+    g = hold_block_limits(lambda g: r0 * g, 0.5 / r0, which)
+    assert g[2] == 1.0 and g[3] == 1.0
+    assert np.all(r0[:2] * g[:2] <= 1.0) and np.all(1.0 / r0[:2] - g[:2] <= 2.0**-10)
+
+
+def test_blocks_in_windows():
+    """Blocks 0..3 of 1 s pulses with 0.5 s windows, starting every 1.2 s (T_d = 0.5 s): corner 1's
+    window [2.2, 2.9] meets the spans of blocks 1 [1.2, 2.7] and 2 [2.4, 3.9] only."""
+    starts = np.array([0.0, 1.2, 2.4, 3.6])
+    flags = np.array([False, True, False])
+    np.testing.assert_array_equal(blocks_in_windows(flags, starts, np.ones(4), 0.5), [False, True, True, False])

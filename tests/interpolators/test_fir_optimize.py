@@ -1,0 +1,77 @@
+"""Optimized FIR (``optimize_fir``, a named extension): its constraints on seeded random paths.
+
+Every check is independent of the optimizer's own constraint functions: corner errors and path
+deviation from the sampled trajectory (``research.metrics``), peaks sampled and refined
+(``metrics.limit_ratios``), end points from the path, and the exact per-piece peaks of the NLP
+against the planner's NumPy root finder (``_fir_limits.corner_peak_ratios``)."""
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from research.errors import ParameterError, PathError
+from research.interpolators import optimize_fir, plan_fir
+from research.interpolators._fir_limits import corner_peak_ratios
+from research.interpolators._fir_optimize import _piece_peak_ratios
+from research.limits import AxisLimits
+from research.metrics import corner_errors, limit_ratios, max_contour_error
+from research.paths import Polyline
+from research.paths.toolpath import ToolPath
+from research.piecewise import NumpyPiecewise
+
+DELAYS = (0.06, 0.03)
+F, EPS = 200.0, 0.1
+
+
+def random_path(seed: int, n: int = 4) -> Polyline:
+    """Seeded 2-D path of ``n`` segments of 4-15 mm turning by up to +-110 deg."""
+    rng = np.random.default_rng(seed)
+    heading = np.cumsum(rng.uniform(-np.radians(110), np.radians(110), n))
+    steps = rng.uniform(4.0, 15.0, n)[:, None] * np.column_stack([np.cos(heading), np.sin(heading)])
+    return Polyline(np.vstack([[0.0, 0.0], np.cumsum(steps, axis=0)]))
+
+
+@pytest.mark.parametrize("seed", [12, 13])  # same sample count: one compile
+def test_tolerance_limits_and_end_points_hold(seed):
+    """On random paths under limits below the FIR envelope: every vertex and every sample within
+    eps, every peak within its limit, start and end at the path's ends at rest, and never slower
+    than the limit-holding plan_fir."""
+    path = random_path(seed)
+    rng = np.random.default_rng(seed)
+    limits = AxisLimits(rng.uniform(0.7, 1.0, 2) * F, rng.uniform(0.7, 1.0, 2) * F / DELAYS[0],
+                        rng.uniform(0.7, 1.0, 2) * F / (DELAYS[0] * DELAYS[1]))
+    plan = optimize_fir(path, F, DELAYS, EPS, limits, max_iter=25, starts=("paper",))
+    tr = plan.trajectory(1e-3)
+    assert np.max(corner_errors(tr, path)) <= EPS * (1 + 1e-6)
+    assert max_contour_error(tr, path) <= EPS * (1 + 1e-6)
+    assert all(np.all(r <= 1 + 1e-6) for r in limit_ratios(tr, limits).values())
+    q, v = np.asarray(tr.q), np.asarray(tr.v)
+    np.testing.assert_allclose(q[0], path.points[0], atol=1e-9)
+    np.testing.assert_allclose(q[-1], path.points[-1], atol=1e-9)
+    np.testing.assert_allclose(v[[0, -1]], 0.0, atol=1e-9)
+    held = plan_fir(path, F, DELAYS, EPS, limits=limits)
+    assert float(plan.cycle_time) <= float(held.cycle_time) * (1 + 1e-12)
+
+
+def test_piece_peaks_match_the_planner_root_finder():
+    """The NLP's closed-form per-piece peaks equal the exact check's (companion-matrix roots)."""
+    path = random_path(13)
+    limits = AxisLimits.fir_envelope(2, F, DELAYS)
+    plan = plan_fir(path, F, DELAYS, EPS)
+    pos = plan.position
+    ours = float(jnp.max(_piece_peak_ratios(pos, jnp.asarray(np.stack([limits.velocity, limits.acceleration, limits.jerk])))))
+    pos_np = NumpyPiecewise(np.asarray(pos.breaks), np.asarray(pos.coeffs))
+    theirs = float(corner_peak_ratios(pos_np, np.array([0.0]), np.array([float(pos.end)]), limits)[0])
+    assert ours == pytest.approx(theirs, rel=1e-9)
+
+
+def test_bad_input():
+    path = random_path(14)
+    with pytest.raises(PathError, match="Polyline"):
+        optimize_fir(ToolPath.from_polyline(path), F, DELAYS, EPS)
+    with pytest.raises(ParameterError, match="tolerance"):
+        optimize_fir(path, F, DELAYS, 0.0)
+    with pytest.raises(ParameterError, match="axes"):
+        optimize_fir(path, F, DELAYS, EPS, AxisLimits.uniform(3, 1.0, 1.0, 1.0))
+    with pytest.raises(ParameterError, match="starts"):
+        optimize_fir(path, F, DELAYS, EPS, starts=("nowhere",))
