@@ -19,7 +19,6 @@ from __future__ import annotations
 import functools
 import math
 
-import numba
 import numpy as np
 
 #: breaks closer than this many sample periods after a grid instant are sampled as on it
@@ -68,6 +67,8 @@ def _kernel(n_coeffs: int, orders: int):
 
     Generated with every Horner step written out, so that each sample is straight-line code (a
     generic loop over ``m`` costs about 3x more per sample, measured in bench_sampling.py)."""
+    import numba  # here, not at module level: importing numba costs ~0.3 s that only sampling needs
+
     lines = [
         "def kernel(breaks, first, table, sample_period, out):",
         "    K = table.shape[0]",
