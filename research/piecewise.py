@@ -29,9 +29,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-_NUMPY_SAMPLES = 50_000  # below this many samples NumPy beats compiling a JAX sampler
-#: breaks closer than this many sample periods after a grid instant are sampled as on it
-GRID_SNAP = 1e-9
+from research._grid_sample import GRID_SNAP, sample_grid
+
 
 
 class PiecewisePolynomial(eqx.Module):
@@ -136,15 +135,11 @@ class PiecewisePolynomial(eqx.Module):
         Samples are right-hand limits, and a break within :data:`GRID_SNAP` ``* sample_period`` after
         a sample counts as on it: a profile whose switching instants sit on the grid up to rounding
         (``k Ts + 1e-16``) gives the new phase's acceleration/jerk at ``t_k``, not the old phase's
-        for a whole period. O(n_samples + K): the piece of each sample comes from a scatter-add and a
-        cumulative sum, not a search. Returns ``orders`` NumPy arrays of shape ``(n_samples, A)``.
+        for a whole period. One O(n_samples + K) pass for all orders (the piece index walks with the
+        grid, no search; :func:`research._grid_sample.sample_grid`). Returns ``orders`` NumPy arrays
+        of shape ``(n_samples, A)`` (views of one ``(orders, n_samples, A)`` block).
         """
-        if n_samples <= _NUMPY_SAMPLES:  # small: NumPy, no compilation
-            t = np.asarray(self.breaks[0]) + np.arange(n_samples) * sample_period
-            return tuple(self.evaluate_numpy(t, nu, snap=GRID_SNAP * sample_period) for nu in range(orders))
-        piece, tau, moving = _sample_pieces(self.breaks, jnp.asarray(sample_period, jnp.float64), bucket_size(n_samples, 256))
-        # one compiled call per order: XLA then fuses the coefficient gather into each Horner loop
-        return tuple(np.asarray(_sample_order(self.coeffs, piece, tau, moving, nu))[:n_samples] for nu in range(orders))
+        return tuple(sample_grid(np.asarray(self.breaks), np.asarray(self.coeffs), sample_period, n_samples, orders))
 
     def evaluate_numpy(self, t, nu: int = 0, snap: float = 0.0) -> np.ndarray:
         """:meth:`__call__` in NumPy, for concrete arrays: no JAX compilation or dispatch, which
@@ -260,27 +255,3 @@ def _recentred(C: PiecewisePolynomial, piece: Array, origin: Array) -> Array:
     table_origin = jnp.concatenate([C.breaks[:1], C.breaks[:K], C.breaks[-1:]])
     j = jnp.clip(piece + 1, 0, K + 1)
     return _taylor_shift(table[j], origin - table_origin[j])
-
-
-@partial(jax.jit, static_argnums=2)
-def _sample_pieces(breaks: Array, sample_period: Array, n_samples: int) -> tuple[Array, Array, Array]:
-    """Piece index, local time and 'motion not yet ended' flag of each sample of the uniform grid."""
-    K = breaks.shape[0] - 1
-    # index of the first sample at or after each interior break (less GRID_SNAP: see sample())
-    first = jnp.clip(jnp.ceil((breaks[1:K] - breaks[0]) / sample_period - GRID_SNAP), 0, n_samples).astype(jnp.int32)
-    piece = jnp.cumsum(jnp.zeros(n_samples + 1, jnp.int32).at[first].add(1))[:n_samples]
-    t = breaks[0] + jnp.arange(n_samples, dtype=jnp.float64) * sample_period
-    tau = jnp.clip(t, breaks[0], breaks[-1]) - breaks[piece]
-    return piece, tau, t <= breaks[-1]
-
-
-@partial(jax.jit, static_argnums=4)
-def _sample_order(coeffs: Array, piece: Array, tau: Array, moving: Array, nu: int) -> Array:
-    """Horner on the ``nu``-th derivative, ``sum_m m!/(m-nu)! c_m tau^(m-nu)``, at every sample."""
-    d = coeffs.shape[1] - 1
-    if nu > d:
-        return jnp.zeros((piece.shape[0], coeffs.shape[2]))
-    value = coeffs[piece, d, :] * math.perm(d, nu)
-    for m in range(d - 1, nu - 1, -1):
-        value = value * tau[:, None] + coeffs[piece, m, :] * math.perm(m, nu)
-    return value if nu == 0 else jnp.where(moving[:, None], value, 0.0)

@@ -11,6 +11,7 @@ through ``jit``/``vmap``/``grad``. Input checks run only on concrete arrays.
 
 from __future__ import annotations
 
+import contextvars
 from pathlib import Path
 
 import equinox as eqx
@@ -21,6 +22,9 @@ from scipy.interpolate import CubicHermiteSpline
 
 from research.errors import ParameterError
 from research.piecewise import PiecewisePolynomial
+
+# set while from_piecewise wraps its own samples: their checks cannot fail (see from_piecewise)
+_SAMPLED_FROM_PROFILE = contextvars.ContextVar("trajectory_sampled_from_profile", default=False)
 
 
 class Trajectory(eqx.Module):
@@ -52,6 +56,8 @@ class Trajectory(eqx.Module):
     sample_period: float = eqx.field(static=True, default=1e-3)
 
     def __check_init__(self):
+        if _SAMPLED_FROM_PROFILE.get():
+            return
         if any(isinstance(x, jax.core.Tracer) for x in (self.t, self.q)):
             return
         t = np.asarray(self.t)
@@ -84,12 +90,27 @@ class Trajectory(eqx.Module):
         The grid is ``0, Ts, 2 Ts, ...`` up to the first sample at or after the end of the motion,
         so the last sample is at rest on the end point; ``duration`` keeps the exact end time.
         """
+        if not (np.isfinite(sample_period) and sample_period > 0):
+            raise ParameterError(f"Trajectory.from_piecewise: sample_period must be finite and > 0 s, got {sample_period!r}")
+        breaks, coeffs = np.asarray(position.breaks), np.asarray(position.coeffs)
+        if coeffs.shape[2] != len(axes):
+            raise ParameterError(f"Trajectory.from_piecewise: profile has {coeffs.shape[2]} channels, axes {tuple(axes)}")
+        # O(K) checks on the profile instead of O(N) checks on its samples: finite breaks and
+        # coefficients give finite samples, and the grid i * Ts is increasing by construction
+        for name, x in (("breaks", breaks), ("coeffs", coeffs)):
+            bad = ~np.isfinite(x)
+            if bad.any():
+                raise ParameterError(f"Trajectory.from_piecewise: profile {name} not finite at index {tuple(map(int, np.argwhere(bad)[0]))}")
         duration = position.end - position.start
-        n = int(np.ceil(float(jax.lax.stop_gradient(duration)) / sample_period - 1e-9)) + 1
+        n = int(np.ceil(float(breaks[-1] - breaks[0]) / sample_period - 1e-9)) + 1
         q, v, a, j = position.sample(sample_period, n, orders=4)
         shifted = PiecewisePolynomial(position.breaks - position.start, position.coeffs)
         t = np.arange(n) * sample_period
-        return Trajectory(t, q, v, a, j, duration, shifted, tuple(axes), float(sample_period))
+        token = _SAMPLED_FROM_PROFILE.set(True)
+        try:
+            return Trajectory(t, q, v, a, j, duration, shifted, tuple(axes), float(sample_period))
+        finally:
+            _SAMPLED_FROM_PROFILE.reset(token)
 
     @staticmethod
     def from_positions(t, q, axes: tuple[str, ...], duration: float | None = None) -> "Trajectory":
