@@ -229,7 +229,10 @@ def _identify(ic, base: Path, objects: dict | None = None, model_file: bool = Tr
 
     truth = None
     if ic.log_file is not None:
-        log = load_drive_log(base / ic.log_file)
+        c, u = ic.columns, ic.units
+        log = load_drive_log(base / ic.log_file, time=c.t, reference=c.x_ref, actual=c.x_act, time_unit=u.t,
+                             units={"x_ref": u.x_ref, "x_act": u.x_act}, counts_per_mm=ic.counts_per_mm,
+                             counts_per_rev=ic.counts_per_rev)
     else:
         truth = virtual_drive(ic.truth)
         ref = identification_program(ic.seed, n_moves=ic.n_moves).trajectory()
