@@ -311,7 +311,8 @@ class IdentificationConfig(_Strict):
 
     @model_validator(mode="after")
     def _log_options(self):
-        given = [k for k in ("columns", "units", "counts_per_mm", "counts_per_rev") if k in self.model_fields_set]
+        defaults = {"columns": LogColumns(), "units": LogUnits(), "counts_per_mm": None, "counts_per_rev": None}
+        given = [k for k, v in defaults.items() if getattr(self, k) != v]  # a dumped config repeats the defaults
         if self.log_file is None and given:
             raise ValueError(f"{', '.join(given)} describe log_file, which is not given (the synthetic log needs none)")
         if self.counts_per_mm is not None and self.counts_per_rev is not None:

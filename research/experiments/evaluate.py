@@ -78,31 +78,23 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
     if cfg.drive is not None and cfg.drive.identified_file is not None:
         log(f"drive: identified model {cfg.drive.identified_file}")
         objects["identified_drive"] = identified_drive(cfg.drive, base)
-    if cfg.vibration is not None:
-        log("vibration: resonance test -> modes -> eq 10 delays")
-        found, details["vibration"], more = vibration_stage(cfg.vibration, base)
-        scalars |= found
-        arrays |= more
-    if cfg.control is not None:
-        log(f"control: {cfg.control.controller} controller on the Fig 5.5 path at {cfg.control.feed_mm_per_s:g} mm/s")
-        found, details["control"], more = control_stage(cfg.control)
-        scalars |= found
-        arrays |= more
-    if cfg.spectrum is not None:
-        log("spectrum: FIR chain frequency response (eq 8-10)")
-        found, details["spectrum"], more = spectrum_stage(cfg.spectrum)
-        scalars |= found
-        arrays |= more
-    if cfg.startup is not None:
-        log("startup: sigmoid start of a linear move (DiMarco eq 3-5)")
-        found, details["startup"], more = startup_stage(cfg.startup)
-        scalars |= found
-        arrays |= more
-    if cfg.five_axis_contour is not None:
-        log("five_axis_contour: eq 4.36 path, exact tip contour error vs Frenet estimates (thesis §4.5)")
-        found, details["five_axis_contour"], more = five_axis_contour_stage(cfg.five_axis_contour)
-        scalars |= found
-        arrays |= more
+    # stages that need no tool path: (config key, progress line from its table, stage function)
+    standalone = (
+        ("vibration", lambda c: "vibration: resonance test -> modes -> eq 10 delays", lambda c: vibration_stage(c, base)),
+        ("control", lambda c: f"control: {c.controller} controller on the Fig 5.5 path at {c.feed_mm_per_s:g} mm/s",
+         control_stage),
+        ("spectrum", lambda c: "spectrum: FIR chain frequency response (eq 8-10)", spectrum_stage),
+        ("startup", lambda c: "startup: sigmoid start of a linear move (DiMarco eq 3-5)", startup_stage),
+        ("five_axis_contour", lambda c: "five_axis_contour: eq 4.36 path, exact tip contour error vs Frenet estimates "
+                                        "(thesis §4.5)", five_axis_contour_stage),
+    )
+    for key, line, stage in standalone:
+        table = getattr(cfg, key)
+        if table is not None:
+            log(line(table))
+            found, details[key], more = stage(table)
+            scalars |= found
+            arrays |= more
     if cfg.drive is not None and cfg.drive.frequency_response is not None:
         log(f"drive {cfg.drive.model}: frequency response")
         axes = named_axes(cfg) if cfg.path is not None else ("x",)
