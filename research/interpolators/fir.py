@@ -231,10 +231,10 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
 
     def settle(factor, head, tail, full, others, arc_rel):
         """Verify and repair one candidate plan, one round per step: a generator that yields the
-        predicted time of the repaired plan after each failed round and returns ``(state, rounds,
-        deviation, limit_repaired)``. Without limits the prediction is a lower bound on the final time
-        (repairs only shrink overlaps and lower feeds); with limits it is not (a corner's bisection
-        may lengthen its overlap again), so the caller then bounds a candidate by its first prediction."""
+        ``(predicted time, limit repaired so far)`` after each failed round and returns ``(state,
+        rounds, deviation, limit_repaired)``. The prediction is a lower bound on the final time:
+        repairs only shrink overlaps and lower feeds, and a bisecting corner is predicted at its
+        bracket's upper end (:attr:`CornerBisection.bound_scale`), above which it never ends."""
         factor, shrink = factor.copy(), np.ones(M - 1)
         bisection, checked, repaired = CornerBisection(M - 1), np.zeros(M, dtype=bool), False
 
@@ -319,7 +319,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         shrink[j] *= min(0.98 * ratio ** (1.0 / (n_f + 1)), 1.0)
                 for k in np.flatnonzero(arc_slow):
                     factor[k] *= min(0.98 * np.sqrt(tb_np[k] / arc_slow[k]), 0.98)
-                yield predicted_time((factor, head, tail, full, others, arc_rel), shrink * bisection.scale)
+                yield predicted_time((factor, head, tail, full, others, arc_rel), shrink * bisection.bound_scale), repaired
                 state = schedule(factor, head, tail, full, shrink * bisection.scale, others, arc_rel)
         return state, rounds, deviation, repaired
 
@@ -328,31 +328,41 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             return _look_ahead(tp, table, F_np, base, d_np, tv_np, t_in, t_out)
         return [(np.repeat(base[:, None], 3, axis=1), head, tail, full, others, None)]
 
-    def verify(candidates, best, best_time):
+    def verify(candidates, capped):
         """Branch and bound, one verification round at a time: the candidate (or repaired candidate)
         of least bound goes next, until none could still beat the best verified plan; a candidate
         whose repairs push its bound past the best verified plan is dropped without rebuilding its
-        profile. Returns ``(best, best_time, any limit repaired)``."""
-        repaired = False
+        profile. Once a candidate needs a limit repair, the candidates ``capped()`` (every block at
+        its closed-form safe feed up front: slower blocks whose corners keep their overlap can beat
+        exact stops) join the same queue. Returns the best settled ``(state, rounds, deviation, _)``."""
+        best, best_time = None, np.inf
         queue = [(predicted_time(c) if len(candidates) > 1 else 0.0, i, settle(*c)) for i, c in enumerate(candidates)]
         heapq.heapify(queue)
+        extra = capped is not None
+
+        def add_capped():
+            for i, c in enumerate(capped(), start=len(candidates)):
+                heapq.heappush(queue, (predicted_time(c), i, settle(*c)))
+
         while queue and queue[0][0] < best_time:
             bound, i, steps = heapq.heappop(queue)
             try:
-                step = next(steps)
-                heapq.heappush(queue, (bound if limits is not None else max(bound, step), i, steps))
+                step, repaired = next(steps)
+                heapq.heappush(queue, (max(bound, step), i, steps))
             except StopIteration as done:
-                repaired |= done.value[3]
+                repaired = done.value[3]
                 t = float(_primal(done.value[0][4].end - done.value[0][4].start))
                 if t < best_time:
                     best, best_time = done.value, t
-        return best, best_time, repaired
+            if extra and repaired:
+                extra = False
+                add_capped()
+        return best
 
-    best, best_time, repaired = verify(plans(base), None, np.inf)
-    if limits is not None and repaired and np.any(safe_feed < F_np * base):
-        # a plan needed a limit repair: also plan every block at its closed-form safe feed up front
-        # (slower blocks whose corners keep their overlap can beat exact stops)
-        best, best_time, _ = verify(plans(np.minimum(base, safe_feed / F_np)), best, best_time)
+    capped = None
+    if limits is not None and np.any(safe_feed < F_np * base):
+        capped = lambda: plans(np.minimum(base, safe_feed / F_np))  # noqa: E731
+    best = verify(plans(base), capped)
     state, rounds, deviation, _ = best
     feeds, overlaps, pulse, starts, position, centre = state
     return FIRPlan(starts, pulse, overlaps, feeds, delays, position, centre, jnp.asarray(tp.vertices),
