@@ -5,9 +5,11 @@
 Per seed: ``cam_like_path(N, seed)`` at F = 200 mm/s, T1/T2 = 60/30 ms, eps = 50 um, under the
 nominal FIR envelope (``AxisLimits.fir_envelope``) and under the plain plan's own peaks (which the
 plain FIR keeps by construction). Prints best-of-R wall time of plain and limit-holding planning
-(first call, JAX compile, apart), their ratio, cycle times and the worst limit ratio measured on the
-sampled trajectory. Target (this task): limit-holding <= 2x the old 0.3 s on the envelope case;
-no slower than ... plain-held case: ratio to plain printed.
+(first call, JAX compile, apart), their ratio, cycle times, the worst limit ratio measured on the
+sampled trajectory (``metrics.limit_ratios``), the corner error and the path deviation. Targets
+(recorded in benchmarks/README.md, bench_fir_optimal section): envelope case within ~2x of the
+0.3 s the 15 %-step repair took; under the plain plan's own peaks no slower than before. For a
+before -> after comparison run the script twice, with ``PYTHONPATH`` on each package version.
 """
 from __future__ import annotations
 
