@@ -39,7 +39,8 @@ corner bounds its candidate's cycle time by its bracket's upper end
 (:attr:`CornerBisection.bound_scale`), so the branch and bound drops a candidate as soon as that
 bound passes the best verified plan; the closed-form capped candidates join the same queue once
 any candidate needs a limit repair. On a seeded 400-segment CAM-like path under the FIR envelope
-this took planning from 3.4 s to 0.76 s at the same cycle time (benchmarks/README.md).
+this took planning from 2.6-4.3 s to 0.56-0.96 s at the same cycle time (benchmarks/README.md;
+phase 1, ``hold_block_limits``, is now about 40 % of it).
 """
 
 from __future__ import annotations
