@@ -33,10 +33,14 @@ exact stops still break a limit (a block checked alone in an earlier window, see
 another), ``plan_fir`` slows every block those windows cover by ``0.98 / ratio`` a round, within
 its hard round bound (``ConvergenceError`` beyond it).
 
-Cost: each round re-verifies the tolerance too (``path_deviations``), so a path whose corners
-break the limits widely pays about ``BISECTION_STEPS`` verified rounds per candidate: on a seeded
-400-segment CAM-like path under the FIR envelope 5.8 s against 0.3 s for the old 15 % steps
-(cycle time 28.698 against 28.688 s).
+Cost: a round after a corner bisection step alone whose limits still break is not checked
+against the tolerance (the plan that is returned always is; see ``plan_fir``), and a bisecting
+corner bounds its candidate's cycle time by its bracket's upper end
+(:attr:`CornerBisection.bound_scale`), so the branch and bound drops a candidate as soon as that
+bound passes the best verified plan; the closed-form capped candidates join the same queue once
+any candidate needs a limit repair. On a seeded 400-segment CAM-like path under the FIR envelope
+this took planning from 2.6-4.3 s to 0.56-0.96 s at the same cycle time (benchmarks/README.md;
+phase 1, ``hold_block_limits``, is now about 40 % of it).
 """
 
 from __future__ import annotations
@@ -290,6 +294,13 @@ class CornerBisection:
         self._steps = np.zeros(n_corners, dtype=np.int64)
         self._state = np.zeros(n_corners, dtype=np.int64)  # 0 untouched, 1 bisecting, 2 settled
         self._round = 0
+
+    @property
+    def bound_scale(self) -> np.ndarray:
+        """``(C,)`` upper bounds on the final multipliers: a bisecting corner ends at most at its
+        bracket's upper end, which only falls; any other multiplier only falls (to 0 at most). The
+        overlaps they give bound the repaired plan's cycle time from below."""
+        return np.where(self._state == 1, self._hi, self.scale)
 
     def update(self, ratios: np.ndarray) -> bool:
         """Take this round's corner ratios (:func:`corner_limit_ratios`); returns True while the

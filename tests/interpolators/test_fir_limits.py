@@ -82,6 +82,24 @@ def test_corner_bisection_converges_from_below():
     assert np.all(bis.scale <= s_star) and np.all(s_star - bis.scale <= 2.0**-BISECTION_STEPS)
 
 
+def test_corner_bisection_bound_never_below_the_final_multiplier():
+    """``bound_scale`` bounds the planner's branch and bound: in every round it must be at least
+    the multiplier the bisection ends at (the current ``scale``, a bracket midpoint, is not: it
+    falls below s* and rises again) and must never rise. Same closed-form ratio as above, plus a
+    corner that never breaks its limit (bound 1 throughout)."""
+    s_star = np.array([0.3, 0.77, 0.999, 2.0])
+    bis = CornerBisection(4)
+    bounds, scales = [bis.bound_scale.copy()], [bis.scale.copy()]
+    while bis.update(1.0 + (bis.scale - s_star)):
+        bounds.append(bis.bound_scale.copy())
+        scales.append(bis.scale.copy())
+    bounds, scales = np.array(bounds), np.array(scales)
+    assert np.all(bounds >= bis.scale[None, :])
+    assert np.all(np.diff(bounds, axis=0) <= 0.0)
+    assert np.any(scales < bis.scale[None, :])  # the midpoint alone would not bound the final plan
+    assert np.all(bounds[:, 3] == 1.0)
+
+
 def test_corner_bisection_goes_to_exact_stop_and_reports_a_stuck_corner():
     """A corner above the limit at every overlap > 0 (the diamond's continuing axis doubles its
     jerk for any T_k < 2 T_2) ends as an exact stop; above it even then, ConvergenceError."""
