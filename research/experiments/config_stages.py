@@ -272,6 +272,23 @@ class StartupConfig(_Strict):
         return self
 
 
+class MTPConfig(_Strict):
+    """A modulated tool path ``m t + A sin(2 pi f t)`` of length L along one axis (DiMarco 2015 §1-2) by the sigmoid
+    interpolator and two linear interpolators of ``moves_per_period`` G01 moves per period (exact stop; blending with
+    acc/dec after interpolation), each run through the config's ``[drive]``
+    (:mod:`research.experiments.stage_mtp`)."""
+
+    length_mm: float = Field(..., gt=0, description="move length L [mm]")
+    feed_mm_per_s: float = Field(..., gt=0, description="nominal feed m [mm/s]")
+    amplitude_mm: float = Field(..., ge=0, description="modulation amplitude A [mm]")
+    frequency_hz: float = Field(..., gt=0, description="modulation frequency f [Hz]")
+    acceleration_mm_per_s2: float = Field(..., gt=0, description="acceleration limit of every interpolator [mm/s^2]")
+    jerk_mm_per_s3: float = Field(..., gt=0, description="jerk limit of every interpolator [mm/s^3]")
+    moves_per_period: int = Field(16, ge=2, description="G01 moves per oscillation period (linear interpolators)")
+    sample_period_ms: float = Field(0.1, gt=0, description="grid step of the references and the drive [ms]")
+    settle_time_s: float = Field(0.2, gt=0, description="rest simulated after the longest reference [s]")
+
+
 class FiveAxisContourConfig(_Strict):
     """Thesis §4.5 / Fig 4.6 (:func:`research.contour.five_axis_contour_study`): the eq 4.36 5-axis path (50 mm/s,
     1500 mm/s^2) through per-axis Table 6.3 drives, the exact tool-tip contour error against the basic (eq 4.20),

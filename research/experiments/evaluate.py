@@ -98,6 +98,13 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
         found, details["startup"], more = startup_stage(cfg.startup)
         scalars |= found
         arrays |= more
+    if cfg.mtp is not None:
+        from research.experiments.stage_mtp import mtp_stage
+
+        log(f"mtp: sigmoid vs linear interpolators through the drive {cfg.drive.model}")
+        found, details["mtp"], more = mtp_stage(cfg.mtp, drive_model(cfg.drive, ("s",), objects.get("identified_drive")))
+        scalars |= found
+        arrays |= more
     if cfg.five_axis_contour is not None:
         log("five_axis_contour: eq 4.36 path, exact tip contour error vs Frenet estimates (thesis §4.5)")
         found, details["five_axis_contour"], more = five_axis_contour_stage(cfg.five_axis_contour)
