@@ -429,6 +429,17 @@ class ExperimentConfig(_Strict):
         return data
 
     @model_validator(mode="after")
+    def _limits_from_earlier(self):
+        labels = []
+        for ic in self.interpolators:
+            source = getattr(ic, "limits_from", None)
+            if source is not None and (ic.limits is not None or source not in labels):
+                raise ValueError(f"interpolator {ic.label or ic.kind!r}: limits_from = {source!r} names no earlier "
+                                 f"interpolator (earlier: {labels}) or comes with limits; give one of them")
+            labels.append(ic.label or ic.kind)
+        return self
+
+    @model_validator(mode="after")
     def _something_to_do(self):
         drive_study = self.drive is not None and self.drive.frequency_response is not None
         if (self.path is None and self.identification is None and self.vibration is None and self.spectrum is None

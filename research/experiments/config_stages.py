@@ -86,6 +86,9 @@ class BlendConfig(_Strict):
     feed_mm_per_s: float = Field(250.0, gt=0, description="commanded feed F [mm/s]")
     tolerance_um: float = Field(500.0, gt=0, description="corner deviation epsilon [um]")
     limits: LimitsConfig | None = Field(None, description="axis limits (default: the FIR envelope of envelope_delays_ms)")
+    limits_from: str | None = Field(None, description="label of an earlier interpolator of the config whose own per-axis "
+                                                      "peak |v|, |a|, |j| are the limits (Sencer 2015 Fig 6: the blend "
+                                                      "held to the FIR's peaks); not with limits")
     envelope_delays_ms: list[float] = Field(PAPER_DELAYS_MS, min_length=1, description="FIR delays setting the default limits [ms]")
     sample_period_ms: float = Field(1.0, gt=0, description="interpolation period Ts [ms]")
 
