@@ -25,3 +25,19 @@ def test_mtp_comparison_from_the_store(tmp_path):
     assert abs(g("sigmoid", "cycle_time") / g("blending", "cycle_time") - 1) < 0.03
     for ref in ("sigmoid", "exact_stop", "blending"):  # every interpolator under the config's limits
         assert g(ref, "peak_acceleration") <= 5000.0 * (1 + 1e-9) and g(ref, "peak_jerk") <= 2e6 * (1 + 1e-9)
+
+
+def test_mtp_needs_one_drive_model():
+    """``[mtp]`` runs its references through a drive: refused without one, with the ideal one, or per axis."""
+    import pytest
+
+    from research.errors import ConfigError
+    from research.experiments.config import validate
+
+    mtp = {"length_mm": 10.0, "feed_mm_per_s": 20.0, "amplitude_mm": 0.2, "frequency_hz": 20.0,
+           "acceleration_mm_per_s2": 5000.0, "jerk_mm_per_s3": 2e6}
+    base = {"name": "t", "reproduces": "-", "mtp": mtp}
+    validate(base | {"drive": {"model": "sencer2009_table6_1"}}, "t.toml")
+    for drive in (None, {"model": "ideal"}, {"model": "sencer2009_table6_3"}):
+        with pytest.raises(ConfigError, match=r"\[mtp\]"):
+            validate(base | ({"drive": drive} if drive else {}), "t.toml")

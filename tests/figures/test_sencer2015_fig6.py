@@ -26,3 +26,20 @@ def test_fig6_from_the_store(tmp_path):
     fir_peak_a = np.abs(arrays["fir.a"]).max(axis=0)
     assert np.all(np.abs(arrays["blend.a"]).max(axis=0) <= np.asarray(limits["acceleration"]) * (1 + 1e-6))
     assert np.all(np.asarray(limits["acceleration"]) >= fir_peak_a * (1 - 1e-9))
+
+
+def test_limits_from_names_an_earlier_interpolator():
+    """``limits_from`` must name an earlier interpolator, and not come with ``limits``."""
+    import pytest
+
+    from research.errors import ConfigError
+    from research.experiments.config import validate
+
+    fir = {"label": "fir"}
+    blend = {"kind": "blend", "label": "blend", "limits_from": "fir"}
+    base = {"name": "t", "reproduces": "-", "path": {"name": "diamond"}}
+    validate(base | {"interpolator": [fir, blend]}, "t.toml")
+    for bad in ([blend, fir], [fir, blend | {"limits_from": "fr"}],
+                [fir, blend | {"limits": {"velocity_mm_per_s": 1.0, "acceleration_mm_per_s2": 1.0}}]):
+        with pytest.raises(ConfigError, match="limits_from"):
+            validate(base | {"interpolator": bad}, "t.toml")
