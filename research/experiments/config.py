@@ -55,6 +55,7 @@ from research.experiments.config_stages import (
     SigmoidConfig,
     FiveAxisContourConfig,
     SpectrumConfig,
+    MTPConfig,
     StartupConfig,
     VibrationConfig,
 )
@@ -99,6 +100,13 @@ METRIC_UNITS = {
     "startup_peak_feed": "mm/s",
     "startup_peak_time": "s",
     "startup_initial_acceleration": "mm/s^2",
+    # mtp stage (DiMarco 2015 MTP through a drive): per reference, cycle, errors against the nominal move, peaks
+    "mtp_cycle_time": "s",
+    "mtp_rms_tracking_error": "mm",
+    "mtp_max_tracking_error": "mm",
+    "mtp_max_reference_error": "mm",
+    "mtp_peak_acceleration": "mm/s^2",
+    "mtp_peak_jerk": "mm/s^3",
     # five-axis contour stage: mean |estimate - exact| while moving
     "mean_estimator_error": "mm",
 }
@@ -397,6 +405,8 @@ class ExperimentConfig(_Strict):
     vibration: VibrationConfig | None = Field(None, description="resonance test -> modes -> eq 10 delays")
     spectrum: SpectrumConfig | None = Field(None, description="FIR chain frequency response (eq 8-10)")
     startup: StartupConfig | None = Field(None, description="sigmoid start of a linear move (DiMarco 2015 eq 3-5)")
+    mtp: MTPConfig | None = Field(None, description="modulated tool path: sigmoid vs linear interpolators through "
+                                                    "the [drive] (DiMarco 2015)")
     five_axis_contour: FiveAxisContourConfig | None = Field(
         None, description="thesis §4.5: eq 4.36 5-axis path, exact tip contour error vs Frenet estimates")
     contour: ContourConfig | None = Field(None, description="contour-error stage (needs a drive other than ideal)")
@@ -420,13 +430,27 @@ class ExperimentConfig(_Strict):
         return data
 
     @model_validator(mode="after")
+    def _limits_from_earlier(self):
+        labels = []
+        for ic in self.interpolators:
+            source = getattr(ic, "limits_from", None)
+            if source is not None and (ic.limits is not None or source not in labels):
+                raise ValueError(f"interpolator {ic.label or ic.kind!r}: limits_from = {source!r} names no earlier "
+                                 f"interpolator (earlier: {labels}) or comes with limits; give one of them")
+            labels.append(ic.label or ic.kind)
+        return self
+
+    @model_validator(mode="after")
     def _something_to_do(self):
         drive_study = self.drive is not None and self.drive.frequency_response is not None
         if (self.path is None and self.identification is None and self.vibration is None and self.spectrum is None
-                and self.startup is None and self.five_axis_contour is None and self.control is None and not drive_study):
+                and self.startup is None and self.five_axis_contour is None and self.control is None and not drive_study
+                and self.mtp is None):
             raise ValueError("give a [path] (motion study), an [identification] table, a [vibration] table, a "
-                             "[spectrum] table, a [startup] table, a [five_axis_contour] table, a [control] table or a "
+                             "[spectrum] table, a [startup] table, an [mtp] table, a [five_axis_contour] table, a [control] table or a "
                              "[drive.frequency_response] table")
+        if self.mtp is not None and (self.drive is None or self.drive.model == "ideal" or self.drive.model in PER_AXIS_DRIVES):
+            raise ValueError("[mtp] runs its references through a [drive] of one model (not \"ideal\", not per axis)")
         if drive_study and self.drive.model == "ideal":
             raise ValueError("[drive.frequency_response] needs a drive model, not \"ideal\"")
         if self.drive is not None and self.drive.model == "identified":

@@ -86,6 +86,9 @@ class BlendConfig(_Strict):
     feed_mm_per_s: float = Field(250.0, gt=0, description="commanded feed F [mm/s]")
     tolerance_um: float = Field(500.0, gt=0, description="corner deviation epsilon [um]")
     limits: LimitsConfig | None = Field(None, description="axis limits (default: the FIR envelope of envelope_delays_ms)")
+    limits_from: str | None = Field(None, description="label of an earlier interpolator of the config whose own per-axis "
+                                                      "peak |v|, |a|, |j| are the limits (Sencer 2015 Fig 6: the blend "
+                                                      "held to the FIR's peaks); not with limits")
     envelope_delays_ms: list[float] = Field(PAPER_DELAYS_MS, min_length=1, description="FIR delays setting the default limits [ms]")
     sample_period_ms: float = Field(1.0, gt=0, description="interpolation period Ts [ms]")
 
@@ -270,6 +273,23 @@ class StartupConfig(_Strict):
         if any(not a > 0 for a in self.alphas):
             raise ValueError(f"alphas = {self.alphas} must all be > 0")
         return self
+
+
+class MTPConfig(_Strict):
+    """A modulated tool path ``m t + A sin(2 pi f t)`` of length L along one axis (DiMarco 2015 §1-2) by the sigmoid
+    interpolator and two linear interpolators of ``moves_per_period`` G01 moves per period (exact stop; blending with
+    acc/dec after interpolation), each run through the config's ``[drive]``
+    (:mod:`research.experiments.stage_mtp`)."""
+
+    length_mm: float = Field(..., gt=0, description="move length L [mm]")
+    feed_mm_per_s: float = Field(..., gt=0, description="nominal feed m [mm/s]")
+    amplitude_mm: float = Field(..., ge=0, description="modulation amplitude A [mm]")
+    frequency_hz: float = Field(..., gt=0, description="modulation frequency f [Hz]")
+    acceleration_mm_per_s2: float = Field(..., gt=0, description="acceleration limit of every interpolator [mm/s^2]")
+    jerk_mm_per_s3: float = Field(..., gt=0, description="jerk limit of every interpolator [mm/s^3]")
+    moves_per_period: int = Field(16, ge=2, description="G01 moves per oscillation period (linear interpolators)")
+    sample_period_ms: float = Field(0.1, gt=0, description="grid step of the references and the drive [ms]")
+    settle_time_s: float = Field(0.2, gt=0, description="rest simulated after the longest reference [s]")
 
 
 class FiveAxisContourConfig(_Strict):

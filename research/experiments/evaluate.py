@@ -29,6 +29,7 @@ import numpy as np
 from research.experiments.config import METRIC_UNITS, ExperimentConfig, build_path, named_axes, read_program
 from research.drives import residual_vibration_sampled
 from research.experiments.stage_control import control_stage
+from research.experiments.stage_mtp import mtp_stage
 from research.experiments.stages import (
     compensation_stage,
     contour_stage,
@@ -85,6 +86,8 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
          control_stage),
         ("spectrum", lambda c: "spectrum: FIR chain frequency response (eq 8-10)", spectrum_stage),
         ("startup", lambda c: "startup: sigmoid start of a linear move (DiMarco eq 3-5)", startup_stage),
+        ("mtp", lambda c: f"mtp: sigmoid vs linear interpolators through the drive {cfg.drive.model}",
+         lambda c: mtp_stage(c, drive_model(cfg.drive, ("s",), objects.get("identified_drive")))),
         ("five_axis_contour", lambda c: "five_axis_contour: eq 4.36 path, exact tip contour error vs Frenet estimates "
                                         "(thesis §4.5)", five_axis_contour_stage),
     )
@@ -115,6 +118,8 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
             label = ic.label or ic.kind
             prefix = f"{label}." if several else ""
             log(f"interpolator {label}: {path.n_segments} segments")
+            if getattr(ic, "limits_from", None) is not None:  # the peaks of an earlier interpolator as the limits
+                ic = _limits_of(ic, next(tr for lb, _, tr, _ in objects["runs"] if lb == ic.limits_from))
             traj, info, plan = interpolate(ic, path, program_feeds, blocks)
             metrics = summarize(traj, path)
             objects.setdefault("runs", []).append((label, plan, traj, metrics))
@@ -125,8 +130,10 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
                 continue
             log(f"drive {cfg.drive.model}: {len(cfg.drive.modes)} modes")
             drive = drive_model(cfg.drive, traj.axes, objects.get("identified_drive"))
-            found, actual = _drive(cfg, traj, drive)
+            found, actual, deflection = _drive(cfg, traj, drive)
             scalars |= {prefix + k: v for k, v in found.items()}
+            if deflection is not None:
+                arrays[f"{label}.deflection"] = deflection
             if actual is not None:
                 arrays[f"{label}.actual"] = actual[: traj.n_samples]
             if cfg.contour is not None:
@@ -154,21 +161,34 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
     return Evaluation({"scalars": scalars, "units": units, "details": details}, arrays, objects)
 
 
+def _limits_of(ic, traj: Trajectory):
+    """``ic`` with ``limits`` set to ``traj``'s own per-axis peak |v|, |a|, |j| (``limits_from``)."""
+    from research.experiments.config_stages import LimitsConfig
+    from research.metrics import peak_axis_values
+
+    peaks = [[float(x) for x in peak_axis_values(traj, nu)] for nu in (1, 2, 3)]
+    limits = LimitsConfig(velocity_mm_per_s=peaks[0], acceleration_mm_per_s2=peaks[1], jerk_mm_per_s3=peaks[2])
+    return ic.model_copy(update={"limits": limits, "limits_from": None})
+
+
 def _metric_name(key: str) -> str:
     return next(p for p in key.split(".") if p in METRIC_UNITS)
 
 
-def _drive(cfg: ExperimentConfig, traj: Trajectory, drive) -> tuple[dict[str, float], np.ndarray | None]:
+def _drive(cfg: ExperimentConfig, traj: Trajectory, drive) -> tuple[dict[str, float], np.ndarray | None,
+                                                                   np.ndarray | None]:
     """Residual vibration per mode (and its max), and the tracking error of a drive model [mm]
     (``drive``: from :func:`~research.experiments.stages.drive_model`, ``None`` for the ideal drive).
 
     Returns:
-        ``(scalars, actual positions on the held grid or None)``.
+        ``(scalars, actual positions on the held grid or None, deflection of each mode (columns in the order of
+        ``[[drive.modes]]``) on the held grid ``k Ts`` (motion + settle_time_s) [mm], or None (no modes, or the ideal
+        drive))``.
     """
     d = cfg.drive
     out = {}
     a = np.asarray(traj.a)
-    actual = None
+    actual, deflections = None, []
     if drive is None:
         for m in d.modes:
             k = traj.axes.index(m.axis)
@@ -188,9 +208,10 @@ def _drive(cfg: ExperimentConfig, traj: Trajectory, drive) -> tuple[dict[str, fl
             axis_drive = drive[k] if isinstance(drive, tuple) else drive
             defl = np.asarray(simulate(axis_drive, one, modes=FlexibleMode.from_hz(m.frequency_hz, m.damping)).deflection)
             out[f"residual_vibration.{m.axis}"] = float(np.max(np.abs(defl[after, 0])))
+            deflections.append(defl[:, 0])
     if d.modes:
         out["residual_vibration"] = max(out[f"residual_vibration.{m.axis}"] for m in d.modes)
-    return out, actual
+    return out, actual, (np.stack(deflections, axis=1) if deflections else None)
 
 
 def _hold(traj: Trajectory, horizon: float) -> Trajectory:

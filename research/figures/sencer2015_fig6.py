@@ -24,11 +24,13 @@ holds eps after the servo by planning at a reduced tolerance (:func:`research.co
 the motion (FIR 262 / 994 um, blend 549 / 2367 um on X / Y: quasi-static bending under the axis
 acceleration).
 :func:`assumption_sweep` sweeps the two assumptions (beam damping 0.5-5 %, diamond size x0.5-x2).
+
+The paper figure is made from the config :data:`CONFIG` (FIR and blend through the drive with the beams) through
+the results store; :func:`plot` only reads the stored result. :func:`comparison` (also the OCP, the CEC and
+eps-after-servo variants) computes directly, for the interpolator tests.
 """
 
 from __future__ import annotations
-
-from pathlib import Path
 
 import equinox as eqx
 import numpy as np
@@ -37,14 +39,15 @@ from research.contour import cec_problem, held_at_rest, mirror_passes, servo_tol
 
 from research.drives import FlexibleMode, simulate, table_6_1_closed_loop
 from research.experiments.optimality import PAPER, study_limits
-from research.figures._style import mosaic, save
+from research.figures._style import mosaic
 from research.interpolators import blend_interpolate, fir_interpolate
 from research.paths import named_path
 from research.paths.polyline import Polyline
 from research.trajectory import Trajectory
 
 NAME = "sencer2015_fig6_cornering_comparison"
-REPRODUCES = "Sencer 2015 Fig 6 (diamond: FIR vs geometric smoothing, feed, acceleration, beam vibration) + OCP"
+REPRODUCES = "Sencer 2015 Fig 6 (diamond: FIR vs geometric smoothing, feed, acceleration, beam vibration)"
+CONFIG = "experiments/figures/sencer2015_fig6_cornering_comparison.toml"
 BEAMS_HZ = (11.4, 6.8)  # X, Y first bending modes, §4
 BEAM_DAMPING = 0.02
 SETTLE = 1.5  # s of rest simulated after the longest motion
@@ -151,37 +154,40 @@ def assumption_sweep(sample_period: float = 1e-3, damping=SWEEP_DAMPING, scales=
     return rows
 
 
-def make_figure(out_dir: Path, fast: bool = False) -> list[Path]:
-    """Write the figure to ``out_dir``; returns the files written (``fast``: without the OCP)."""
-    data = comparison(1e-3, include_ocp=not fast, cec_passes=1, servo_eps=True)
+def plot(record: dict, arrays: dict):
+    """The figure (not saved) from a stored result of :data:`CONFIG`: (a) path, (b) feed, (c-d) axis acceleration,
+    (e-f) beam deflection through the drive, held at rest ``settle_time_s`` after each motion."""
+    s, cfg = record["scalars"], record["config"]
+    labels = [ic["label"] for ic in cfg["interpolator"]]
+    names = {"fir": "FIR overlap", "blend": "geometric blend (FIR's axis peaks)"}
+    modes = [(m["axis"], m["frequency_hz"]) for m in cfg["drive"]["modes"]]
     fig, ax = mosaic([["path", "feed", "feed"], ["ax", "ay", "ay2"], ["dx", "dy", "dy2"]], figsize=(14, 10))
     ax["ay2"].remove()
     ax["dy2"].remove()
-    path = named_path("diamond")
+    path = named_path(cfg["path"]["name"])
     ax["path"].plot(path.points[:, 0], path.points[:, 1], "k:", lw=0.8)
-    for (name, d), colour in zip(data.items(), ("C0", "C1", "C3", "C4", "C2")):
-        tr = d["trajectory"]
-        t, q, v, a = (np.asarray(x) for x in (tr.t, tr.q, tr.v, tr.a))
+    for label, colour in zip(labels, ("C0", "C1")):
+        name = names.get(label, label)
+        t, q, v, a = (arrays[f"{label}.{k}"] for k in ("t", "q", "v", "a"))
         ax["path"].plot(q[:, 0], q[:, 1], color=colour, lw=0.8, label=name)
-        ce = d["corner_error_post_servo"].max() * 1e3
-        ax["feed"].plot(t, np.linalg.norm(v, axis=1), color=colour,
-                        label=f"{name}: {d['cycle_time']:.3f} s, corner error after the servo {ce:.1f} um")
+        ax["feed"].plot(t, np.linalg.norm(v, axis=1), color=colour, label=f"{name}: cycle {s[f'{label}.cycle_time']:.3f} s, "
+                        f"corner error {s[f'{label}.max_corner_error'] * 1e3:.1f} um")
         ax["ax"].plot(t, a[:, 0], color=colour, lw=0.8, label=name)
         ax["ay"].plot(t, a[:, 1], color=colour, lw=0.8, label=name)
-        r = d["residual_vibration"] * 1e3
-        ax["dx"].plot(t, d["deflection"][:, 0] * 1e3, color=colour, lw=0.8, label=f"{name}: residual {r[0]:.2f} um, in motion {d['max_deflection_in_motion'][0] * 1e3:.0f} um")
-        ax["dy"].plot(t, d["deflection"][:, 1] * 1e3, color=colour, lw=0.8, label=f"{name}: residual {r[1]:.2f} um, in motion {d['max_deflection_in_motion'][1] * 1e3:.0f} um")
+        defl = arrays[f"{label}.deflection"]
+        th = np.arange(defl.shape[0]) * (t[1] - t[0])
+        for k, (axis, _) in enumerate(modes):
+            ax[f"d{axis}"].plot(th, defl[:, k] * 1e3, color=colour, lw=0.8,
+                                label=f"{name}: residual {s[f'{label}.residual_vibration.{axis}'] * 1e3:.1f} um")
     ax["path"].set(xlabel="x [mm]", ylabel="y [mm]", title="(a) diamond, eps = 500 um")
     ax["path"].set_aspect("equal", adjustable="datalim")
     ax["feed"].set(xlabel="time [s]", ylabel="feed [mm/s]", title="(b) feed, F = 250 mm/s")
     ax["ax"].set(xlabel="time [s]", ylabel="a_x [mm/s^2]", title="(c) X acceleration")
     ax["ay"].set(xlabel="time [s]", ylabel="a_y [mm/s^2]", title="(d) Y acceleration")
-    ax["dx"].set(xlabel="time [s]", ylabel="deflection [um]", title="(e) X beam, 11.4 Hz")
-    ax["dy"].set(xlabel="time [s]", ylabel="deflection [um]", title="(f) Y beam, 6.8 Hz")
+    for k, (axis, f) in enumerate(modes):
+        ax[f"d{axis}"].set(xlabel="time [s]", ylabel="deflection [um]", title=f"({'ef'[k]}) {axis.upper()} beam, {f:g} Hz")
     for key in ("path", "feed", "ax", "ay", "dx", "dy"):
         ax[key].legend(loc="best", fontsize=7)
-    fig.suptitle("FIR T1/T2 = 148/89 ms vs geometric smoothing and OCP held to the FIR's own axis peaks; "
-                 "Table 6.1 P-PI drive with the 11.4 Hz (X) and 6.8 Hz (Y) beams", fontsize=8)
-    out = Path(out_dir) / f"{NAME}.png"
-    save(fig, out)
-    return [out]
+    fig.suptitle("FIR T1/T2 = 148/89 ms vs geometric smoothing held to the FIR's own axis peaks; Table 6.1 P-PI drive "
+                 "(dc = 0) with the 11.4 Hz (X) and 6.8 Hz (Y) beams, 2 % damping", fontsize=8)
+    return fig
