@@ -45,6 +45,8 @@ from research.paths import Polyline
 from research.piecewise import GRID_SNAP, PiecewisePolynomial, bucket_size
 from research.trajectory import Trajectory
 
+from bench_fir import cam_path  # noqa: E402  (the seeded CAM-like path of bench_fir.py; benchmarks/ is on sys.path)
+
 TARGET = 3.0  # issue 19: sampling <= 3x the memory-write floor
 DELAYS = (0.148, 0.089)  # Sencer 2015 section 4
 FEED, TOLERANCE, TS_FIR = 200.0, 0.05, 2e-5
@@ -108,19 +110,6 @@ def pulse_train(plan, path: Polyline, Ts: float) -> np.ndarray:
     grid = np.arange(int(np.ceil(ends[-1] / Ts)) + 2) * Ts
     unfiltered = np.column_stack([np.interp(grid, knots, knot_pos[:, k]) for k in range(path.dim)])
     return np.diff(unfiltered, axis=0) / Ts
-
-
-def cam_path(n_segments: int, seed: int) -> Polyline:
-    """Seeded 3-D CAM-like path of short G1 segments (the generator of bench_fir.py)."""
-    rng = np.random.default_rng(seed)
-    lengths = rng.uniform(0.2, 2.0, n_segments)
-    heading = np.cumsum(rng.normal(0.0, np.radians(2.0), n_segments))
-    pitch = np.zeros(n_segments)
-    steps = rng.normal(0.0, np.radians(1.0), n_segments)
-    for k in range(1, n_segments):
-        pitch[k] = 0.97 * pitch[k - 1] + steps[k]
-    u = np.column_stack([np.cos(pitch) * np.cos(heading), np.cos(pitch) * np.sin(heading), np.sin(pitch)])
-    return Polyline(np.vstack([np.zeros((1, 3)), np.cumsum(lengths[:, None] * u, axis=0)]))
 
 
 def best_of(repeats: int, fn, *args):
