@@ -106,6 +106,20 @@ def _number(cell: str, path: Path, lineno: int, col: int, name: str) -> float:
                             "plain decimal number") from None
 
 
+def _rows(lines, first_lineno: int, sep: str, names, path: Path, expected: str) -> list[list[float]]:
+    """Numbers of the delimited rows ``lines`` (the first is line ``first_lineno`` of the file); blank and
+    ``#`` lines are skipped; a row of another length raises, its message ending with ``expected``."""
+    rows = []
+    for lineno, line in enumerate(lines, start=first_lineno):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        cells = line.split(sep)
+        if len(cells) != len(names):
+            raise DriveLogError(f"{path}:{lineno}: row has {len(cells)} values but {expected}")
+        rows.append([_number(c, path, lineno, i, names[i - 1]) for i, c in enumerate(cells, start=1)])
+    return rows
+
+
 def _read_csv(path: Path) -> dict[str, np.ndarray]:
     lines = _text_lines(path, "CSV")
     header = lines[0].strip() if lines else ""
@@ -113,15 +127,7 @@ def _read_csv(path: Path) -> dict[str, np.ndarray]:
     if not header or any(not n for n in names):
         raise DriveLogError(f"{path}:1: a CSV drive log needs a header line naming every column, got {header!r}")
     _unique(names, path, 1)
-    rows = []
-    for lineno, line in enumerate(lines[1:], start=2):
-        if not line.strip() or line.lstrip().startswith("#"):
-            continue
-        cells = line.split(",")
-        if len(cells) != len(names):
-            raise DriveLogError(f"{path}:{lineno}: row has {len(cells)} values but the header names "
-                                f"{len(names)} columns {names}")
-        rows.append([_number(c, path, lineno, i, names[i - 1]) for i, c in enumerate(cells, start=1)])
+    rows = _rows(lines[1:], 2, ",", names, path, f"the header names {len(names)} columns {names}")
     if not rows:
         raise DriveLogError(f"{path}: the CSV has a header {names} but no data rows")
     data = np.array(rows, dtype=np.float64)
@@ -185,16 +191,8 @@ def _halscope_new(lines, path):
     if any(not n for n in names):
         raise DriveLogError(f"{path}:2: empty channel name in {lines[1]!r}")
     _unique(names, path, 2)
-    rows = []
-    for lineno, line in enumerate(lines[2:], start=3):
-        if not line.strip() or line.lstrip().startswith("#"):  # '# Position:' / '# Scale:' display settings
-            continue
-        cells = line.split(";")
-        if len(cells) != len(names):
-            raise DriveLogError(f"{path}:{lineno}: row has {len(cells)} values but line 2 names {len(names)} channels "
-                                f"{names}; is the file truncated?")
-        rows.append([_number(c, path, lineno, i, names[i - 1]) for i, c in enumerate(cells, start=1)])
-    return names, rows
+    # '#' lines here are halscope's '# Position:' / '# Scale:' display settings
+    return names, _rows(lines[2:], 3, ";", names, path, f"line 2 names {len(names)} channels {names}; is the file truncated?")
 
 
 def _halscope_old(lines, path):
