@@ -16,23 +16,25 @@ from research.experiments.config_control import ControlConfig
 AXES = ("x", "y", "z", "a", "c")
 
 
+def _pick(given, default, axes=slice(None)):
+    """The configured gains (``axes`` of them) where given, else the table's ``default``."""
+    return np.asarray(default) if given is None else np.asarray(given, dtype=np.float64)[axes]
+
+
 def controller_from_config(cc: ControlConfig):
     """The :class:`~research.control.AxisSMC` or :class:`~research.control.ContourGains` the config describes."""
     from research.control import AxisSMC, ContourGains, TipGains, table_5_2, table_5_3
 
     if cc.controller == "siso":
         base = table_5_2()
-        pick = lambda given, default: np.asarray(default) if given is None else np.asarray(given, dtype=np.float64)  # noqa: E731
-        return AxisSMC(pick(cc.siso_bandwidth_rad_per_s, base.lam), pick(cc.siso_Ks, base.Ks), pick(cc.siso_Gamma, base.Gamma))
+        return AxisSMC(_pick(cc.siso_bandwidth_rad_per_s, base.lam), _pick(cc.siso_Ks, base.Ks),
+                       _pick(cc.siso_Gamma, base.Gamma))
     base = table_5_3(cc.tip_damping)
-    pick = lambda given, default: np.asarray(default) if given is None else np.asarray(given, dtype=np.float64)  # noqa: E731
-    tip = TipGains(pick(cc.tip_bandwidth_rad_per_s, base.tip.wn), pick(cc.tip_Ks, base.tip.Ks),
-                   pick(cc.tip_Gamma, base.tip.Gamma), cc.tip_damping)
-    rotary = base.rotary
-    if cc.siso_bandwidth_rad_per_s or cc.siso_Ks or cc.siso_Gamma:  # A and C of the contour scheme are SISO SMC
-        rot = lambda given, default: np.asarray(default) if given is None else np.asarray(given[3:], dtype=np.float64)  # noqa: E731
-        rotary = AxisSMC(rot(cc.siso_bandwidth_rad_per_s, rotary.lam), rot(cc.siso_Ks, rotary.Ks),
-                         rot(cc.siso_Gamma, rotary.Gamma), n=2)
+    tip = TipGains(_pick(cc.tip_bandwidth_rad_per_s, base.tip.wn), _pick(cc.tip_Ks, base.tip.Ks),
+                   _pick(cc.tip_Gamma, base.tip.Gamma), cc.tip_damping)
+    ac = slice(3, 5)  # A and C of the contour scheme are SISO SMC (Fig 5.4)
+    rotary = AxisSMC(_pick(cc.siso_bandwidth_rad_per_s, base.rotary.lam, ac), _pick(cc.siso_Ks, base.rotary.Ks, ac),
+                     _pick(cc.siso_Gamma, base.rotary.Gamma, ac), n=2)
     return ContourGains(tip, rotary, tuple(cc.orientation_weights_per_s))
 
 
