@@ -91,7 +91,7 @@ def run_sweep(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_CACHE,
     store = ResultStore(Path(cache_dir) / "store")
     rows = {p.index: {"status": "error", "error": p.error, "source": "config"} for p in points if p.config is None}
     valid = [p for p in points if p.config is not None]
-    reason = eligible(cfg)
+    reason = eligible(cfg, base_dir)
     fast, general = ([], valid) if (engine in ("dask", "serial") or reason) else split(valid, cfg)
     if engine == "vmap" and (reason or general):
         raise ConfigError(f"{config_file}: key 'sweep.engine': the vmap path cannot take this sweep "

@@ -22,8 +22,12 @@ from research.experiments.store import ResultStore, result_key
 from research.experiments.sweep_points import Point
 
 
-def eligible(cfg: ExperimentConfig) -> str | None:
-    """``None`` when the fast path can evaluate ``cfg``'s kind of experiment, else the reason it cannot."""
+def eligible(cfg: ExperimentConfig, base_dir=None) -> str | None:
+    """``None`` when the fast path can evaluate ``cfg``'s kind of experiment, else the reason it cannot.
+
+    ``base_dir`` is the folder G-code paths are read from (the config's): a program with arcs or
+    ``G64 P`` tolerances goes to the general path, because the closed forms model one tolerance on a
+    polyline while ``plan_fir`` keeps arcs as arcs and each block's ``G64 P`` tolerance."""
     if cfg.path is None or cfg.identification is not None:
         return "identification studies need the general path"
     if len(cfg.interpolators) != 1 or cfg.interpolators[0].kind != "fir":
@@ -34,6 +38,14 @@ def eligible(cfg: ExperimentConfig) -> str | None:
         return "per-block G-code feeds need the general path"
     if cfg.drive is not None and cfg.drive.model != "ideal":
         return "catalog drive dynamics need the general path"
+    if cfg.path.gcode is not None and base_dir is not None:
+        from research.experiments.config import read_program
+
+        program = read_program(cfg.path, base_dir)
+        if np.any(program.blocks.is_arc):
+            return "G-code arcs (planned as arcs) need the general path"
+        if np.any(np.isfinite(program.block_tolerance)):
+            return "the program's G64 P tolerances (per block) need the general path"
     return None
 
 

@@ -10,7 +10,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from research.errors import PathError
 
@@ -170,5 +169,7 @@ class Polyline:
             start = np.repeat(np.cumsum(pieces) - pieces, pieces)
             frac = (np.arange(owner.size) - start + 0.5) / pieces[owner]
             centres = self.points[owner] + frac[:, None] * (self.points[owner + 1] - self.points[owner])
+            from scipy.spatial import cKDTree  # imported here: about 1 s that a cached run never needs
+
             self._tree["tree"] = (cKDTree(centres), owner, h)
         return self._tree["tree"]

@@ -20,7 +20,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from research.errors import PathError
 from research.paths.polyline import DEFAULT_AXES, Polyline
@@ -324,6 +323,8 @@ class ToolPath:
                 centres[arc] = _arc_eval(g, frac[arc] * g["sweep"], 0)[:, : self.dim]
             # a sample point is within half an arc-length step (<= h / 2) of every point it stands for
             step = self.lengths[owner] / pieces[owner]
+            from scipy.spatial import cKDTree  # imported here: a cached run never needs it
+
             self._cache["tree"] = (cKDTree(centres), owner, float(step.max()))
         return self._cache["tree"]
 

@@ -187,3 +187,23 @@ def test_table_6_3_drive_is_one_model_per_axis():
     for m, axis in zip(models, "xy"):
         assert m.pole_parameters() == pytest.approx(table_6_3_closed_loop(axis).pole_parameters(), rel=1e-12)
     assert models[0].pole_parameters() != pytest.approx(models[1].pole_parameters(), rel=1e-3)
+
+
+def test_gcode_arcs_and_g64_tolerances_are_not_sent_to_the_fast_path(tmp_path):
+    """The fast path's closed forms take one tolerance on a polyline; ``plan_fir`` keeps arcs as arcs and
+    each block's ``G64 P`` tolerance (stages.interpolate), so such programs must go to the general path
+    even when the config sets a feed (a sweep over ``tolerance_um`` would otherwise ignore ``G64 P``)."""
+    from research.experiments.sweep_vmap import eligible
+
+    programs = {"plain.ngc": "G21 G90\nG1 X0 Y0 F6000\nG1 X40\nG1 Y40\nG1 X0\nM2\n",
+                "g64.ngc": "G21 G90\nG64 P0.1\nG1 X0 Y0 F6000\nG1 X40\nG1 Y40\nG1 X0\nM2\n",
+                "arc.ngc": "G21 G90\nG1 X0 Y0 F6000\nG1 X40\nG3 X60 Y20 I0 J20\nG1 Y60\nM2\n"}
+    reasons = {}
+    for name, text in programs.items():
+        (tmp_path / name).write_text(text)
+        cfg = validate({"name": "t", "reproduces": "-", "path": {"gcode": name},
+                        "interpolator": {"feed_mm_per_s": 100.0}}, tmp_path / "t.toml")
+        reasons[name] = eligible(cfg, tmp_path)
+    assert reasons["plain.ngc"] is None
+    assert "G64 P" in reasons["g64.ngc"]
+    assert "arcs" in reasons["arc.ngc"]
