@@ -36,7 +36,9 @@ from dataclasses import dataclass
 import jax.numpy as jnp
 import numpy as np
 
-from research.contour import eq436_trajectory, exact_tip_contour_error, simulate_setpoint, tip_reference
+from research.contour._cec import simulate_setpoint
+from research.contour._five_axis import eq436_trajectory
+from research.contour._frenet import exact_tip_contour_error, tip_reference
 from research.drives import ClosedLoopModel, Encoder, table_6_3_closed_loop
 from research.errors import ParameterError
 from research.paths.kinematics5 import TableTiltingAC
