@@ -46,6 +46,7 @@ from research.errors import ConfigError, PathError
 from research.experiments.config_control import CONTROL_METRIC_UNITS, ControlConfig
 from research.experiments.config_feedrate import FEEDRATE_METRIC_UNITS, FeedrateConfig
 from research.experiments.config_five_axis_path import FiveAxisPathConfig
+from research.experiments.config_identified_contour import IDENTIFIED_CONTOUR_METRIC_UNITS, IdentifiedContourConfig
 from research.experiments.config_stages import (
     BlendConfig,
     ClosedLoopConfig,
@@ -114,6 +115,7 @@ METRIC_UNITS = {
 }
 METRIC_UNITS |= CONTROL_METRIC_UNITS  # [control] stage (thesis ch 5)
 METRIC_UNITS |= FEEDRATE_METRIC_UNITS  # [feedrate] stage (thesis ch 3)
+METRIC_UNITS |= IDENTIFIED_CONTOUR_METRIC_UNITS  # [identified_contour] stage (thesis §6.5.3)
 #: what ``name`` (the results folder and figure file stem) may be: starts with a letter or digit, at most 64
 #: characters of letters, digits, ``_``, ``-`` and ``.`` (so never ``..`` or a path)
 NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$"
@@ -430,6 +432,9 @@ class ExperimentConfig(_Strict):
                                                             "5-axis contour controller)")
     feedrate: FeedrateConfig | None = Field(None, description="thesis ch 3: optimized vs constant feed along a 5-axis "
                                                               "[path] (kind = \"five_axis\"), Fig 3.13 drive run")
+    identified_contour: IdentifiedContourConfig | None = Field(
+        None, description="thesis §6.5.3 / Fig 6.13: Table 6.3 machine identified by LS and PSO, predicting the eq 4.36 "
+                          "tip contour error")
     metrics: list[Literal[tuple(METRIC_UNITS)]] | None = Field(None, description="metrics to report (default: all)")
     output: OutputConfig = OutputConfig()
     sweep: SweepConfig | None = None
@@ -462,9 +467,11 @@ class ExperimentConfig(_Strict):
         drive_study = self.drive is not None and self.drive.frequency_response is not None
         if (self.path is None and self.identification is None and self.vibration is None and self.spectrum is None
                 and self.startup is None and self.five_axis_contour is None and self.control is None and not drive_study
+                and self.identified_contour is None
                 and self.mtp is None):
             raise ValueError("give a [path] (motion study), an [identification] table, a [vibration] table, a "
-                             "[spectrum] table, a [startup] table, an [mtp] table, a [five_axis_contour] table, a [control] table or a "
+                             "[spectrum] table, a [startup] table, an [mtp] table, a [five_axis_contour] table, a [control] table, an "
+                             "[identified_contour] table or a "
                              "[drive.frequency_response] table")
         five_axis = isinstance(self.path, FiveAxisPathConfig)
         if five_axis != (self.feedrate is not None):

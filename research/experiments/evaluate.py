@@ -30,6 +30,7 @@ from research.experiments.config import METRIC_UNITS, ExperimentConfig, build_pa
 from research.drives import residual_vibration_sampled
 from research.experiments.stage_control import control_stage
 from research.experiments.stage_feedrate import feedrate_stage
+from research.experiments.stage_identified_contour import identified_contour_stage
 from research.experiments.stage_mtp import mtp_stage
 from research.experiments.stages import (
     compensation_stage,
@@ -91,6 +92,8 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
          lambda c: mtp_stage(c, drive_model(cfg.drive, ("s",), objects.get("identified_drive")))),
         ("five_axis_contour", lambda c: "five_axis_contour: eq 4.36 path, exact tip contour error vs Frenet estimates "
                                         "(thesis §4.5)", five_axis_contour_stage),
+        ("identified_contour", lambda c: "identified_contour: Table 6.3 machine identified by LS and PSO, eq 4.36 contour "
+                                         f"error predicted at {c.feed_mm_per_s:g} mm/s (thesis §6.5.3)", identified_contour_stage),
     )
     for key, line, stage in standalone:
         table = getattr(cfg, key)
