@@ -29,7 +29,7 @@ def _schedule_details(result) -> dict:
     return {"method": result.method, "status": result.status, "iterations": int(result.iterations),
             "cycle_time_s": float(result.cycle_time),
             "limit_ratio": {k: np.asarray(getattr(result.check, f"{k}_ratio")).tolist() for k in KINDS},
-            "feed_ratio": float(result.check.feed_ratio),
+            "feed_ratio": None if np.isnan(result.check.feed_ratio) else float(result.check.feed_ratio),  # no cap: None
             "binding": [{"axis": b.axis, "kind": b.kind, "s_start_mm": float(b.s_start), "s_end_mm": float(b.s_end),
                          "peak": float(b.peak)} for b in result.binding]}
 

@@ -46,7 +46,7 @@ def plot(record: dict, arrays: dict):
     ax["b"].axhline(BOUND_UM, color="C1", lw=1.2, label="thesis: 'less than 10 [micron]'")
     ax["b"].set(xlabel="time [s]", ylabel="|predicted - true| [um]", ylim=(1e-4, 100),
                 title="(b) discrepancy (log scale; floor 1e-4 um)")
-    ax["b"].legend(loc="lower right")
+    ax["b"].legend(loc="upper center", ncol=3)  # between 10 and 100 um, above the data
     rows = [[a.upper(), c.replace("thesis_pso", "PSO thesis").replace("ls", "LS").replace("pso", "PSO"),
              *(_fmt(x) for x in cols[c][:4]), _fmt(cols[c][4])]
             for a, cols in d["columns"].items() for c in _COLUMNS]
@@ -55,7 +55,7 @@ def plot(record: dict, arrays: dict):
     tab = t_ax.table(cellText=rows, colLabels=["axis", "column", "wn [Hz]", "zeta", "p [Hz]", "dc", "stable"],
                      loc="center", fontsize=7)
     tab.scale(1, 0.9)
-    t_ax.set_title("Table 6.3: actual, LS and PSO (this run), PSO (thesis, printed); dc in mm/s^2 or rad/s^2", pad=4)
+    t_ax.set_title("Table 6.3: actual, LS and PSO (this run), PSO (thesis, printed as is); dc [mm/s^2, rad/s^2]", pad=4)
     if d["excluded"]:
         fig.text(0.5, 0.005, "excluded: " + "; ".join(f"{k}: {v}" for k, v in d["excluded"].items()), ha="center",
                  fontsize=7)
