@@ -516,7 +516,7 @@ class ExperimentConfig(_Strict):
 
 
 def named_axes(cfg: ExperimentConfig) -> tuple[str, ...]:
-    """Axis letters of the path (from its dimension: x, y, z)."""
+    """Axis letters of the path (from its dimension: x, y, z; a 5-axis path: x, y, z, a, c)."""
     p = cfg.path
     if isinstance(p, FiveAxisPathConfig):
         return ("x", "y", "z", "a", "c")
