@@ -14,6 +14,8 @@
   ready-made (:func:`prevost2012_application1`, ...).
 - Cornering tolerance held after the servo: :func:`servo_tolerance` plans the FIR at the reduced
   tolerance whose simulated actual corner error is eps (:func:`vertex_distances`).
+- Thesis §6.5.3 / Fig 6.13: the Table 6.3 virtual machine identified axis by axis (LS, PSO) and the
+  identified models predicting the eq 4.36 tip contour error (:func:`fig6_13`).
 - The EMPS chain: identify the real EMPS axis, then CEC on a path within its stroke
   (:func:`emps_cec_chain`).
 """
@@ -46,6 +48,17 @@ from research.contour._exact import (
     contour_error,
     tracking_error,
 )
+from research.contour._identified_machine import (
+    FIG6_13_ACCELERATION,
+    FIG6_13_BOUND,
+    FIG6_13_FEED,
+    TABLE_6_3_PSO,
+    AxisIdentification,
+    ContourPrediction,
+    fig6_13,
+    identify_table_6_3,
+    predict_contour_error,
+)
 from research.contour._five_axis import FiveAxisContourStudy, eq436_trajectory, five_axis_contour_study
 from research.contour._frenet import (
     FrenetEstimates,
@@ -72,6 +85,15 @@ from research.contour._prevost import (
 )
 
 __all__ = [
+    "AxisIdentification",
+    "ContourPrediction",
+    "FIG6_13_ACCELERATION",
+    "FIG6_13_BOUND",
+    "FIG6_13_FEED",
+    "TABLE_6_3_PSO",
+    "fig6_13",
+    "identify_table_6_3",
+    "predict_contour_error",
     "ServoTolerance",
     "held_at_rest",
     "servo_tolerance",

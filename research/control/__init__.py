@@ -3,8 +3,8 @@ axis controller with disturbance adaptation (thesis [35], Table 5.2), the tool-t
 (§5.2, eq 5.1-5.17, Table 5.3) and the orientation contour controller (§5.3, eq 5.18-5.39), run in
 closed loop on the rigid-body drives of Table 5.1 through the A/C table-tilting kinematics; and the
 thesis' end-to-end results that need these drives: Fig 3.13 (feed schedules through the SISO drives
-with an amplifier limit, :func:`feed_tracking`) and §6.5.3 / Fig 6.13 (the Table 6.3 virtual machine
-identified with LS and PSO, :func:`fig6_13`). Units: mm, s, rad; voltages in V.
+with an amplifier limit, :func:`feed_tracking`). (§6.5.3 / Fig 6.13, the identified Table 6.3 machine
+predicting contour errors, is :func:`research.contour.fig6_13`.) Units: mm, s, rad; voltages in V.
 """
 
 from research.control._compensation import SchemeResult, corrected_reference, feedback_vs_feedforward, tracking_mirror_passes
@@ -22,17 +22,6 @@ from research.control._gains import (
     table_5_3,
 )
 from research.control._feed_tracking import FeedTracking, amplifier_limits, feed_tracking
-from research.control._identified_machine import (
-    FIG6_13_ACCELERATION,
-    FIG6_13_BOUND,
-    FIG6_13_FEED,
-    TABLE_6_3_PSO,
-    AxisIdentification,
-    ContourPrediction,
-    fig6_13,
-    identify_table_6_3,
-    predict_contour_error,
-)
 from research.control._loop import ClosedLoopResult, direction_inertia, simulate_closed_loop
 from research.control._plant import FiveAxisPlant, thesis_plant
 from research.control._reference import ContourReference, eq436_reference, joint_reference, parametric_reference
@@ -60,15 +49,6 @@ __all__ = [
     "amplifier_limits",
     "feed_tracking",
     "joint_reference",
-    "AxisIdentification",
-    "ContourPrediction",
-    "FIG6_13_ACCELERATION",
-    "FIG6_13_BOUND",
-    "FIG6_13_FEED",
-    "TABLE_6_3_PSO",
-    "fig6_13",
-    "identify_table_6_3",
-    "predict_contour_error",
     "AXES",
     "CONTROL_PERIOD",
     "CaseResult",

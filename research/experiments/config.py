@@ -40,10 +40,13 @@ from pathlib import Path
 from typing import Annotated, Literal, Union, get_args
 
 import numpy as np
-from pydantic import BaseModel, StrictFloat, StrictInt, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, StrictFloat, StrictInt, ConfigDict, Discriminator, Field, Tag, ValidationError, field_validator, model_validator
 
 from research.errors import ConfigError, PathError
 from research.experiments.config_control import CONTROL_METRIC_UNITS, ControlConfig
+from research.experiments.config_feedrate import FEEDRATE_METRIC_UNITS, FeedrateConfig
+from research.experiments.config_five_axis_path import FiveAxisPathConfig
+from research.experiments.config_identified_contour import IDENTIFIED_CONTOUR_METRIC_UNITS, IdentifiedContourConfig
 from research.experiments.config_stages import (
     BlendConfig,
     ClosedLoopConfig,
@@ -111,6 +114,8 @@ METRIC_UNITS = {
     "mean_estimator_error": "mm",
 }
 METRIC_UNITS |= CONTROL_METRIC_UNITS  # [control] stage (thesis ch 5)
+METRIC_UNITS |= FEEDRATE_METRIC_UNITS  # [feedrate] stage (thesis ch 3)
+METRIC_UNITS |= IDENTIFIED_CONTOUR_METRIC_UNITS  # [identified_contour] stage (thesis §6.5.3)
 #: what ``name`` (the results folder and figure file stem) may be: starts with a letter or digit, at most 64
 #: characters of letters, digits, ``_``, ``-`` and ``.`` (so never ``..`` or a path)
 NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$"
@@ -234,6 +239,17 @@ def _plausible_units(feed: float, delays_ms: list[float], sample_period_ms: floa
                     else "; lengthen the delay or shorten sample_period_ms")
             raise ValueError(f"{delays_key}[{i}] = {d:g} ms is below the sample period sample_period_ms = "
                              f"{sample_period_ms:g} ms{hint}")
+
+
+def _path_kind(value) -> str:
+    """The ``kind`` of a ``[path]`` table (none: the named / G-code / points kind)."""
+    return (value.get("kind") if isinstance(value, dict) else getattr(value, "kind", None)) or "polyline"
+
+
+#: the ``[path]`` kinds: a polyline (named, G-code, points) or a named 5-axis pose path (``kind = "five_axis"``)
+PathTable = Annotated[Union[Annotated[PathConfig, Tag("polyline")], Annotated[FiveAxisPathConfig, Tag("five_axis")]],
+                      Discriminator(_path_kind)]
+PATH_KINDS = ("polyline", "five_axis")
 
 
 Interpolator = Annotated[Union[FIRConfig, TimeOptimalConfig, SCurveConfig, BlendConfig, SigmoidConfig],
@@ -397,7 +413,8 @@ class ExperimentConfig(_Strict):
     name: str = Field(..., pattern=NAME_PATTERN, description="results and figure file stem (letters, digits, _ - .)")
     reproduces: str = Field(..., description="the paper result this experiment reproduces")
     description: str = ""
-    path: PathConfig | None = Field(None, description="tool path (required unless the study is identification only)")
+    path: PathTable | None = Field(None, description="tool path (required unless the study is identification only); "
+                                                    "kind = \"five_axis\": a 5-axis pose path for [feedrate]")
     interpolator: list[Interpolator] = Field([FIRConfig()], min_length=1,
                                              description="one table, or an array of tables [[interpolator]]; kind defaults to fir")
     drive: DriveConfig | None = None
@@ -413,6 +430,11 @@ class ExperimentConfig(_Strict):
     compensation: CompensationConfig | None = Field(None, description="CEC stage (needs a drive other than ideal)")
     control: ControlConfig | None = Field(None, description="thesis ch 5 closed loop on the Fig 5.5 path (SISO SMC or "
                                                             "5-axis contour controller)")
+    feedrate: FeedrateConfig | None = Field(None, description="thesis ch 3: optimized vs constant feed along a 5-axis "
+                                                              "[path] (kind = \"five_axis\"), Fig 3.13 drive run")
+    identified_contour: IdentifiedContourConfig | None = Field(
+        None, description="thesis §6.5.3 / Fig 6.13: Table 6.3 machine identified by LS and PSO, predicting the eq 4.36 "
+                          "tip contour error")
     metrics: list[Literal[tuple(METRIC_UNITS)]] | None = Field(None, description="metrics to report (default: all)")
     output: OutputConfig = OutputConfig()
     sweep: SweepConfig | None = None
@@ -445,10 +467,19 @@ class ExperimentConfig(_Strict):
         drive_study = self.drive is not None and self.drive.frequency_response is not None
         if (self.path is None and self.identification is None and self.vibration is None and self.spectrum is None
                 and self.startup is None and self.five_axis_contour is None and self.control is None and not drive_study
+                and self.identified_contour is None
                 and self.mtp is None):
             raise ValueError("give a [path] (motion study), an [identification] table, a [vibration] table, a "
-                             "[spectrum] table, a [startup] table, an [mtp] table, a [five_axis_contour] table, a [control] table or a "
+                             "[spectrum] table, a [startup] table, an [mtp] table, a [five_axis_contour] table, a [control] table, an "
+                             "[identified_contour] table or a "
                              "[drive.frequency_response] table")
+        five_axis = isinstance(self.path, FiveAxisPathConfig)
+        if five_axis != (self.feedrate is not None):
+            raise ValueError("a [path] with kind = \"five_axis\" and a [feedrate] table go together (the feed-rate "
+                             "optimisation runs along a 5-axis path; the interpolators along a polyline)")
+        if five_axis and ({"interpolator", "drive", "contour", "compensation", "sweep"} & self.model_fields_set):
+            raise ValueError("a 5-axis [path] is scheduled by [feedrate] only; [interpolator], [drive], [contour], "
+                             "[compensation] and [sweep] take a polyline path (the Fig 3.13 drives are [feedrate.drive])")
         if self.mtp is not None and (self.drive is None or self.drive.model == "ideal" or self.drive.model in PER_AXIS_DRIVES):
             raise ValueError("[mtp] runs its references through a [drive] of one model (not \"ideal\", not per axis)")
         if drive_study and self.drive.model == "ideal":
@@ -485,8 +516,10 @@ class ExperimentConfig(_Strict):
 
 
 def named_axes(cfg: ExperimentConfig) -> tuple[str, ...]:
-    """Axis letters of the path (from its dimension: x, y, z)."""
+    """Axis letters of the path (from its dimension: x, y, z; a 5-axis path: x, y, z, a, c)."""
     p = cfg.path
+    if isinstance(p, FiveAxisPathConfig):
+        return ("x", "y", "z", "a", "c")
     dim = len(p.points_mm[0]) if p.points_mm else (named_path(p.name).dim if p.name else 3)
     return ("x", "y", "z")[:dim]
 
@@ -540,7 +573,7 @@ def validate(raw: dict, file: str | Path) -> ExperimentConfig:
 def input_files(cfg: ExperimentConfig) -> dict[str, str]:
     """``{dotted key: file name}`` of every input file the config reads (part of the results key)."""
     files = {}
-    if cfg.path is not None and cfg.path.gcode is not None:
+    if isinstance(cfg.path, PathConfig) and cfg.path.gcode is not None:
         files["path.gcode"] = cfg.path.gcode
     if cfg.identification is not None and cfg.identification.log_file is not None:
         files["identification.log_file"] = cfg.identification.log_file
@@ -555,6 +588,8 @@ def _describe(err: dict, file: Path, single_interpolator: bool) -> str:
     loc = list(err["loc"])
     if loc[:1] == ["interpolator"]:  # drop the union tag, and the list index of a single [interpolator] table
         loc = ["interpolator"] + [p for p in loc[1 + single_interpolator:] if p not in INTERPOLATOR_KINDS]
+    elif loc[:1] == ["path"]:  # drop the path kind tag
+        loc = ["path"] + [p for p in loc[1:] if p not in PATH_KINDS]
     key = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in loc).lstrip(".") or "(top level)"
     msg = err["msg"].removeprefix("Value error, ")
     kind, value = err["type"], err.get("input")

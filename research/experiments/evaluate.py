@@ -29,6 +29,8 @@ import numpy as np
 from research.experiments.config import METRIC_UNITS, ExperimentConfig, build_path, named_axes, read_program
 from research.drives import residual_vibration_sampled
 from research.experiments.stage_control import control_stage
+from research.experiments.stage_feedrate import feedrate_stage
+from research.experiments.stage_identified_contour import identified_contour_stage
 from research.experiments.stage_mtp import mtp_stage
 from research.experiments.stages import (
     compensation_stage,
@@ -90,6 +92,8 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
          lambda c: mtp_stage(c, drive_model(cfg.drive, ("s",), objects.get("identified_drive")))),
         ("five_axis_contour", lambda c: "five_axis_contour: eq 4.36 path, exact tip contour error vs Frenet estimates "
                                         "(thesis §4.5)", five_axis_contour_stage),
+        ("identified_contour", lambda c: "identified_contour: Table 6.3 machine identified by LS and PSO, eq 4.36 contour "
+                                         f"error predicted at {c.feed_mm_per_s:g} mm/s (thesis §6.5.3)", identified_contour_stage),
     )
     for key, line, stage in standalone:
         table = getattr(cfg, key)
@@ -105,7 +109,12 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
                                                drive_model(cfg.drive, axes, objects.get("identified_drive")), axes)
         scalars |= found
         arrays |= more
-    if cfg.path is not None:
+    if cfg.feedrate is not None:  # thesis ch 3 along the 5-axis [path]
+        log(f"feedrate: optimized vs constant feed along the 5-axis path {cfg.path.name}")
+        found, details["feedrate"], more = feedrate_stage(cfg.feedrate, cfg.path.build())
+        scalars |= found
+        arrays |= more
+    elif cfg.path is not None:
         if cfg.path.gcode is not None:  # one read: chords for the metrics, blocks for the FIR planner
             program = read_program(cfg.path, base)
             path, program_feeds = program.polyline, program.feeds

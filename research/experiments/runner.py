@@ -37,7 +37,7 @@ if TYPE_CHECKING:
 DEFAULT_CACHE = Path(".cache") / "results"
 DEFAULT_FIGURES = Path("paper_figures")
 #: ``details`` entries of stages that are not interpolator runs
-STAGE_DETAILS = ("identification", "vibration", "spectrum", "startup", "mtp", "five_axis_contour", "control")
+STAGE_DETAILS = ("identification", "vibration", "spectrum", "startup", "mtp", "five_axis_contour", "control", "feedrate", "identified_contour")
 #: the visible results folder of the command line (one folder per experiment)
 DEFAULT_RESULTS = Path("results")
 
@@ -115,7 +115,7 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
     store = ResultStore(Path(cache_dir) / "store")
     key = config_key(cfg, base, kind="run")
     entry = None if force else store.get(key)
-    want_figure = cfg.output.figure and (cfg.path is not None or cfg.control is not None)
+    want_figure = cfg.output.figure and ((cfg.path is not None and cfg.feedrate is None) or cfg.control is not None)
     stem = cfg.name
     if cfg.sweep is not None:  # the sweep's own outputs keep their names; this run is the base point
         stem = f"{cfg.name}_base"

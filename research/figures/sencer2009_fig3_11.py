@@ -1,121 +1,92 @@
-"""Sencer (2009) thesis Fig 3.10-3.12: axis limits reflected on the feed, optimized against
-constant feed, and the axis profiles, on the public 300 mm blade-flank path (the thesis' impeller
-CL data are not public) and on the thesis' eq 4.36 path, under the Table 3.1 limits (A / C jerk read
-as rad/s^3, see :func:`research.optimal.table31_limits`), programmed feed 150 mm/s.
+"""Sencer (2009) thesis Fig 3.10-3.12 on the public 300 mm blade-flank path (the thesis' impeller CL data are
+not public), Table 3.1 limits, feed cap 150 mm/s, in one figure:
 
-- ``*_fig3_10.png``: per-axis feed limits from the velocity (eq 3.42), acceleration (eq 3.50) and jerk
-  (eq 3.54) limits, with the optimized feed.
-- ``*_fig3_11.png``: optimized B-spline feed (eq 3.31-3.58) against the constant 15 mm/s feed and the
-  150 mm/s cap, the stretches where each axis limit binds shaded.
-- ``*_fig3_12.png``: axis velocity, acceleration and jerk against time, optimized (solid) and constant
-  15 mm/s (dashed), with the limits.
+- (a) Fig 3.11: the optimized B-spline feed (eq 3.31-3.58) against the constant 15 mm/s feed, under the axis
+  constraints reflected on the feed (min over the axes), the stretches where an axis limit binds shaded;
+- (b)-(d) Fig 3.10: each axis' velocity (eq 3.42), acceleration (eq 3.50) and jerk (eq 3.54) limit on the feed;
+- (e)-(j) Fig 3.12: axis velocity, acceleration and jerk against time, optimized (solid) and 15 mm/s (dashed),
+  with the limits.
 
-The constant-feed time is L/F plus the S-curve start and stop (20.000 + 0.259 s on the 300 mm
-blade path); the thesis' 20.18 s is L/F = 20 s on its 300 mm impeller path plus ramps it does not
-describe, so the agreement is by construction of the path length, not a reproduction.
-
-``fast=True`` solves a 40-control-point schedule of the blade path only (seconds); the full run uses
-the thesis' n = 276 control points.
+Made from the config :data:`CONFIG` (the ``[feedrate]`` stage) through the results store; :func:`plot` only reads
+the stored result.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
-from research.figures._style import figure, save
-from research.optimal import (
-    axis_feed_limits,
-    constant_feed,
-    optimize_feedrate,
-    table31_limits,
-)
-from research.paths.five_axis_library import blade_flank_path, eq436_spline
+from research.figures._style import mosaic
 
 NAME = "sencer2009_fig3_11_feed_optimization"
 REPRODUCES = ("Sencer 2009 thesis Fig 3.10-3.12 (feed limited by each axis, optimized vs constant 15 mm/s feed, "
               "axis profiles; thesis: 20.18 s constant vs 4.664 s optimized on its 300 mm impeller path)")
+CONFIG = "experiments/figures/sencer2009_fig3_11_feed_optimization.toml"
 
-FEED = 150.0  # mm/s, programmed feed of the thesis' CL file (§3.6)
-CONSTANT = 15.0  # mm/s, the thesis' conservative constant feed
 AXES = ("x", "y", "z", "a", "c")
 COLOURS = dict(zip(AXES, ("tab:blue", "tab:red", "tab:green", "tab:purple", "tab:orange")))
+KINDS = (("velocity", "3.42", "v", "/s"), ("acceleration", "3.50", "a", "/s^2"), ("jerk", "3.54", "j", "/s^3"))
+CONSTANT = "constant_15"
 
 
-def make_figure(out_dir: Path, fast: bool = False) -> list[Path]:
-    """Write the figures to ``out_dir``; returns the files written."""
-    out_dir = Path(out_dir)
-    limits = table31_limits()
-    cases = [("blade", blade_flank_path(), 40 if fast else 276)]
-    if not fast:
-        cases.append(("eq436", eq436_spline(), None))
-    written = []
-    for tag, path, n in cases:
-        opt = optimize_feedrate(path, limits, FEED, control_points=n, refinements=1 if fast else 3,
-                                sample_period=5e-3 if fast else 1e-3)
-        const = constant_feed(path, limits, CONSTANT, sample_period=5e-3 if fast else 1e-3)
-        written += [_fig3_10(out_dir, tag, path, limits, opt), _fig3_11(out_dir, tag, path, limits, opt, const),
-                    _fig3_12(out_dir, tag, limits, opt, const)]
-    return written
+def plot(record: dict, arrays: dict):
+    """The figure (not saved) from a stored result of :data:`CONFIG`."""
+    from matplotlib.patches import Patch
 
-
-def _fig3_10(out_dir, tag, path, limits, opt) -> Path:
-    s = np.linspace(0.0, path.length, 1500)
-    env = axis_feed_limits(path, limits, s)
-    fig, ax = figure(3, 1, figsize=(8, 8), sharex=True)
-    for k, (kind, eq) in enumerate((("velocity", "3.42"), ("acceleration", "3.50"), ("jerk", "3.54"))):
+    d = record["details"]["feedrate"]
+    sc = record["scalars"]
+    feed_cap = d["feed_mm_per_s"]
+    limits = d["limits"]
+    fig, ax = mosaic([["f", "f", "f"], ["lv", "la", "lj"], ["cv", "ca", "cj"], ["rv", "ra", "rj"]],
+                     figsize=(14, 15), height_ratios=[1.1, 1, 1, 1])
+    s_env = arrays["feedrate.envelope.s"]
+    s_opt, f_opt = arrays["feedrate.optimized.s"], arrays["feedrate.optimized.feed"]
+    # (a) Fig 3.11
+    a = ax["f"]
+    for (kind, *_), style in zip(KINDS, (":", "--", "-.")):
+        a.plot(s_env, np.min(arrays[f"feedrate.envelope.{kind}"], axis=1), color="0.45", ls=style, lw=1,
+               label=f"{kind} constraints (min over the axes)")
+    a.plot(s_opt, f_opt, "k", lw=1.8, label=f"optimized feed, T = {sc['optimized.feedrate_cycle_time']:.3f} s")
+    a.plot(arrays[f"feedrate.{CONSTANT}.s"], arrays[f"feedrate.{CONSTANT}.feed"], "C0", lw=1.4,
+           label=f"constant feed 15 mm/s, T = {sc[CONSTANT + '.feedrate_cycle_time']:.2f} s")
+    a.axhline(feed_cap, color="C3", lw=1, label=f"feed limit {feed_cap:g} mm/s")
+    bound = set()
+    for b in d["schedules"]["optimized"]["binding"]:
+        if b["axis"] != "feed":
+            a.axvspan(b["s_start_mm"], max(b["s_end_mm"], b["s_start_mm"] + 0.3), color=COLOURS[b["axis"]], alpha=0.15,
+                      lw=0)
+            bound.add((b["axis"], b["kind"]))
+    handles, _ = a.get_legend_handles_labels()
+    handles += [Patch(color=COLOURS[x], alpha=0.3, label=f"shaded: {x.upper()} {k} limit binds") for x, k in sorted(bound)]
+    a.set(xlabel="displacement s [mm]", ylabel="feed [mm/s]", ylim=(0, 300), xlim=(0, s_env[-1]),
+          title=f"(a) Fig 3.11: optimized vs constant feed along the {d['path']} path ({d['path_length_mm']:.0f} mm), "
+                "Table 3.1 limits")
+    a.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.005, 1.0), fontsize=7)
+    # (b)-(d) Fig 3.10
+    for k, (key, (kind, eq, _, _), letter) in enumerate(zip(("lv", "la", "lj"), KINDS, "bcd")):
+        a = ax[key]
+        env = arrays[f"feedrate.envelope.{kind}"]
         for i, name in enumerate(AXES):
-            ax[k].plot(s, env[kind][:, i], color=COLOURS[name], label=f"{name.upper()} axis limit")
-        ax[k].plot(opt.s, opt.feed, "k", lw=1.6, label="optimized feed")
-        ax[k].set(ylim=(0, 1200), ylabel="feed [mm/s]", title=f"({'abc'[k]}) feed limited by the axis {kind} limits (eq {eq})")
-    ax[0].legend(ncol=3)
-    ax[2].set(xlabel="displacement s [mm]")
-    out = out_dir / f"{NAME}_{tag}_fig3_10.png"
-    save(fig, out)
-    return out
-
-
-def _fig3_11(out_dir, tag, path, limits, opt, const) -> Path:
-    fig, ax = figure(figsize=(9, 4.5))
-    s = np.linspace(0.0, path.length, 1500)
-    env = axis_feed_limits(path, limits, s)
-    for kind, style in (("velocity", ":"), ("acceleration", "--"), ("jerk", "-.")):
-        ax.plot(s, np.minimum(env[kind].min(axis=1), 400), "0.5", ls=style, lw=1, label=f"{kind} constraints (min over axes)")
-    ax.plot(opt.s, opt.feed, "k", lw=1.8, label=f"optimized feed, T = {opt.cycle_time:.3f} s")
-    ax.plot(const.s, const.feed, "C0", lw=1.4, label=f"constant feed {CONSTANT:g} mm/s, T = {const.cycle_time:.2f} s")
-    ax.axhline(FEED, color="C3", lw=1, label=f"feed limit {FEED:g} mm/s")
-    for b in opt.binding:
-        if b.axis != "feed":
-            ax.axvspan(b.s_start, max(b.s_end, b.s_start + 0.3), color=COLOURS[b.axis], alpha=0.12, lw=0)
-    ax.set(xlabel="displacement s [mm]", ylabel="feed [mm/s]", ylim=(0, 260),
-           title=f"Fig 3.11 style, {path.name}: optimized vs constant feed (shaded: binding axis limit, colour = axis)")
-    ax.legend(loc="upper right")
-    out = out_dir / f"{NAME}_{tag}_fig3_11.png"
-    save(fig, out)
-    return out
-
-
-def _fig3_12(out_dir, tag, limits, opt, const) -> Path:
-    fig, ax = figure(3, 2, figsize=(11, 8), sharex=True)
-    rows = (("v", "velocity", "/s"), ("a", "acceleration", "/s^2"), ("j", "jerk", "/s^3"))
-    for r, (attr, kind, unit) in enumerate(rows):
-        lim = getattr(limits, kind)
-        for c, (axes, scale, u) in enumerate((((0, 1, 2), 1.0, "mm"), ((3, 4), 180 / np.pi, "deg"))):
-            a = ax[r, c]
-            for i in axes:
-                a.plot(opt.trajectory.t, np.asarray(getattr(opt.trajectory, attr))[:, i] * scale, color=COLOURS[AXES[i]],
+            a.plot(s_env, env[:, i], color=COLOURS[name], lw=1, label=f"{name.upper()} axis limit")
+        a.plot(s_opt, f_opt, "k", lw=1.4, label="optimized feed")
+        a.set(xlabel="displacement s [mm]", ylabel="feed [mm/s]", ylim=(0, 1200), xlim=(0, s_env[-1]),
+              title=f"({letter}) Fig 3.10{'abc'[k]}: axis {kind} limits (eq {eq})")
+    ax["lj"].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)
+    # (e)-(j) Fig 3.12
+    t_end = sc[CONSTANT + ".feedrate_cycle_time"]
+    for row, axes_i, scale, unit in (("c", (0, 1, 2), 1.0, "mm"), ("r", (3, 4), 180 / np.pi, "deg")):
+        for k, (kind, _, attr, per) in enumerate(KINDS):
+            a = ax[row + attr]
+            lim = limits[kind]
+            for i in axes_i:
+                c = COLOURS[AXES[i]]
+                a.plot(arrays["feedrate.optimized.t"], arrays[f"feedrate.optimized.{attr}"][:, i] * scale, color=c, lw=1,
                        label=f"{AXES[i].upper()} optimized")
-                a.plot(const.trajectory.t, np.asarray(getattr(const.trajectory, attr))[:, i] * scale, color=COLOURS[AXES[i]],
-                       ls="--", lw=0.8)
-                a.axhline(lim[i] * scale, color=COLOURS[AXES[i]], lw=0.6, ls=":")
-                a.axhline(-lim[i] * scale, color=COLOURS[AXES[i]], lw=0.6, ls=":")
-            a.set(ylabel=f"{kind} [{u}{unit}]", xlim=(0, const.cycle_time))
-            if r == 0:
-                a.set_title(("Cartesian", "rotary")[c] + " axes: optimized (solid), 15 mm/s (dashed), limits (dotted)")
-                a.legend(ncol=3)
-    for a in ax[-1]:
-        a.set(xlabel="time [s]")
-    out = out_dir / f"{NAME}_{tag}_fig3_12.png"
-    save(fig, out)
-    return out
+                a.plot(arrays[f"feedrate.{CONSTANT}.t"], arrays[f"feedrate.{CONSTANT}.{attr}"][:, i] * scale, color=c,
+                       ls="--", lw=0.8, label=f"{AXES[i].upper()} constant 15 mm/s")
+                for sign in (1, -1):
+                    a.axhline(sign * lim[i] * scale, color=c, lw=0.7, ls=":")
+            letter = "efghij"[k + (3 if row == "r" else 0)]
+            a.set(xlabel="time [s]", ylabel=f"{kind} [{unit}{per}]", xlim=(0, t_end),
+                  title=f"({letter}) Fig 3.12: {('X Y Z', 'A C')[row == 'r']} {kind} (dotted: limits)")
+        ax[row + "j"].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)
+    return fig

@@ -36,7 +36,9 @@ from dataclasses import dataclass
 import jax.numpy as jnp
 import numpy as np
 
-from research.contour import eq436_trajectory, exact_tip_contour_error, simulate_setpoint, tip_reference
+from research.contour._cec import simulate_setpoint
+from research.contour._five_axis import eq436_trajectory
+from research.contour._frenet import exact_tip_contour_error, tip_reference
 from research.drives import ClosedLoopModel, Encoder, table_6_3_closed_loop
 from research.errors import ParameterError
 from research.paths.kinematics5 import TableTiltingAC
@@ -181,16 +183,18 @@ def predict_contour_error(models: dict, *, feed: float = FIG6_13_FEED, accelerat
     return ContourPrediction(t, true, {name: contour(drives) for name, drives in models.items()}, {})
 
 
-def fig6_13(*, seed: int = 0, encoder: Encoder | None = None) -> tuple[dict, ContourPrediction]:
+def fig6_13(*, seed: int = 0, encoder: Encoder | None = None, pso_settings=None, feed: float = FIG6_13_FEED,
+            acceleration: float = FIG6_13_ACCELERATION, sample_period: float = 1e-3) -> tuple[dict, ContourPrediction]:
     """Identify (:func:`identify_table_6_3`) and predict (:func:`predict_contour_error`) with every
-    method whose five fits are stable with non-negative friction; returns ``(identification, prediction)``."""
-    ident = identify_table_6_3(seed=seed, encoder=encoder)
+    method whose five fits are stable with non-negative friction; returns ``(identification, prediction)``.
+    ``pso_settings``, ``feed``, ``acceleration`` and ``sample_period`` are passed on (defaults: the thesis')."""
+    ident = identify_table_6_3(seed=seed, encoder=encoder, pso_settings=pso_settings)
     models, excluded = {}, {}
     for method in ("ls", "pso"):
         try:
             models[method] = tuple(ident[a].model(method) for a in AXES)
         except ParameterError as exc:
             excluded[method] = str(exc)
-    pred = predict_contour_error(models)
+    pred = predict_contour_error(models, feed=feed, acceleration=acceleration, sample_period=sample_period)
     return ident, ContourPrediction(pred.t, pred.true, pred.predicted, excluded)
 

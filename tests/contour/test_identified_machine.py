@@ -1,5 +1,5 @@
 """Thesis §6.5.3 / Table 6.3 / Fig 6.13: the Table 6.3 virtual 5-axis machine identified axis by axis with
-LS and PSO, and the contour error predicted with the identified models (research.control._identified_machine).
+LS and PSO, and the contour error predicted with the identified models (research.contour._identified_machine).
 
 One identification and one prediction (the thesis' setup: §6.5 program, 75 mm/s, 1500 mm/s^2) are shared
 by the tests (module fixture)."""
@@ -7,8 +7,8 @@ by the tests (module fixture)."""
 import numpy as np
 import pytest
 
-from research.control import FIG6_13_BOUND, ContourPrediction, fig6_13, predict_contour_error
-from research.control._identified_machine import AXES
+from research.contour import FIG6_13_BOUND, ContourPrediction, fig6_13, predict_contour_error
+from research.contour._identified_machine import AXES
 from research.drives import table_6_3_closed_loop
 from research.errors import ParameterError
 
@@ -78,7 +78,7 @@ def test_prediction_of_the_true_machine_has_zero_discrepancy():
 def test_unstable_or_frictionless_fit_is_refused_with_the_reason():
     """An identified model with a right-half-plane pole cannot predict a contour error: ``model`` raises
     ParameterError naming the axis and the poles (fig6_13 lists such a method under ``excluded``)."""
-    from research.control import AxisIdentification
+    from research.contour import AxisIdentification
     from research.identification import IdentifiedDrive
 
     coeffs = dict(a1=-10.0, a2=1e4, a3=1e5, b0=0.0, b1=0.0, b2=1e4, dc=1.0)  # s^3 - 10 s^2 + ...: unstable
