@@ -91,6 +91,33 @@ def test_rounded_chords_run_as_fast_as_the_smooth_ones():
     assert np.max(np.asarray(rounded.corner_errors)) <= EPS * (1 + 1e-6)
 
 
+def test_micro_chord_contouring_program_runs_near_its_curvature_feed_regression():
+    """Issue repro: "a public 10,000-chord contouring program (0.016 mm chords, 5-13 deg zigzags
+    from 4-decimal rounding) takes 21.65 s at 200 mm/s for 185 mm of path: 23x its length over
+    feed". Rebuilt here: 185 mm of y = 3 sin(x / 15) in 0.016 mm chords (11,562), rounded to
+    4 decimals of inch (q = 2.54 um: zigzags up to 10 deg), written as G-code and read back.
+    Bounds, both independent of the planner: at least L / F + T_d (no block above F), and at most a
+    constant feed at the crest's eq 8 feed, F8 = 136.3 mm/s (radius 75 mm = W^2 / A, scipy root of
+    eq 8 here) for eps less what the rounding takes (a vertex moves at most q / sqrt(2) off the
+    curve, and so does the window's average of the input): 1.450 s, against 21.65 s before."""
+    from research.paths.gcode import parse_gcode, to_gcode
+    q, L, h = 2.54e-3, 185.0, 0.016
+    xf = np.linspace(0.0, L + 10.0, 400001)
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(xf), np.diff(3.0 * np.sin(xf / 15.0))))])
+    x = np.interp(np.arange(0.0, L + 1e-9, h), s, xf)
+    pts = np.round(np.column_stack([x, 3.0 * np.sin(x / 15.0)]) / q) * q
+    path = parse_gcode(to_gcode(Polyline.from_points(pts, merge_duplicates=True), 200.0 * 60.0),
+                       start=(pts[0, 0], pts[0, 1], 0.0)).polyline
+    u = path.directions
+    assert np.degrees(np.max(np.arccos(np.clip(np.sum(u[1:] * u[:-1], axis=1), -1, 1)))) > 5.0  # the zigzags
+    plan = plan_fir(path, 200.0, DELAYS, EPS)
+    Td = sum(DELAYS)
+    f8 = eq8_feed(75.0, DELAYS, EPS - np.sqrt(2.0) * q)
+    T = float(plan.cycle_time)
+    assert path.length / 200.0 + Td <= T <= path.length / f8 + Td, (T, f8)
+    assert np.max(np.asarray(plan.corner_errors)) <= EPS * (1 + 1e-6)
+
+
 def test_limit_check_ignores_degenerate_pieces_regression():
     """Issue repro: at exact stops two breaks coincide up to rounding and leave a ~1e-16 s piece
     carrying both neighbours' jerk; it was counted as a peak (1.184 of the jerk limit, true jerk
