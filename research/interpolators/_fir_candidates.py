@@ -18,6 +18,11 @@ The construction here does not ask that of the planner. It rests on one fact of 
     every ``eps' >= eps`` (the checks compare the same, tolerance-free distances with a larger
     bound) -- it is a feasible plan for ``eps'``.
 
+(In detail: the vertex distances and the limit ratios do not depend on the tolerance; a path
+sample passes when its three-block distance, or the tighter ``distance_bound`` computed for the
+samples that fail that first test, is within the bound of its block or vertex, a predicate that
+only gets easier as the bound grows, componentwise for per-block tolerances.)
+
 So over a set of tolerances ``E`` (scalars, or one per block ordered componentwise), the plan
 returned for ``eps_j`` is the least cycle time among the verified plans of every ``eps_i <= eps_j``
 in ``E`` (:func:`envelope`). For ``eps_i <= eps_j`` the candidate set of ``eps_j`` contains the

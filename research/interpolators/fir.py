@@ -32,6 +32,10 @@ CAM programs (beyond the paper, which assumes every block longer than the window
   stop, which puts it on the trajectory whatever its neighbours do. Deviations inside an arc slow
   that arc. At most :data:`MAX_ROUNDS` rounds; the rounds needed are reported in
   :attr:`FIRPlan.rounds`.
+
+One call is not monotone in ``eps`` (a looser tolerance can change the candidates and repairs
+and come out slower); :func:`plan_fir_sweep` keeps, over a tolerance sweep, the fastest verified
+plan of every tighter tolerance, which is (``_fir_candidates``).
 """
 
 from __future__ import annotations

@@ -91,6 +91,19 @@ def test_rounded_chords_run_as_fast_as_the_smooth_ones():
     assert np.max(np.asarray(rounded.corner_errors)) <= EPS * (1 + 1e-6)
 
 
+def test_sweep_bad_input_names_the_problem():
+    """An empty sweep, a negative tolerance in it, and times that do not match the tolerances are
+    ParameterErrors saying what was expected."""
+    from research.errors import ParameterError
+    path = Polyline([[0.0, 0.0], [5.0, 0.0], [5.0, 5.0]])
+    with pytest.raises(ParameterError, match="at least one tolerance"):
+        plan_fir_sweep(path, 100.0, DELAYS, [])
+    with pytest.raises(ParameterError, match="epsilon"):
+        plan_fir_sweep(path, 100.0, DELAYS, [0.05, -0.01])
+    with pytest.raises(ParameterError, match="2 tolerances but 1 cycle times"):
+        envelope([np.array([1.0]), np.array([2.0])], [1.0])
+
+
 def test_micro_chord_contouring_program_runs_near_its_curvature_feed_regression():
     """Issue repro: "a public 10,000-chord contouring program (0.016 mm chords, 5-13 deg zigzags
     from 4-decimal rounding) takes 21.65 s at 200 mm/s for 185 mm of path: 23x its length over
