@@ -19,7 +19,8 @@ from research.interpolators._fir_chain import (
 from research.interpolators._fir_optimize import optimize_fir
 from research.interpolators._fir_overlap import cornering_error, overlap_time
 from research.interpolators.blend import blend_interpolate, corner_blends
-from research.interpolators.fir import FIRPlan, fir_by_convolution, fir_interpolate, plan_fir
+from research.interpolators._fir_candidates import FIRSweep
+from research.interpolators.fir import FIRPlan, fir_by_convolution, fir_interpolate, plan_fir, plan_fir_sweep
 from research.interpolators.scurve import double_s, max_end_speed, scurve_interpolate, scurve_phases, scurve_profile
 from research.interpolators.sigmoid import (
     SigmoidMotion,
@@ -32,6 +33,7 @@ from research.interpolators.sigmoid import (
 
 __all__ = [
     "FIRPlan",
+    "FIRSweep",
     "SigmoidMotion",
     "acceleration_spectrum",
     "blend_interpolate",
@@ -51,6 +53,7 @@ __all__ = [
     "optimize_fir",
     "overlap_time",
     "plan_fir",
+    "plan_fir_sweep",
     "scurve_interpolate",
     "scurve_phases",
     "scurve_profile",

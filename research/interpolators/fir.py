@@ -32,6 +32,10 @@ CAM programs (beyond the paper, which assumes every block longer than the window
   stop, which puts it on the trajectory whatever its neighbours do. Deviations inside an arc slow
   that arc. At most :data:`MAX_ROUNDS` rounds; the rounds needed are reported in
   :attr:`FIRPlan.rounds`.
+
+One call is not monotone in ``eps`` (a looser tolerance can change the candidates and repairs
+and come out slower); :func:`plan_fir_sweep` keeps, over a tolerance sweep, the fastest verified
+plan of every tighter tolerance, which is (``_fir_candidates``).
 """
 
 from __future__ import annotations
@@ -46,6 +50,7 @@ from jax import Array
 
 from research.errors import ConvergenceError, ParameterError, PathError
 from research.interpolators._fir_blocks import PulseTable, build_profile
+from research.interpolators._fir_candidates import FIRSweep, envelope
 from research.interpolators._fir_chain import check_delays, kernel_second_integral
 from research.interpolators._fir_feed import ChainError, arc_feed_caps, range_min
 from research.interpolators._fir_limits import (
@@ -367,6 +372,36 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     feeds, overlaps, pulse, starts, position, centre = state
     return FIRPlan(starts, pulse, overlaps, feeds, delays, position, centre, jnp.asarray(tp.vertices),
                    float(deviation), int(rounds), tp.axes)
+
+
+def plan_fir_sweep(path, feed, delays, tolerances, *, limits: AxisLimits | None = None,
+                   check_period: float = CHECK_PERIOD) -> FIRSweep:
+    """Verified plans over a tolerance sweep whose cycle time never increases with the tolerance.
+
+    Each tolerance is planned by :func:`plan_fir` (``refine=True``); the plan kept at
+    ``tolerances[j]`` is the fastest of the verified plans of every ``tolerances[i] <=
+    tolerances[j]`` (componentwise for per-block tolerances). A plan verified within a tolerance is
+    within every larger one, so the cycle time is non-increasing along the sweep by construction
+    (``_fir_candidates``), exactly, at the cost of planning each tolerance once.
+
+    Args:
+        path, feed, delays, limits, check_period: as :func:`plan_fir`.
+        tolerances: ``K >= 1`` cornering tolerances [mm], each a scalar or one per block, any order.
+
+    Returns:
+        :class:`FIRSweep` with ``plans[j]``, ``planned_at[j]`` (the tolerance index it was planned
+        at), ``cycle_times`` and ``own_cycle_times`` (each tolerance's own plan). Gradients with respect to ``tolerances[j]`` are those of the plan
+        kept (zero when it was planned at a tighter tolerance).
+    """
+    tols = tuple(tolerances)
+    if not tols:
+        raise ParameterError("plan_fir_sweep needs at least one tolerance, got none")
+    M = _as_toolpath(path).n_blocks
+    plans = [plan_fir(path, feed, delays, t, limits=limits, check_period=check_period) for t in tols]
+    vectors = [np.broadcast_to(np.asarray(_primal(t), dtype=np.float64), (M,)) for t in tols]
+    own = tuple(float(_primal(p.cycle_time)) for p in plans)
+    pick = envelope(vectors, own)
+    return FIRSweep(tols, tuple(plans[i] for i in pick), pick, own)
 
 
 _overlap_jit = jax.jit(overlap_time)  # eq 13/14 on concrete, padded arrays (one dispatch)
