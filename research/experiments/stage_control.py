@@ -58,17 +58,28 @@ def control_stage(cc: ControlConfig) -> tuple[dict[str, float], dict, dict[str, 
         UnstableGainsError: a gain set whose sampled loop is unstable at the control period (the
         eigenvalue is named); ParameterError: inconsistent gains.
     """
-    from research.control import identify_coulomb, thesis_plant
+    from research.control import eq436_reference, identify_coulomb, thesis_plant
 
     T = cc.control_period_ms * 1e-3
     plant = thesis_plant()
-    coulomb = identify_coulomb(plant, T=T) if cc.coulomb_V is None else np.asarray(cc.coulomb_V, dtype=np.float64)
-    if cc.cases is None:
-        return _one_run(cc, plant, coulomb, T)
-    scalars, details, arrays = {}, {"coulomb_V": [float(c) for c in coulomb], "control_period_s": T, "cases": {}}, {}
     runs = cc.case_configs()
+    references = {}  # (feed, acceleration) -> the eq 4.36 reference, built once per config (it costs more than a run)
+
+    def reference(feed, acceleration):
+        if (feed, acceleration) not in references:
+            references[feed, acceleration] = eq436_reference(feed=feed, acceleration=acceleration, sample_period=T)
+        return references[feed, acceleration]
+
+    if cc.coulomb_V is None:  # identified on the thesis' Fig 5.7 run (50 mm/s, 1500 mm/s^2)
+        coulomb = identify_coulomb(plant, T=T, reference=reference(50.0, 1500.0)[0])
+    else:
+        coulomb = np.asarray(cc.coulomb_V, dtype=np.float64)
+    if cc.cases is None:
+        return _one_run(cc, plant, coulomb, T, reference(cc.feed_mm_per_s, cc.acceleration_mm_per_s2))
+    scalars, details, arrays = {}, {"coulomb_V": [float(c) for c in coulomb], "control_period_s": T, "cases": {}}, {}
     for label, case_cc in runs.items():
-        found, details["cases"][label], more = _one_run(case_cc, plant, coulomb, T)
+        found, details["cases"][label], more = _one_run(
+            case_cc, plant, coulomb, T, reference(case_cc.feed_mm_per_s, case_cc.acceleration_mm_per_s2))
         scalars |= {f"{label}.{k}": v for k, v in found.items()}
         arrays |= {f"control.{label}.{k.removeprefix('control.')}": v for k, v in more.items()}
     ratios = {}
@@ -85,20 +96,21 @@ def control_stage(cc: ControlConfig) -> tuple[dict[str, float], dict, dict[str, 
     return scalars, details, arrays
 
 
-def _one_run(cc: ControlConfig, plant, coulomb, T) -> tuple[dict[str, float], dict, dict[str, np.ndarray]]:
-    """One closed-loop run of ``cc`` on ``plant`` with friction ``coulomb`` [V] at period ``T`` [s]."""
-    from research.control import check_controller, eq436_reference, measure, run_case, tracking_mirror_passes
+def _one_run(cc: ControlConfig, plant, coulomb, T, reference) -> tuple[dict[str, float], dict, dict[str, np.ndarray]]:
+    """One closed-loop run of ``cc`` on ``plant`` with friction ``coulomb`` [V] at period ``T`` [s] on ``reference``
+    (the pair of :func:`research.control.eq436_reference` at the run's feed and acceleration)."""
+    from research.control import check_controller, measure, run_case, tracking_mirror_passes
 
     controller = controller_from_config(cc)
     if cc.mirror_passes == 0:
         limit = cc.amplifier_limit_V
         u_max = None if limit is None else np.broadcast_to(np.asarray(limit, dtype=np.float64), (5,))
         case = run_case(controller, feed=cc.feed_mm_per_s, coulomb=coulomb, plant=plant, T=T,
-                        acceleration=cc.acceleration_mm_per_s2, u_max=u_max)
+                        acceleration=cc.acceleration_mm_per_s2, u_max=u_max, reference=reference)
     else:
         loaded = plant.with_coulomb(coulomb)
         check_controller(controller, loaded, T)
-        ref, traj = eq436_reference(feed=cc.feed_mm_per_s, acceleration=cc.acceleration_mm_per_s2, sample_period=T)
+        ref, traj = reference
         runs = tracking_mirror_passes(loaded, ref, controller, cc.mirror_passes)
         case = measure(ref, traj, runs[-1])
     s = case.summary()
