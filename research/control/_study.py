@@ -47,14 +47,10 @@ LOG_PERIOD = 1e-3
 FIG5_7_AXIS_PEAKS = (0.015, 0.013, 0.007, 2.2e-3, 1.7e-3)
 #: thesis §5.4, Fig 5.7a: SISO tool-tip contour error mean / max [mm]
 FIG5_7_CONTOUR = dict(mean=0.045, max=0.317)
-#: thesis §5.4, Fig 5.8b-d: Cartesian axis tracking maxima under the tip contour controller [mm]
-FIG5_8_AXIS_PEAKS = (0.130, 0.216, 0.130)
 #: thesis Table 5.4: feed [mm/s] -> (contour max, contour mean, SISO max, SISO mean) [mm]
 TABLE_5_4 = {50.0: (0.079, 0.010, 0.317, 0.045), 60.0: (0.087, 0.014, 0.359, 0.055), 80.0: (0.101, 0.020, 0.412, 0.074)}
 #: thesis Table 5.5 (60 mm/s): (wn tangent, normal, binormal) [rad/s] -> (max, mean) [um]
 TABLE_5_5 = {(100.0, 230.0, 230.0): (90.0, 13.0), (100.0, 200.0, 200.0): (115.0, 18.0), (70.0, 230.0, 230.0): (93.0, 12.0)}
-#: thesis Fig 5.10: orientation coupling weights W = diag(w, w)
-FIG5_10_WEIGHTS = (0.0, 3.0, 4.0, 5.0)
 
 
 def step_disturbance_peak(m: float, c: float, gains: AxisSMC, axis: int, T: float, duration: float = 2.0) -> float:
