@@ -5,7 +5,16 @@ kinematics under either the SISO sliding-mode axis controllers (Table 5.2) or th
 controller (tool-tip controller of §5.2 with Table 5.3, orientation controller of §5.3 with the
 coupling weights ``W = diag(wa, wc)``), optionally with feed-forward mirror passes on the setpoint
 (:func:`research.control.tracking_mirror_passes`). Every gain defaults to the thesis' table; units are
-in the key names or, where they differ between linear and rotary axes, in the description.
+in the key names or, where they differ between linear and rotary axes, in the description. The SISO
+controller takes ``siso_*`` (X Y Z A C); the contour controller ``tip_*`` (Frenet directions) and ``rotary_*``
+(A, C), and refuses ``siso_*``, which it would not use.
+
+Several runs in one config (the thesis compares runs: SISO against contour controller, feeds, bandwidths,
+weights W, mirror passes): ``[[control.cases]]``, each a ``label``, the keys that differ from the table
+(:data:`CASE_KEYS`) and optionally ``ratio_to`` (labels whose metrics this case's are divided by). Each
+case is the table with its keys replaced, validated again as a whole; the friction is identified once.
+This is the smallest shape that keeps a figure's runs and their comparisons in one stored result; a
+``[sweep]`` maps a grid instead and has no per-run labels or ratios.
 
 Example:
     >>> ControlConfig(controller="siso", feed_mm_per_s=60.0).feed_mm_per_s
