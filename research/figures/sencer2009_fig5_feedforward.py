@@ -38,8 +38,7 @@ def plot(record: dict, arrays: dict):
                 title="(a) exact tool-tip contour error, 50 mm/s (simulation)")
     ax["a"].legend(loc="upper center", ncol=2, fontsize=7)
     ax["b"].set(xlabel="time [s]", ylabel="orientation contour error [mrad] (log scale)", ylim=(1e-4, 1e2),
-                title="(b) orientation contour error (W = 0: each contour run on its SISO twin; eq 5.40's arccos "
-                      "resolves 2e-8 rad, below the axis)")
+                title="(b) orientation contour error (W = 0: contour runs on their SISO twins; eq 5.40 resolves 2e-8 rad)")
     ax["b"].legend(loc="upper center", ncol=2, fontsize=7)
     cells = [[name, f"{s[f'{lb}.tip_contour_error_max'] * 1e3:.2f}", f"{s[f'{lb}.tip_contour_error_mean'] * 1e3:.3f}",
               f"{s[f'{lb}.orientation_error_max'] * 1e3:.3f}", f"{s[f'{lb}.orientation_error_mean'] * 1e3:.4f}",
