@@ -47,14 +47,10 @@ LOG_PERIOD = 1e-3
 FIG5_7_AXIS_PEAKS = (0.015, 0.013, 0.007, 2.2e-3, 1.7e-3)
 #: thesis §5.4, Fig 5.7a: SISO tool-tip contour error mean / max [mm]
 FIG5_7_CONTOUR = dict(mean=0.045, max=0.317)
-#: thesis §5.4, Fig 5.8b-d: Cartesian axis tracking maxima under the tip contour controller [mm]
-FIG5_8_AXIS_PEAKS = (0.130, 0.216, 0.130)
 #: thesis Table 5.4: feed [mm/s] -> (contour max, contour mean, SISO max, SISO mean) [mm]
 TABLE_5_4 = {50.0: (0.079, 0.010, 0.317, 0.045), 60.0: (0.087, 0.014, 0.359, 0.055), 80.0: (0.101, 0.020, 0.412, 0.074)}
 #: thesis Table 5.5 (60 mm/s): (wn tangent, normal, binormal) [rad/s] -> (max, mean) [um]
 TABLE_5_5 = {(100.0, 230.0, 230.0): (90.0, 13.0), (100.0, 200.0, 200.0): (115.0, 18.0), (70.0, 230.0, 230.0): (93.0, 12.0)}
-#: thesis Fig 5.10: orientation coupling weights W = diag(w, w)
-FIG5_10_WEIGHTS = (0.0, 3.0, 4.0, 5.0)
 
 
 def step_disturbance_peak(m: float, c: float, gains: AxisSMC, axis: int, T: float, duration: float = 2.0) -> float:
@@ -81,7 +77,8 @@ def step_disturbance_peak(m: float, c: float, gains: AxisSMC, axis: int, T: floa
 
 
 def identify_coulomb(plant: FiveAxisPlant | None = None, gains: AxisSMC | None = None, peaks=FIG5_7_AXIS_PEAKS,
-                     T: float = CONTROL_PERIOD, feed: float = 50.0, machine: TableTiltingAC | None = None) -> np.ndarray:
+                     T: float = CONTROL_PERIOD, feed: float = 50.0, machine: TableTiltingAC | None = None,
+                     reference=None) -> np.ndarray:
     """Coulomb friction voltages [V] per axis from the thesis' peak SISO axis errors (module docstring).
 
     The SISO axes are decoupled and, with the exact-model feed-forward, their errors are caused by the
@@ -95,7 +92,9 @@ def identify_coulomb(plant: FiveAxisPlant | None = None, gains: AxisSMC | None =
     Args:
         plant: drives (default Table 5.1); gains: SISO gains (default Table 5.2); peaks: ``(5,)`` peak
         axis errors [mm, rad] (default thesis Fig 5.7); T: control period [s]; feed: [mm/s] of the run
-        the peaks were measured on (Fig 5.7: 50 mm/s); machine: kinematics.
+        the peaks were measured on (Fig 5.7: 50 mm/s); machine: kinematics; reference: that run's
+        :class:`~research.control.ContourReference` at period ``T`` if already built (:func:`eq436_reference`
+        at ``feed``; building it costs more than the runs), else built here.
     Raises:
         ParameterError: peaks not 5 positive numbers; UnstableGainsError: unstable gains at ``T``.
     """
@@ -105,7 +104,9 @@ def identify_coulomb(plant: FiveAxisPlant | None = None, gains: AxisSMC | None =
     if peaks.shape != (5,) or np.any(~np.isfinite(peaks)) or np.any(peaks <= 0):
         raise ParameterError(f"peaks must be 5 positive axis errors [mm, mm, mm, rad, rad], got {peaks}")
     check_axis_gains(gains, plant.m, plant.c, T)
-    ref, _ = eq436_reference(machine, feed=feed, sample_period=T)
+    ref = eq436_reference(machine, feed=feed, sample_period=T)[0] if reference is None else reference
+    if abs(ref.sample_period - T) > 1e-12 * T:
+        raise ParameterError(f"reference sampled every {ref.sample_period} s, the control period is {T} s")
     dc = peaks / (2.0 * np.array([step_disturbance_peak(float(plant.m[i]), float(plant.c[i]), gains, i, T) for i in range(5)]))
     for it in range(20):
         res = simulate_closed_loop(plant.with_coulomb(dc), ref, gains, machine)
@@ -168,21 +169,26 @@ def check_controller(controller: AxisSMC | ContourGains, plant: FiveAxisPlant, T
 
 def run_case(controller: AxisSMC | ContourGains, *, feed: float = 50.0, coulomb=None, plant: FiveAxisPlant | None = None,
              machine: TableTiltingAC | None = None, T: float = CONTROL_PERIOD, acceleration: float = 1500.0,
-             u_max: float | None = None) -> CaseResult:
+             u_max: float | None = None, reference=None) -> CaseResult:
     """Simulate the Fig 5.5 path at ``feed`` under ``controller`` and compute the §5.4 metrics.
 
     Args:
         controller: SISO (:func:`table_5_2`) or contour (:func:`table_5_3`) gains; checked for stability.
         feed: cruise feed [mm/s]; coulomb: friction voltages [V] (default :func:`identify_coulomb`);
         plant: drives (default Table 5.1); machine: kinematics; T: control period [s];
-        acceleration: [mm/s^2]; u_max: amplifier limit [V] (None: unlimited).
+        acceleration: [mm/s^2]; u_max: amplifier limit [V] (None: unlimited); reference: the pair
+        ``(ContourReference, trajectory)`` of :func:`eq436_reference` at ``feed``, ``acceleration`` and ``T`` if
+        already built (several runs on one path share it), else built here.
     """
     machine = TableTiltingAC() if machine is None else machine
     plant = thesis_plant() if plant is None else plant
     coulomb = identify_coulomb(plant, T=T) if coulomb is None else coulomb
     plant = plant.with_coulomb(coulomb)
     check_controller(controller, plant, T)
-    ref, traj = eq436_reference(machine, feed=feed, acceleration=acceleration, sample_period=T)
+    ref, traj = eq436_reference(machine, feed=feed, acceleration=acceleration, sample_period=T) if reference is None \
+        else reference
+    if abs(ref.sample_period - T) > 1e-12 * T:
+        raise ParameterError(f"reference sampled every {ref.sample_period} s, the control period is {T} s")
     res: ClosedLoopResult = simulate_closed_loop(plant, ref, controller, machine, u_max=u_max)
     return measure(ref, traj, res, machine)
 

@@ -593,7 +593,7 @@ def _describe(err: dict, file: Path, single_interpolator: bool) -> str:
     key = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in loc).lstrip(".") or "(top level)"
     msg = err["msg"].removeprefix("Value error, ")
     kind, value = err["type"], err.get("input")
-    named = re.match(r"([a-z_]+(?:\[\d+\])?) = ", msg) if kind == "value_error" else None
+    named = re.match(r"([A-Za-z_]+(?:\[\d+\])?) = ", msg) if kind == "value_error" else None
     if named and isinstance(value, dict) and named.group(1).split("[")[0] in value:  # a table check naming its key
         key = f"{key}.{named.group(1)}"
     if kind == "extra_forbidden":

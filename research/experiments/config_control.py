@@ -5,7 +5,16 @@ kinematics under either the SISO sliding-mode axis controllers (Table 5.2) or th
 controller (tool-tip controller of §5.2 with Table 5.3, orientation controller of §5.3 with the
 coupling weights ``W = diag(wa, wc)``), optionally with feed-forward mirror passes on the setpoint
 (:func:`research.control.tracking_mirror_passes`). Every gain defaults to the thesis' table; units are
-in the key names or, where they differ between linear and rotary axes, in the description.
+in the key names or, where they differ between linear and rotary axes, in the description. The SISO
+controller takes ``siso_*`` (X Y Z A C); the contour controller ``tip_*`` (Frenet directions) and ``rotary_*``
+(A, C), and refuses ``siso_*``, which it would not use.
+
+Several runs in one config (the thesis compares runs: SISO against contour controller, feeds, bandwidths,
+weights W, mirror passes): ``[[control.cases]]``, each a ``label``, the keys that differ from the table
+(:data:`CASE_KEYS`) and optionally ``ratio_to`` (labels whose metrics this case's are divided by). Each
+case is the table with its keys replaced, validated again as a whole; the friction is identified once.
+This is the smallest shape that keeps a figure's runs and their comparisons in one stored result; a
+``[sweep]`` maps a grid instead and has no per-run labels or ratios.
 
 Example:
     >>> ControlConfig(controller="siso", feed_mm_per_s=60.0).feed_mm_per_s
@@ -16,7 +25,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, ValidationError, create_model, model_validator
 
 from research.experiments.config_stages import _Strict
 
@@ -31,8 +40,11 @@ CONTROL_METRIC_UNITS = {
     "axis_error_max": "mm",  # X, Y, Z
     "rotary_axis_error_max": "rad",  # A, C
     "control_voltage_max": "V",
+    "orientation_estimate_error_max": "rad",
     "diverged": "-",
 }
+#: ``<label>.<metric>_ratio.<other>``: a case's metric over the same metric of case ``<other>`` (``ratio_to``)
+CONTROL_METRIC_UNITS |= {f"{k}_ratio": "-" for k in tuple(CONTROL_METRIC_UNITS) if k != "diverged"}
 
 
 def _n(n: int, what: str):
@@ -60,6 +72,10 @@ class ControlConfig(_Strict):
     tip_Gamma: list[float] | None = _n(3, "tool-tip Gamma per Frenet direction [V/mm] (none: Table 5.3, 10 20 20)")
     tip_damping: float = Field(1.0, gt=0, description="damping of the tip sliding surface (Table 5.3 prints none; "
                                                       "1: the double root at wn)")
+    rotary_bandwidth_rad_per_s: list[float] | None = _n(2, "contour controller: A, C surface bandwidth [rad/s] "
+                                                           "(none: Table 5.3, 150 200)")
+    rotary_Ks: list[float] | None = _n(2, "contour controller: A, C feedback gain [V s/rad] (none: Table 5.3, 0.5 1)")
+    rotary_Gamma: list[float] | None = _n(2, "contour controller: A, C adaptation gain [V/rad] (none: Table 5.3, 3 3)")
     orientation_weights_per_s: list[float] = Field([0.0, 0.0], min_length=2, max_length=2,
                                                    description="orientation coupling W = diag(wa, wc) [1/s] "
                                                                "(Fig 5.10: 0, 3, 4, 5)")
@@ -67,11 +83,25 @@ class ControlConfig(_Strict):
                                                                             "(none: unlimited)")
     mirror_passes: int = Field(0, ge=0, le=20, description="feed-forward mirror passes on the setpoint "
                                                           "(0: feedback only)")
+    cases: list["ControlCase"] | None = Field(None, description="several runs in one config ([[control.cases]]: a "
+                                                                  "label and the keys that differ from this table; "
+                                                                  "none: one run of this table)")
 
     @model_validator(mode="after")
     def _consistent(self):
         if self.controller == "siso" and any(getattr(self, k) is not None for k in ("tip_bandwidth_rad_per_s", "tip_Ks", "tip_Gamma")):
             raise ValueError("tip_* gains belong to controller = \"contour\"; the SISO controller takes siso_*")
+        if self.controller == "siso":
+            for k in ("rotary_bandwidth_rad_per_s", "rotary_Ks", "rotary_Gamma"):
+                if getattr(self, k) is not None:
+                    raise ValueError(f"{k} = {getattr(self, k)}: rotary_* gains belong to controller = \"contour\"; "
+                                     f"the SISO controller takes siso_* (five axes, A and C the last two)")
+        else:
+            for k in ("siso_bandwidth_rad_per_s", "siso_Ks", "siso_Gamma"):
+                if getattr(self, k) is not None:
+                    raise ValueError(f"{k} = {getattr(self, k)}: controller = \"contour\" does not use the SISO X, Y, Z "
+                                     f"gains (its tool-tip controller takes tip_*) and takes A, C as rotary_"
+                                     f"{k.removeprefix('siso_')}")
         if self.controller == "siso" and any(self.orientation_weights_per_s):
             raise ValueError("orientation_weights_per_s belongs to controller = \"contour\" (the SISO loops are uncoupled)")
         if any(w < 0 for w in self.orientation_weights_per_s):
@@ -88,4 +118,57 @@ class ControlConfig(_Strict):
             v = getattr(self, key)
             if v is not None and any(x < 0 for x in v):
                 raise ValueError(f"{key} = {v} must be >= 0")
+        if self.cases is not None:
+            self.case_configs()  # every case, merged with this table, is a valid run
         return self
+
+    def case_configs(self) -> dict[str, "ControlConfig"]:
+        """``{label: ControlConfig}`` of the runs: this table alone (label ``""``) without ``cases``, else each
+        case's keys over this table's.
+
+        Raises:
+            ValueError: duplicate labels, ``ratio_to`` naming an unknown label or the case itself, or a case whose
+                merged table is invalid (the case and the key are named).
+        """
+        if self.cases is None:
+            return {"": self}
+        base = self.model_dump(exclude={"cases"}, exclude_unset=True)
+        out = {}
+        labels = [c.label for c in self.cases]
+        for i, case in enumerate(self.cases):
+            if case.label in out:
+                raise ValueError(f"cases[{i}] = {case.label!r}: duplicate label")
+            for other in case.ratio_to:
+                if other not in labels or other == case.label:
+                    raise ValueError(f"cases[{i}] = {case.label!r}: ratio_to {other!r} is not another case's label "
+                                     f"(labels: {labels})")
+            merged = base | case.model_dump(exclude={"label", "ratio_to"}, exclude_none=True)
+            try:
+                out[case.label] = ControlConfig.model_validate(merged)
+            except ValidationError as e:
+                what = "; ".join(f"key '{'.'.join(str(p) for p in err['loc']) or '(table)'}': "
+                                 f"{err['msg'].removeprefix('Value error, ')}" for err in e.errors())
+                raise ValueError(f"cases[{i}] = {case.label!r}: {what}") from None
+        return out
+
+
+#: keys of [control] a case may change (friction, control period and surface damping stay the table's: the
+#: friction is identified once per config, at its period)
+CASE_KEYS = ("controller", "feed_mm_per_s", "acceleration_mm_per_s2", "siso_bandwidth_rad_per_s", "siso_Ks",
+             "siso_Gamma", "tip_bandwidth_rad_per_s", "tip_Ks", "tip_Gamma", "rotary_bandwidth_rad_per_s", "rotary_Ks",
+             "rotary_Gamma", "orientation_weights_per_s", "amplifier_limit_V", "mirror_passes")
+
+ControlCase = create_model(
+    "ControlCase",
+    __base__=_Strict,
+    __doc__="One run of a [control] table with cases (``[[control.cases]]``): a label, the ratios to report and "
+            "the keys that differ from the table (each validated again on the merged table).",
+    label=(str, Field(..., pattern=r"^[a-z][a-z0-9_]*$", max_length=40,
+                      description="name of the run: its scalars are <label>.<metric>, its arrays control.<label>.<name>")),
+    ratio_to=(list[str], Field([], description="labels of other cases: <label>.<metric>_ratio.<other> = this run's "
+                                               "metric / the other's [-]")),
+    **{k: (ControlConfig.model_fields[k].annotation | None,
+           Field(None, description=f"{ControlConfig.model_fields[k].description}; none: the [control] table's"))
+       for k in CASE_KEYS},
+)
+ControlConfig.model_rebuild()

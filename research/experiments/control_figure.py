@@ -16,9 +16,13 @@ def plot_control(arrays: dict, details: dict, title: str = ""):
     Args:
         arrays: ``control.t`` [s], ``control.tip_contour_error`` [mm], ``control.orientation_error`` [rad],
             ``control.axis_error`` ``(M, 5)`` [mm, rad], ``control.u`` ``(M, 5)`` [V].
-        details: the stage's details (``controller``, ``summary``).
+        details: the stage's details (``controller``, ``summary``); with ``cases`` (a table with
+            ``[[control.cases]]``), the arrays are ``control.<label>.<name>`` and every case is drawn in two
+            panels (tool-tip and orientation contour error).
         title: figure title.
     """
+    if "cases" in details:
+        return _plot_cases(arrays, details, title)
     t = np.asarray(arrays["control.t"])
     fig, ax = figure(2, 2, figsize=(10, 7), sharex=True)
     s = details["summary"]
@@ -46,6 +50,27 @@ def plot_control(arrays: dict, details: dict, title: str = ""):
         a.plot(t, u[:, k], f"C{k}", label=AXES[k])
     a.set(xlabel="time [s]", ylabel="control voltage [V]", title="control effort")
     a.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=5)
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+def _plot_cases(arrays: dict, details: dict, title: str):
+    """Tool-tip and orientation contour error of every case of a ``[control]`` table with cases (log scales: the
+    cases' errors often span decades)."""
+    fig, ax = figure(2, 1, figsize=(10, 7), sharex=True)
+    for label in details["labels"]:
+        s = details["cases"][label]["summary"]
+        t = np.asarray(arrays[f"control.{label}.t"])
+        ax[0].semilogy(t, np.maximum(1e3 * np.asarray(arrays[f"control.{label}.tip_contour_error"]), 1e-4), lw=0.8,
+                       label=f"{label}: max {1e3 * s['contour_max']:.3g} um, mean {1e3 * s['contour_mean']:.3g} um")
+        ax[1].semilogy(t, np.maximum(1e6 * np.asarray(arrays[f"control.{label}.orientation_error"]), 1e-2), lw=0.8,
+                       label=f"{label}: max {1e6 * s['orientation_max']:.3g} urad")
+    ax[0].set(ylabel="tool-tip contour error [um] (log scale)", title="tool-tip contour error per case")
+    ax[1].set(xlabel="time [s]", ylabel="orientation contour error [urad] (log scale)",
+              title="orientation contour error per case")
+    for a in ax:
+        a.legend(loc="lower right", fontsize=7, ncol=2)
     if title:
         fig.suptitle(title)
     return fig

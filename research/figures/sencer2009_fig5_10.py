@@ -1,53 +1,56 @@
 """Sencer (2009) thesis Fig 5.10: orientation contour error (angle between the actual tool axis and the
 reference orientation path, §4.5 / eq 5.40) at 50 mm/s for the coupling weights W = diag(w, w),
-w = 0, 3, 4, 5, and its mean against w (simulation; thesis curves experimental). A second file is the
-thesis Fig 4.7 check on its own SMC drives (SISO, 50 mm/s): the eq 4.34/4.35 orientation contour error
-estimate against the exact one and their difference (thesis: below 6 urad). Reads the stored runs of
-:mod:`research.figures.sencer2009_fig5_results`.
+w = 0, 3, 4, 5, and its mean against w (simulation; the thesis' curves are measured). Panels (c, d): the
+thesis Fig 4.7 check on the same drives with W = 0 (whose A, C loops are the SISO ones): the eq 4.34/4.35
+orientation contour error estimate against the exact one and their difference (thesis: below 6 urad).
+
+Made from the config :data:`CONFIG` (four ``[[control.cases]]``) through the results store; :func:`plot`
+only reads the stored result.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
-
-from research.control import FIG5_10_WEIGHTS
-from research.figures import sencer2009_fig5_results as stored
-from research.figures._style import figure, save
+from research.figures._style import mosaic
 
 NAME = "sencer2009_fig5_10_orientation_weights"
-REPRODUCES = ("Sencer 2009 thesis Fig 5.10 (orientation contour error for W = 0, 3, 4, 5: steady decline of the mean) "
-              "and Fig 4.7 (eq 4.35 estimate within 6 urad of the true orientation contour error)")
+REPRODUCES = ("Sencer 2009 thesis Fig 5.10 (orientation contour error for W = 0, 3, 4, 5 at 50 mm/s) and Fig 4.7 "
+              "(eq 4.35 estimate within 6 urad)")
+CONFIG = "experiments/figures/sencer2009_fig5_10_orientation_weights.toml"
+
+_WEIGHTS = (("w0", 0.0, "k"), ("w3", 3.0, "C0"), ("w4", 4.0, "C1"), ("w5", 5.0, "C2"))
 
 
-def make_figure(out_dir: Path, fast: bool = False) -> list[Path]:
-    """Write the figure to ``out_dir``; returns the files written."""
-    out_dir = Path(out_dir)
-    fig, ax = figure(1, 2, figsize=(11, 4), width_ratios=(3, 1))
-    means = []
-    weights = (0.0, 5.0) if fast else FIG5_10_WEIGHTS  # fast: the end points only
-    for w, style in zip(weights, ("k", "C0", "C1", "C2")):
-        run = stored.case("contour", W=w, fast=fast)
-        means.append(run["summary"]["orientation_mean"] * 1e3)
-        ax[0].plot(run["t"], run["orientation"] * 1e3, style, lw=0.9, label=f"W = diag({w:g}, {w:g})")
-    ax[0].set(xlabel="time [s]", ylabel="orientation contour error [mrad]", title="(a) orientation contour error, 50 mm/s")
-    ax[0].legend()
-    ax[1].plot(weights, means, "ko-")
-    ax[1].set(xlabel="w", ylabel="mean [mrad]", title="(b) mean orientation contour error")
-    out = out_dir / f"{NAME}.png"
-    save(fig, out)
-
-    siso = stored.case("siso", fast=fast)
-    fig, ax = figure(2, 1, figsize=(9, 6), sharex=True)
-    ax[0].plot(siso["t"], siso["orientation"] * 1e3, "k", label="exact (closest reference orientation)")
-    ax[0].plot(siso["t"], siso["orientation_estimate"] * 1e3, "C1--", label="|J_o eps_R|, eq 4.34/4.35")
-    ax[0].set(ylabel="[mrad]", title="Fig 4.7: orientation contour error under the SISO SMC drives, 50 mm/s")
-    ax[0].legend()
-    d = (siso["orientation_estimate"] - siso["orientation"]) * 1e6
-    ax[1].plot(siso["t"], d, "k")
-    ax[1].axhline(6, color="r", ls=":", label="thesis bound 6 urad")
-    ax[1].axhline(-6, color="r", ls=":")
-    ax[1].set(xlabel="time [s]", ylabel="estimate - exact [urad]", title=f"discrepancy, max |.| = {abs(d).max():.2f} urad")
-    ax[1].legend()
-    out2 = out_dir / f"{NAME}_fig4_7.png"
-    save(fig, out2)
-    return [out, out2]
+def plot(record: dict, arrays: dict):
+    """The figure (not saved) from a stored result of :data:`CONFIG`."""
+    s = record["scalars"]
+    bound = next(p for p in record["config"]["paper"] if p["key"] == "w0.orientation_estimate_error_max")
+    fig, ax = mosaic([["ori", "ori", "mean"], ["est", "est", "diff"]], figsize=(13, 8))
+    for label, w, colour in _WEIGHTS:
+        ax["ori"].plot(arrays[f"control.{label}.t"], arrays[f"control.{label}.orientation_error"] * 1e3, color=colour,
+                       lw=0.8, label=f"W = diag({w:g}, {w:g}) 1/s: mean {s[f'{label}.orientation_error_mean'] * 1e3:.3f} mrad")
+    top = 1.4 * max(arrays[f"control.{label}.orientation_error"].max() for label, _, _ in _WEIGHTS) * 1e3
+    ax["ori"].set(xlabel="time [s]", ylabel="orientation contour error [mrad]", ylim=(0, top),
+                  title="(a) Fig 5.10a: orientation contour error (eq 5.40), 50 mm/s (simulation)")
+    ax["ori"].legend(loc="upper left", fontsize=7)
+    w = [w for _, w, _ in _WEIGHTS]
+    ax["mean"].plot(w, [s[f"{label}.orientation_error_mean"] * 1e3 for label, _, _ in _WEIGHTS], "ko-")
+    ax["mean"].set(xlabel="coupling weight w, W = diag(w, w) [1/s]", ylabel="mean orientation contour error [mrad]",
+                   xticks=w, title="(b) Fig 5.10b: mean against W\n(the thesis prints no values: 'a steady decline')")
+    t = arrays["control.w0.t"]
+    exact, estimate = arrays["control.w0.orientation_error"], arrays["control.w0.orientation_estimate"]
+    ax["est"].plot(t, exact * 1e3, "k", lw=1.2, label="exact (closest reference orientation)")
+    ax["est"].plot(t, estimate * 1e3, "C1--", lw=0.9, label="estimate |J_o eps_R|, eq 4.34 / 4.35")
+    ax["est"].set(xlabel="time [s]", ylabel="orientation contour error [mrad]", ylim=(0, top),
+                  title="(c) Fig 4.7: exact and estimated orientation contour error, W = 0 (A, C as SISO), 50 mm/s")
+    ax["est"].legend(loc="upper left", fontsize=7)
+    d = (estimate - exact) * 1e6
+    limit = (bound["value"] + bound["tolerance"]) * 1e6
+    ax["diff"].plot(t, d, "k", lw=0.8)
+    for sign in (1, -1):
+        ax["diff"].axhline(sign * limit, color="C3", ls="--", lw=1, label=f"thesis: below {limit:g} urad" if sign > 0 else None)
+    ax["diff"].set(xlabel="time [s]", ylabel="estimate - exact [urad]", ylim=(-1.3 * limit, 1.3 * limit),
+                   title=f"(d) Fig 4.7c-d: discrepancy, max {s['w0.orientation_estimate_error_max'] * 1e6:.2f} urad")
+    ax["diff"].legend(loc="lower left", fontsize=7)
+    fig.suptitle("Sencer 2009 Fig 5.10 / 4.7: orientation contour controller (eq 5.22-5.27) on the Fig 5.5 path, "
+                 "Table 5.1 drives (simulation)", fontsize=10)
+    return fig

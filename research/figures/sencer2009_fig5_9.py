@@ -1,52 +1,67 @@
-"""Sencer (2009) thesis Fig 5.9 / Table 5.5 and Table 5.4: the tool-tip contour controller's contour
-error for the three bandwidth sets of Table 5.5 at 60 mm/s, and max / mean contour error of the
-contour and SISO controllers at 50 / 60 / 80 mm/s against Table 5.4 (simulation; thesis values are
-experimental). Reads the stored runs of :mod:`research.figures.sencer2009_fig5_results`.
+"""Sencer (2009) thesis Fig 5.9 / Table 5.5 and Table 5.4: (a) the tool-tip contour controller's contour
+error at 60 mm/s for the three tip bandwidth sets of Table 5.5; (b, c) max and mean tool-tip contour error
+of the contour and SISO controllers at 50 / 60 / 80 mm/s beside Table 5.4 (simulation; the thesis' values
+are measured); (d) Table 5.5's ratios to its first row, simulated and printed.
+
+Made from the config :data:`CONFIG` (eight ``[[control.cases]]``) through the results store; :func:`plot`
+only reads the stored result.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 
-from research.control import TABLE_5_4, TABLE_5_5
-from research.figures import sencer2009_fig5_results as stored
-from research.figures._style import figure, save
+from research.figures._style import mosaic
 
 NAME = "sencer2009_fig5_9_bandwidths_feeds"
-REPRODUCES = ("Sencer 2009 thesis Fig 5.9 / Table 5.5 (directional bandwidths at 60 mm/s: 90/13, 115/18, 93/12 um) "
-              "and Table 5.4 (contour vs SISO max/mean at 50/60/80 mm/s)")
-FEEDS = (50.0, 60.0, 80.0)
+REPRODUCES = ("Sencer 2009 thesis Table 5.4 (contour vs SISO at 50 / 60 / 80 mm/s) and Table 5.5 / Fig 5.9 "
+              "(tip bandwidths at 60 mm/s)")
+CONFIG = "experiments/figures/sencer2009_fig5_9_bandwidths_feeds.toml"
+
+FEEDS = (50, 60, 80)
+_BANDWIDTHS = (("contour_60", "100 / 230 / 230", "k", "-"), ("bw_100_200_200", "100 / 200 / 200", "C3", "--"),
+               ("bw_70_230_230", "70 / 230 / 230", "C0", ":"))
 
 
-def make_figure(out_dir: Path, fast: bool = False) -> list[Path]:
-    """Write the Fig 5.9 and Table 5.4 panels to ``out_dir``; returns the files written."""
-    out_dir = Path(out_dir)
-    fig, ax = figure(figsize=(9, 4))
-    for (wn, (tmax, tmean)), style in zip(TABLE_5_5.items(), ("k", "C0--", "C1:")):
-        run = stored.case("contour", feed=60.0, wn=wn, fast=fast)
-        s = run["summary"]
-        ax.plot(run["t"], run["contour"] * 1e3, style,
-                label=f"wn = {tuple(int(w) for w in wn)}: sim {s['contour_max'] * 1e3:.1f} / {s['contour_mean'] * 1e3:.2f} um "
-                      f"(thesis {tmax:g} / {tmean:g})")
-    ax.set(xlabel="time [s]", ylabel="contour error [um]", title="Fig 5.9: tool-tip contour error at 60 mm/s, max / mean")
-    ax.legend()
-    out1 = out_dir / f"{NAME}_fig5_9.png"
-    save(fig, out1)
-
-    fig, ax = figure(1, 2, figsize=(10, 4))
-    feeds = (50.0, 80.0) if fast else FEEDS  # fast: the end points only
-    sim = {kind: np.array([[stored.case(kind, feed=f, fast=fast)["summary"][k] for k in ("contour_max", "contour_mean")]
-                           for f in feeds]) * 1e3 for kind in ("contour", "siso")}
-    thesis = np.array([TABLE_5_4[f] for f in FEEDS]) * 1e3
-    for j, what in enumerate(("max", "mean")):
-        ax[j].semilogy(feeds, sim["siso"][:, j], "ko-", label="SISO (sim.)")
-        ax[j].semilogy(FEEDS, thesis[:, 2 + j], "ks--", mfc="none", label="SISO (thesis)")
-        ax[j].semilogy(feeds, sim["contour"][:, j], "C0o-", label="contour controller (sim.)")
-        ax[j].semilogy(FEEDS, thesis[:, j], "C0s--", mfc="none", label="contour controller (thesis)")
-        ax[j].set(xlabel="feed [mm/s]", ylabel=f"{what} contour error [um]", title=f"Table 5.4: {what} tool-tip contour error")
-    ax[0].legend()
-    out2 = out_dir / f"{NAME}_table5_4.png"
-    save(fig, out2)
-    return [out1, out2]
+def plot(record: dict, arrays: dict):
+    """The figure (not saved) from a stored result of :data:`CONFIG`."""
+    s = record["scalars"]
+    declared = [(p["key"], p["value"]) for p in record["config"]["paper"]]
+    paper = dict(declared)  # the last of a repeated key: contour_60 is Table 5.4's 60 mm/s row (87 / 14 um) ...
+    table_5_5 = dict(reversed(declared))  # ... and, declared first, Table 5.5's row 1 (90 / 13 um)
+    fig, ax = mosaic([["bw", "bw", "ratio"], ["max", "mean", "key"]], figsize=(13, 8))
+    a = ax["bw"]
+    for label, wn, colour, ls in _BANDWIDTHS:
+        e = arrays[f"control.{label}.tip_contour_error"] * 1e3
+        a.semilogy(arrays[f"control.{label}.t"], np.maximum(e, 1e-3), color=colour, ls=ls, lw=0.9,
+                   label=f"wn = {wn} rad/s: max {s[f'{label}.tip_contour_error_max'] * 1e3:.2f} / mean "
+                         f"{s[f'{label}.tip_contour_error_mean'] * 1e3:.3f} um (thesis "
+                         f"{table_5_5[f'{label}.tip_contour_error_max'] * 1e3:g} / {table_5_5[f'{label}.tip_contour_error_mean'] * 1e3:g})")
+    a.set(xlabel="time [s]", ylabel="tool-tip contour error [um] (log scale)", ylim=(1e-2, 1e3),
+          title="(a) Fig 5.9: contour controller at 60 mm/s, tip bandwidths tangent / normal / binormal (simulation)")
+    a.legend(loc="upper right", fontsize=7)
+    for key, what in (("max", "max"), ("mean", "mean")):
+        a = ax[key]
+        for kind, colour, name in (("siso", "0.45", "SISO SMC"), ("contour", "k", "contour controller")):
+            sim = [s[f"{kind}_{f}.tip_contour_error_{what}"] * 1e3 for f in FEEDS]
+            thesis = [paper[f"{kind}_{f}.tip_contour_error_{what}"] * 1e3 for f in FEEDS]
+            a.semilogy(FEEDS, sim, "o-", color=colour, label=f"{name} (simulation)")
+            a.semilogy(FEEDS, thesis, "s--", color=colour, mfc="none", label=f"{name} (thesis, measured)")
+        a.set(xlabel="feed [mm/s]", ylabel=f"{what} tool-tip contour error [um] (log scale)", xticks=FEEDS,
+              title=f"({'b' if key == 'max' else 'c'}) Table 5.4: {what} tool-tip contour error")
+    ax["key"].axis("off")
+    ax["key"].legend(*ax["max"].get_legend_handles_labels(), loc="center", title="(b), (c)", fontsize=8)
+    a = ax["ratio"]
+    x = np.arange(2)
+    for j, (label, wn, colour, _) in enumerate(_BANDWIDTHS[1:]):
+        sim = [s[f"{label}.tip_contour_error_{w}_ratio.contour_60"] for w in ("max", "mean")]
+        thesis = [paper[f"{label}.tip_contour_error_{w}_ratio.contour_60"] for w in ("max", "mean")]
+        a.bar(x + 0.4 * j - 0.3, sim, 0.18, color=colour, label=f"{wn}: simulation")
+        a.bar(x + 0.4 * j - 0.1, thesis, 0.18, color=colour, alpha=0.35, hatch="//", label=f"{wn}: thesis")
+    a.axhline(1.0, color="k", lw=0.8)
+    a.set(xticks=x, xticklabels=["max", "mean"], ylabel="contour error / row 1 (100 / 230 / 230) [-]", ylim=(0, 1.8),
+          title="(d) Table 5.5: ratio to its first row")
+    a.legend(loc="upper center", fontsize=7, ncol=2)
+    fig.suptitle("Sencer 2009 Table 5.4 / 5.5, Fig 5.9: Fig 5.5 path, Table 5.1 drives (simulation) against the thesis' "
+                 "measurements", fontsize=10)
+    return fig
