@@ -44,6 +44,8 @@ from pydantic import BaseModel, StrictFloat, StrictInt, ConfigDict, Field, Valid
 
 from research.errors import ConfigError, PathError
 from research.experiments.config_control import CONTROL_METRIC_UNITS, ControlConfig
+from research.experiments.config_path_bspline import BSplinePathConfig
+from research.experiments.stage_execution_errors import EXECUTION_ERROR_METRIC_UNITS
 from research.experiments.config_stages import (
     BlendConfig,
     ClosedLoopConfig,
@@ -111,6 +113,7 @@ METRIC_UNITS = {
     "mean_estimator_error": "mm",
 }
 METRIC_UNITS |= CONTROL_METRIC_UNITS  # [control] stage (thesis ch 5)
+METRIC_UNITS |= EXECUTION_ERROR_METRIC_UNITS  # Prévost's e1 / e2 / eT in the [compensation] stage
 #: what ``name`` (the results folder and figure file stem) may be: starts with a letter or digit, at most 64
 #: characters of letters, digits, ``_``, ``-`` and ``.`` (so never ``..`` or a path)
 NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$"
@@ -132,18 +135,19 @@ class _Strict(BaseModel):
 
 
 class PathConfig(_Strict):
-    """The tool path: exactly one of a named benchmark path, a G-code file or explicit points."""
+    """The tool path: exactly one of a named benchmark path, a G-code file, explicit points or a B-spline."""
 
     name: str | None = Field(None, description=f"named path, one of {sorted(PATHS)}")
     gcode: str | None = Field(None, description="G-code file, relative to the config file")
     points_mm: list[list[float]] | None = Field(None, description="polyline vertices [mm]")
     chord_tolerance_um: float = Field(1.0, gt=0, description="arc-to-chord tolerance for G2/G3 [um]")
+    bspline: BSplinePathConfig | None = Field(None, description="B-spline path ([path.bspline]: control points, knots, degree)")
 
     @model_validator(mode="after")
     def _exactly_one(self):
-        given = [k for k in ("name", "gcode", "points_mm") if getattr(self, k) is not None]
+        given = [k for k in ("name", "gcode", "points_mm", "bspline") if getattr(self, k) is not None]
         if len(given) != 1:
-            raise ValueError(f"give exactly one of name, gcode, points_mm (got {given or 'none'})")
+            raise ValueError(f"give exactly one of name, gcode, points_mm, bspline (got {given or 'none'})")
         if self.name is not None and self.name not in PATHS:
             raise ValueError(f"unknown path name {self.name!r}; expected one of {sorted(PATHS)}")
         return self
@@ -487,7 +491,8 @@ class ExperimentConfig(_Strict):
 def named_axes(cfg: ExperimentConfig) -> tuple[str, ...]:
     """Axis letters of the path (from its dimension: x, y, z)."""
     p = cfg.path
-    dim = len(p.points_mm[0]) if p.points_mm else (named_path(p.name).dim if p.name else 3)
+    dim = len(p.points_mm[0]) if p.points_mm else (named_path(p.name).dim if p.name else
+                                                    len(p.bspline.control_points_mm[0]) if p.bspline else 3)
     return ("x", "y", "z")[:dim]
 
 
@@ -617,6 +622,8 @@ def build_path(cfg: PathConfig, base: Path) -> tuple[Polyline, np.ndarray | None
         return named_path(cfg.name), None
     if cfg.points_mm is not None:
         return Polyline(cfg.points_mm), None
+    if cfg.bspline is not None:
+        return cfg.bspline.polyline(), None
     program = read_program(cfg, base)
     return program.polyline, program.feeds
 

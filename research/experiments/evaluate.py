@@ -29,6 +29,7 @@ import numpy as np
 from research.experiments.config import METRIC_UNITS, ExperimentConfig, build_path, named_axes, read_program
 from research.drives import residual_vibration_sampled
 from research.experiments.stage_control import control_stage
+from research.experiments.stage_execution_errors import execution_error_stage
 from research.experiments.stage_mtp import mtp_stage
 from research.experiments.stages import (
     compensation_stage,
@@ -113,6 +114,7 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
         else:
             (path, program_feeds), blocks = build_path(cfg.path, base), None
         objects["path"] = path
+        cam = path if cfg.path.bspline is None else cfg.path.bspline.curve()  # errors against the curve itself
         several = len(cfg.interpolators) > 1
         for ic in cfg.interpolators:
             label = ic.label or ic.kind
@@ -138,23 +140,26 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
                 arrays[f"{label}.actual"] = actual[: traj.n_samples]
             if cfg.contour is not None:
                 log(f"contour {label}: exact" + "".join(f", {e}" for e in cfg.contour.estimators))
-                found, more = contour_stage(cfg.contour, path, traj, actual)
+                found, more = contour_stage(cfg.contour, cam, traj, actual)
                 scalars |= {prefix + k: v for k, v in found.items()}
                 arrays |= {f"{label}.{k}": v for k, v in more.items()}
             if cfg.compensation is not None:
                 from research.contour import contour_error
 
                 log(f"compensation {label}: CEC {cfg.compensation.method}")
-                found, cec = compensation_stage(cfg.compensation, path, traj, drive)
+                found, cec = compensation_stage(cfg.compensation, cam, traj, drive)
                 scalars |= {prefix + k: v for k, v in found.items()}
                 objects.setdefault("compensation", {})[label] = cec
                 details[label]["compensation"] = {"method": cec.method, "steps": cec.steps, "converged": cec.converged,
                                                   "history": list(cec.history)}
+                found, more = execution_error_stage(cam, traj, actual, cec)  # Prévost's e1, e2, eT (Fig 5)
+                scalars |= {prefix + k: v for k, v in found.items()}
+                arrays |= {f"{label}.{k}": v for k, v in more.items()}
                 arrays |= {f"{label}.cec.q": np.asarray(cec.setpoint.q), f"{label}.cec.actual": np.asarray(cec.response.position),
                            f"{label}.cec.error_before": cec.before.distance, f"{label}.cec.error_after": cec.after.distance,
                            # e1 of Prevost 2012: the setpoint's distance to the CAM path, before and after
-                           f"{label}.cec.setpoint_error_before": contour_error(path, np.asarray(traj.q)).distance,
-                           f"{label}.cec.setpoint_error_after": contour_error(path, np.asarray(cec.setpoint.q)).distance}
+                           f"{label}.cec.setpoint_error_before": contour_error(cam, np.asarray(traj.q)).distance,
+                           f"{label}.cec.setpoint_error_after": contour_error(cam, np.asarray(cec.setpoint.q)).distance}
     if cfg.metrics is not None:
         scalars = {k: v for k, v in scalars.items() if _metric_name(k) in cfg.metrics}
     units = {k: METRIC_UNITS[_metric_name(k)] for k in scalars}
