@@ -44,6 +44,8 @@ from pydantic import BaseModel, StrictFloat, StrictInt, ConfigDict, Field, Valid
 
 from research.errors import ConfigError, PathError
 from research.experiments.config_control import CONTROL_METRIC_UNITS, ControlConfig
+from research.experiments.config_identification_ch6 import IDENTIFICATION_CH6_METRIC_UNITS, IdentificationCh6Config
+from research.experiments.config_optimality import OPTIMALITY_METRIC_UNITS, OptimalityConfig
 from research.experiments.config_path_bspline import BSplinePathConfig
 from research.experiments.stage_execution_errors import EXECUTION_ERROR_METRIC_UNITS
 from research.experiments.config_stages import (
@@ -113,6 +115,8 @@ METRIC_UNITS = {
     "mean_estimator_error": "mm",
 }
 METRIC_UNITS |= CONTROL_METRIC_UNITS  # [control] stage (thesis ch 5)
+METRIC_UNITS |= IDENTIFICATION_CH6_METRIC_UNITS  # [identification_ch6] stage (thesis ch 6)
+METRIC_UNITS |= OPTIMALITY_METRIC_UNITS  # [optimality] stage (FIR against the time-optimal OCP)
 METRIC_UNITS |= EXECUTION_ERROR_METRIC_UNITS  # Prévost's e1 / e2 / eT in the [compensation] stage
 #: what ``name`` (the results folder and figure file stem) may be: starts with a letter or digit, at most 64
 #: characters of letters, digits, ``_``, ``-`` and ``.`` (so never ``..`` or a path)
@@ -417,6 +421,10 @@ class ExperimentConfig(_Strict):
     compensation: CompensationConfig | None = Field(None, description="CEC stage (needs a drive other than ideal)")
     control: ControlConfig | None = Field(None, description="thesis ch 5 closed loop on the Fig 5.5 path (SISO SMC or "
                                                             "5-axis contour controller)")
+    identification_ch6: IdentificationCh6Config | None = Field(None, description="thesis ch 6: methods compared on the "
+                                                                                 "Table 6.1 virtual drive, and the EMPS axis")
+    optimality: OptimalityConfig | None = Field(None, description="FIR (plain, limits held) against the time-optimal OCP "
+                                                                  "on the optimality study's paths")
     metrics: list[Literal[tuple(METRIC_UNITS)]] | None = Field(None, description="metrics to report (default: all)")
     output: OutputConfig = OutputConfig()
     sweep: SweepConfig | None = None
@@ -449,7 +457,8 @@ class ExperimentConfig(_Strict):
         drive_study = self.drive is not None and self.drive.frequency_response is not None
         if (self.path is None and self.identification is None and self.vibration is None and self.spectrum is None
                 and self.startup is None and self.five_axis_contour is None and self.control is None and not drive_study
-                and self.mtp is None):
+                and self.mtp is None and self.identification_ch6 is None
+                and self.optimality is None):
             raise ValueError("give a [path] (motion study), an [identification] table, a [vibration] table, a "
                              "[spectrum] table, a [startup] table, an [mtp] table, a [five_axis_contour] table, a [control] table or a "
                              "[drive.frequency_response] table")
@@ -551,6 +560,8 @@ def input_files(cfg: ExperimentConfig) -> dict[str, str]:
         files["identification.log_file"] = cfg.identification.log_file
     if cfg.vibration is not None and cfg.vibration.log_file is not None:
         files["vibration.log_file"] = cfg.vibration.log_file
+    if cfg.identification_ch6 is not None and cfg.identification_ch6.emps_log_file is not None:
+        files["identification_ch6.emps_log_file"] = cfg.identification_ch6.emps_log_file
     if cfg.drive is not None and cfg.drive.identified_file is not None:
         files["drive.identified_file"] = cfg.drive.identified_file
     return files

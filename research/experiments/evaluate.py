@@ -30,7 +30,9 @@ from research.experiments.config import METRIC_UNITS, ExperimentConfig, build_pa
 from research.drives import residual_vibration_sampled
 from research.experiments.stage_control import control_stage
 from research.experiments.stage_execution_errors import execution_error_stage
+from research.experiments.stage_identification_ch6 import identification_ch6_stage
 from research.experiments.stage_mtp import mtp_stage
+from research.experiments.stage_optimality import optimality_stage
 from research.experiments.stages import (
     compensation_stage,
     contour_stage,
@@ -89,6 +91,9 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
         ("startup", lambda c: "startup: sigmoid start of a linear move (DiMarco eq 3-5)", startup_stage),
         ("mtp", lambda c: f"mtp: sigmoid vs linear interpolators through the drive {cfg.drive.model}",
          lambda c: mtp_stage(c, drive_model(cfg.drive, ("s",), objects.get("identified_drive")))),
+        ("identification_ch6", lambda c: f"identification_ch6: {', '.join(c.methods)} on the Table 6.1 virtual drive"
+                                         + (", EMPS" if c.emps_log_file else ""), lambda c: identification_ch6_stage(c, base)),
+        ("optimality", lambda c: f"optimality: FIR against the time-optimal OCP on {', '.join(c.paths)}", optimality_stage),
         ("five_axis_contour", lambda c: "five_axis_contour: eq 4.36 path, exact tip contour error vs Frenet estimates "
                                         "(thesis §4.5)", five_axis_contour_stage),
     )
