@@ -460,7 +460,8 @@ class ExperimentConfig(_Strict):
                 and self.mtp is None and self.identification_ch6 is None
                 and self.optimality is None):
             raise ValueError("give a [path] (motion study), an [identification] table, a [vibration] table, a "
-                             "[spectrum] table, a [startup] table, an [mtp] table, a [five_axis_contour] table, a [control] table or a "
+                             "[spectrum] table, a [startup] table, an [mtp] table, a [five_axis_contour] table, a [control] table, an "
+                             "[identification_ch6] table, an [optimality] table or a "
                              "[drive.frequency_response] table")
         if self.mtp is not None and (self.drive is None or self.drive.model == "ideal" or self.drive.model in PER_AXIS_DRIVES):
             raise ValueError("[mtp] runs its references through a [drive] of one model (not \"ideal\", not per axis)")
