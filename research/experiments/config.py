@@ -47,6 +47,10 @@ from research.experiments.config_control import CONTROL_METRIC_UNITS, ControlCon
 from research.experiments.config_feedrate import FEEDRATE_METRIC_UNITS, FeedrateConfig
 from research.experiments.config_five_axis_path import FiveAxisPathConfig
 from research.experiments.config_identified_contour import IDENTIFIED_CONTOUR_METRIC_UNITS, IdentifiedContourConfig
+from research.experiments.config_identification_ch6 import IDENTIFICATION_CH6_METRIC_UNITS, IdentificationCh6Config
+from research.experiments.config_optimality import OPTIMALITY_METRIC_UNITS, OptimalityConfig
+from research.experiments.config_path_bspline import BSplinePathConfig
+from research.experiments.stage_execution_errors import EXECUTION_ERROR_METRIC_UNITS
 from research.experiments.config_stages import (
     BlendConfig,
     ClosedLoopConfig,
@@ -116,6 +120,9 @@ METRIC_UNITS = {
 METRIC_UNITS |= CONTROL_METRIC_UNITS  # [control] stage (thesis ch 5)
 METRIC_UNITS |= FEEDRATE_METRIC_UNITS  # [feedrate] stage (thesis ch 3)
 METRIC_UNITS |= IDENTIFIED_CONTOUR_METRIC_UNITS  # [identified_contour] stage (thesis §6.5.3)
+METRIC_UNITS |= IDENTIFICATION_CH6_METRIC_UNITS  # [identification_ch6] stage (thesis ch 6)
+METRIC_UNITS |= OPTIMALITY_METRIC_UNITS  # [optimality] stage (FIR against the time-optimal OCP)
+METRIC_UNITS |= EXECUTION_ERROR_METRIC_UNITS  # Prévost's e1 / e2 / eT in the [compensation] stage
 #: what ``name`` (the results folder and figure file stem) may be: starts with a letter or digit, at most 64
 #: characters of letters, digits, ``_``, ``-`` and ``.`` (so never ``..`` or a path)
 NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$"
@@ -137,18 +144,19 @@ class _Strict(BaseModel):
 
 
 class PathConfig(_Strict):
-    """The tool path: exactly one of a named benchmark path, a G-code file or explicit points."""
+    """The tool path: exactly one of a named benchmark path, a G-code file, explicit points or a B-spline."""
 
     name: str | None = Field(None, description=f"named path, one of {sorted(PATHS)}")
     gcode: str | None = Field(None, description="G-code file, relative to the config file")
     points_mm: list[list[float]] | None = Field(None, description="polyline vertices [mm]")
     chord_tolerance_um: float = Field(1.0, gt=0, description="arc-to-chord tolerance for G2/G3 [um]")
+    bspline: BSplinePathConfig | None = Field(None, description="B-spline path ([path.bspline]: control points, knots, degree)")
 
     @model_validator(mode="after")
     def _exactly_one(self):
-        given = [k for k in ("name", "gcode", "points_mm") if getattr(self, k) is not None]
+        given = [k for k in ("name", "gcode", "points_mm", "bspline") if getattr(self, k) is not None]
         if len(given) != 1:
-            raise ValueError(f"give exactly one of name, gcode, points_mm (got {given or 'none'})")
+            raise ValueError(f"give exactly one of name, gcode, points_mm, bspline (got {given or 'none'})")
         if self.name is not None and self.name not in PATHS:
             raise ValueError(f"unknown path name {self.name!r}; expected one of {sorted(PATHS)}")
         return self
@@ -435,6 +443,10 @@ class ExperimentConfig(_Strict):
     identified_contour: IdentifiedContourConfig | None = Field(
         None, description="thesis §6.5.3 / Fig 6.13: Table 6.3 machine identified by LS and PSO, predicting the eq 4.36 "
                           "tip contour error")
+    identification_ch6: IdentificationCh6Config | None = Field(None, description="thesis ch 6: methods compared on the "
+                                                                                 "Table 6.1 virtual drive, and the EMPS axis")
+    optimality: OptimalityConfig | None = Field(None, description="FIR (plain, limits held) against the time-optimal OCP "
+                                                                  "on the optimality study's paths")
     metrics: list[Literal[tuple(METRIC_UNITS)]] | None = Field(None, description="metrics to report (default: all)")
     output: OutputConfig = OutputConfig()
     sweep: SweepConfig | None = None
@@ -468,10 +480,11 @@ class ExperimentConfig(_Strict):
         if (self.path is None and self.identification is None and self.vibration is None and self.spectrum is None
                 and self.startup is None and self.five_axis_contour is None and self.control is None and not drive_study
                 and self.identified_contour is None
-                and self.mtp is None):
+                and self.mtp is None and self.identification_ch6 is None
+                and self.optimality is None):
             raise ValueError("give a [path] (motion study), an [identification] table, a [vibration] table, a "
                              "[spectrum] table, a [startup] table, an [mtp] table, a [five_axis_contour] table, a [control] table, an "
-                             "[identified_contour] table or a "
+                             "[identified_contour] table, an [identification_ch6] table, an [optimality] table or a "
                              "[drive.frequency_response] table")
         five_axis = isinstance(self.path, FiveAxisPathConfig)
         if five_axis != (self.feedrate is not None):
@@ -520,7 +533,8 @@ def named_axes(cfg: ExperimentConfig) -> tuple[str, ...]:
     p = cfg.path
     if isinstance(p, FiveAxisPathConfig):
         return ("x", "y", "z", "a", "c")
-    dim = len(p.points_mm[0]) if p.points_mm else (named_path(p.name).dim if p.name else 3)
+    dim = len(p.points_mm[0]) if p.points_mm else (named_path(p.name).dim if p.name else
+                                                    len(p.bspline.control_points_mm[0]) if p.bspline else 3)
     return ("x", "y", "z")[:dim]
 
 
@@ -579,6 +593,8 @@ def input_files(cfg: ExperimentConfig) -> dict[str, str]:
         files["identification.log_file"] = cfg.identification.log_file
     if cfg.vibration is not None and cfg.vibration.log_file is not None:
         files["vibration.log_file"] = cfg.vibration.log_file
+    if cfg.identification_ch6 is not None and cfg.identification_ch6.emps_log_file is not None:
+        files["identification_ch6.emps_log_file"] = cfg.identification_ch6.emps_log_file
     if cfg.drive is not None and cfg.drive.identified_file is not None:
         files["drive.identified_file"] = cfg.drive.identified_file
     return files
@@ -652,6 +668,8 @@ def build_path(cfg: PathConfig, base: Path) -> tuple[Polyline, np.ndarray | None
         return named_path(cfg.name), None
     if cfg.points_mm is not None:
         return Polyline(cfg.points_mm), None
+    if cfg.bspline is not None:
+        return cfg.bspline.polyline(), None
     program = read_program(cfg, base)
     return program.polyline, program.feeds
 

@@ -31,7 +31,10 @@ from research.drives import residual_vibration_sampled
 from research.experiments.stage_control import control_stage
 from research.experiments.stage_feedrate import feedrate_stage
 from research.experiments.stage_identified_contour import identified_contour_stage
+from research.experiments.stage_execution_errors import execution_error_stage
+from research.experiments.stage_identification_ch6 import identification_ch6_stage
 from research.experiments.stage_mtp import mtp_stage
+from research.experiments.stage_optimality import optimality_stage
 from research.experiments.stages import (
     compensation_stage,
     contour_stage,
@@ -90,6 +93,9 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
         ("startup", lambda c: "startup: sigmoid start of a linear move (DiMarco eq 3-5)", startup_stage),
         ("mtp", lambda c: f"mtp: sigmoid vs linear interpolators through the drive {cfg.drive.model}",
          lambda c: mtp_stage(c, drive_model(cfg.drive, ("s",), objects.get("identified_drive")))),
+        ("identification_ch6", lambda c: f"identification_ch6: {', '.join(c.methods)} on the Table 6.1 virtual drive"
+                                         + (", EMPS" if c.emps_log_file else ""), lambda c: identification_ch6_stage(c, base)),
+        ("optimality", lambda c: f"optimality: FIR against the time-optimal OCP on {', '.join(c.paths)}", optimality_stage),
         ("five_axis_contour", lambda c: "five_axis_contour: eq 4.36 path, exact tip contour error vs Frenet estimates "
                                         "(thesis §4.5)", five_axis_contour_stage),
         ("identified_contour", lambda c: "identified_contour: Table 6.3 machine identified by LS and PSO, eq 4.36 contour "
@@ -122,6 +128,7 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
         else:
             (path, program_feeds), blocks = build_path(cfg.path, base), None
         objects["path"] = path
+        cam = path if cfg.path.bspline is None else cfg.path.bspline.curve()  # errors against the curve itself
         several = len(cfg.interpolators) > 1
         for ic in cfg.interpolators:
             label = ic.label or ic.kind
@@ -147,23 +154,26 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
                 arrays[f"{label}.actual"] = actual[: traj.n_samples]
             if cfg.contour is not None:
                 log(f"contour {label}: exact" + "".join(f", {e}" for e in cfg.contour.estimators))
-                found, more = contour_stage(cfg.contour, path, traj, actual)
+                found, more = contour_stage(cfg.contour, cam, traj, actual)
                 scalars |= {prefix + k: v for k, v in found.items()}
                 arrays |= {f"{label}.{k}": v for k, v in more.items()}
             if cfg.compensation is not None:
                 from research.contour import contour_error
 
                 log(f"compensation {label}: CEC {cfg.compensation.method}")
-                found, cec = compensation_stage(cfg.compensation, path, traj, drive)
+                found, cec = compensation_stage(cfg.compensation, cam, traj, drive)
                 scalars |= {prefix + k: v for k, v in found.items()}
                 objects.setdefault("compensation", {})[label] = cec
                 details[label]["compensation"] = {"method": cec.method, "steps": cec.steps, "converged": cec.converged,
                                                   "history": list(cec.history)}
+                found, more = execution_error_stage(cam, traj, actual, cec)  # Prévost's e1, e2, eT (Fig 5)
+                scalars |= {prefix + k: v for k, v in found.items()}
+                arrays |= {f"{label}.{k}": v for k, v in more.items()}
                 arrays |= {f"{label}.cec.q": np.asarray(cec.setpoint.q), f"{label}.cec.actual": np.asarray(cec.response.position),
                            f"{label}.cec.error_before": cec.before.distance, f"{label}.cec.error_after": cec.after.distance,
                            # e1 of Prevost 2012: the setpoint's distance to the CAM path, before and after
-                           f"{label}.cec.setpoint_error_before": contour_error(path, np.asarray(traj.q)).distance,
-                           f"{label}.cec.setpoint_error_after": contour_error(path, np.asarray(cec.setpoint.q)).distance}
+                           f"{label}.cec.setpoint_error_before": contour_error(cam, np.asarray(traj.q)).distance,
+                           f"{label}.cec.setpoint_error_after": contour_error(cam, np.asarray(cec.setpoint.q)).distance}
     if cfg.metrics is not None:
         scalars = {k: v for k, v in scalars.items() if _metric_name(k) in cfg.metrics}
     units = {k: METRIC_UNITS[_metric_name(k)] for k in scalars}

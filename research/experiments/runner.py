@@ -37,7 +37,8 @@ if TYPE_CHECKING:
 DEFAULT_CACHE = Path(".cache") / "results"
 DEFAULT_FIGURES = Path("paper_figures")
 #: ``details`` entries of stages that are not interpolator runs
-STAGE_DETAILS = ("identification", "vibration", "spectrum", "startup", "mtp", "five_axis_contour", "control", "feedrate", "identified_contour")
+STAGE_DETAILS = ("identification", "vibration", "spectrum", "startup", "mtp", "five_axis_contour", "control",
+                 "feedrate", "identified_contour", "identification_ch6", "optimality")
 #: the visible results folder of the command line (one folder per experiment)
 DEFAULT_RESULTS = Path("results")
 

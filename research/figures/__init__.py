@@ -39,6 +39,7 @@ FIGURE_MODULES = (
     "research.figures.sencer2009_fig5_feedforward",
     "research.figures.sencer2009_fig6_13",
     "research.figures.sencer2009_fig3_13",
+    "research.figures.optimality",
 )
 
 

@@ -1,63 +1,52 @@
 """Prévost, Lavernhe, Lartigue (HSM 2012) Fig 5: execution errors on the Application 1 B-spline at
-10 m/min, before (left) and after (middle) CEC compensation, and the total error after (right).
+10 m/min, before (a) and after (b) one CEC mirror pass, and the total error after (c), against the
+curvilinear abscissa of the actual position on the B-spline.
 
-Setup (:func:`research.contour.prevost2012_application1`): stand-in FIR interpolator T1 = 24 ms,
-T2 = 12 ms at the paper's Ts = 6 ms, thesis Table 6.1 P-PI drive on both axes (stand-in). Errors are
-signed contour errors against the arc length of the CAM B-spline. The compensation is the paper's
-single mirror pass (eq 4); the title of (c) adds the iterated mirror to 2 um (an extension).
-Dotted: the axis reversals of the B-spline (100.2, 189.7 mm; the paper says 100 and 175); dashed:
-its curvature maxima (84.8, 196.2 mm), where the peaks sit with this drive.
+Setup (the config; :func:`research.contour.prevost2012_application1` holds the same stand-ins): FIR
+interpolator T1 = 24 ms, T2 = 12 ms at the paper's Ts = 6 ms, thesis Table 6.1 P-PI drive on both axes.
+Errors are signed contour errors (positive to the left of travel) against the B-spline itself. Dotted: the
+axis reversals of the B-spline (from the stored result: 100.2 and 189.7 mm; the paper says 100 and 175);
+grey: the paper's 5 um bound after compensation.
+
+Made from the config :data:`CONFIG` through the results store; :func:`plot` only reads the stored result.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
-
-import numpy as np
-
-from research.contour import (
-    execution_errors,
-    mirror_compensation,
-    mirror_single_pass,
-    prevost2012_application1,
-    simulate_setpoint,
-)
-from research.figures._style import mosaic, save
+from research.figures._style import mosaic
 
 NAME = "prevost2012_fig5_cec_bspline"
 REPRODUCES = "Prévost 2012 Fig 5 (e1, e2, eT on the Application 1 B-spline, before and after CEC)"
+CONFIG = "experiments/figures/prevost2012_fig5_cec_bspline.toml"
+PAPER_AFTER_UM = 5.0  # §4.1: eT after compensation "2 um (5 um in the critical zones of axis inversions)"
 
 
-def make_figure(out_dir: Path, fast: bool = False) -> list[Path]:
-    """Write the figure to ``out_dir``; returns the files written (``fast`` changes nothing: one run)."""
-    case = prevost2012_application1()
-    before = execution_errors(case.cam_path, case.setpoint, simulate_setpoint(case.setpoint, case.drive))
-    res = mirror_single_pass(case.problem, limits=case.limits, control_limit=case.control_limit)
-    iterated = mirror_compensation(case.problem, method="fixed_point", tolerance=2e-3, throw=False)
-    after = execution_errors(case.cam_path, res.setpoint, res.response)
-    s = case.cam_path.arc_length(case.cam_path.project(np.asarray(res.response.position))[1])
-    s0 = case.cam_path.arc_length(case.cam_path.project(np.asarray(case.setpoint.q))[1])
-    fig, ax = mosaic([["before", "after", "total"]], figsize=(14, 4), sharey=False)
-    for key, ex, abscissa, title in (("before", before, s0, "(a) before compensation"),
-                                     ("after", after, s, "(b) after CEC (one mirror pass, the paper's method)")):
-        a = ax[key]
-        a.plot(abscissa, ex.e1 * 1e3, "r", label="e1 interpolation")
-        a.plot(abscissa, ex.e2 * 1e3, "g", label="e2 feed drive")
-        a.plot(abscissa, ex.eT * 1e3, "b", label="eT total")
-        m = ex.max_abs()
-        a.set(xlabel="curvilinear abscissa [mm]", ylabel="error [um]",
-              title=f"{title}\nmax |e1|, |e2|, |eT| = {m['e1'] * 1e3:.1f}, {m['e2'] * 1e3:.1f}, {m['eT'] * 1e3:.2f} um")
-        a.legend(loc="lower left")
+def plot(record: dict, arrays: dict):
+    """The figure (not saved) from a stored result of :data:`CONFIG`."""
+    s = record["scalars"]
+    ic = record["config"]["interpolator"][0]
+    label = ic.get("label") or ic["kind"]
+    arrays = {k.removeprefix(f"{label}."): v for k, v in arrays.items()}
+    reversals = {k.split(".", 1)[1]: v for k, v in s.items() if k.startswith("axis_reversal_abscissa.")}
+    fig, ax = mosaic([["before", "after", "total"]], figsize=(15, 4.6), sharey=False)
+    for when, title in (("before", "(a) before compensation"), ("after", "(b) after one CEC mirror pass (eq 4)")):
+        a, x = ax[when], arrays[f"cec.s_{when}"]
+        for e, color, label in (("e1", "r", "e1 interpolation"), ("e2", "g", "e2 feed drive"), ("eT", "b", "eT total")):
+            a.plot(x, arrays[f"cec.{e}_{when}"] * 1e3, color, lw=1, label=label)
+        a.set(xlabel="curvilinear abscissa s [mm]", ylabel="signed error [um] (+: left of travel)",
+              title=f"{title}\nmax |e1|, |e2|, |eT| = {s[f'cec_interpolation_error_{when}'] * 1e3:.1f}, "
+                    f"{s[f'cec_drive_error_{when}'] * 1e3:.1f}, {s[f'cec_error_{when}'] * 1e3:.1f} um")
+        a.legend(loc="lower right", fontsize=7)
     a = ax["total"]
-    a.plot(s, after.eT * 1e3, "b", label="eT after")
-    for rev in (100.17, 189.66):  # Y and X velocity reversals of the B-spline [mm]
-        a.axvline(rev, color="k", ls=":", lw=0.8)
-    for peak in (84.79, 196.15):  # curvature maxima of the B-spline [mm]
-        a.axvline(peak, color="C3", ls="--", lw=0.8)
-    a.set(xlabel="curvilinear abscissa [mm]", ylabel="eT [um]",
-          title=f"(c) eT after one pass: max {res.after.max * 1e3:.2f} um (iterated mirror, extension: "
-                f"{iterated.after.max * 1e3:.2f} um in {iterated.steps} steps)\n"
-                f"dotted: axis reversals, dashed: curvature maxima; limits: {res.limits.summary()}")
-    out = Path(out_dir) / f"{NAME}.png"
-    save(fig, out)
-    return [out]
+    a.plot(arrays["cec.s_after"], arrays["cec.eT_after"] * 1e3, "b", lw=1, label="eT after one pass")
+    for bound in (PAPER_AFTER_UM, -PAPER_AFTER_UM):
+        a.axhline(bound, color="grey", ls="--", lw=0.8, label="paper: 5 um at the axis inversions" if bound > 0 else None)
+    for axis, at in reversals.items():
+        for b in (ax["before"], ax["after"], a):
+            b.axvline(at, color="k", ls=":", lw=0.8)
+        a.annotate(f"{axis} reverses\n{at:.1f} mm", (at, -PAPER_AFTER_UM * 1.15), fontsize=7, ha="center", va="top")
+    a.set(xlabel="curvilinear abscissa s [mm]", ylabel="eT [um]", ylim=(-PAPER_AFTER_UM * 1.6, PAPER_AFTER_UM * 1.3),
+          title=f"(c) eT after one pass: max {s['cec_error_after'] * 1e3:.2f} um (paper: 2 um, 5 um at inversions)\n"
+                f"before {s['cec_error_before'] * 1e3:.1f} um (paper: 70 um); stand-in FIR 24/12 ms, Table 6.1 P-PI drive")
+    a.legend(loc="upper right", fontsize=7)
+    return fig

@@ -12,9 +12,25 @@ from research.figures import ROOT, catalog
 CONFIG_FIGURES = {name: e.config for name, e in catalog().items() if e.config}
 
 
+def _absent_shared_data(config: str) -> str | None:
+    """Why ``config`` cannot run here, when it reads third-party data under ``../shared/data`` (beside the
+    checkout, as in CI; /work/shared/data/README.md) that this checkout lacks; else None."""
+    from research.errors import ConfigError
+
+    try:
+        load_config(ROOT / config)
+    except ConfigError as e:
+        if "file not found" in str(e) and "/shared/data/" in str(e):
+            return f"third-party data beside the checkout is absent: {e}"
+        raise
+    return None
+
+
 def test_config_figures_declare_paper_numbers():
     assert CONFIG_FIGURES, "no registered figure is made from a config"
     for name, config in CONFIG_FIGURES.items():
+        if _absent_shared_data(config):
+            continue
         cfg, _ = load_config(ROOT / config)
         assert cfg.name == name and cfg.paper, f"{config}: needs name = {name!r} and [[paper]] numbers"
         assert all(p.source.strip() for p in cfg.paper)
@@ -23,6 +39,8 @@ def test_config_figures_declare_paper_numbers():
 
 @pytest.mark.parametrize("name", sorted(CONFIG_FIGURES))
 def test_paper_numbers_from_the_stored_result(tmp_path, name):
+    if reason := _absent_shared_data(CONFIG_FIGURES[name]):
+        pytest.skip(reason)
     kwargs = dict(cache_dir=tmp_path / "cache", results_dir=tmp_path / "results", figures_dir=tmp_path / "figs",
                   log=lambda s: None)
     first = run_experiment(ROOT / CONFIG_FIGURES[name], **kwargs)
