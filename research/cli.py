@@ -46,7 +46,6 @@ def main(argv: list[str] | None = None) -> int:
 
     figs = sub.add_parser("figures", help="regenerate the registered paper figures")
     figs.add_argument("--only", action="append", metavar="NAME", help="only this figure (repeatable)")
-    figs.add_argument("--fast", action="store_true", help="coarser grids, for smoke tests")
     figs.add_argument("--out", type=Path, default=Path("paper_figures"), help="output folder (default paper_figures)")
     figs.add_argument("--list", action="store_true", help="list the registered figures and exit")
     figs.add_argument("--cache", type=Path, default=Path(".cache/results"),
@@ -171,22 +170,20 @@ def _figures(args) -> int:
               f"{figures[name].reproduces}", flush=True)
         start = time.perf_counter()
         module = figure_module(name)
-        done = render(name, args.out, fast=args.fast, cache_dir=args.cache, results_dir=args.results)
+        done = render(name, args.out, cache_dir=args.cache, results_dir=args.results)
         seconds = time.perf_counter() - start
-        cached = " (from the store)" if done.run is not None and done.run.cached else ""
+        cached = " (from the store)" if done.run.cached else ""
         print(f"[{i}/{len(names)}] {name}: done in {seconds:.1f} s{cached}: " + ", ".join(str(f) for f in done.files),
               flush=True)
-        checks = done.run.paper_checks() if done.run is not None else []
+        checks = done.run.paper_checks()
         for c in checks:
             print(f"      paper: {c.line()}", flush=True)
         manifest.append({
             "name": name,
             "reproduces": module.REPRODUCES,
-            # the experiment config the figure is made from (a module CONFIG), else its parameters' module
-            "config": getattr(module, "CONFIG", None) or f"{module.__name__} (module constants)",
+            "config": module.CONFIG,  # the experiment config the figure is made from
             "module": module.__name__,
             "files": [Path(f).name for f in done.files],
-            "fast": bool(args.fast),
             "seconds": round(seconds, 2),
             "paper": [{"key": c.key, "value": c.value, "expected": c.expected, "tolerance": c.tolerance,
                        "source": c.source, "ok": c.ok, "reproduced": c.reproduced, "reason": c.reason} for c in checks],

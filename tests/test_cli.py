@@ -1,7 +1,7 @@
-"""The command line: the README's main job, sweeps, and figure regeneration (fast mode).
+"""The command line: the README's main job, sweeps, and figure regeneration.
 
-The manifest smoke test runs two light figures through the CLI; every registered figure's fast mode
-is covered by its own test (so pytest-xdist spreads them), each under its module's ``fast`` path.
+The manifest smoke test runs two light figures through the CLI; every registered figure's numbers are
+checked from its stored result in tests/figures/test_paper_numbers.py.
 """
 
 import json
@@ -87,11 +87,11 @@ def test_figures_list_is_fast_and_imports_no_figure_module():
         assert text.startswith(modules[name].REPRODUCES)
 
 
-def test_figures_fast_writes_manifest(tmp_path, capsys):
+def test_figures_writes_manifest(tmp_path, capsys):
     from research.cli import main
 
     store = ["--cache", str(tmp_path / "c"), "--results", str(tmp_path / "r")]  # config figures: stores in tmp_path
-    assert main(["figures", "--fast", "--out", str(tmp_path)] + store + [a for n in LIGHT for a in ("--only", n)]) == 0
+    assert main(["figures", "--out", str(tmp_path)] + store + [a for n in LIGHT for a in ("--only", n)]) == 0
     out = capsys.readouterr().out.splitlines()
     lines = [ln for ln in out if ln.startswith("[")]  # a line as each figure starts, then one as it finishes
     paper = [ln for ln in out if ln.strip().startswith("paper: ")]  # the config figure's checks (fig 3: eq 8-10)
@@ -101,19 +101,9 @@ def test_figures_fast_writes_manifest(tmp_path, capsys):
     manifest = json.loads((tmp_path / "manifest.json").read_text())
     assert [m["name"] for m in manifest] == LIGHT
     for m in manifest:
-        assert m["reproduces"] and m["config"] and m["fast"]
+        assert m["reproduces"] and m["config"]
         for f in m["files"]:
             assert (tmp_path / f).stat().st_size > 10_000
-
-
-@pytest.mark.parametrize("name", [n for n in registry() if n not in LIGHT and not getattr(registry()[n], "CONFIG", None)])
-def test_each_figure_fast(tmp_path, name):
-    """Figures not yet made from a config (their numbers are checked by their own tests); config figures are
-    checked from the stored result in tests/figures/test_paper_numbers.py."""
-    module = registry()[name]
-    assert module.REPRODUCES
-    files = module.make_figure(tmp_path, fast=True)
-    assert files and all(Path(f).stat().st_size > 10_000 for f in files)
 
 
 def test_errors_exit_2_with_message(tmp_path, capsys):
@@ -135,10 +125,10 @@ def test_os_error_is_one_line_and_debug_shows_the_traceback(tmp_path, capsys):
     blocker = tmp_path / "not_a_folder"
     blocker.write_text("x")
     store = ["--cache", str(tmp_path / "c"), "--results", str(tmp_path / "r")]
-    assert main(["figures", "--fast", "--out", str(blocker), "--only", LIGHT[0]] + store) == 2
+    assert main(["figures", "--out", str(blocker), "--only", LIGHT[0]] + store) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("error: ") and str(blocker) in err and "Traceback" not in err
-    assert main(["--debug", "figures", "--fast", "--out", str(blocker), "--only", LIGHT[0]] + store) == 2
+    assert main(["--debug", "figures", "--out", str(blocker), "--only", LIGHT[0]] + store) == 2
     err = capsys.readouterr().err
     assert "Traceback" in err and err.strip().splitlines()[-1].startswith("error: ")
 

@@ -1,9 +1,7 @@
-"""Regenerated paper figures: one module per figure, each with ``NAME`` and ``REPRODUCES``, and either
-
-- ``CONFIG`` (an experiment config under ``experiments/``, with the paper numbers it reproduces) and
-  ``plot(record, arrays) -> Figure``: :func:`render` runs the config through the results store (an
-  unchanged config and code is not recomputed) and draws the stored result; or
-- ``make_figure(out_dir, fast=False) -> list[Path]`` (figures not yet expressed as a config).
+"""Regenerated paper figures: one module per figure, each with ``NAME``, ``REPRODUCES``, ``CONFIG`` (an
+experiment config under ``experiments/figures/``, with the paper numbers it reproduces) and
+``plot(record, arrays) -> Figure``: :func:`render` runs the config through the results store (an unchanged
+config and code is not recomputed) and draws the stored result; the module computes nothing itself.
 
 ``python -m research figures`` renders them all.
 
@@ -55,13 +53,13 @@ class FigureEntry:
 
     Attributes:
         name: ``NAME``; module: the dotted module name; reproduces: ``REPRODUCES``;
-        config: ``CONFIG`` (the experiment config it is made from) or ``None``.
+        config: ``CONFIG``, the experiment config it is made from (relative to :data:`ROOT`).
     """
 
     name: str
     module: str
     reproduces: str
-    config: str | None = None
+    config: str
 
 
 def catalog() -> dict[str, FigureEntry]:
@@ -69,8 +67,8 @@ def catalog() -> dict[str, FigureEntry]:
     ``NAME`` / ``REPRODUCES`` / ``CONFIG`` assignments (no module, and so no jax, is imported).
 
     Raises:
-        ResearchError: a registered module is missing, or does not assign ``NAME`` and ``REPRODUCES``
-            as literal strings (the registry could not list it without importing it).
+        ResearchError: a registered module is missing, or does not assign ``NAME``, ``REPRODUCES`` and
+            ``CONFIG`` as literal strings (the registry could not list it without importing it).
     """
     from research.errors import ResearchError
 
@@ -91,10 +89,10 @@ def catalog() -> dict[str, FigureEntry]:
                 except ValueError:
                     raise ResearchError(f"{file}: line {node.lineno}: {node.targets[0].id} must be a literal string "
                                         "(the figure registry reads it without importing the module)") from None
-        if not (isinstance(found.get("NAME"), str) and isinstance(found.get("REPRODUCES"), str)):
-            raise ResearchError(f"{file}: a registered figure module needs literal NAME and REPRODUCES strings, "
-                                f"found {sorted(found)}")
-        out[found["NAME"]] = FigureEntry(found["NAME"], dotted, found["REPRODUCES"], found.get("CONFIG"))
+        if not all(isinstance(found.get(k), str) for k in ("NAME", "REPRODUCES", "CONFIG")):
+            raise ResearchError(f"{file}: a registered figure module needs literal NAME, REPRODUCES and CONFIG "
+                                f"strings, found {sorted(found)}")
+        out[found["NAME"]] = FigureEntry(found["NAME"], dotted, found["REPRODUCES"], found["CONFIG"])
     return out
 
 
@@ -104,19 +102,18 @@ ROOT = Path(__file__).resolve().parents[2]
 
 @dataclass(frozen=True)
 class Rendered:
-    """What :func:`render` produced: the files written and, for a config figure, its run result."""
+    """What :func:`render` produced: the files written and the config's run result."""
 
     files: list[Path]
-    run: object | None = None
+    run: object
 
 
-def render(name: str, out_dir: Path, *, fast: bool = False, cache_dir: Path | None = None,
+def render(name: str, out_dir: Path, *, cache_dir: Path | None = None,
            results_dir: Path | None = None, log=None) -> Rendered:
     """Write the registered figure ``name`` to ``out_dir/<name>.png``.
 
     A config figure runs its ``CONFIG`` through :func:`research.experiments.run_experiment` (store under
-    ``cache_dir``, readable results under ``results_dir``) and plots the stored record and arrays; ``fast``
-    does not apply to it. Other figures call their ``make_figure(out_dir, fast)``.
+    ``cache_dir``, readable results under ``results_dir``) and plots the stored record and arrays.
 
     Raises:
         ResearchError: unknown name; ConfigError from the config.
@@ -125,10 +122,7 @@ def render(name: str, out_dir: Path, *, fast: bool = False, cache_dir: Path | No
     from research.experiments.runner import DEFAULT_CACHE, DEFAULT_RESULTS, run_experiment
 
     module = figure_module(name)
-    config = getattr(module, "CONFIG", None)
-    if config is None or not hasattr(module, "plot"):
-        return Rendered(list(module.make_figure(out_dir, fast=fast)))
-    run = run_experiment(ROOT / config, cache_dir=DEFAULT_CACHE if cache_dir is None else cache_dir,
+    run = run_experiment(ROOT / module.CONFIG, cache_dir=DEFAULT_CACHE if cache_dir is None else cache_dir,
                          results_dir=DEFAULT_RESULTS if results_dir is None else results_dir,
                          log=log or (lambda s: None))
     out = Path(out_dir) / f"{name}.png"
