@@ -1,0 +1,174 @@
+"""Compiled (Numba) kernels of the FIR look-ahead: window displacements and their root search.
+
+The look-ahead of ``fir`` evaluates, for every vertex ``j`` of a chain of short blocks, the windowed
+displacement (``_fir_feed`` module docstring)::
+
+    d_j(F) = F sum_i du_i H2(T_d / 2 - |s_i - s_j| / F),   |s_i - s_j| < F T_d / 2,
+
+and finds the largest feed with ``|d_j(F)| <= eps`` by a bracketing root search. In NumPy both are
+vectorised over the vertices, which costs one array pass (and a Python step) per root-search
+iteration over all active vertices, and a ragged gather per evaluation. Here each vertex is one
+scalar loop: its turns are summed in place, its search runs to its own end. The operations are
+those of :class:`research.interpolators._fir_feed.ChainError` (same formulas, same order of
+summation, ``pow`` / ``log`` / ``exp`` from the C library as NumPy uses them), so the feeds agree
+with the vectorised form to rounding (tested in ``tests/interpolators/test_fir_kernels.py``).
+
+Compiled on first use and cached on disk (``cache=True``): the first call of a fresh install pays
+the compilation (a few seconds), later processes load it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+_OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
+
+
+@numba.njit(**_OPTIONS)
+def _left(a, v):
+    """``np.searchsorted(a, v, side="left")``."""
+    lo, hi = 0, a.size
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if a[mid] < v:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@numba.njit(**_OPTIONS)
+def _right(a, v):
+    """``np.searchsorted(a, v, side="right")``."""
+    lo, hi = 0, a.size
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if a[mid] <= v:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@numba.njit(**_OPTIONS)
+def _displacement(s, du, rho, sign, p, norm, prefix, binom, direct, q, F, out):
+    """``d_j`` at the re-centred arc length ``q`` for feed ``F`` into ``out`` ``(d,)``: a direct sum
+    over the window's turns when it holds at most ``direct`` of them, else the prefix sums
+    (``ChainError._direct`` / ``ChainError._prefix``)."""
+    d = du.shape[1]
+    pf = float(p)  # a float exponent: C pow, as NumPy's power (an integer one compiles to multiplications)
+    for k in range(d):
+        out[k] = 0.0
+    R = F * np.max(rho)
+    first = _right(s, q - R)
+    count = _left(s, q + R) - first
+    if count <= direct:
+        for i in range(first, first + count):
+            x = abs(s[i] - q) / F if F > 0 else np.inf
+            h = 0.0
+            for r_i in range(rho.size):
+                r = max(rho[r_i] - x, 0.0)
+                h += sign[r_i] * math.pow(r, pf)
+            w = h * norm * F
+            for k in range(d):
+                out[k] += w * du[i, k]
+        return
+    at = _left(s, q)
+    for r_i in range(rho.size):
+        Rr = F * rho[r_i]
+        b = _left(s, q + Rr)
+        a = _right(s, q - Rr)
+        right, left = Rr + q, Rr - q
+        for m in range(p + 1):
+            c = sign[r_i] * binom[m]
+            cr = (-1.0) ** m * math.pow(right, pf - m)
+            cl = math.pow(left, pf - m)
+            for k in range(d):
+                pr = prefix[m, b, k] - prefix[m, at, k]
+                pl = prefix[m, at, k] - prefix[m, a, k]
+                out[k] += c * (cr * pr + cl * pl)
+    scale = (math.pow(F, 1.0 - pf) if F > 0 else 0.0) * norm
+    for k in range(d):
+        out[k] *= scale
+
+
+@numba.njit(**_OPTIONS)
+def chain_displacements(s, du, rho, sign, p, norm, prefix, binom, direct, q, F):
+    """``(J, d)`` displacements ``d_j`` at re-centred arc lengths ``q`` ``(J,)`` for feeds ``F`` ``(J,)``."""
+    out = np.zeros((q.size, du.shape[1]))
+    for j in range(q.size):
+        _displacement(s, du, rho, sign, p, norm, prefix, binom, direct, q[j], F[j], out[j])
+    return out
+
+
+@numba.njit(**_OPTIONS)
+def _error(s, du, rho, sign, p, norm, prefix, binom, direct, q, F, buf):
+    """``|d_j(F)|`` (Euclidean norm, summed in axis order as ``np.linalg.norm``)."""
+    _displacement(s, du, rho, sign, p, norm, prefix, binom, direct, q, F, buf)
+    acc = 0.0
+    for k in range(buf.size):
+        acc += buf[k] * buf[k]
+    return math.sqrt(acc)
+
+
+@numba.njit(**_OPTIONS)
+def chain_largest_feeds(s, du, rho, sign, p, norm, prefix, binom, direct, q, hi, tol, e_hi, steps, close, tiny):
+    """Largest feed ``<= hi`` with ``|d_j| <= tol`` for every query (``ChainError.largest_feed``).
+
+    Args:
+        q: ``(J,)`` re-centred arc lengths; hi, tol, e_hi: ``(J,)`` feed bound, tolerance and
+            ``|d_j(hi)|``; steps, close, tiny: the search's resolution exponent, stopping distance
+            (log ratio) and error floor (``_fir_feed``'s constants).
+
+    Returns:
+        ``(J,)`` feeds [mm/s].
+    """
+    J = q.size
+    buf = np.zeros(du.shape[1])
+    out = np.empty(J)
+    resolution = 0.5 ** steps
+    for j in range(J):
+        h, t, e = hi[j], tol[j], e_hi[j]
+        if e <= t:
+            out[j] = h
+            continue
+        if not t > 0:
+            out[j] = 0.0
+            continue
+        g_h = math.log(e / t)
+        l = h * t / e
+        e_l = _error(s, du, rho, sign, p, norm, prefix, binom, direct, q[j], l, buf)
+        if e_l > t:
+            l, g_l = 0.0, -np.inf
+        else:
+            g_l = math.log(max(e_l, tiny * t) / t)
+        width = (h - l) * resolution
+        side = 0
+        for _ in range(2 * steps):
+            if not (h - l > width and g_l < -close):
+                break
+            if l > 0:
+                xl = math.log(l)
+                x = math.exp(xl + (math.log(h) - xl) * (-g_l) / (g_h - g_l))
+            else:
+                x = 0.5 * h  # no power law through F = 0: bisect
+            if x != x:
+                x = 0.5 * (l + h)
+            guard = 0.5 * width
+            x = min(max(x, l + guard), h - guard)
+            gx = math.log(max(_error(s, du, rho, sign, p, norm, prefix, binom, direct, q[j], x, buf), tiny * t) / t)
+            if gx <= 0:
+                if side == -1:
+                    g_h = 0.5 * g_h
+                g_l, l = gx, x
+                side = -1
+            else:
+                if side == 1:
+                    g_l = 0.5 * g_l
+                g_h, h = gx, x
+                side = 1
+        out[j] = l
+    return out
