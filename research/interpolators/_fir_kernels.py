@@ -172,3 +172,55 @@ def chain_largest_feeds(s, du, rho, sign, p, norm, prefix, binom, direct, q, hi,
                 side = 1
         out[j] = l
     return out
+
+
+@numba.njit(**_OPTIONS)
+def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv):
+    """Trajectory samples and their squared distances to the three blocks around each (lines).
+
+    The exact profile is evaluated at ``t`` (clipped to its breaks; Horner's rule on the piece
+    found by a right search, as :class:`research.piecewise.NumpyPiecewise`), the block whose input
+    the averaging window is centred on is ``searchsorted(starts, t - T_d / 2, "right") - 1``
+    (clipped), and each sample is projected on the segments of blocks ``k - 1 .. k + 1`` (clipped
+    to the path; an arc's entry is its chord here and is replaced by the caller).
+
+    Args:
+        breaks, coeffs: ``(K + 1,)`` and ``(K, D, A)`` of the position profile.
+        t: ``(N,)`` sample times [s]; starts: ``(M,)`` block pulse starts [s]; half_window: ``T_d / 2``.
+        seg_start, seg_vec: ``(M, A)`` start and end-minus-start of each block [mm];
+            seg_inv: ``(M,)`` ``1 / |seg_vec|^2`` (0 for a zero-length block).
+
+    Returns:
+        ``(q (N, A), block (N,), d2 (N, 3))``.
+    """
+    N, K, D, A = t.size, coeffs.shape[0], coeffs.shape[1], coeffs.shape[2]
+    M = starts.size
+    q = np.empty((N, A))
+    block = np.empty(N, dtype=np.int64)
+    d2 = np.empty((N, 3))
+    b0, bK = breaks[0], breaks[K]
+    w = np.empty(A)
+    for i in range(N):
+        tc = min(max(t[i], b0), bK)
+        piece = min(max(_right(breaks, tc) - 1, 0), K - 1)
+        tau = tc - breaks[piece]
+        for a in range(A):
+            v = coeffs[piece, D - 1, a]
+            for m in range(D - 2, -1, -1):
+                v = v * tau + coeffs[piece, m, a]
+            q[i, a] = v
+        k = min(max(_right(starts, t[i] - half_window) - 1, 0), M - 1)
+        block[i] = k
+        for c in range(3):
+            kb = min(max(k - 1 + c, 0), M - 1)
+            dot = 0.0
+            for a in range(A):
+                w[a] = q[i, a] - seg_start[kb, a]
+                dot += w[a] * seg_vec[kb, a]
+            u = min(max(dot * seg_inv[kb], 0.0), 1.0)
+            acc = 0.0
+            for a in range(A):
+                r = w[a] - u * seg_vec[kb, a]
+                acc += r * r
+            d2[i, c] = acc
+    return q, block, d2
