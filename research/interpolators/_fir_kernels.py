@@ -224,3 +224,73 @@ def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, se
                 acc += r * r
             d2[i, c] = acc
     return q, block, d2
+
+
+@numba.njit(**_OPTIONS)
+def _derivatives(breaks, coeffs, t, out):
+    """Value, first and second derivative of the profile at ``t`` into ``out`` ``(3, A)``
+    (right-searched piece, clipped time; derivatives 0 outside the breaks)."""
+    K, D, A = coeffs.shape[0], coeffs.shape[1], coeffs.shape[2]
+    tc = min(max(t, breaks[0]), breaks[K])
+    piece = min(max(_right(breaks, tc) - 1, 0), K - 1)
+    tau = tc - breaks[piece]
+    inside = breaks[0] <= t <= breaks[K]
+    for a in range(A):
+        v = coeffs[piece, D - 1, a]
+        for m in range(D - 2, -1, -1):
+            v = v * tau + coeffs[piece, m, a]
+        out[0, a] = v
+        v1 = 0.0
+        if D > 1:
+            v1 = coeffs[piece, D - 1, a] * (D - 1)
+            for m in range(D - 2, 0, -1):
+                v1 = v1 * tau + coeffs[piece, m, a] * m
+        v2 = 0.0
+        if D > 2:
+            v2 = coeffs[piece, D - 1, a] * (D - 1) * (D - 2)
+            for m in range(D - 2, 1, -1):
+                v2 = v2 * tau + coeffs[piece, m, a] * m * (m - 1)
+        out[1, a] = v1 if inside else 0.0
+        out[2, a] = v2 if inside else 0.0
+
+
+@numba.njit(**_OPTIONS)
+def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
+    """Distance [mm] from each vertex ``(C, A)`` to the profile near ``centre`` ``(C,)`` [s]: the best
+    of ``grid`` points evenly spread over ``centre +- half_window``, refined by ``newton_steps``
+    safeguarded Newton steps on ``|p(t) - V|^2`` kept within one grid step (the compiled form of
+    ``_fir_verify._corner_distances``; never above the best grid point's distance)."""
+    C, A = vertices.shape[0], vertices.shape[1]
+    out = np.empty(C)
+    buf = np.empty((3, A))
+    step = half_window * (2.0 / (grid - 1))
+    for c in range(C):
+        best, best_d2 = 0.0, np.inf
+        for g in range(grid):
+            tg = centre[c] + half_window * (-1.0 + 2.0 * g / (grid - 1))
+            _derivatives(breaks, coeffs, tg, buf)
+            d2 = 0.0
+            for a in range(A):
+                e = buf[0, a] - vertices[c, a]
+                d2 += e * e
+            if d2 < best_d2:
+                best, best_d2 = tg, d2
+        lo, hi = best - step, best + step
+        t = best
+        for _ in range(newton_steps):
+            _derivatives(breaks, coeffs, t, buf)
+            slope, curvature = 0.0, 0.0
+            for a in range(A):
+                e = buf[0, a] - vertices[c, a]
+                slope += e * buf[1, a]
+                curvature += buf[1, a] * buf[1, a] + e * buf[2, a]
+            if curvature > 0:
+                t = t - slope / curvature
+            t = min(max(t, lo), hi)
+        _derivatives(breaks, coeffs, t, buf)
+        d2 = 0.0
+        for a in range(A):
+            e = buf[0, a] - vertices[c, a]
+            d2 += e * e
+        out[c] = math.sqrt(min(d2, best_d2))
+    return out

@@ -17,6 +17,7 @@ import numpy as np
 from jax import Array
 
 from research.paths.toolpath import ToolPath
+from research.interpolators._fir_kernels import corner_distances as _corner_kernel
 from research.interpolators._fir_kernels import sampled_line_distances
 from research.piecewise import NumpyPiecewise, PiecewisePolynomial, bucket_size
 
@@ -64,6 +65,17 @@ def _corner_distances(position, vertices, centre, half_window, real):
     squared = jnp.minimum(jnp.sum((position(t) - vertices) ** 2, axis=1), jnp.min(d2, axis=1))
     positive = squared > 0
     return jnp.where(real & positive, jnp.sqrt(jnp.where(positive, squared, 1.0)), 0.0)
+
+
+def vertex_distances(position: NumpyPiecewise, vertices: np.ndarray, centre: np.ndarray, half_window: float) -> np.ndarray:
+    """:func:`corner_distances` on concrete arrays, compiled (``_fir_kernels.corner_distances``): the
+    same grid and Newton steps without JAX dispatch, for the planner's checks (the JAX form stays
+    the differentiable one). Agrees with it to rounding."""
+    if vertices.shape[0] == 0:
+        return np.zeros(0)
+    return _corner_kernel(np.ascontiguousarray(position.breaks), np.ascontiguousarray(position.coeffs),
+                          np.ascontiguousarray(vertices, dtype=np.float64), np.ascontiguousarray(centre, dtype=np.float64),
+                          float(half_window), _GRID, _NEWTON_STEPS)
 
 
 def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray, centre: np.ndarray, Td: float,
