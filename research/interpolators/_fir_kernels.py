@@ -54,6 +54,31 @@ def _right(a, v):
 
 
 @numba.njit(**_OPTIONS)
+def _right_from(a, v, hint):
+    """``np.searchsorted(a, v, side="right")`` (the count of entries ``<= v``, unique on a sorted
+    array) found from a nearby index ``hint``: a few steps forward, else a binary search on the side
+    of ``hint`` that holds it. For queries that move monotonically along ``a``."""
+    n = a.size
+    i = min(max(hint, 0), n)
+    if i > 0 and a[i - 1] > v:
+        lo, hi = 0, i
+    else:
+        for _ in range(8):
+            if i < n and a[i] <= v:
+                i += 1
+            else:
+                return i
+        lo, hi = i, n
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if a[mid] <= v:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@numba.njit(**_OPTIONS)
 def _displacement(s, du, rho, sign, p, norm, prefix, binom, direct, q, F, out):
     """``d_j`` at the re-centred arc length ``q`` for feed ``F`` into ``out`` ``(d,)``: a direct sum
     over the window's turns when it holds at most ``direct`` of them, else the prefix sums
@@ -200,16 +225,19 @@ def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, se
     d2 = np.empty((N, 3))
     b0, bK = breaks[0], breaks[K]
     w = np.empty(A)
+    at_break, at_start = 0, 0  # search hints: the samples run forward (grid, then corner instants)
     for i in range(N):
         tc = min(max(t[i], b0), bK)
-        piece = min(max(_right(breaks, tc) - 1, 0), K - 1)
+        at_break = _right_from(breaks, tc, at_break)
+        piece = min(max(at_break - 1, 0), K - 1)
         tau = tc - breaks[piece]
         for a in range(A):
             v = coeffs[piece, D - 1, a]
             for m in range(D - 2, -1, -1):
                 v = v * tau + coeffs[piece, m, a]
             q[i, a] = v
-        k = min(max(_right(starts, t[i] - half_window) - 1, 0), M - 1)
+        at_start = _right_from(starts, t[i] - half_window, at_start)
+        k = min(max(at_start - 1, 0), M - 1)
         block[i] = k
         for c in range(3):
             kb = min(max(k - 1 + c, 0), M - 1)
@@ -227,12 +255,14 @@ def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, se
 
 
 @numba.njit(**_OPTIONS)
-def _derivatives(breaks, coeffs, t, out):
+def _derivatives(breaks, coeffs, t, out, hint):
     """Value, first and second derivative of the profile at ``t`` into ``out`` ``(3, A)``
-    (right-searched piece, clipped time; derivatives 0 outside the breaks)."""
+    (right-searched piece from the index ``hint``, clipped time; derivatives 0 outside the breaks).
+    Returns the search's index, the hint for a nearby next time."""
     K, D, A = coeffs.shape[0], coeffs.shape[1], coeffs.shape[2]
     tc = min(max(t, breaks[0]), breaks[K])
-    piece = min(max(_right(breaks, tc) - 1, 0), K - 1)
+    found = _right_from(breaks, tc, hint)
+    piece = min(max(found - 1, 0), K - 1)
     tau = tc - breaks[piece]
     inside = breaks[0] <= t <= breaks[K]
     for a in range(A):
@@ -252,6 +282,7 @@ def _derivatives(breaks, coeffs, t, out):
                 v2 = v2 * tau + coeffs[piece, m, a] * m * (m - 1)
         out[1, a] = v1 if inside else 0.0
         out[2, a] = v2 if inside else 0.0
+    return found
 
 
 @numba.njit(**_OPTIONS)
@@ -264,11 +295,15 @@ def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton
     out = np.empty(C)
     buf = np.empty((3, A))
     step = half_window * (2.0 / (grid - 1))
+    first = 0  # search hint of each corner's first grid point (the corner instants run forward)
     for c in range(C):
         best, best_d2 = 0.0, np.inf
+        hint = first
         for g in range(grid):
             tg = centre[c] + half_window * (-1.0 + 2.0 * g / (grid - 1))
-            _derivatives(breaks, coeffs, tg, buf)
+            hint = _derivatives(breaks, coeffs, tg, buf, hint)
+            if g == 0:
+                first = hint
             d2 = 0.0
             for a in range(A):
                 e = buf[0, a] - vertices[c, a]
@@ -278,7 +313,7 @@ def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton
         lo, hi = best - step, best + step
         t = best
         for _ in range(newton_steps):
-            _derivatives(breaks, coeffs, t, buf)
+            hint = _derivatives(breaks, coeffs, t, buf, hint)
             slope, curvature = 0.0, 0.0
             for a in range(A):
                 e = buf[0, a] - vertices[c, a]
@@ -287,7 +322,7 @@ def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton
             if curvature > 0:
                 t = t - slope / curvature
             t = min(max(t, lo), hi)
-        _derivatives(breaks, coeffs, t, buf)
+        _derivatives(breaks, coeffs, t, buf, hint)
         d2 = 0.0
         for a in range(A):
             e = buf[0, a] - vertices[c, a]
