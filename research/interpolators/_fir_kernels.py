@@ -1,4 +1,5 @@
-"""Compiled (Numba) kernels of the FIR look-ahead: window displacements and their root search.
+"""Compiled (Numba) kernels of the FIR planner: window displacements and their root search (the
+look-ahead), the sampled path check, and the corner-distance search (the verification).
 
 The look-ahead of ``fir`` evaluates, for every vertex ``j`` of a chain of short blocks, the windowed
 displacement (``_fir_feed`` module docstring)::
@@ -9,12 +10,18 @@ and finds the largest feed with ``|d_j(F)| <= eps`` by a bracketing root search.
 vectorised over the vertices, which costs one array pass (and a Python step) per root-search
 iteration over all active vertices, and a ragged gather per evaluation. Here each vertex is one
 scalar loop: its turns are summed in place, its search runs to its own end. The operations are
-those of :class:`research.interpolators._fir_feed.ChainError` (same formulas, same order of
-summation, ``pow`` / ``log`` / ``exp`` from the C library as NumPy uses them), so the feeds agree
-with the vectorised form to rounding (tested in ``tests/interpolators/test_fir_kernels.py``).
+those of the vectorised NumPy form this replaced (same formulas, same order of summation, ``pow`` /
+``log`` / ``exp`` from the C library as NumPy uses them), so the plans are bit-identical to it
+(benchmarks/README.md, bench_cam section); ``tests/interpolators/test_fir_kernels.py`` checks the
+kernels against slow independent computations.
 
-Compiled on first use and cached on disk (``cache=True``): the first call of a fresh install pays
-the compilation (a few seconds), later processes load it.
+The verification kernels (:func:`sampled_line_distances`, :func:`corner_distances`) evaluate the
+exact profile on its NumPy arrays with Horner's rule, as :class:`research.piecewise.NumpyPiecewise`,
+and replace per-sample NumPy gathers (path check) and the JAX grid + Newton search
+(``_fir_verify``) inside the planner's rounds.
+
+Compiled on first use and cached on disk (``cache=True``): the first call of a fresh checkout pays
+the compilation (about 16 s for all of them, measured at load 4), later processes load it (0.7 s).
 """
 
 from __future__ import annotations
