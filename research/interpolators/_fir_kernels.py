@@ -63,19 +63,27 @@ def _right(a, v):
 @numba.njit(**_OPTIONS)
 def _right_from(a, v, hint):
     """``np.searchsorted(a, v, side="right")`` (the count of entries ``<= v``, unique on a sorted
-    array) found from a nearby index ``hint``: a few steps forward, else a binary search on the side
-    of ``hint`` that holds it. For queries that move monotonically along ``a``."""
+    array) found from a nearby index ``hint`` by a galloping search: steps of 1, 2, 4, ... away from
+    ``hint`` until the answer is bracketed, then a binary search in the bracket. ``O(log distance)``
+    for queries that move little along ``a``."""
     n = a.size
     i = min(max(hint, 0), n)
-    if i > 0 and a[i - 1] > v:
-        lo, hi = 0, i
-    else:
-        for _ in range(8):
-            if i < n and a[i] <= v:
-                i += 1
-            else:
-                return i
-        lo, hi = i, n
+    if i > 0 and a[i - 1] > v:  # the answer is below i
+        hi, step = i, 1
+        lo = hi - step
+        while lo > 0 and a[lo - 1] > v:
+            hi = lo
+            step *= 2
+            lo = max(hi - step, 0)
+        lo = max(lo, 0)
+    else:  # the answer is at or above i
+        lo, step = i, 1
+        hi = lo + step
+        while hi <= n and a[hi - 1] <= v:
+            lo = hi
+            step *= 2
+            hi = lo + step
+        hi = min(hi, n)
     while lo < hi:
         mid = (lo + hi) >> 1
         if a[mid] <= v:

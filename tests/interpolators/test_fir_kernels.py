@@ -110,3 +110,17 @@ def test_sampled_line_distances_match_projection_on_each_segment():
         k = np.clip(block - 1 + c, 0, M - 1)
         u = np.clip(np.sum((q - a[k]) * ab[k], axis=1) / np.sum(ab[k] ** 2, axis=1), 0.0, 1.0)
         np.testing.assert_allclose(d2[:, c], np.sum((q - a[k] - u[:, None] * ab[k]) ** 2, axis=1), rtol=1e-9, atol=1e-16)  # rounding of coordinates ~100 mm
+
+
+def test_hinted_search_is_searchsorted_right():
+    """The kernels' galloping search from a hint gives ``np.searchsorted(a, v, "right")`` for any
+    hint, including repeated entries (zero-length pieces) and values outside the array."""
+    from research.interpolators._fir_kernels import _right_from
+
+    rng = np.random.default_rng(0)
+    for _ in range(2000):
+        n = int(rng.integers(0, 40))
+        a = np.sort(rng.integers(0, 20, n).astype(np.float64))
+        v = float(rng.integers(-2, 22)) + float(rng.choice([0.0, 0.5]))
+        hint = int(rng.integers(-3, n + 4))
+        assert _right_from(a, v, hint) == np.searchsorted(a, v, side="right")
