@@ -75,7 +75,7 @@ from research.paths import Polyline
 from research.paths.toolpath import ToolPath
 from research.paths.gcode import parse_gcode, to_gcode
 
-from bench_fir import Table, timed, verdict  # the benchmarks' shared table and timer (same folder)
+from bench_fir import TARGET_MEMORY_PER_SEGMENT, Table, peak_memory, timed, verdict  # the benchmarks' shared table and timer (same folder)
 
 # The benchmark's settings (stated by the issue, not tuned)
 FEED = 200.0  # commanded feed F [mm/s]
@@ -333,7 +333,11 @@ def bench_cam(args, table: Table, t0: float) -> None:
     table.row(f"plan_fir first call (compile + run) / warm median of {args.repeats}", f"{t_cold:.2f} s",
               f"warm {t_fir * 1e3:.1f} ms")
     ours = t_fir / M
-    table.row("plan_fir per segment (warm median)", f"{ours * 1e6:.2f} us")
+    table.row("plan_fir per segment (warm median)", f"{ours * 1e6:.2f} us", load())
+    peak = peak_memory(plan_fir, path, FEED, DELAYS, EPS)
+    table.row("plan_fir peak traced memory (tracemalloc), per segment", f"{peak / M / 1e3:.2f} kB",
+              f"{peak / 1e6:.1f} MB in all", f"<= {TARGET_MEMORY_PER_SEGMENT / 1e3:g} kB",
+              verdict(peak / M <= TARGET_MEMORY_PER_SEGMENT))
     timed(plan_fir, path, FEED, DELAYS, EPS, refine=False)  # warm-up
     _, t_eq = median_of(args.repeats, plan_fir, path, FEED, DELAYS, EPS, refine=False)
     table.row("  for information: plan_fir(refine=False) (eq 13/14 only), per segment", f"{t_eq / M * 1e6:.2f} us",

@@ -71,6 +71,7 @@ SEGMENT_LENGTHS = (0.2, 2.0)  # [mm]
 TARGET_REAL_TIME = 1e4  # x real time
 TARGET_VS_CONVOLUTION = 100.0  # convolution time / our time
 TARGET_VS_RUCKIG = 1.0  # ruckig per-segment time / ours
+TARGET_MEMORY_PER_SEGMENT = 1e3  # bytes of peak planning memory per segment (issue 19 item 4)
 
 
 # -- scenario --------------------------------------------------------------------------------------
@@ -99,6 +100,28 @@ def timed(fn, *args, **kwargs):
     t0 = time.perf_counter()
     out = jax.block_until_ready(fn(*args, **kwargs))
     return out, time.perf_counter() - t0
+
+
+def peak_memory(fn, *args, **kwargs) -> int:
+    """Peak bytes traced by ``tracemalloc`` (Python objects and NumPy buffers, not XLA's own
+    buffers) during one call, above what was allocated before it."""
+    import tracemalloc
+
+    tracemalloc.start()
+    try:
+        base = tracemalloc.get_traced_memory()[0]
+        jax.block_until_ready(fn(*args, **kwargs))
+        return tracemalloc.get_traced_memory()[1] - base
+    finally:
+        tracemalloc.stop()
+
+
+def load() -> str:
+    """The machine's load averages (1, 5, 15 min), for the record."""
+    try:
+        return "load %.2f %.2f %.2f" % os.getloadavg()
+    except OSError:
+        return "load n/a"
 
 
 def best_of(repeats: int, fn, *args, **kwargs):
@@ -254,7 +277,11 @@ def bench_planning(path: Polyline, feeds, repeats: int, table: Table) -> None:
     _, t_plan = best_of(repeats, plan_fir, path, feeds, DELAYS, TOLERANCE)
     _, t_plan_eq = best_of(repeats, plan_fir, path, feeds, DELAYS, TOLERANCE, refine=False)
     ours = t_plan / M
-    table.row("plan_fir (warm), per segment", f"{ours * 1e6:.2f} us")
+    table.row("plan_fir (warm), per segment", f"{ours * 1e6:.2f} us", load())
+    peak = peak_memory(plan_fir, path, feeds, DELAYS, TOLERANCE)
+    table.row("plan_fir peak traced memory (tracemalloc), per segment", f"{peak / M / 1e3:.2f} kB",
+              f"{peak / 1e6:.1f} MB in all", f"<= {TARGET_MEMORY_PER_SEGMENT / 1e3:g} kB",
+              verdict(peak / M <= TARGET_MEMORY_PER_SEGMENT))
     table.row("plan_fir(refine=False) (eq 13/14 only), per segment", f"{t_plan_eq / M * 1e6:.2f} us",
               f"{t_plan_eq / t_plan:.0%} of full plan")
     try:
@@ -314,7 +341,8 @@ def main(argv=None) -> int:
 
     cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     print(f"python {platform.python_version()}, numpy {np.__version__}, jax {jax.__version__} "
-          f"({jax.default_backend()}), {cpus} CPUs available ({os.cpu_count()} total), {platform.machine()}")
+          f"({jax.default_backend()}), {cpus} CPUs available ({os.cpu_count()} total), {platform.machine()}, "
+          f"{load()} at start")
     print(f"path: {segments} segments, seed {args.seed}; best of {repeats} warm repeats; "
           f"ratios are against baselines timed in this run")
 
@@ -326,7 +354,7 @@ def main(argv=None) -> int:
         bench_breakdown(res["path"], res["feeds"], res["plan"], res["t_ours"], repeats, table)
     bench_planning(res["path"], res["feeds"], repeats, table)
     table.print()
-    print(f"total benchmark time {time.perf_counter() - t_start:.1f} s")
+    print(f"total benchmark time {time.perf_counter() - t_start:.1f} s ({load()} at the end)")
     return 0
 
 

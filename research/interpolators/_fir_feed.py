@@ -37,6 +37,8 @@ import math
 
 import numpy as np
 
+from research.interpolators._fir_kernels import chain_displacements, chain_largest_feeds
+
 
 _ARC_STEPS = 60  # arc feeds to machine precision (cheap: one evaluation per arc and step)
 _DIRECT = 64  # windows of at most this many direction changes are summed directly
@@ -108,71 +110,31 @@ class ChainError:
         self.rho, self.sign = 0.5 * self.Td - sums[keep], signs[keep]
         self.origin = 0.5 * (float(s[0]) + float(s[-1])) if s.size else 0.0
         self.s = np.asarray(s, dtype=np.float64) - self.origin
-        du = np.asarray(du, dtype=np.float64)
+        du = np.ascontiguousarray(du, dtype=np.float64).reshape(-1, np.shape(du)[-1])
         self.du = du
         # prefix sums of du * s^m, m = 0 .. p
-        self.prefix = [np.vstack([np.zeros((1, du.shape[1])), np.cumsum(du * (self.s ** m)[:, None], axis=0)])
-                       for m in range(self.p + 1)]
-        self.binom = [math.comb(self.p, m) for m in range(self.p + 1)]
+        self.prefix = np.stack([np.vstack([np.zeros((1, du.shape[1])), np.cumsum(du * (self.s ** m)[:, None], axis=0)])
+                                for m in range(self.p + 1)])  # (p + 1, T + 1, d)
+        self.binom = np.array([math.comb(self.p, m) for m in range(self.p + 1)], dtype=np.float64)
 
     def __call__(self, s_query: np.ndarray, feed: np.ndarray) -> np.ndarray:
         """``|d_j|`` [mm] at arc lengths ``s_query`` [mm] for feeds ``feed`` [mm/s] (both ``(J,)``)."""
         return np.linalg.norm(self.displacement(s_query, feed), axis=1)
 
+    def _args(self):
+        return (self.s, self.du, self.rho, self.sign, self.p, self.norm, self.prefix, self.binom, _DIRECT)
+
     def displacement(self, s_query: np.ndarray, feed: np.ndarray) -> np.ndarray:
         """``d_j`` ``(J, d)`` [mm] at arc lengths ``s_query`` [mm] for feeds ``feed`` [mm/s].
 
         Windows holding at most :data:`_DIRECT` direction changes are summed directly (exact in
-        floating point whatever the window's size against the path), each over its own turns only
-        (a ragged sum: the work is the total number of turns in the windows, not the largest window
-        times the query count); larger ones through the prefix sums, whose binomial re-centring
-        loses ``(|s| / R)^(n+1)`` ulps (small there, because a window of many turns is long)."""
-        q = np.asarray(s_query, dtype=np.float64) - self.origin
-        F = np.broadcast_to(np.asarray(feed, dtype=np.float64), q.shape)
-        R = F * self.rho.max()
-        first = np.searchsorted(self.s, q - R, side="right")
-        count = np.searchsorted(self.s, q + R, side="left") - first
-        small = count <= _DIRECT
-        out = np.zeros((q.size, self.du.shape[1]))
-        if small.any():
-            out[small] = self._direct(q[small], F[small], first[small], count[small])
-        if not small.all():
-            out[~small] = self._prefix(q[~small], F[~small])
-        return out
-
-    def _direct(self, q, F, first, count):
-        """Ragged direct sums: query ``j`` sums the ``count[j]`` turns from ``first[j]`` on."""
-        J, d = q.size, self.du.shape[1]
-        total = int(count.sum())
-        if total == 0:
-            return np.zeros((J, d))
-        owner = np.repeat(np.arange(J), count)
-        offset = np.arange(total) - np.repeat(np.cumsum(count) - count, count)
-        idx = first[owner] + offset
-        with np.errstate(divide="ignore", invalid="ignore"):
-            x = np.where(F[owner] > 0, np.abs(self.s[idx] - q[owner]) / F[owner], np.inf)
-        h = np.zeros(total)
-        for rho, sign in zip(self.rho, self.sign):
-            r = np.maximum(rho - x, 0.0)
-            h += sign * r ** self.p
-        w = (h * self.norm * F[owner])[:, None] * self.du[idx]
-        return np.stack([np.bincount(owner, weights=w[:, k], minlength=J) for k in range(d)], axis=1)
-
-    def _prefix(self, q, F):
-        total = np.zeros((q.size, self.prefix[0].shape[1]))
-        at = np.searchsorted(self.s, q, side="left")
-        for rho, sign in zip(self.rho, self.sign):
-            R = F * rho
-            b = np.searchsorted(self.s, q + R, side="left")
-            a = np.searchsorted(self.s, q - R, side="right")
-            right, left = R + q, R - q
-            for m in range(self.p + 1):
-                c = self.binom[m]
-                pr, pl = self.prefix[m][b] - self.prefix[m][at], self.prefix[m][at] - self.prefix[m][a]
-                total += sign * c * (((-1.0) ** m * right ** (self.p - m))[:, None] * pr + (left ** (self.p - m))[:, None] * pl)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            scale = np.where(F > 0, F ** (1 - self.p), 0.0) * self.norm
-        return total * scale[:, None]
+        floating point whatever the window's size against the path), each over its own turns only;
+        larger ones through the prefix sums, whose binomial re-centring loses ``(|s| / R)^(n+1)``
+        ulps (small there, because a window of many turns is long). One compiled loop over the
+        queries (``_fir_kernels.chain_displacements``)."""
+        q = np.asarray(s_query, dtype=np.float64).reshape(-1) - self.origin
+        F = np.ascontiguousarray(np.broadcast_to(np.asarray(feed, dtype=np.float64), q.shape))
+        return chain_displacements(*self._args(), q, F)
 
     def largest_feed(self, s_query: np.ndarray, feed_max: np.ndarray, tolerance: np.ndarray,
                      error_max: np.ndarray | None = None) -> np.ndarray:
@@ -188,47 +150,15 @@ class ChainError:
         bracket is ``2^-BISECTION_STEPS`` of its start (the resolution of :data:`_BISECTION_STEPS`
         halvings), when the low end's error is within ``2^-BISECTION_STEPS`` (relative) of the
         tolerance (a feed that close to the root: the error grows at least linearly), or after
-        ``2 * _BISECTION_STEPS`` steps.
+        ``2 * _BISECTION_STEPS`` steps. Each query's search is one compiled scalar loop
+        (``_fir_kernels.chain_largest_feeds``).
 
         ``error_max``: ``|d_j(feed_max)|`` where the caller has it already (saves one evaluation)."""
-        hi = np.asarray(feed_max, dtype=np.float64).copy()
-        tol = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), hi.shape)
-        e = self(s_query, hi) if error_max is None else np.asarray(error_max, dtype=np.float64)
-        ok = e <= tol
-        lo = np.where(ok, hi, 0.0)
-        todo = np.flatnonzero(~ok & (tol > 0))  # a zero tolerance with a turn in the window: feed 0
-        if todo.size:
-            sq, h, t = s_query[todo], hi[todo], tol[todo]
-            g_h = np.log(e[todo] / t)  # > 0
-            l = h * t / e[todo]
-            e_l = self(sq, l)
-            bad = e_l > t
-            l = np.where(bad, 0.0, l)
-            g_l = np.where(bad, -np.inf, np.log(np.maximum(e_l, _TINY * t) / t))
-            width = (h - l) * 0.5 ** _BISECTION_STEPS
-            side = np.zeros(l.shape, dtype=np.int8)  # which end moved last: -1 low, +1 high
-            active = np.flatnonzero((h - l > width) & (g_l < -_CLOSE))
-            for _ in range(2 * _BISECTION_STEPS):
-                if active.size == 0:
-                    break
-                la, ha, gl, gh = l[active], h[active], g_l[active], g_h[active]
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    xl = np.log(la)
-                    x = np.exp(xl + (np.log(ha) - xl) * (-gl) / (gh - gl))
-                x = np.where(la > 0, x, 0.5 * ha)  # no power law through F = 0: bisect
-                guard = 0.5 * width[active]
-                x = np.clip(np.nan_to_num(x, nan=0.5 * (la + ha)), la + guard, ha - guard)
-                gx = np.log(np.maximum(self(sq[active], x), _TINY * t[active]) / t[active])
-                good = gx <= 0
-                sa = side[active]
-                # Illinois: an end kept twice in a row has its residual halved
-                g_h[active] = np.where(good, np.where(sa == -1, 0.5 * gh, gh), gx)
-                g_l[active] = np.where(good, gx, np.where(sa == 1, 0.5 * gl, gl))
-                l[active], h[active] = np.where(good, x, la), np.where(good, ha, x)
-                side[active] = np.where(good, -1, 1)
-                active = active[(h[active] - l[active] > width[active]) & (g_l[active] < -_CLOSE)]
-            lo[todo] = l
-        return lo
+        hi = np.array(feed_max, dtype=np.float64).reshape(-1)
+        tol = np.ascontiguousarray(np.broadcast_to(np.asarray(tolerance, dtype=np.float64), hi.shape))
+        e = self(s_query, hi) if error_max is None else np.array(error_max, dtype=np.float64).reshape(-1)
+        q = np.asarray(s_query, dtype=np.float64).reshape(-1) - self.origin
+        return chain_largest_feeds(*self._args(), q, hi, tol, e, _BISECTION_STEPS, _CLOSE, _TINY)
 
 
 def range_min(first: np.ndarray, last: np.ndarray, values: np.ndarray, n: int, initial: np.ndarray) -> np.ndarray:

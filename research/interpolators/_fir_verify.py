@@ -17,6 +17,8 @@ import numpy as np
 from jax import Array
 
 from research.paths.toolpath import ToolPath
+from research.interpolators._fir_kernels import corner_distances as _corner_kernel
+from research.interpolators._fir_kernels import sampled_line_distances
 from research.piecewise import NumpyPiecewise, PiecewisePolynomial, bucket_size
 
 _GRID = 9  # grid points per corner window for the corner-error search
@@ -65,6 +67,17 @@ def _corner_distances(position, vertices, centre, half_window, real):
     return jnp.where(real & positive, jnp.sqrt(jnp.where(positive, squared, 1.0)), 0.0)
 
 
+def vertex_distances(position: NumpyPiecewise, vertices: np.ndarray, centre: np.ndarray, half_window: float) -> np.ndarray:
+    """:func:`corner_distances` on concrete arrays, compiled (``_fir_kernels.corner_distances``): the
+    same grid and Newton steps without JAX dispatch, for the planner's checks (the JAX form stays
+    the differentiable one). Agrees with it to rounding."""
+    if vertices.shape[0] == 0:
+        return np.zeros(0)
+    return _corner_kernel(np.ascontiguousarray(position.breaks), np.ascontiguousarray(position.coeffs),
+                          np.ascontiguousarray(vertices, dtype=np.float64), np.ascontiguousarray(centre, dtype=np.float64),
+                          float(half_window), _GRID, _NEWTON_STEPS)
+
+
 def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray, centre: np.ndarray, Td: float,
                     tol_block: np.ndarray, check_period: float):
     """Largest sampled distance from the trajectory to ``path`` and where it breaks the tolerance.
@@ -87,11 +100,9 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
     t = np.concatenate([t0 + np.arange(n) * check_period, centre, [t1]])
     t = np.clip(t, t0, t1)
     M = path.n_blocks
-    block = np.clip(np.searchsorted(starts, t - 0.5 * Td, side="right") - 1, 0, M - 1)
-    q = position(t)
     # first the blocks the window is centred on (almost every sample is within tolerance of them),
     # then, for the rest, the k nearest path samples as well
-    dist = _three_block_distance(path, q, block)
+    q, block, dist = _three_block_distance(path, position, t, starts, Td)
     limit = tol_block[block]
     near = np.full(t.size, -1)
     if M > 1:
@@ -123,26 +134,26 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
     return float(dist.max()), at_vertex, at_block
 
 
-def _three_block_distance(path: ToolPath, q: np.ndarray, block: np.ndarray) -> np.ndarray:
-    """Distance [mm] from each point ``q`` ``(N, d)`` to the nearest of blocks ``block - 1 .. block + 1``.
+def _three_block_distance(path: ToolPath, position: NumpyPiecewise, t: np.ndarray, starts: np.ndarray, Td: float):
+    """Trajectory samples at ``t``, the block each one's window is centred on, and the distance [mm]
+    from each sample to the nearest of blocks ``block - 1 .. block + 1``.
 
-    Lines in one vectorised projection on the segment; arc candidates through
-    ``ToolPath._block_distance`` (exact for planar arcs)."""
+    Lines by one compiled pass (``_fir_kernels.sampled_line_distances``); arc candidates through
+    ``ToolPath._block_distance`` (exact for planar arcs). Returns ``(q (N, d), block (N,), dist (N,))``."""
     M = path.n_blocks
-    if "neighbour_segments" not in path._cache:  # (M, 3, .) rows of blocks k - 1, k, k + 1 (clipped)
-        nb = np.clip(np.arange(M)[:, None] + np.arange(-1, 2)[None, :], 0, M - 1)
-        ab = path.ends - path.starts
+    if "line_segments" not in path._cache:
+        ab = np.ascontiguousarray(path.ends - path.starts)
         ab2 = np.einsum("kd,kd->k", ab, ab)
         inv = np.where(ab2 > 0, 1.0 / np.where(ab2 > 0, ab2, 1.0), 0.0)
-        path._cache["neighbour_segments"] = (nb, path.starts[nb], ab[nb], inv[nb], path.is_arc[nb])
-    nb, a3, ab3, inv3, arc3 = path._cache["neighbour_segments"]
-    w = q[:, None, :] - a3[block]
-    ab = ab3[block]
-    u = np.clip(np.einsum("nkd,nkd->nk", w, ab) * inv3[block], 0.0, 1.0)
-    w -= u[:, :, None] * ab
-    d2 = np.einsum("nkd,nkd->nk", w, w)
-    arc = arc3[block]
-    if arc.any():
-        rows = np.nonzero(arc)
-        d2[rows] = path._block_distance(q[rows[0]], nb[block[rows[0]], rows[1]]) ** 2
-    return np.sqrt(d2.min(axis=1))
+        path._cache["line_segments"] = (np.ascontiguousarray(path.starts, dtype=np.float64), ab, inv)
+    a, ab, inv = path._cache["line_segments"]
+    q, block, d2 = sampled_line_distances(np.ascontiguousarray(position.breaks), np.ascontiguousarray(position.coeffs),
+                                          np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(starts), 0.5 * Td,
+                                          a, ab, inv)
+    if path.is_arc.any():
+        nb = np.clip(block[:, None] + np.arange(-1, 2)[None, :], 0, M - 1)
+        arc = path.is_arc[nb]
+        if arc.any():
+            rows = np.nonzero(arc)
+            d2[rows] = path._block_distance(q[rows[0]], nb[rows]) ** 2
+    return q, block, np.sqrt(d2.min(axis=1))

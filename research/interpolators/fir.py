@@ -65,7 +65,7 @@ from research.interpolators._fir_limits import (
     hold_block_limits,
 )
 from research.interpolators._fir_overlap import overlap_time
-from research.interpolators._fir_verify import corner_distances, path_deviations
+from research.interpolators._fir_verify import corner_distances, path_deviations, vertex_distances
 from research.limits import AxisLimits
 from research.paths.polyline import Polyline
 from research.paths.toolpath import ToolPath
@@ -293,7 +293,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                 # such proof -- hence the final check rather than trusting it.
                 if tol_due or not too_fast:
                     if refine and M > 1:
-                        errors = np.array(_primal(corner_distances(position, jnp.asarray(tp.vertices), centre, 0.5 * jnp.sum(delays))))
+                        errors = vertex_distances(pos_np, tp.vertices, centre_np, 0.5 * Td_np)
                     viol = errors > limit_v
                     if refine:
                         deviation, at_vertex, at_block = path_deviations(pos_np, tp, starts_np, centre_np, Td_np, tb_np, check_period)

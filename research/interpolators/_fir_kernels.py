@@ -1,0 +1,346 @@
+"""Compiled (Numba) kernels of the FIR planner: window displacements and their root search (the
+look-ahead), the sampled path check, and the corner-distance search (the verification).
+
+The look-ahead of ``fir`` evaluates, for every vertex ``j`` of a chain of short blocks, the windowed
+displacement (``_fir_feed`` module docstring)::
+
+    d_j(F) = F sum_i du_i H2(T_d / 2 - |s_i - s_j| / F),   |s_i - s_j| < F T_d / 2,
+
+and finds the largest feed with ``|d_j(F)| <= eps`` by a bracketing root search. In NumPy both are
+vectorised over the vertices, which costs one array pass (and a Python step) per root-search
+iteration over all active vertices, and a ragged gather per evaluation. Here each vertex is one
+scalar loop: its turns are summed in place, its search runs to its own end. The operations are
+those of the vectorised NumPy form this replaced (same formulas, same order of summation, ``pow`` /
+``log`` / ``exp`` from the C library as NumPy uses them), so the plans are bit-identical to it
+(benchmarks/README.md, bench_cam section); ``tests/interpolators/test_fir_kernels.py`` checks the
+kernels against slow independent computations.
+
+The verification kernels (:func:`sampled_line_distances`, :func:`corner_distances`) evaluate the
+exact profile on its NumPy arrays with Horner's rule, as :class:`research.piecewise.NumpyPiecewise`,
+and replace per-sample NumPy gathers (path check) and the JAX grid + Newton search
+(``_fir_verify``) inside the planner's rounds.
+
+Compiled on first use and cached on disk (``cache=True``): the first call of a fresh checkout pays
+the compilation (about 16 s for all of them, measured at load 4), later processes load it (0.7 s).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+_OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
+
+
+@numba.njit(**_OPTIONS)
+def _left(a, v):
+    """``np.searchsorted(a, v, side="left")``."""
+    lo, hi = 0, a.size
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if a[mid] < v:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@numba.njit(**_OPTIONS)
+def _right(a, v):
+    """``np.searchsorted(a, v, side="right")``."""
+    lo, hi = 0, a.size
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if a[mid] <= v:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@numba.njit(**_OPTIONS)
+def _right_from(a, v, hint):
+    """``np.searchsorted(a, v, side="right")`` (the count of entries ``<= v``, unique on a sorted
+    array) found from a nearby index ``hint`` by a galloping search: steps of 1, 2, 4, ... away from
+    ``hint`` until the answer is bracketed, then a binary search in the bracket. ``O(log distance)``
+    for queries that move little along ``a``."""
+    n = a.size
+    i = min(max(hint, 0), n)
+    if i > 0 and a[i - 1] > v:  # the answer is below i
+        hi, step = i, 1
+        lo = hi - step
+        while lo > 0 and a[lo - 1] > v:
+            hi = lo
+            step *= 2
+            lo = max(hi - step, 0)
+        lo = max(lo, 0)
+    else:  # the answer is at or above i
+        lo, step = i, 1
+        hi = lo + step
+        while hi <= n and a[hi - 1] <= v:
+            lo = hi
+            step *= 2
+            hi = lo + step
+        hi = min(hi, n)
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if a[mid] <= v:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@numba.njit(**_OPTIONS)
+def _displacement(s, du, rho, sign, p, norm, prefix, binom, direct, q, F, out):
+    """``d_j`` at the re-centred arc length ``q`` for feed ``F`` into ``out`` ``(d,)``: a direct sum
+    over the window's turns when it holds at most ``direct`` of them, else the prefix sums
+    (``ChainError._direct`` / ``ChainError._prefix``)."""
+    d = du.shape[1]
+    pf = float(p)  # a float exponent: C pow, as NumPy's power (an integer one compiles to multiplications)
+    for k in range(d):
+        out[k] = 0.0
+    R = F * np.max(rho)
+    first = _right(s, q - R)
+    count = _left(s, q + R) - first
+    if count <= direct:
+        for i in range(first, first + count):
+            x = abs(s[i] - q) / F if F > 0 else np.inf
+            h = 0.0
+            for r_i in range(rho.size):
+                r = max(rho[r_i] - x, 0.0)
+                h += sign[r_i] * math.pow(r, pf)
+            w = h * norm * F
+            for k in range(d):
+                out[k] += w * du[i, k]
+        return
+    at = _left(s, q)
+    for r_i in range(rho.size):
+        Rr = F * rho[r_i]
+        b = _left(s, q + Rr)
+        a = _right(s, q - Rr)
+        right, left = Rr + q, Rr - q
+        for m in range(p + 1):
+            c = sign[r_i] * binom[m]
+            cr = (-1.0) ** m * math.pow(right, pf - m)
+            cl = math.pow(left, pf - m)
+            for k in range(d):
+                pr = prefix[m, b, k] - prefix[m, at, k]
+                pl = prefix[m, at, k] - prefix[m, a, k]
+                out[k] += c * (cr * pr + cl * pl)
+    scale = (math.pow(F, 1.0 - pf) if F > 0 else 0.0) * norm
+    for k in range(d):
+        out[k] *= scale
+
+
+@numba.njit(**_OPTIONS)
+def chain_displacements(s, du, rho, sign, p, norm, prefix, binom, direct, q, F):
+    """``(J, d)`` displacements ``d_j`` at re-centred arc lengths ``q`` ``(J,)`` for feeds ``F`` ``(J,)``."""
+    out = np.zeros((q.size, du.shape[1]))
+    for j in range(q.size):
+        _displacement(s, du, rho, sign, p, norm, prefix, binom, direct, q[j], F[j], out[j])
+    return out
+
+
+@numba.njit(**_OPTIONS)
+def _error(s, du, rho, sign, p, norm, prefix, binom, direct, q, F, buf):
+    """``|d_j(F)|`` (Euclidean norm, summed in axis order as ``np.linalg.norm``)."""
+    _displacement(s, du, rho, sign, p, norm, prefix, binom, direct, q, F, buf)
+    acc = 0.0
+    for k in range(buf.size):
+        acc += buf[k] * buf[k]
+    return math.sqrt(acc)
+
+
+@numba.njit(**_OPTIONS)
+def chain_largest_feeds(s, du, rho, sign, p, norm, prefix, binom, direct, q, hi, tol, e_hi, steps, close, tiny):
+    """Largest feed ``<= hi`` with ``|d_j| <= tol`` for every query (``ChainError.largest_feed``).
+
+    Args:
+        q: ``(J,)`` re-centred arc lengths; hi, tol, e_hi: ``(J,)`` feed bound, tolerance and
+            ``|d_j(hi)|``; steps, close, tiny: the search's resolution exponent, stopping distance
+            (log ratio) and error floor (``_fir_feed``'s constants).
+
+    Returns:
+        ``(J,)`` feeds [mm/s].
+    """
+    J = q.size
+    buf = np.zeros(du.shape[1])
+    out = np.empty(J)
+    resolution = 0.5 ** steps
+    for j in range(J):
+        h, t, e = hi[j], tol[j], e_hi[j]
+        if e <= t:
+            out[j] = h
+            continue
+        if not t > 0:
+            out[j] = 0.0
+            continue
+        g_h = math.log(e / t)
+        l = h * t / e
+        e_l = _error(s, du, rho, sign, p, norm, prefix, binom, direct, q[j], l, buf)
+        if e_l > t:
+            l, g_l = 0.0, -np.inf
+        else:
+            g_l = math.log(max(e_l, tiny * t) / t)
+        width = (h - l) * resolution
+        side = 0
+        for _ in range(2 * steps):
+            if not (h - l > width and g_l < -close):
+                break
+            if l > 0:
+                xl = math.log(l)
+                x = math.exp(xl + (math.log(h) - xl) * (-g_l) / (g_h - g_l))
+            else:
+                x = 0.5 * h  # no power law through F = 0: bisect
+            if x != x:
+                x = 0.5 * (l + h)
+            guard = 0.5 * width
+            x = min(max(x, l + guard), h - guard)
+            gx = math.log(max(_error(s, du, rho, sign, p, norm, prefix, binom, direct, q[j], x, buf), tiny * t) / t)
+            if gx <= 0:
+                if side == -1:
+                    g_h = 0.5 * g_h
+                g_l, l = gx, x
+                side = -1
+            else:
+                if side == 1:
+                    g_l = 0.5 * g_l
+                g_h, h = gx, x
+                side = 1
+        out[j] = l
+    return out
+
+
+@numba.njit(**_OPTIONS)
+def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv):
+    """Trajectory samples and their squared distances to the three blocks around each (lines).
+
+    The exact profile is evaluated at ``t`` (clipped to its breaks; Horner's rule on the piece
+    found by a right search, as :class:`research.piecewise.NumpyPiecewise`), the block whose input
+    the averaging window is centred on is ``searchsorted(starts, t - T_d / 2, "right") - 1``
+    (clipped), and each sample is projected on the segments of blocks ``k - 1 .. k + 1`` (clipped
+    to the path; an arc's entry is its chord here and is replaced by the caller).
+
+    Args:
+        breaks, coeffs: ``(K + 1,)`` and ``(K, D, A)`` of the position profile.
+        t: ``(N,)`` sample times [s]; starts: ``(M,)`` block pulse starts [s]; half_window: ``T_d / 2``.
+        seg_start, seg_vec: ``(M, A)`` start and end-minus-start of each block [mm];
+            seg_inv: ``(M,)`` ``1 / |seg_vec|^2`` (0 for a zero-length block).
+
+    Returns:
+        ``(q (N, A), block (N,), d2 (N, 3))``.
+    """
+    N, K, D, A = t.size, coeffs.shape[0], coeffs.shape[1], coeffs.shape[2]
+    M = starts.size
+    q = np.empty((N, A))
+    block = np.empty(N, dtype=np.int64)
+    d2 = np.empty((N, 3))
+    b0, bK = breaks[0], breaks[K]
+    w = np.empty(A)
+    at_break, at_start = 0, 0  # search hints: the samples run forward (grid, then corner instants)
+    for i in range(N):
+        tc = min(max(t[i], b0), bK)
+        at_break = _right_from(breaks, tc, at_break)
+        piece = min(max(at_break - 1, 0), K - 1)
+        tau = tc - breaks[piece]
+        for a in range(A):
+            v = coeffs[piece, D - 1, a]
+            for m in range(D - 2, -1, -1):
+                v = v * tau + coeffs[piece, m, a]
+            q[i, a] = v
+        at_start = _right_from(starts, t[i] - half_window, at_start)
+        k = min(max(at_start - 1, 0), M - 1)
+        block[i] = k
+        for c in range(3):
+            kb = min(max(k - 1 + c, 0), M - 1)
+            dot = 0.0
+            for a in range(A):
+                w[a] = q[i, a] - seg_start[kb, a]
+                dot += w[a] * seg_vec[kb, a]
+            u = min(max(dot * seg_inv[kb], 0.0), 1.0)
+            acc = 0.0
+            for a in range(A):
+                r = w[a] - u * seg_vec[kb, a]
+                acc += r * r
+            d2[i, c] = acc
+    return q, block, d2
+
+
+@numba.njit(**_OPTIONS)
+def _derivatives(breaks, coeffs, t, out, hint):
+    """Value, first and second derivative of the profile at ``t`` into ``out`` ``(3, A)``
+    (right-searched piece from the index ``hint``, clipped time; derivatives 0 outside the breaks).
+    Returns the search's index, the hint for a nearby next time."""
+    K, D, A = coeffs.shape[0], coeffs.shape[1], coeffs.shape[2]
+    tc = min(max(t, breaks[0]), breaks[K])
+    found = _right_from(breaks, tc, hint)
+    piece = min(max(found - 1, 0), K - 1)
+    tau = tc - breaks[piece]
+    inside = breaks[0] <= t <= breaks[K]
+    for a in range(A):
+        v = coeffs[piece, D - 1, a]
+        for m in range(D - 2, -1, -1):
+            v = v * tau + coeffs[piece, m, a]
+        out[0, a] = v
+        v1 = 0.0
+        if D > 1:
+            v1 = coeffs[piece, D - 1, a] * (D - 1)
+            for m in range(D - 2, 0, -1):
+                v1 = v1 * tau + coeffs[piece, m, a] * m
+        v2 = 0.0
+        if D > 2:
+            v2 = coeffs[piece, D - 1, a] * (D - 1) * (D - 2)
+            for m in range(D - 2, 1, -1):
+                v2 = v2 * tau + coeffs[piece, m, a] * m * (m - 1)
+        out[1, a] = v1 if inside else 0.0
+        out[2, a] = v2 if inside else 0.0
+    return found
+
+
+@numba.njit(**_OPTIONS)
+def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
+    """Distance [mm] from each vertex ``(C, A)`` to the profile near ``centre`` ``(C,)`` [s]: the best
+    of ``grid`` points evenly spread over ``centre +- half_window``, refined by ``newton_steps``
+    safeguarded Newton steps on ``|p(t) - V|^2`` kept within one grid step (the compiled form of
+    ``_fir_verify._corner_distances``; never above the best grid point's distance)."""
+    C, A = vertices.shape[0], vertices.shape[1]
+    out = np.empty(C)
+    buf = np.empty((3, A))
+    step = half_window * (2.0 / (grid - 1))
+    first = 0  # search hint of each corner's first grid point (the corner instants run forward)
+    for c in range(C):
+        best, best_d2 = 0.0, np.inf
+        hint = first
+        for g in range(grid):
+            tg = centre[c] + half_window * (-1.0 + 2.0 * g / (grid - 1))
+            hint = _derivatives(breaks, coeffs, tg, buf, hint)
+            if g == 0:
+                first = hint
+            d2 = 0.0
+            for a in range(A):
+                e = buf[0, a] - vertices[c, a]
+                d2 += e * e
+            if d2 < best_d2:
+                best, best_d2 = tg, d2
+        lo, hi = best - step, best + step
+        t = best
+        for _ in range(newton_steps):
+            hint = _derivatives(breaks, coeffs, t, buf, hint)
+            slope, curvature = 0.0, 0.0
+            for a in range(A):
+                e = buf[0, a] - vertices[c, a]
+                slope += e * buf[1, a]
+                curvature += buf[1, a] * buf[1, a] + e * buf[2, a]
+            if curvature > 0:
+                t = t - slope / curvature
+            t = min(max(t, lo), hi)
+        _derivatives(breaks, coeffs, t, buf, hint)
+        d2 = 0.0
+        for a in range(A):
+            e = buf[0, a] - vertices[c, a]
+            d2 += e * e
+        out[c] = math.sqrt(min(d2, best_d2))
+    return out

@@ -1,0 +1,126 @@
+"""Compiled kernels of the FIR planner (``_fir_kernels``) against slow independent computations.
+
+References computed here: the windowed displacement ``d_j(F)`` summed term by term from its
+definition (``_fir_feed`` module docstring) with ``kernel_second_integral``; the corner distance by
+dense sampling of the exact profile; the path distance by projecting every sample on every
+segment. Nothing is compared with the planner's earlier output."""
+
+import numpy as np
+import pytest
+
+from research.interpolators import plan_fir
+from research.interpolators._fir_chain import kernel_second_integral
+from research.interpolators._fir_feed import ChainError
+from research.interpolators._fir_kernels import sampled_line_distances
+from research.interpolators._fir_verify import corner_distances, vertex_distances
+from research.paths import Polyline
+from research.piecewise import NumpyPiecewise
+
+
+def slow_displacement(s, du, delays, sq, F):
+    """``d_j(F) = F sum_i du_i H2(T_d / 2 - |s_i - s_j| / F)`` over ``|s_i - s_j| < F T_d / 2`` for
+    queries ``sq``, ``F`` ``(J,)``: every term of every turn (``H2`` from ``_fir_chain``, 0 outside
+    the window), no window search, no prefix sums. Returns ``(J, d)``."""
+    Td = float(np.sum(delays))
+    sq, F = np.atleast_1d(sq), np.atleast_1d(F)
+    r = 0.5 * Td - np.abs(s[None, :] - sq[:, None]) / F[:, None]
+    h2 = np.where(r > 0, np.asarray(kernel_second_integral(np.maximum(r, 0.0), np.asarray(delays))), 0.0)
+    return F[:, None] * (h2 @ du)
+
+
+@pytest.mark.parametrize("delays", [(0.06, 0.03), (0.05, 0.02, 0.01)])
+@pytest.mark.parametrize("span", [2000.0, 40.0])  # sparse windows (direct sums), dense ones (prefix sums)
+def test_window_displacement_matches_the_term_by_term_sum(delays, span):
+    rng = np.random.default_rng(7)
+    T = 800
+    s = np.sort(rng.uniform(0.0, span, T))
+    du = rng.normal(0.0, 0.05, (T, 3))
+    chain = ChainError(s, du, np.asarray(delays))
+    sq = rng.uniform(0.0, span, 40)
+    F = rng.uniform(5.0, 300.0, 40)
+    got = chain.displacement(sq, F)
+    want = slow_displacement(s, du, delays, sq, F)
+    scale = np.max(np.abs(want))
+    assert np.max(np.abs(got - want)) <= 1e-9 * scale
+
+
+def test_largest_feed_is_the_root_of_the_window_error():
+    """The feed found keeps ``|d_j| <= eps`` and is within the search's resolution (2^-36 of the
+    bracket, here below 1e-7 relative) of a feed that breaks it."""
+    rng = np.random.default_rng(3)
+    delays = np.array([0.06, 0.03])
+    T = 400
+    s = np.cumsum(rng.uniform(0.2, 2.0, T))
+    du = rng.normal(0.0, 0.1, (T, 3))
+    chain = ChainError(s, du, delays)
+    sq = s[rng.choice(T, 30, replace=False)]
+    hi = np.full(30, 200.0)
+    tol = rng.uniform(0.005, 0.05, 30)
+    f = chain.largest_feed(sq, hi, tol)
+    e = np.linalg.norm(slow_displacement(s, du, delays, sq, f), axis=1)
+    assert np.all(e <= tol * (1 + 1e-12))
+    below = f < 200.0
+    assert below.sum() >= 10  # the case is not trivial
+    e_up = np.linalg.norm(slow_displacement(s, du, delays, sq[below], f[below] * (1 + 1e-7)), axis=1)
+    assert np.all(e_up > tol[below])
+
+
+def zigzag(n=60, seed=0):
+    rng = np.random.default_rng(seed)
+    pts = np.cumsum(np.column_stack([rng.uniform(0.5, 3.0, n), rng.uniform(-1.5, 1.5, n), rng.uniform(-0.2, 0.2, n)]),
+                    axis=0)
+    return Polyline(pts)
+
+
+def test_vertex_distances_match_dense_sampling_and_the_jax_search():
+    path = zigzag()
+    plan = plan_fir(path, 150.0, (0.05, 0.02), 0.03, refine=False)
+    pos = NumpyPiecewise(np.asarray(plan.position.breaks), np.asarray(plan.position.coeffs))
+    half = 0.5 * 0.07
+    centre = np.asarray(plan.corner_times)
+    got = vertex_distances(pos, np.asarray(plan.vertices), centre, half)
+    jax_form = np.asarray(corner_distances(plan.position, plan.vertices, plan.corner_times, half))
+    np.testing.assert_allclose(got, jax_form, rtol=1e-12, atol=1e-15)
+    for c in range(got.size):
+        t = np.linspace(centre[c] - half, centre[c] + half, 4001)
+        dense = np.min(np.linalg.norm(pos(t) - np.asarray(plan.vertices)[c], axis=1))
+        assert got[c] <= dense * (1 + 1e-12) + 1e-15  # never above a sampled point's distance
+        # and at the minimum, to the sampling's resolution: a sample at most half a step (h) off the
+        # nearest instant is at most (F h / 2)^2 / (2 d) farther (the chord's sagitta at feed <= F)
+        h = 2 * half / 4000
+        assert got[c] >= dense - (150.0 * h / 2) ** 2 / (2 * max(got[c], 1e-6)) - 1e-12
+
+
+def test_sampled_line_distances_match_projection_on_each_segment():
+    path = zigzag(seed=1)
+    plan = plan_fir(path, 150.0, (0.05, 0.02), 0.03, refine=False)
+    pos = NumpyPiecewise(np.asarray(plan.position.breaks), np.asarray(plan.position.coeffs))
+    starts = np.asarray(plan.start_times)
+    Td = 0.07
+    t = np.concatenate([np.linspace(float(pos.breaks[0]) - 0.1, float(pos.breaks[-1]) + 0.1, 3001), np.asarray(plan.corner_times)])
+    a, b = path.points[:-1], path.points[1:]
+    ab = b - a
+    q, block, d2 = sampled_line_distances(pos.breaks, pos.coeffs, t, starts, 0.5 * Td, a, ab,
+                                          1.0 / np.einsum("kd,kd->k", ab, ab))
+    np.testing.assert_array_equal(q, pos(t))
+    M = path.n_segments
+    want_block = np.clip(np.searchsorted(starts, t - 0.5 * Td, side="right") - 1, 0, M - 1)
+    np.testing.assert_array_equal(block, want_block)
+    for c in range(3):
+        k = np.clip(block - 1 + c, 0, M - 1)
+        u = np.clip(np.sum((q - a[k]) * ab[k], axis=1) / np.sum(ab[k] ** 2, axis=1), 0.0, 1.0)
+        np.testing.assert_allclose(d2[:, c], np.sum((q - a[k] - u[:, None] * ab[k]) ** 2, axis=1), rtol=1e-9, atol=1e-16)  # rounding of coordinates ~100 mm
+
+
+def test_hinted_search_is_searchsorted_right():
+    """The kernels' galloping search from a hint gives ``np.searchsorted(a, v, "right")`` for any
+    hint, including repeated entries (zero-length pieces) and values outside the array."""
+    from research.interpolators._fir_kernels import _right_from
+
+    rng = np.random.default_rng(0)
+    for _ in range(2000):
+        n = int(rng.integers(0, 40))
+        a = np.sort(rng.integers(0, 20, n).astype(np.float64))
+        v = float(rng.integers(-2, 22)) + float(rng.choice([0.0, 0.5]))
+        hint = int(rng.integers(-3, n + 4))
+        assert _right_from(a, v, hint) == np.searchsorted(a, v, side="right")
