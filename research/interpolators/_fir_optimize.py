@@ -49,6 +49,7 @@ from research.errors import ParameterError, PathError
 from research.interpolators._fir_blocks import build_profile
 from research.interpolators._fir_chain import check_delays
 from research.interpolators._fir_limits import DEGENERATE_PIECE, LIMIT_RTOL, corner_peak_ratios, feed_caps
+from research.interpolators._fir_reorder import mode_tuples, profile_residuals, smooth_search
 from research.interpolators._fir_verify import corner_distances, path_deviations
 from research.interpolators.fir import CHECK_PERIOD, FIRPlan, _as_toolpath, _pulse_table, plan_fir
 from research.limits import AxisLimits
@@ -68,8 +69,9 @@ _FEED_FLOOR = 1e-3
 
 
 def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: AxisLimits | None = None, *,
-                 max_iter: int = 150, starts=("paper", "safe"), sample_period: float = 2e-3,
-                 check_period: float = CHECK_PERIOD, full_output: bool = False):
+                 max_iter: int = 150, starts=("smooth",), sample_period: float = 2e-3,
+                 check_period: float = CHECK_PERIOD, modes=(), residual_vibration=None, rounds: int = 6,
+                 full_output: bool = False):
     """FIR plan with per-corner overlaps and per-block feeds that minimise the cycle time.
 
     Args:
@@ -79,11 +81,18 @@ def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: 
         tolerance: cornering tolerance ``eps`` [mm], > 0.
         limits: per-axis velocity / acceleration / jerk limits [mm/s, mm/s^2, mm/s^3], or ``None``.
         max_iter: SLSQP iterations per start.
-        starts: where SLSQP starts, in turn: ``"paper"`` (eq 13/14 overlaps at ``F``, usually
-            infeasible) and / or ``"safe"`` (the fastest feasible start plan); the fastest verified
-            answer is kept (the problem is not smooth: peaks switch pieces as breaks cross).
+        starts: the searches, in turn: ``"smooth"`` (``_fir_reorder.smooth_search``: the closed-form
+            profile with its break order fixed, IPOPT, re-linearised up to ``rounds`` times, from
+            the fastest feasible start plan), and SLSQP on the exact profile from ``"paper"``
+            (eq 13/14 overlaps at ``F``, usually infeasible) and / or ``"safe"`` (the fastest
+            feasible start plan); the fastest verified answer is kept.
         sample_period: spacing [s] of the path-deviation samples inside the optimization.
         check_period: spacing [s] of the final path-deviation check (as in :func:`plan_fir`).
+        modes: structural modes ``(axis, frequency_hz, damping)`` (or objects with those fields,
+            e.g. ``research.optimal.StructuralMode``) whose residual vibration (eq V3) the
+            ``"smooth"`` search must keep within ``residual_vibration`` [mm] per mode (default: the
+            plain ``plan_fir`` plan's, on its exact profile); SLSQP runs ignore them.
+        rounds: NLP solves of the ``"smooth"`` search at most.
         full_output: also return a dict ``{"start_time", "runs", "kept", "wall_time"}``: cycle time
             of the feasible start plan [s]; per start its SLSQP iterations, message, the solver's
             own cycle time [s], the share ``backtrack`` of the step to it kept feasible (NaN: an
@@ -120,9 +129,23 @@ def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: 
     shares = np.zeros((M, n_c + 5 * M))  # h_k + t_k <= 1
     shares[np.arange(M), n_c + 3 * M + np.arange(M)] = shares[np.arange(M), n_c + 4 * M + np.arange(M)] = -1.0
     x_best, t_best, runs = x_safe, t_safe, []
+    modes = mode_tuples(modes)
+    if modes and residual_vibration is None:
+        residual_vibration = profile_residuals(plan_fir(path, float(feed), d_np, float(tolerance)).position, modes)
+    residual = None if not modes else np.broadcast_to(np.asarray(residual_vibration, dtype=np.float64), (len(modes),))
     for name in starts:
-        if name not in ("paper", "safe"):
-            raise ParameterError(f"optimize_fir starts must be 'paper' or 'safe', got {name!r}")
+        if name not in ("paper", "safe", "smooth"):
+            raise ParameterError(f"optimize_fir starts must be 'smooth', 'paper' or 'safe', got {name!r}")
+        if name == "smooth":
+            x_s, log = smooth_search(problem, x_safe, check_period, modes=modes, residual=residual, rounds=rounds)
+            run = {"start": name, "iterations": sum(r["iterations"] for r in log), "status": log[-1]["status"] if log else "",
+                   "solver_time": min((r["time"] for r in log), default=np.nan), "backtrack": np.nan, "time": t_safe,
+                   "rounds": log}
+            if x_s is not None and problem.time(x_s) < t_best:
+                x_best, t_best = x_s, problem.time(x_s)
+                run["time"] = t_best
+            runs.append(run)
+            continue
         iterates = []  # SLSQP's iterates that meet its own constraints: it may wander off later
 
         def keep(x):
