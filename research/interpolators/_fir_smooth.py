@@ -88,7 +88,7 @@ class Layout:
         points = np.asarray(points, dtype=np.float64)
         shares = np.asarray(shares, dtype=np.float64)
         if shares.ndim != 1 or np.any(shares <= 0) or abs(shares.sum() - 1.0) > 1e-12:
-            raise ParameterError(f"piece shares must be > 0 and add to 1, got {shares.tolist()}")
+            raise ParameterError(f"piece shares must be a 1-D list > 0 adding to 1, got {np.array2string(shares, threshold=8)}")
         seg = np.diff(points, axis=0)
         disp = (shares[None, :, None] * seg[:, None, :]).reshape(-1, points.shape[1])
         d = np.asarray(delays, dtype=np.float64)
