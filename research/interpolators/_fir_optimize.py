@@ -13,6 +13,13 @@ degrees of freedom are optimized together::
                dist(p(t_i), path) <= eps on samples every ``sample_period`` along the motion
                |q^(nu)_a(t)| <= limit_a,nu, nu = 1..3, on every piece of the exact profile
 
+Two searches solve it. The default, ``"smooth"`` (``_fir_reorder``, ``_fir_smooth``), writes the
+profile in closed form (each pulse filtered is a B-spline CDF) with the order of its break points
+fixed, so that every constraint above, and the residual vibration of given structural modes, is
+smooth; IPOPT solves that, the order is re-linearised at the answer a bounded number of times, and
+only answers verified on the exact profile are kept. The older SLSQP runs (``"paper"``,
+``"safe"``) work on the exact profile directly:
+
 The profile is the one ``plan_fir`` builds (``_fir_blocks.build_profile``: exact piecewise
 polynomial, differentiable in ``T_k`` and ``F_k``); peaks are exact per piece (ends, and where the
 next derivative vanishes, in closed form for up to three filters), their gradients by the envelope

@@ -49,14 +49,6 @@ def to_x(problem, layout: sm.Layout, z: np.ndarray) -> np.ndarray:
     return np.concatenate([np.clip(T, 0.0, 1.0), feeds.T.ravel(), h, t])
 
 
-def residuals(layout: sm.Layout, z: np.ndarray, modes) -> np.ndarray:
-    """Residual envelope [mm] of every mode at the plan ``z`` (S2)."""
-    S = layout.starts_matrix()
-    t_end = float(layout.end_row() @ z + layout.Td)
-    sigma, tau = S @ z, z[: layout.n_pieces]
-    return np.array([np.sqrt(sm.residual_squared(layout, tau, sigma, t_end, a, f, zt)) for a, f, zt in modes])
-
-
 def smooth_search(problem, x_start: np.ndarray, check_period: float, *, modes=(), residual=None,
                   shares=(0.25, 0.5, 0.25), rounds: int = 6, max_iter: int = 300):
     """Best verified plan of the re-linearised fixed-order NLPs.
