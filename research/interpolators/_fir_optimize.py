@@ -13,6 +13,13 @@ degrees of freedom are optimized together::
                dist(p(t_i), path) <= eps on samples every ``sample_period`` along the motion
                |q^(nu)_a(t)| <= limit_a,nu, nu = 1..3, on every piece of the exact profile
 
+Two searches solve it. The default, ``"smooth"`` (``_fir_reorder``, ``_fir_smooth``), writes the
+profile in closed form (each pulse filtered is a B-spline CDF) with the order of its break points
+fixed, so that every constraint above, and the residual vibration of given structural modes, is
+smooth; IPOPT solves that, the order is re-linearised at the answer a bounded number of times, and
+only answers verified on the exact profile are kept. The older SLSQP runs (``"paper"``,
+``"safe"``) work on the exact profile directly:
+
 The profile is the one ``plan_fir`` builds (``_fir_blocks.build_profile``: exact piecewise
 polynomial, differentiable in ``T_k`` and ``F_k``); peaks are exact per piece (ends, and where the
 next derivative vanishes, in closed form for up to three filters), their gradients by the envelope
@@ -49,6 +56,7 @@ from research.errors import ParameterError, PathError
 from research.interpolators._fir_blocks import build_profile
 from research.interpolators._fir_chain import check_delays
 from research.interpolators._fir_limits import DEGENERATE_PIECE, LIMIT_RTOL, corner_peak_ratios, feed_caps
+from research.interpolators._fir_reorder import mode_tuples, profile_residuals, smooth_search
 from research.interpolators._fir_verify import corner_distances, path_deviations
 from research.interpolators.fir import CHECK_PERIOD, FIRPlan, _as_toolpath, _pulse_table, plan_fir
 from research.limits import AxisLimits
@@ -63,13 +71,16 @@ _BACKTRACK = 12
 _MARGIN_ROUNDS = 3
 #: an SLSQP iterate within this of its own constraints is worth the exact check
 _NLP_SLACK = 1e-7
+#: paths of up to this many blocks get head / body / tail pieces in the "smooth" search
+_PIECED = 12
 #: feeds are kept above this share of the commanded feed (a positive pulse length bound)
 _FEED_FLOOR = 1e-3
 
 
 def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: AxisLimits | None = None, *,
-                 max_iter: int = 150, starts=("paper", "safe"), sample_period: float = 2e-3,
-                 check_period: float = CHECK_PERIOD, full_output: bool = False):
+                 max_iter: int = 150, starts=("smooth",), sample_period: float = 2e-3,
+                 check_period: float = CHECK_PERIOD, modes=(), residual_vibration=None, rounds: int = 6, piece_shares=None,
+                 full_output: bool = False):
     """FIR plan with per-corner overlaps and per-block feeds that minimise the cycle time.
 
     Args:
@@ -79,20 +90,34 @@ def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: 
         tolerance: cornering tolerance ``eps`` [mm], > 0.
         limits: per-axis velocity / acceleration / jerk limits [mm/s, mm/s^2, mm/s^3], or ``None``.
         max_iter: SLSQP iterations per start.
-        starts: where SLSQP starts, in turn: ``"paper"`` (eq 13/14 overlaps at ``F``, usually
-            infeasible) and / or ``"safe"`` (the fastest feasible start plan); the fastest verified
-            answer is kept (the problem is not smooth: peaks switch pieces as breaks cross).
+        starts: the searches, in turn: ``"smooth"`` (``_fir_reorder.smooth_search``: the closed-form
+            profile with its break order fixed, IPOPT, re-linearised up to ``rounds`` times, from
+            the fastest feasible start plan), and SLSQP on the exact profile from ``"paper"``
+            (eq 13/14 overlaps at ``F``, usually infeasible) and / or ``"safe"`` (the fastest
+            feasible start plan); the fastest verified answer is kept.
         sample_period: spacing [s] of the path-deviation samples inside the optimization.
         check_period: spacing [s] of the final path-deviation check (as in :func:`plan_fir`).
-        full_output: also return a dict ``{"start_time", "runs", "kept", "wall_time"}``: cycle time
+        modes: structural modes ``(axis, frequency_hz, damping)`` (or objects with those fields,
+            e.g. ``research.optimal.StructuralMode``) whose residual vibration (eq V3) the
+            ``"smooth"`` search must keep within ``residual_vibration`` [mm] per mode (default: the
+            plain ``plan_fir`` plan's, on its exact profile); SLSQP runs ignore them.
+        rounds: NLP solves of the ``"smooth"`` search at most.
+        piece_shares: fixed shares of each block's pieces in the ``"smooth"`` search (default: head,
+            body and tail of 1/4, 1/2, 1/4 on paths of up to :data:`_PIECED` blocks, one piece
+            per block beyond: the NLP grows with the number of breaks).
+        full_output: also return a dict ``{"start_time", "runs", "kept", "quiet", "wall_time"}``: cycle time
             of the feasible start plan [s]; per start its SLSQP iterations, message, the solver's
             own cycle time [s], the share ``backtrack`` of the step to it kept feasible (NaN: an
-            earlier iterate was kept) and the resulting time [s]; ``"optimized"`` or ``"plan_fir"``; wall time [s].
+            earlier iterate was kept) and the resulting time [s] (``"smooth"``: per NLP round its
+            ``time``, ``status``, ``iterations``, ``verified``, ``margin``, ``swaps``); ``"optimized"``
+            or ``"plan_fir"``; ``"quiet"``: the result meets the residual bound (True without
+            ``modes``); wall time [s].
 
     Returns:
         A :class:`FIRPlan` (``rounds`` = 0), or ``(plan, info)`` with ``full_output``; the
-        limit-holding ``plan_fir`` plan where that is faster (``info["kept"]``), so the result is
-        never slower than it.
+        limit-holding ``plan_fir`` plan where that is faster and verifies (exact peaks within the
+        limits, residual within its bound; ``info["kept"]``), so the result is never slower than
+        a verified limit-holding plan.
 
     Raises:
         PathError: ``path`` is not a Polyline.
@@ -110,6 +135,7 @@ def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: 
         raise ParameterError(f"limits have {limits.n_axes} axes but the path has {path.dim}")
     if d_np.size > 3 or (limits is not None and d_np.size < 2 and np.any(np.isfinite(limits.jerk))):
         raise ParameterError("optimize_fir with limits supports 2 or 3 filters (exact peaks; one filter gives unbounded jerk)")
+    modes = mode_tuples(modes)
     t_wall = time.perf_counter()
     problem = _Problem(path, float(feed), d_np, float(tolerance), limits, sample_period)
     x_safe, t_safe, x_start, held = problem.start(check_period)
@@ -120,9 +146,25 @@ def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: 
     shares = np.zeros((M, n_c + 5 * M))  # h_k + t_k <= 1
     shares[np.arange(M), n_c + 3 * M + np.arange(M)] = shares[np.arange(M), n_c + 4 * M + np.arange(M)] = -1.0
     x_best, t_best, runs = x_safe, t_safe, []
+    if modes and residual_vibration is None:
+        residual_vibration = profile_residuals(plan_fir(path, float(feed), d_np, float(tolerance)).position, modes)
+    residual = None if not modes else np.broadcast_to(np.asarray(residual_vibration, dtype=np.float64), (len(modes),))
+    if modes and not problem.holds(problem.plan(x_safe, check_period), modes, residual):
+        t_best = np.inf  # the start plan rings more than allowed: any quiet answer beats it
     for name in starts:
-        if name not in ("paper", "safe"):
-            raise ParameterError(f"optimize_fir starts must be 'paper' or 'safe', got {name!r}")
+        if name not in ("paper", "safe", "smooth"):
+            raise ParameterError(f"optimize_fir starts must be 'smooth', 'paper' or 'safe', got {name!r}")
+        if name == "smooth":
+            sh = piece_shares if piece_shares is not None else ((0.25, 0.5, 0.25) if M <= _PIECED else (1.0,))
+            x_s, log = smooth_search(problem, x_safe, check_period, modes=modes, residual=residual, rounds=rounds, shares=sh)
+            run = {"start": name, "iterations": sum(r["iterations"] for r in log), "status": log[-1]["status"] if log else "",
+                   "solver_time": min((r["time"] for r in log), default=np.nan), "backtrack": np.nan, "time": t_safe,
+                   "rounds": log}
+            if x_s is not None and problem.time(x_s) < t_best:
+                x_best, t_best = x_s, problem.time(x_s)
+                run["time"] = t_best
+            runs.append(run)
+            continue
         iterates = []  # SLSQP's iterates that meet its own constraints: it may wander off later
 
         def keep(x):
@@ -165,11 +207,15 @@ def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: 
         runs.append(run)
     plan = problem.plan(x_best, check_period)
     kept = "optimized"
-    if float(held.cycle_time) < float(plan.cycle_time):  # never slower than the limit-holding plan_fir
+    # never slower than the limit-holding plan_fir, where that plan holds the limits (exact peaks)
+    # and the residual bound
+    if float(held.cycle_time) < float(plan.cycle_time) and problem.holds(held, modes, residual):
         plan, kept = held, "plan_fir"
     if not full_output:
         return plan
-    return plan, {"start_time": t_safe, "runs": runs, "kept": kept, "wall_time": time.perf_counter() - t_wall}
+    quiet = not modes or bool(np.all(profile_residuals(plan.position, modes) <= residual * (1 + 1e-6) + 1e-9))
+    return plan, {"start_time": t_safe, "runs": runs, "kept": kept, "quiet": quiet,
+                  "wall_time": time.perf_counter() - t_wall}
 
 
 def _clean(x, lower, upper, n_c: int, M: int) -> np.ndarray:
@@ -272,6 +318,16 @@ class _Problem:
             if span[0] > 1.0 + LIMIT_RTOL:
                 return False
         return True
+
+    def holds(self, plan: FIRPlan, modes=(), residual=None) -> bool:
+        """``plan``'s exact per-piece peaks within the limits and, with ``modes``, its residual
+        vibration (exact profile) within ``residual``."""
+        if self.limits is not None:
+            pos_np = NumpyPiecewise(np.asarray(plan.position.breaks), np.asarray(plan.position.coeffs))
+            span = corner_peak_ratios(pos_np, np.array([float(plan.position.start)]), np.array([float(plan.position.end)]), self.limits)
+            if span[0] > 1.0 + LIMIT_RTOL:
+                return False
+        return not modes or bool(np.all(profile_residuals(plan.position, modes) <= np.asarray(residual) * (1 + 1e-6) + 1e-9))
 
     def start(self, check_period: float) -> tuple[np.ndarray, float, np.ndarray, FIRPlan]:
         """``(x_safe, its cycle time, x_start, held)``: the fastest feasible of the limit-holding
