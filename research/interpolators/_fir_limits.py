@@ -18,8 +18,9 @@ planned). Where a corner's window breaks one:
    Short blocks inside a continuous motion often peak lower than alone (no start and stop of their
    own), so blocks are never slowed up front.
 2. **Corners.** Any time at which two blocks' outputs overlap lies inside the window
-   ``[end of block k, start of block k+1 + T_d]`` of a corner with ``T_k > 0``, so with every block
-   safe alone only overlapping corners can break a limit. A corner whose window does has its overlap
+   ``[end of block k, start of block k+1 + T_d]`` of a corner with ``T_k > 0``, and every other
+   instant lies in one block's own span (checked every round), so with every block safe alone only
+   overlapping corners can break a limit. A corner whose window does has its overlap
    bisected (:class:`CornerBisection`) between 0 (two safe blocks) and its planned value.
 
 Convergence bound: a call of phase 1 builds at most ``2 + BISECTION_STEPS + HALVINGS`` exact-stop
@@ -232,6 +233,27 @@ def corner_limit_ratios(position, starts: np.ndarray, pulse_times: np.ndarray, t
         return np.zeros(0)
     ends = starts + np.asarray(pulse_times)
     return corner_peak_ratios(position, ends[:-1], starts[1:] + total_delay, limits)
+
+
+def own_span_ratios(position, starts: np.ndarray, pulse_times: np.ndarray, total_delay: float,
+                    limits: AxisLimits) -> np.ndarray:
+    """``(M,)`` largest ``peak / limit`` in the part of each block's filtered span that no corner window
+    covers, ``[start_k + T_d, end_k]`` (``[start_1, end_1]`` for the first block, ``[start_M + T_d,
+    end_M + T_d]`` for the last, the whole span for a single block) [s]; 0 where that part is empty.
+
+    Only block ``k``'s own pulse is filtered there (block ``k - 1``'s output has ended, block ``k + 1``'s
+    has not begun), so these are the block-alone peaks that the corner windows do not see: a block
+    slowed in pieces (look-ahead staircase) can break a limit inside its own span."""
+    starts = np.asarray(starts, dtype=np.float64)
+    ends = starts + np.asarray(pulse_times, dtype=np.float64)
+    lo, hi = starts + total_delay, ends.copy()
+    lo[0] = starts[0]
+    hi[-1] = ends[-1] + total_delay
+    out = np.zeros(starts.size)
+    some = hi > lo
+    if some.any():
+        out[some] = corner_peak_ratios(position, lo[some], hi[some], limits)
+    return out
 
 
 def hold_block_limits(alone_ratios: Callable[[np.ndarray], np.ndarray], safe: np.ndarray,

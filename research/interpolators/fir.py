@@ -63,6 +63,7 @@ from research.interpolators._fir_limits import (
     corner_limit_ratios,
     feed_caps,
     hold_block_limits,
+    own_span_ratios,
 )
 from research.interpolators._fir_overlap import overlap_time
 from research.interpolators._fir_verify import corner_distances, path_deviations, vertex_distances
@@ -266,14 +267,17 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                 if limits is not None and M > 1:
                     pulse_np = np.asarray(_primal(pulse))
                     ratios = corner_limit_ratios(pos_np, starts_np, pulse_np, Td_np, limits)
-                    bad = ratios > 1.0 + LIMIT_RTOL
-                    near = blocks_in_windows(bad, starts_np, pulse_np, Td_np) & ~checked
+                    own = own_span_ratios(pos_np, starts_np, pulse_np, Td_np, limits)
+                    bad, own_bad = ratios > 1.0 + LIMIT_RTOL, own > 1.0 + LIMIT_RTOL
+                    near = (blocks_in_windows(bad, starts_np, pulse_np, Td_np) | own_bad) & ~checked
                     g = hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), near) if near.any() else 1.0
                     checked |= near
                     if bad.any() and not near.any() and np.all(bisection.scale[bad] == 0.0):
                         # exact stops still above a limit (blocks checked alone before, in other
                         # windows): slow every block those windows cover, as peaks scale with feed
                         g = np.where(blocks_in_windows(bad, starts_np, pulse_np, Td_np), 0.98 / np.max(ratios[bad]), 1.0)
+                    if own_bad.any() and not near.any():  # checked alone before, above a limit again
+                        g = np.where(own_bad, 0.98 / np.maximum(own, 1.0), g)
                     if np.any(g < 1.0):  # slowed blocks: check the corners again before bisecting
                         factor *= np.reshape(g, (-1, 1))
                         too_fast = slowed = True
