@@ -201,6 +201,9 @@ class FIRConfig(_Strict):
     refine: bool = Field(True, description="short-segment rule (verified overlap)")
     limits: LimitsConfig | None = Field(None, description="axis limits the FIR also holds (plan_fir(limits=...), "
                                                           "beyond the paper; none: the paper's planner)")
+    optimized: bool = Field(False, description="per-corner overlaps and per-block feeds chosen for the least cycle "
+                                               "time (research.interpolators.optimize_fir, beyond the paper): G01 "
+                                               "paths with one feed and tolerance, eps > 0")
 
     @model_validator(mode="after")
     def _positive_delays(self):
@@ -208,6 +211,8 @@ class FIRConfig(_Strict):
         if bad:
             raise ValueError(f"delays_ms[{bad[0]}] must be > 0 ms, got {self.delays_ms[bad[0]]}")
         _plausible_units(self.feed_mm_per_s, self.delays_ms, self.sample_period_ms, "delays_ms")
+        if self.optimized and not self.tolerance_um > 0:
+            raise ValueError("optimized = true needs a cornering tolerance tolerance_um > 0 um (optimize_fir)")
         return self
 
 

@@ -28,6 +28,26 @@ def envelope(ic, n_axes: int):
     return AxisLimits.fir_envelope(n_axes, ic.feed_mm_per_s, np.asarray(ic.envelope_delays_ms) * 1e-3)
 
 
+def _optimized_fir(ic, target, feed, tolerance, limits):
+    """``optimize_fir`` on a config's path: G01 blocks with one feed and one tolerance (it takes no arcs,
+    per-block F words or G64 P tolerances: refused by name rather than replaced)."""
+    from research.errors import ConfigError
+    from research.interpolators import optimize_fir
+    from research.paths import Polyline
+    from research.paths.toolpath import ToolPath
+
+    if isinstance(target, ToolPath):
+        if np.any(target.is_arc):
+            raise ConfigError("key 'interpolator.optimized': optimize_fir takes G01 blocks; this program has arcs")
+        target = Polyline(np.vstack([target.start, target.ends]))
+    feeds, tolerances = np.unique(np.atleast_1d(feed)), np.unique(np.atleast_1d(tolerance))
+    if feeds.size > 1 or tolerances.size > 1:
+        raise ConfigError("key 'interpolator.optimized': optimize_fir takes one feed and one tolerance; this program "
+                          f"has {feeds.size} feeds and {tolerances.size} tolerances (set interpolator.feed_mm_per_s, "
+                          "give no or one G64 P)")
+    return optimize_fir(target, float(feeds[0]), np.asarray(ic.delays_ms) * 1e-3, float(tolerances[0]), limits)
+
+
 def interpolate(ic, path, program_feeds, blocks=None):
     """``(trajectory, details, plan or None)`` of one interpolator config.
 
@@ -47,8 +67,11 @@ def interpolate(ic, path, program_feeds, blocks=None):
             feed = ic.feed_mm_per_s if explicit else feeds
             tolerance = np.where(np.isfinite(g64), g64, tolerance)
         limits = None if ic.limits is None else ic.limits.axis_limits(path.dim)
-        plan = plan_fir(target, feed, np.asarray(ic.delays_ms) * 1e-3, tolerance, refine=ic.refine, limits=limits)
-        info = {"feeds": np.asarray(plan.feeds).tolist(), "overlap_times": np.asarray(plan.overlaps).tolist(),
+        if ic.optimized:
+            plan = _optimized_fir(ic, target, feed, tolerance, limits)
+        else:
+            plan = plan_fir(target, feed, np.asarray(ic.delays_ms) * 1e-3, tolerance, refine=ic.refine, limits=limits)
+        info = {"planner": "optimize_fir" if ic.optimized else "plan_fir", "feeds": np.asarray(plan.feeds).tolist(), "overlap_times": np.asarray(plan.overlaps).tolist(),
                 "corner_errors": np.asarray(plan.corner_errors).tolist()}
         return plan.trajectory(Ts), info, plan
     if ic.kind == "scurve":

@@ -32,6 +32,8 @@ def eligible(cfg: ExperimentConfig, base_dir=None) -> str | None:
         return "identification studies need the general path"
     if len(cfg.interpolators) != 1 or cfg.interpolators[0].kind != "fir":
         return "the fast path models one FIR interpolator"
+    if cfg.interpolators[0].optimized:
+        return "the optimized FIR (interpolator.optimized) needs the general path"
     if cfg.interpolators[0].limits is not None:
         return "the limit-holding FIR (interpolator.limits) needs the general path"
     if cfg.path.gcode is not None and "feed_mm_per_s" not in cfg.interpolators[0].model_fields_set:

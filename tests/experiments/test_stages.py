@@ -207,3 +207,35 @@ def test_gcode_arcs_and_g64_tolerances_are_not_sent_to_the_fast_path(tmp_path):
     assert reasons["plain.ngc"] is None
     assert "G64 P" in reasons["g64.ngc"]
     assert "arcs" in reasons["arc.ngc"]
+
+
+def test_optimized_fir_from_a_config_holds_eps_and_limits_and_is_no_slower(tmp_path):
+    """``optimized = true`` runs ``optimize_fir`` (issue 16 item 1: every interpolator from a config). On a
+    3-block G01 path under limits below the FIR envelope: the sampled trajectory keeps the limits (1e-6, as
+    ``metrics.within_limits``), every vertex is within eps of it (distance computed here from the samples),
+    and the cycle time is at most the limit-holding ``plan_fir``'s (optimize_fir keeps that plan when it is
+    faster). Arcs are refused by name."""
+    from research.interpolators import plan_fir
+    from research.limits import AxisLimits
+    from research.paths import Polyline
+
+    pts = [[0.0, 0.0], [12.0, 0.0], [16.0, 9.0], [6.0, 14.0]]
+    lim = {"velocity_mm_per_s": 180.0, "acceleration_mm_per_s2": 2500.0, "jerk_mm_per_s3": 9e4}
+    ic = {"kind": "fir", "label": "opt", "optimized": True, "feed_mm_per_s": 200.0, "delays_ms": [60.0, 30.0],
+          "tolerance_um": 100.0, "limits": lim, "sample_period_ms": 0.05}
+    _, ev = run(path={"points_mm": pts}, interpolator=ic)
+    assert ev.record["details"]["opt"]["planner"] == "optimize_fir"
+    q, v, a, j = (np.asarray(ev.arrays[f"opt.{k}"]) for k in "qvaj")
+    assert np.abs(v).max() <= 180.0 * (1 + 1e-6) and np.abs(a).max() <= 2500.0 * (1 + 1e-6)
+    assert np.abs(j).max() <= 9e4 * (1 + 1e-6)
+    vertex_gap = [np.linalg.norm(q - np.asarray(p), axis=1).min() for p in pts[1:-1]]
+    assert max(vertex_gap) <= 0.1 * (1 + 1e-3)
+    held = plan_fir(Polyline(pts), 200.0, np.array([0.06, 0.03]), 0.1,
+                    limits=AxisLimits.uniform(2, 180.0, 2500.0, 9e4))
+    t = np.asarray(ev.arrays["opt.t"])
+    assert t[-1] - t[0] <= float(held.cycle_time) + 5e-5  # one sample period
+    (tmp_path / "arc.ngc").write_text("G21 G90\nG1 X0 Y0 F6000\nG1 X40\nG3 X60 Y20 I0 J20\nM2\n")
+    cfg = validate({"name": "t", "reproduces": "-", "path": {"gcode": "arc.ngc"},
+                    "interpolator": ic | {"feed_mm_per_s": 100.0}}, tmp_path / "t.toml")
+    with pytest.raises(ConfigError, match="optimize_fir takes G01 blocks"):
+        evaluate(cfg, tmp_path)
