@@ -72,7 +72,7 @@ from research.interpolators._fir_feed import arc_feed_caps
 from research.limits import AxisLimits
 from research.metrics import limit_ratios
 from research.paths import Polyline
-from research.paths.toolpath import ToolPath
+from research.paths.library import random_program
 from research.paths.gcode import parse_gcode, to_gcode
 
 from bench_fir import TARGET_MEMORY_PER_SEGMENT, Table, peak_memory, timed, verdict  # the benchmarks' shared table and timer (same folder)
@@ -412,27 +412,6 @@ def bench_ocp(args, table: Table, t0: float, cam: Polyline) -> None:
 
 
 # -- part 3 ----------------------------------------------------------------------------------------
-def seeded_program(rng, arcs: bool) -> ToolPath:
-    """A random 2-D program of 3-9 blocks: lines of 0.02-30 mm at any turn and (``arcs``) tangent or
-    not arcs of R 1-40 mm; the distribution of ``tests/interpolators/test_fir_cam.py``."""
-    tp = ToolPath.from_polyline(Polyline([[0.0, 0.0], [rng.uniform(0.5, 30.0), 0.0]]))
-    for _ in range(int(rng.integers(2, 9))):
-        end = tp.ends[-1]
-        if not arcs or rng.random() < 0.5:
-            ang, length = rng.uniform(-np.pi, np.pi), rng.choice([0.02, 0.1, 0.5, 2.0, 10.0, 30.0])
-            tp = ToolPath(tp.start, np.vstack([tp.ends, end + length * np.array([np.cos(ang), np.sin(ang)])]),
-                          np.vstack([tp.centers, [[np.nan, np.nan]]]), np.vstack([tp.normals, [[np.nan] * 3]]),
-                          np.concatenate([tp.sweeps, [0.0]]))
-        else:
-            radius, sweep, side = rng.uniform(1.0, 40.0), rng.uniform(0.2, 3.0), rng.choice([-1.0, 1.0])
-            ang = rng.uniform(-np.pi, np.pi)
-            centre = end + radius * np.array([np.cos(ang), np.sin(ang)])
-            a0 = ang + np.pi
-            tp = tp.then_arc(centre + radius * np.array([np.cos(a0 + side * sweep), np.sin(a0 + side * sweep)]),
-                             centre, ccw=side > 0)
-    return tp
-
-
 def random_monotone(args, table: Table, t0: float) -> None:
     """Rate of random programs slower at ``RANDOM_EPS_FACTOR`` eps: plan_fir alone and plan_fir_sweep."""
     n = RANDOM_PROGRAMS_QUICK if args.quick else RANDOM_PROGRAMS
@@ -440,7 +419,7 @@ def random_monotone(args, table: Table, t0: float) -> None:
     rng = np.random.default_rng(args.seed + 7)
     rows = {False: [], True: []}
     for i in range(n):
-        tp = seeded_program(rng, arcs=i % 2 == 1)
+        tp = random_program(rng, arcs=i % 2 == 1)
         eps, feed = float(np.exp(rng.uniform(np.log(0.005), np.log(0.5)))), float(rng.uniform(20.0, 300.0))
         sw = plan_fir_sweep(tp, feed, DELAYS, (eps, RANDOM_EPS_FACTOR * eps))
         own, kept = sw.own_cycle_times, sw.cycle_times

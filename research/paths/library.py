@@ -9,6 +9,7 @@ import numpy as np
 
 from research.errors import PathError
 from research.paths.polyline import Polyline
+from research.paths.toolpath import ToolPath
 
 
 def corner90() -> Polyline:
@@ -49,3 +50,26 @@ def named_path(name: str) -> Polyline:
         return PATHS[name][0]()
     except KeyError:
         raise PathError(f"unknown path {name!r}; expected one of {sorted(PATHS)}") from None
+
+
+def random_program(rng: np.random.Generator, arcs: bool = True) -> ToolPath:
+    """A seeded random 2-D CAM-like program of 3-9 blocks [mm]: a first line of 0.5-30 mm, then lines of
+    0.02, 0.1, 0.5, 2, 10 or 30 mm at any turn and, with ``arcs``, (half the blocks) arcs of R 1-40 mm
+    sweeping 0.2-3 rad, tangent or not. The draws come from ``rng`` in a fixed order, so a seed gives the
+    same program on every run (the property tests and ``benchmarks/bench_cam.py`` share them)."""
+    tp = ToolPath.from_polyline(Polyline([[0.0, 0.0], [rng.uniform(0.5, 30.0), 0.0]]))
+    for _ in range(int(rng.integers(2, 9))):
+        end = tp.ends[-1]
+        if not arcs or rng.random() < 0.5:
+            ang, length = rng.uniform(-np.pi, np.pi), rng.choice([0.02, 0.1, 0.5, 2.0, 10.0, 30.0])
+            step = length * np.array([np.cos(ang), np.sin(ang)])
+            tp = ToolPath(tp.start, np.vstack([tp.ends, end + step]), np.vstack([tp.centers, [[np.nan, np.nan]]]),
+                          np.vstack([tp.normals, [[np.nan] * 3]]), np.concatenate([tp.sweeps, [0.0]]))
+        else:
+            radius, sweep, side = rng.uniform(1.0, 40.0), rng.uniform(0.2, 3.0), rng.choice([-1.0, 1.0])
+            ang = rng.uniform(-np.pi, np.pi)
+            centre = end + radius * np.array([np.cos(ang), np.sin(ang)])
+            a0 = ang + np.pi
+            tp = tp.then_arc(centre + radius * np.array([np.cos(a0 + side * sweep), np.sin(a0 + side * sweep)]),
+                             centre, ccw=side > 0)
+    return tp

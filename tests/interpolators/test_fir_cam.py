@@ -16,6 +16,7 @@ from research.interpolators._fir_candidates import envelope
 from research.interpolators._fir_limits import corner_peak_ratios
 from research.limits import AxisLimits
 from research.paths import Polyline
+from research.paths.library import random_program
 from research.paths.toolpath import ToolPath
 from research.piecewise import NumpyPiecewise
 
@@ -197,26 +198,6 @@ def test_property_programs_with_arcs_within_tolerance(program, eps, feed):
     assert np.linalg.norm(q[-1] - program.ends[-1]) < 1e-8
 
 
-def _seeded_program(rng, arcs: bool) -> ToolPath:
-    """Programs like :func:`random_programs` (lines only when ``arcs`` is False), drawn with NumPy from a fixed seed (the same programs on every run)."""
-    tp = ToolPath.from_polyline(Polyline([[0.0, 0.0], [rng.uniform(0.5, 30.0), 0.0]]))
-    for _ in range(int(rng.integers(2, 9))):
-        end = tp.ends[-1]
-        if not arcs or rng.random() < 0.5:
-            ang, length = rng.uniform(-np.pi, np.pi), rng.choice([0.02, 0.1, 0.5, 2.0, 10.0, 30.0])
-            step = length * np.array([np.cos(ang), np.sin(ang)])
-            tp = ToolPath(tp.start, np.vstack([tp.ends, end + step]), np.vstack([tp.centers, [[np.nan, np.nan]]]),
-                          np.vstack([tp.normals, [[np.nan] * 3]]), np.concatenate([tp.sweeps, [0.0]]))
-        else:
-            radius, sweep, side = rng.uniform(1.0, 40.0), rng.uniform(0.2, 3.0), rng.choice([-1.0, 1.0])
-            ang = rng.uniform(-np.pi, np.pi)
-            centre = end + radius * np.array([np.cos(ang), np.sin(ang)])
-            a0 = ang + np.pi
-            tp = tp.then_arc(centre + radius * np.array([np.cos(a0 + side * sweep), np.sin(a0 + side * sweep)]),
-                             centre, ccw=side > 0)
-    return tp
-
-
 def test_property_cycle_time_never_increases_over_a_tolerance_sweep():
     """The issue's property as a law: over seeded random programs (lines, and lines with arcs;
     eps log-uniform in 5-500 um, F 20-300 mm/s) the cycle time of ``plan_fir_sweep`` at eps,
@@ -226,7 +207,7 @@ def test_property_cycle_time_never_increases_over_a_tolerance_sweep():
     calls are not monotone: measured rates in benchmarks/README.md, bench_cam section.)"""
     rng = np.random.default_rng(20261202)
     for i in range(12):
-        tp = _seeded_program(rng, arcs=i % 2 == 1)
+        tp = random_program(rng, arcs=i % 2 == 1)
         eps, feed = float(np.exp(rng.uniform(np.log(0.005), np.log(0.5)))), float(rng.uniform(20.0, 300.0))
         tols = (2.25 * eps, eps, 1.5 * eps)  # any order
         sweep = plan_fir_sweep(tp, feed, DELAYS, tols)

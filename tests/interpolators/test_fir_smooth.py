@@ -10,17 +10,11 @@ from research.interpolators import _fir_smooth as sm
 from research.interpolators._fir_bound import fir_cycle_lower_bound, fir_kernel, mean_distance
 from research.interpolators._fir_reorder import profile_residuals
 from research.optimal import StructuralMode, trajectory_vibration
-from research.paths import Polyline, named_path
+from research.paths import named_path
+from tests.interpolators.test_fir_optimize import random_path  # the same seeded paths
 
 DELAYS = (0.06, 0.03)
 F, EPS = 200.0, 0.1
-
-
-def random_path(seed: int, n: int = 4) -> Polyline:
-    rng = np.random.default_rng(seed)
-    heading = np.cumsum(rng.uniform(-np.radians(110), np.radians(110), n))
-    steps = rng.uniform(4.0, 15.0, n)[:, None] * np.column_stack([np.cos(heading), np.sin(heading)])
-    return Polyline(np.vstack([[0.0, 0.0], np.cumsum(steps, axis=0)]))
 
 
 @pytest.fixture(scope="module")
