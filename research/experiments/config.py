@@ -40,7 +40,7 @@ from pathlib import Path
 from typing import Annotated, Literal, Union, get_args
 
 import numpy as np
-from pydantic import BaseModel, StrictFloat, StrictInt, ConfigDict, Discriminator, Field, Tag, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, StrictFloat, StrictInt, Discriminator, Field, Tag, ValidationError, field_validator, model_validator
 
 from research.errors import ConfigError, PathError
 from research.experiments.config_control import CONTROL_METRIC_UNITS, ControlConfig
@@ -52,6 +52,7 @@ from research.experiments.config_optimality import OPTIMALITY_METRIC_UNITS, Opti
 from research.experiments.config_path_bspline import BSplinePathConfig
 from research.experiments.stage_execution_errors import EXECUTION_ERROR_METRIC_UNITS
 from research.experiments.config_stages import (
+    _Strict,
     BlendConfig,
     ClosedLoopConfig,
     CompensationConfig,
@@ -135,12 +136,6 @@ DRIVE_MODELS = ("ideal", "sencer2009_table6_1", "sencer2009_table6_1_ppi", "senc
                 "sencer2009_table6_3", "sencer2009_table6_3_ppi", "parameters", "identified")
 #: catalog drives with one model per axis (thesis Table 6.3: axes x, y, z, a, c)
 PER_AXIS_DRIVES = {"sencer2009_table6_3": "table_6_3_closed_loop", "sencer2009_table6_3_ppi": "table_6_3_ppi"}
-
-
-class _Strict(BaseModel):
-    """Base of every table: unknown keys refused, no coercion, finite numbers only."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 
 
 class PathConfig(_Strict):

@@ -7,7 +7,9 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import Field, model_validator
+
+from research.experiments.config_stages import _Strict
 
 #: the identification methods compared: eq 6.9 as the thesis prints it, LS with the trapezoid regressor and
 #: prefilter (research.identification.least_squares defaults), PSO (§6.4) and the optimistix bounded fit
@@ -26,12 +28,6 @@ IDENTIFICATION_CH6_METRIC_UNITS = {
     "emps_fit_validation": "%",  # the same on the held-out window
     "emps_rms_validation": "mm",  # RMS of x - x_sim on the held-out window
 }
-
-
-class _Strict(BaseModel):
-    """Base of every table: unknown keys refused, no coercion, finite numbers only."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 
 
 class IdentificationCh6Config(_Strict):

@@ -7,7 +7,9 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import Field, model_validator
+
+from research.experiments.config_stages import _Strict
 
 #: the study's paths (research.experiments.optimality.STUDY_PATHS; cam30 is its seeded 30-segment CAM-like path)
 OPTIMALITY_PATHS = ("corner90", "diamond", "zigzag", "cam30")
@@ -23,12 +25,6 @@ OPTIMALITY_METRIC_UNITS = {
     "ocp_bound_ratio": "-",  # T_OCP / T_lower (the corner-cut length over F)
     "ocp_converged": "-",  # 1 when the grid refinement met rel_change
 }
-
-
-class _Strict(BaseModel):
-    """Base of every table: unknown keys refused, no coercion, finite numbers only."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 
 
 class OptimalityConfig(_Strict):

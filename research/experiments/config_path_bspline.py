@@ -14,13 +14,9 @@ Example (``experiments/figures/prevost2012_fig5_cec_bspline.toml``)::
 
 from __future__ import annotations
 
-from pydantic import BaseModel, ConfigDict, Field, StrictFloat, StrictInt, model_validator
+from pydantic import Field, StrictFloat, StrictInt, model_validator
 
-
-class _Strict(BaseModel):
-    """Base of every table: unknown keys refused, no coercion, finite numbers only."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
+from research.experiments.config_stages import _Strict
 
 
 class BSplinePathConfig(_Strict):
