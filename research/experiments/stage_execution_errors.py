@@ -29,8 +29,7 @@ def abscissa(cam_path, points) -> np.ndarray:
     if isinstance(cam_path, BSplinePath):
         return cam_path.arc_length(cam_path.project(points)[1])
     _, seg, frac = cam_path.project(points)
-    start = np.concatenate([[0.0], np.cumsum(cam_path.lengths)])
-    return start[seg] + frac * cam_path.lengths[seg]
+    return cam_path.arc_length[seg] + frac * cam_path.lengths[seg]
 
 
 def axis_reversals(curve, samples: int = 20001) -> dict[str, list[float]]:

@@ -84,13 +84,7 @@ def _right_from(a, v, hint):
             step *= 2
             hi = lo + step
         hi = min(hi, n)
-    while lo < hi:
-        mid = (lo + hi) >> 1
-        if a[mid] <= v:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
+    return lo + _right(a[lo:hi], v)  # binary search inside the bracket
 
 
 @numba.njit(**_OPTIONS)
