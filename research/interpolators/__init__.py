@@ -20,7 +20,8 @@ from research.interpolators._fir_optimize import optimize_fir
 from research.interpolators._fir_overlap import cornering_error, overlap_time
 from research.interpolators.blend import blend_interpolate, corner_blends
 from research.interpolators._fir_candidates import FIRSweep
-from research.interpolators.fir import FIRPlan, fir_by_convolution, fir_interpolate, plan_fir, plan_fir_sweep
+from research.interpolators._fir_convolution import fir_by_convolution
+from research.interpolators.fir import FIRPlan, fir_interpolate, plan_fir, plan_fir_sweep
 from research.interpolators.scurve import double_s, max_end_speed, scurve_interpolate, scurve_phases, scurve_profile
 from research.interpolators.sigmoid import (
     SigmoidMotion,

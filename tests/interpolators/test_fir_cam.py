@@ -296,7 +296,7 @@ def test_staircase_cut_follows_every_window_and_beats_every_cut_on_the_steps():
     feeds from each end): never above the feed any covering window allows (checked on a dense
     grid), and no slower than the best cut among the staircase's steps found by brute force here
     (each piece at the lowest allowed feed over it)."""
-    from research.interpolators.fir import _staircase_cut
+    from research.interpolators._fir_lookahead import staircase_cut as _staircase_cut
     rng = np.random.default_rng(5)
     length, cap = 5.0, 100.0
     xs = (np.arange(20000) + 0.5) * length / 20000

@@ -1,0 +1,256 @@
+"""Look-ahead of the FIR planner on programs of short blocks (beyond Sencer 2015).
+
+Sencer 2015 assumes every block is longer than the filter window ``T_d``; on CAM programs a
+window spans many chords. :func:`look_ahead` builds the candidate plans that ``plan_fir``
+verifies: for every vertex, either eq 13/14's dwell (a gap of ``T_d - T_k``) or full overlap at
+the largest feed whose windowed displacement (``_fir_feed``: every direction change inside the
+window, with their cancellation) stays within the tolerance; block feeds follow the staircase of
+the windows that reach into each line (:func:`line_pieces`).
+"""
+
+from __future__ import annotations
+
+import jax
+import numpy as np
+
+from research.interpolators._fir_blocks import PulseTable
+from research.interpolators._fir_chain import kernel_second_integral
+from research.interpolators._fir_feed import ChainError, range_min
+from research.interpolators._fir_overlap import overlap_time
+from research.paths.toolpath import ToolPath
+from research.piecewise import bucket_size
+
+_overlap_jit = jax.jit(overlap_time)  # eq 13/14 on concrete, padded arrays (one dispatch)
+
+
+def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in, t_out):
+    """Candidate plans, one per dwell rule, each ``(factor, head, tail, full, others, arc_rel)``:
+    feed factors ``(M, 3)`` (head, body, tail), head and tail shares ``(M,)``, full-overlap flags
+    ``(M - 1,)``, the tolerance other turns take at dwell corners ``(M - 1,)`` and the slow-down of
+    every sub-arc ``(A,)`` (a window reaching into an arc slows only the sub-arcs it covers).
+
+    The rule decides where eq 13/14's dwell may replace a slow-down: ``"budget"`` gives the dwell
+    what the other direction changes of its window leave of the tolerance at full overlap
+    (triangle inequality; right for curves cut into chords), ``"isolated"`` gives it the whole
+    tolerance (right for isolated corners and for zigzags whose neighbours dwell too). Both are
+    verified; the faster plan is kept."""
+    M = tp.n_blocks
+    Td = float(delays.sum())
+    F = F_cmd * base
+    du = t_in[1:] - t_out[:-1]
+    s_v = np.cumsum(tp.lengths)[:-1]
+    Fv = np.minimum(F[:-1], F[1:])
+    dF = np.linalg.norm(F[1:, None] * t_in[1:] - F[:-1, None] * t_out[:-1], axis=1)
+    h_full = float(kernel_second_integral(0.5 * Td, delays))
+    arc_turns = _arc_turns(tp, float(np.min(tol_v, initial=np.inf))) if tp.is_arc.any() else (np.zeros(0), np.zeros((0, tp.dim)))
+
+    def chain(keep):
+        s_t, du_t = np.concatenate([s_v[keep], arc_turns[0]]), np.concatenate([du[keep], arc_turns[1]])
+        order = np.argsort(s_t, kind="stable")
+        return ChainError(s_t[order], du_t[order], delays)
+
+    every = chain(np.ones(M - 1, dtype=bool))
+    d_all = every.displacement(s_v, Fv)
+    # what the other direction changes in the window add at full overlap: eq 13/14's dwell gets the
+    # rest of the tolerance (triangle inequality), and is valid only where some is left
+    budget = tol_v - np.linalg.norm(d_all - Fv[:, None] * du * h_full, axis=1)
+    e_all = np.linalg.norm(d_all, axis=1)
+    need = e_all > tol_v
+    f_w = Fv.copy()
+    f_w[need] = every.largest_feed(s_v[need], Fv[need], tol_v[need], e_all[need])
+    reach = Fv * every.rho.max()  # a window at a feed <= Fv sums the turns strictly inside s_v +- reach
+    memo = {}
+
+    def feeds_without(gap):
+        """Window feeds of the vertices that do not dwell, on the chain without the dwell turns:
+        only windows that reach a removed turn change (the others sum the same turns)."""
+        key = gap.tobytes()
+        if key not in memo:
+            removed = s_v[gap]
+            hit = np.searchsorted(removed, s_v + reach, side="left") > np.searchsorted(removed, s_v - reach, side="right")
+            f = f_w.copy()
+            q = np.flatnonzero(hit & ~gap)
+            if q.size:
+                f[q] = chain(~gap).largest_feed(s_v[q], Fv[q], tol_v[q])
+            memo[key] = f[~gap]
+        return memo[key]
+
+    # eq 13/14 overlaps for the two tolerances a dwell may use (one compiled call, padded shapes)
+    pad = bucket_size(M - 1, 16) - (M - 1)
+    both = np.pad(np.stack([np.maximum(budget, 0.0), tol_v]), ((0, 0), (0, pad)), constant_values=1.0)
+    Tk_budget, Tk_whole = np.asarray(_overlap_jit(both, np.tile(np.pad(dF, (0, pad), constant_values=1.0), (2, 1)), delays))[:, : M - 1]
+    out = []
+    for rule_budget, Tk, choice in ((budget, Tk_budget, "cost"), (tol_v, Tk_whole, "cost"), (tol_v, Tk_whole, "all"),
+                                    (tol_v, Tk_whole, "none")):
+        c = _dwell_rule(tp, table, F_cmd, F, Fv, f_w, need, rule_budget, Tk, delays, tol_v, s_v, feeds_without, choice)
+        if not any(np.array_equal(c[3], o[3]) and np.array_equal(c[4], o[4]) for o in out):
+            out.append(c)
+    return out
+
+
+def _dwell_rule(tp, table, F_cmd, F, Fv, f_w, need, budget, Tk, delays, tol_v, s_v, feeds_without, choice="cost"):
+    """One candidate of :func:`look_ahead` for the tolerance ``budget`` a dwell corner may use
+    (``Tk``: its eq 13/14 overlaps); ``choice`` says which vertices that need a slow-down dwell
+    instead: those where the dwell is estimated cheaper (``"cost"``), all that can (``"all"``),
+    none that need not (``"none"``)."""
+    M = tp.n_blocks
+    Td = float(delays.sum())
+    # dwell where it costs less than the slow-down: T_d - T_k against the time lost on the stretch
+    # the vertex's window slows, f T_d, or its share of the blocks when neighbouring windows join
+    L = tp.lengths
+    stretch = np.minimum(f_w * Td, 0.5 * (L[:-1] + L[1:]))
+    with np.errstate(divide="ignore"):
+        slow_cost = stretch * (1.0 / np.maximum(f_w, 1e-300) - 1.0 / Fv)
+    can = need & (budget > 0) & (Tk < Td * (1 - 1e-12))
+    gap = {"cost": can & (Td - Tk <= slow_cost), "all": can, "none": np.zeros_like(can)}[choice]
+    gap |= need & ((f_w <= 0) | (tol_v <= 0))  # no feed keeps a turn within a zero tolerance: exact stop
+    query = np.flatnonzero(~gap)
+    # without dwells the chain is every turn, whose feeds are already known
+    f = feeds_without(gap)
+    # the estimate holds a constant feed through the window: a vertex between blocks of different
+    # feeds (a line entering a slower arc) gets the lower one on both sides of it
+    slow = f < np.maximum(F[:-1], F[1:])[query] * (1 - 1e-12)
+    j, f = query[slow], f[slow]
+    lo, hi = s_v[j] - 0.5 * Td * f, s_v[j] + 0.5 * Td * f
+    cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
+    # blocks inside a window run at its feed; a window reaching into a block slows its head or tail
+    first, last = np.searchsorted(cum, lo, side="left"), np.searchsorted(cum, hi, side="right") - 2
+    body = range_min(first, last, f, M, F)
+    k_r = np.clip(np.searchsorted(cum, hi, side="right") - 1, 0, M - 1)  # block holding the window's right end
+    k_l = np.clip(np.searchsorted(cum, lo, side="right") - 1, 0, M - 1)
+    # the window spans T_d / 2 of *time* each side of its vertex: through the blocks it covers,
+    # which run at their (lower) body feeds, it reaches less far into the end block than f T_d / 2
+    t_cum = np.concatenate([[0.0], np.cumsum(L / body)])
+    reach_r = np.minimum(hi - cum[k_r], np.maximum(0.5 * Td - (t_cum[k_r] - t_cum[j + 1]), 0.0) * f)
+    reach_l = np.minimum(cum[k_l + 1] - lo, np.maximum(0.5 * Td - (t_cum[j + 1] - t_cum[k_l + 1]), 0.0) * f)
+    inside_r = (hi < cum[k_r + 1]) & (reach_r > 0)
+    inside_l = (lo > cum[k_l]) & (reach_l > 0)
+    arc = tp.is_arc
+    head, tail, piece_f = line_pieces(k_r[inside_r], reach_r[inside_r], f[inside_r], k_l[inside_l], reach_l[inside_l],
+                                       f[inside_l], L, body, F, arc)
+    factor = piece_f / F_cmd[:, None]
+    # sub-arcs a window [lo, hi] overlaps: those ending after lo and starting before hi (path order)
+    span = table.arc_span
+    a_first = np.searchsorted(span[:, 1], lo, side="right")
+    a_last = np.searchsorted(span[:, 0], hi, side="left") - 1
+    A = span.shape[0]
+    arc_f = range_min(a_first, a_last, f, A, np.full(A, np.inf)) if A else np.zeros(0)
+    arc_rel = np.minimum(arc_f / F[table.block[table.arc_pieces]], 1.0) if A else np.zeros(0)
+    return factor, head, tail, ~gap, np.where(gap, np.clip(tol_v - budget, 0.0, tol_v), 0.0), arc_rel
+
+
+def line_pieces(h_blk, h_reach, h_feed, t_blk, t_reach, t_feed, L, body, F, arc):
+    """Head, body and tail pieces of every line from the windows that reach into it.
+
+    A window reaching ``reach`` [mm] into a line from its start (``h_*``) or from its end (``t_*``)
+    needs the feed ``<= feed`` over that stretch; ``body`` caps the whole line (windows that cover
+    it). The feed the windows allow at a point of the line is a staircase: the minimum over the
+    windows that cover the point. Three pieces can follow a staircase of at most three steps
+    exactly (one window at each end, overlapping or not, or two steps at one end); otherwise the
+    pieces take the cut points, among the staircase's steps, that give the least block time
+    ``sum length / feed`` with each piece at the lowest feed it covers (never above a window's
+    feed; a staircase of end pieces, not one piece at the slowest feed of all the windows).
+
+    Returns:
+        ``(head, tail, feeds)``: head and tail shares ``(M,)`` of the block length and the feeds
+        ``(M, 3)`` [mm/s] of head, body and tail (``F`` and shares 0 on arcs and untouched lines).
+    """
+    M = L.size
+    n_h, n_t = np.bincount(h_blk, minlength=M), np.bincount(t_blk, minlength=M)
+    r_h, f_h, r_t, f_t = np.zeros(M), np.full(M, np.inf), np.zeros(M), np.full(M, np.inf)
+    np.maximum.at(r_h, h_blk, h_reach)
+    np.minimum.at(f_h, h_blk, h_feed)
+    np.maximum.at(r_t, t_blk, t_reach)
+    np.minimum.at(f_t, t_blk, t_feed)
+    b = np.minimum(body, F)
+    # one window at each end (or none): the staircase has at most three steps
+    a_cut = np.minimum(r_h, L - r_t)  # the head piece ends where the tail's reach begins, if earlier
+    b_cut = np.maximum(L - r_t, r_h)
+    head_f = np.minimum(np.where(a_cut > 0, f_h, b), b)
+    mid_f = np.minimum(b, np.minimum(np.where(r_h + r_t > L, f_h, np.inf), np.where(r_h + r_t > L, f_t, np.inf)))
+    tail_f = np.minimum(np.where(b_cut < L, f_t, b), b)
+    head, tail = a_cut / L, (L - b_cut) / L
+    feeds = np.stack([head_f, mid_f, tail_f], axis=1)
+    multi = np.flatnonzero(~arc & ((n_h > 1) | (n_t > 1)))
+    if multi.size:
+        slot = np.full(M, -1)
+        slot[multi] = np.arange(multi.size)
+        head[multi], tail[multi], feeds[multi] = staircase_cut(
+            _pad_rows(slot, h_blk, h_reach, 0.0), _pad_rows(slot, h_blk, h_feed, np.inf),
+            _pad_rows(slot, t_blk, t_reach, 0.0), _pad_rows(slot, t_blk, t_feed, np.inf), L[multi], b[multi])
+    feeds[arc] = F[arc, None]
+    head[arc], tail[arc] = 0.0, 0.0
+    # an empty end piece takes the feed of the nearest piece that is not: eq 13/14 reads a block's
+    # entry and exit feeds from its first and last pieces
+    mid = 1.0 - head - tail > 0
+    h, m, t = feeds.T
+    feeds = np.stack([np.where(head > 0, h, np.where(mid, m, t)), m, np.where(tail > 0, t, np.where(mid, m, h))], axis=1)
+    return head, tail, feeds
+
+
+def _pad_rows(slot, blk, values, fill):
+    """``(B, K)`` rows of ``values`` grouped by ``slot[blk]`` (entries whose slot is -1 dropped),
+    padded with ``fill``."""
+    s = slot[blk]
+    keep = s >= 0
+    s, v = s[keep], values[keep]
+    order = np.argsort(s, kind="stable")
+    s, v = s[order], v[order]
+    B = int(slot.max()) + 1
+    count = np.bincount(s, minlength=B)
+    rank = np.arange(s.size) - np.repeat(np.cumsum(count) - count, count)
+    out = np.full((B, max(int(count.max(initial=0)), 1)), fill)
+    out[s, rank] = v
+    return out
+
+
+def staircase_cut(r_h, f_h, r_t, f_t, length, cap):
+    """Best three pieces of lines under the staircase of their windows (see :func:`line_pieces`):
+    cut points among the steps, each piece at the minimum feed the windows allow over it.
+
+    Args:
+        r_h, f_h: ``(B, H)`` reach [mm] from each line's start and feed [mm/s] of its head windows
+            (padding: reach 0); r_t, f_t: ``(B, T)`` the same from each line's end.
+        length: ``(B,)`` line lengths [mm]; cap: ``(B,)`` feed cap of the whole line [mm/s].
+
+    Returns:
+        ``(head share (B,), tail share (B,), feeds (B, 3))``.
+    """
+    r_h, f_h, r_t, f_t = (np.atleast_2d(np.asarray(a, dtype=np.float64)) for a in (r_h, f_h, r_t, f_t))
+    length, cap = np.atleast_1d(np.asarray(length, dtype=np.float64)), np.atleast_1d(np.asarray(cap, dtype=np.float64))
+    B = length.size
+    x = np.sort(np.clip(np.concatenate([np.zeros((B, 1)), length[:, None], r_h, length[:, None] - r_t], axis=1),
+                        0.0, length[:, None]), axis=1)  # (B, n) cut candidates, duplicates allowed
+    n = x.shape[1]
+    left, right = x[:, :-1], x[:, 1:]
+    # allowed feed on each elementary interval: the windows that cover it (none on an empty one)
+    f_cov_h = np.min(np.where(r_h[:, None, :] >= right[:, :, None], f_h[:, None, :], np.inf), axis=2, initial=np.inf)
+    f_cov_t = np.min(np.where((length[:, None] - r_t)[:, None, :] <= left[:, :, None], f_t[:, None, :], np.inf), axis=2,
+                     initial=np.inf)
+    allowed = np.where(right > left, np.maximum(np.minimum(np.minimum(f_cov_h, f_cov_t), cap[:, None]), 1e-300), np.inf)
+    # low[:, i, j]: lowest allowed feed over intervals i .. j - 1 (piece from x_i to x_j)
+    low = np.full((B, n, n), np.inf)
+    for i in range(n - 1):
+        low[:, i, i + 1:] = np.minimum.accumulate(allowed[:, i:], axis=1)
+    span = x[:, None, :] - x[:, :, None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cost = np.where(span > 0, span / low, 0.0)
+    # cuts a <= c: pieces [x_0, x_a], [x_a, x_c], [x_c, x_n-1]
+    total = cost[:, 0, :, None] + cost + cost[:, None, :, n - 1]
+    total = np.where(np.triu(np.ones((n, n), dtype=bool))[None], total, np.inf)
+    best = np.argmin(total.reshape(B, -1), axis=1)
+    a, c = np.divmod(best, n)
+    rows = np.arange(B)
+    xa, xc = x[rows, a], x[rows, c]
+    feeds = np.stack([np.where(xa > 0, low[rows, 0, a], cap), np.where(xc > xa, low[rows, a, c], cap),
+                      np.where(xc < length, low[rows, c, n - 1], cap)], axis=1)
+    return xa / length, (length - xc) / length, np.minimum(feeds, cap[:, None])
+
+
+def _arc_turns(tp: ToolPath, tol: float):
+    """Arc length and direction change of the interior chord vertices of every arc block."""
+    chords, owner = tp.to_polyline(max(min(tol, 1e-2) * 1e-2, 1e-6))
+    inner = np.flatnonzero(owner[1:] == owner[:-1])  # chord vertex inside one block
+    inner = inner[tp.is_arc[owner[inner]]]
+    u = chords.directions
+    return chords.arc_length[inner + 1], u[inner + 1] - u[inner]
