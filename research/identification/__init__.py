@@ -14,7 +14,7 @@ reports, synthetic logs, the excitation program, the thesis tables and virtual d
 used (they build on :mod:`research.drives` or the interpolators).
 """
 
-import importlib
+from research._lazy import lazy_exports
 
 #: public name -> the private module defining it
 _EXPORTS = {
@@ -77,17 +77,7 @@ _EXPORTS = {
 }
 
 
-def __getattr__(name: str):
-    if name not in _EXPORTS:
-        raise AttributeError(f"module 'research.identification' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"research.identification.{_EXPORTS[name]}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_EXPORTS))
-
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
 
 __all__ = [
     "PhysicalModel",
