@@ -17,9 +17,17 @@ from pathlib import Path
 
 from research.errors import ResearchError
 
+#: ``--help`` text (the module docstring without its reST markup)
+DESCRIPTION = ("Run experiment configs (run, sweep), regenerate the paper figures (figures), check or clean the "
+               "results store (store verify|gc), tune FIR delays from an accelerometer log (tune LOG --path NAME) "
+               "and export a stored trajectory (export TRAJECTORY.npz --csv FILE --gcode FILE). Units: mm, s (the "
+               "options name theirs). An input or file-system error prints one line 'error: ...' and exits with "
+               "status 2; --debug prints the traceback as well.")
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m research", description=__doc__)
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of every subcommand (each option's help states its unit and its default)."""
+    parser = argparse.ArgumentParser(prog="python -m research", description=DESCRIPTION)
     parser.add_argument("--debug", action="store_true", help="print the traceback of an error")
     sub = parser.add_subparsers(dest="command", required=True)
 
@@ -36,7 +44,7 @@ def main(argv: list[str] | None = None) -> int:
     sw.add_argument("config", type=Path, help="experiment file with a [sweep] table, e.g. experiments/sensitivity_delays.toml")
     sw.add_argument("--cache", type=Path, default=Path(".cache/results"), help="results root (default .cache/results)")
     sw.add_argument("--figures", type=Path, default=Path("paper_figures"), help="figure folder (default paper_figures)")
-    sw.add_argument("--engine", choices=("auto", "vmap", "dask", "serial"), help="override sweep.engine")
+    sw.add_argument("--engine", choices=("auto", "vmap", "dask", "serial"), help="sweep engine (default: the config's sweep.engine, itself auto by default)")
     sw.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler (default: a LocalCluster)")
     sw.add_argument("--workers", type=int, help="LocalCluster worker processes (default: CPU count)")
     sw.add_argument("--retry-failed", action="store_true", help="recompute points stored as failures")
@@ -45,7 +53,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="results folder: <results>/<name>/ gets table.json/.npz, figure, config, report.md (default results)")
 
     figs = sub.add_parser("figures", help="regenerate the registered paper figures")
-    figs.add_argument("--only", action="append", metavar="NAME", help="only this figure (repeatable)")
+    figs.add_argument("--only", action="append", metavar="NAME", help="only this figure (repeatable; default: every registered figure)")
     figs.add_argument("--out", type=Path, default=Path("paper_figures"), help="output folder (default paper_figures)")
     figs.add_argument("--list", action="store_true", help="list the registered figures and exit")
     figs.add_argument("--cache", type=Path, default=Path(".cache/results"),
@@ -70,12 +78,13 @@ def main(argv: list[str] | None = None) -> int:
     tn.add_argument("--out", type=Path, help="config to write (default tuned_<first log stem>.toml)")
     tn.add_argument("--feed", type=float, default=250.0, help="feed F [mm/s] (default 250)")
     tn.add_argument("--tolerance-um", type=float, default=500.0, help="cornering tolerance [um] (default 500)")
-    tn.add_argument("--before-ms", type=float, nargs="+", default=[148.0, 89.0], help="delays to compare against [ms]")
-    tn.add_argument("--k", type=int, choices=(1, 2), default=1, help="eq 10 zero: 1 (shortest delay) or 2")
-    tn.add_argument("--unit", default="mm/s^2", help="acceleration unit of the log: mm/s^2 (Klipper), m/s^2 or g")
-    tn.add_argument("--time-unit", default="s", help="time unit of the log: s, ms or us")
-    tn.add_argument("--full-scale", type=float, help="sensor range in --unit (samples at it are clipping)")
-    tn.add_argument("--band", type=float, nargs=2, metavar=("LO", "HI"), help="band to search [Hz]")
+    tn.add_argument("--before-ms", type=float, nargs="+", default=[148.0, 89.0], help="delays to compare against [ms] (default 148 89: Sencer 2015 §4)")
+    tn.add_argument("--k", type=int, choices=(1, 2), default=1, help="eq 10 zero: 1 (shortest delay; default) or 2")
+    tn.add_argument("--unit", default="mm/s^2", help="acceleration unit of the log: mm/s^2 (Klipper; default), m/s^2 or g")
+    tn.add_argument("--time-unit", default="s", help="time unit of the log: s (default), ms or us")
+    tn.add_argument("--full-scale", type=float, help="sensor range [the unit of --unit] (samples at it are clipping; default none: a flat top at a "
+                    "column's extreme is flagged instead)")
+    tn.add_argument("--band", type=float, nargs=2, metavar=("LO", "HI"), help="band to search [Hz] (default: 3 PSD bins to 0.8 x Nyquist)")
     tn.add_argument("--window", choices=("boxcar", "hann"), default="boxcar",
                     help="boxcar: whole record (sweeps, tones; default); hann: Welch (random excitation)")
     tn.add_argument("--resolution-hz", type=float, help="PSD bin width [Hz] (default: 1 / record length)")
@@ -83,11 +92,16 @@ def main(argv: list[str] | None = None) -> int:
     ex = sub.add_parser("export", help="a stored trajectory (.npz, e.g. results/<name>/trajectory.npz) to CSV and/or "
                                        "a G-code stream")
     ex.add_argument("trajectory", type=Path, help="trajectory file written by a run (Trajectory.save)")
-    ex.add_argument("--csv", type=Path, help="CSV to write: t, q, v, a, j per axis, units in the header")
-    ex.add_argument("--gcode", type=Path, help="G-code stream to write: one G1 per sample at its mean speed")
-    ex.add_argument("--tolerance-um", type=float, default=0.0, help="G64 P tolerance of the stream [um] (0: G61)")
+    ex.add_argument("--csv", type=Path, help="CSV to write: t [s], q, v, a, j per axis [mm, mm/s, mm/s^2, mm/s^3], units in the header")
+    ex.add_argument("--gcode", type=Path, help="G-code stream to write: one G1 per sample, F its mean speed [mm/min]; "
+                    "coordinates in mm")
+    ex.add_argument("--tolerance-um", type=float, default=0.0, help="G64 P tolerance of the stream [um] (default 0: G61, exact path)")
 
-    args = parser.parse_args(argv)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
     try:
         return {"run": _run, "sweep": _sweep, "figures": _figures, "store": _store, "tune": _tune,
                 "export": _export}[args.command](args)

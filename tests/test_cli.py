@@ -178,3 +178,30 @@ def test_cached_run_does_not_import_jax(tmp_path):
     assert not first.cached
     again = subprocess.run([sys.executable, "-c", code % args], capture_output=True, text=True, check=True, cwd=tmp_path, env=env).stdout
     assert "found in the store" in again and "(cached)" in again and "loaded: []" in again
+
+
+def test_every_option_states_its_default_and_unit():
+    """``--help`` of every subcommand (issue: units and defaults): an option with a default says which, and a
+    float option names its unit in brackets (every float option is a physical quantity)."""
+    import argparse
+
+    from research.cli import build_parser
+
+    def parsers(p, name="python -m research"):
+        yield name, p
+        for action in p._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for sub_name, sub in action.choices.items():
+                    yield from parsers(sub, f"{name} {sub_name}")
+
+    missing = []
+    for name, p in parsers(build_parser()):
+        for action in p._actions:
+            if not action.option_strings or isinstance(action, (argparse._HelpAction, argparse._StoreTrueAction)):
+                continue
+            text = action.help or ""
+            if action.default is not None and "default" not in text:
+                missing.append(f"{name} {action.option_strings[0]}: default {action.default!r} not stated")
+            if action.type is float and "[" not in text:
+                missing.append(f"{name} {action.option_strings[0]}: no [unit]")
+    assert not missing, missing

@@ -34,6 +34,7 @@ keeps the loop in pure JAX; reported errors always come from the exact projectio
 from __future__ import annotations
 
 import dataclasses
+import functools
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -141,16 +142,25 @@ def _derivative(x: Array, Ts: float) -> Array:
     return jnp.gradient(x, Ts, axis=0)
 
 
+@functools.partial(jax.jit, static_argnames="Ts")
+def _corrected(q, v, a, j, D, Ts: float):
+    """``(q + D, v + D', a + D'', j + D''')`` in one compiled call: run eagerly, each of its seven array
+    operations was a compilation of its own, repeated in every process (each is below the compile time
+    JAX's persistent cache keeps)."""
+    D = jnp.asarray(D, dtype=jnp.float64)
+    d1 = _derivative(D, Ts)
+    d2 = _derivative(d1, Ts)
+    d3 = _derivative(d2, Ts)
+    return q + D, v + d1, a + d2, j + d3
+
+
 def corrected_setpoint(problem: CECProblem, correction) -> Trajectory:
     """The setpoint ``q + D`` with ``v + D'``, ``a + D''``, ``j + D'''`` (central differences at
     ``Ts``); absolute coordinates [mm]."""
     sp = problem.setpoint
-    D = jnp.asarray(correction, dtype=jnp.float64)
     Ts = sp.sample_period
-    d1 = _derivative(D, Ts)
-    d2 = _derivative(d1, Ts)
-    d3 = _derivative(d2, Ts)
-    return Trajectory(sp.t, sp.q + D, sp.v + d1, sp.a + d2, sp.j + d3, sp.duration, None, sp.axes, Ts)
+    q, v, a, j = _corrected(sp.q, sp.v, sp.a, sp.j, correction, Ts=float(Ts))
+    return Trajectory(sp.t, q, v, a, j, sp.duration, None, sp.axes, Ts)
 
 
 def simulate_setpoint(setpoint: Trajectory, drive, friction: str = "exact") -> DriveResponse:
@@ -191,10 +201,16 @@ def intersample_response(problem: CECProblem, correction, factor: int = 6) -> Dr
 
 def _foot(problem: CECProblem, P: Array) -> Array:
     """Closest point of the in-loop target polyline, searched in each sample's window."""
-    M = problem.target.shape[0] - 1
-    idx = jnp.clip(problem.window_start[:, None] + jnp.arange(problem.window)[None, :], 0, M - 1)
-    a = problem.target[idx]
-    ab = problem.target[idx + 1] - a
+    return _window_foot(problem.target, problem.window_start, P, window=problem.window)
+
+
+@functools.partial(jax.jit, static_argnames="window")
+def _window_foot(target: Array, window_start: Array, P: Array, window: int) -> Array:
+    """:func:`_foot` on arrays in one compiled call (run eagerly, its ~25 array operations compiled one by one)."""
+    M = target.shape[0] - 1
+    idx = jnp.clip(window_start[:, None] + jnp.arange(window)[None, :], 0, M - 1)
+    a = target[idx]
+    ab = target[idx + 1] - a
     u = jnp.clip(jnp.sum((P[:, None, :] - a) * ab, -1) / jnp.sum(ab * ab, -1), 0.0, 1.0)
     cand = a + u[..., None] * ab
     best = jnp.argmin(jnp.sum((P[:, None, :] - cand) ** 2, -1), axis=1)
@@ -226,9 +242,6 @@ def mirror_step(problem: CECProblem, correction, smoothing: int = 1) -> Array:
     excites, and the filter also bounds the jerk the correction adds."""
     D = jnp.asarray(correction, dtype=jnp.float64)
     return q_filter(D - execution_error_vector(problem, D), smoothing)
-
-
-_jitted_mirror_step = jax.jit(mirror_step, static_argnums=2)
 
 
 def _newton_residual(problem: CECProblem, correction) -> Array:
@@ -390,11 +403,11 @@ def mirror_passes(problem: CECProblem, passes: int, *, smoothing: int = 1, limit
         raise ParameterError(f"smoothing must be a window of >= 1 samples, got {smoothing!r}")
     _check_common(1.0, 1, on_violation, limits)
     t0 = time.perf_counter()
-    D = jnp.zeros_like(problem.setpoint.q)
+    D = np.zeros(np.shape(problem.setpoint.q))  # NumPy: no eager JAX operation to compile
     before = contour_error(problem.cam_path, np.asarray(simulate_correction(problem, D).position))
     history = []
     for _ in range(passes):
-        D = _jitted_mirror_step(problem, D, int(smoothing))
+        D = mirror_step(problem, D, int(smoothing))  # its parts compiled: the drive scan once, not again inside it
         history.append(contour_error(problem.cam_path, np.asarray(simulate_correction(problem, D).position)).max)
     return _finish(problem, "passes", D, passes, 1 + 2 * passes, 0, 0.0, history, t0, limits, control_limit,
                    on_violation, False, before)

@@ -2,7 +2,7 @@
 content-addressed results store, sweeps (``python -m research sweep``: ``jax.vmap`` fast path,
 Dask general path) and the closed-form differentiable FIR-cornering model the fast path uses."""
 
-import importlib
+from research._lazy import lazy_exports
 
 #: public name -> the module defining it; imported on first use (PEP 562), so that ``run`` served from the
 #: store does not import JAX through :mod:`~research.experiments.evaluate` (issue 16: a cached re-run is instant).
@@ -16,17 +16,7 @@ _EXPORTS = {
 }
 
 
-def __getattr__(name: str):
-    if name not in _EXPORTS:
-        raise AttributeError(f"module 'research.experiments' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"research.experiments.{_EXPORTS[name]}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_EXPORTS))
-
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
 
 __all__ = [
     "ExperimentConfig",

@@ -89,19 +89,24 @@ class ControlConfig(_Strict):
 
     @model_validator(mode="after")
     def _consistent(self):
-        if self.controller == "siso" and any(getattr(self, k) is not None for k in ("tip_bandwidth_rad_per_s", "tip_Ks", "tip_Gamma")):
-            raise ValueError("tip_* gains belong to controller = \"contour\"; the SISO controller takes siso_*")
         if self.controller == "siso":
+            for k in ("tip_bandwidth_rad_per_s", "tip_Ks", "tip_Gamma"):
+                if getattr(self, k) is not None:
+                    raise ValueError(f"{k} = {getattr(self, k)}: tip_* gains belong to controller = \"contour\" (thesis "
+                                     f"Table 5.3: tangential, normal, binormal); the SISO controller takes siso_* "
+                                     f"(Table 5.2: X Y Z A C)")
             for k in ("rotary_bandwidth_rad_per_s", "rotary_Ks", "rotary_Gamma"):
                 if getattr(self, k) is not None:
-                    raise ValueError(f"{k} = {getattr(self, k)}: rotary_* gains belong to controller = \"contour\"; "
-                                     f"the SISO controller takes siso_* (five axes, A and C the last two)")
+                    raise ValueError(f"{k} = {getattr(self, k)}: rotary_* gains belong to controller = \"contour\" "
+                                     f"(thesis Table 5.3, A and C); the SISO controller takes siso_* (Table 5.2: five "
+                                     f"axes X Y Z A C, A and C the last two)")
         else:
             for k in ("siso_bandwidth_rad_per_s", "siso_Ks", "siso_Gamma"):
                 if getattr(self, k) is not None:
-                    raise ValueError(f"{k} = {getattr(self, k)}: controller = \"contour\" does not use the SISO X, Y, Z "
-                                     f"gains (its tool-tip controller takes tip_*) and takes A, C as rotary_"
-                                     f"{k.removeprefix('siso_')}")
+                    raise ValueError(f"{k} = {getattr(self, k)}: controller = \"contour\" does not use the SISO gains "
+                                     f"(thesis Table 5.2, X Y Z A C): its gains are Table 5.3's, the tool-tip controller's "
+                                     f"per Frenet direction as tip_* and A, C as rotary_{k.removeprefix('siso_')}; "
+                                     f"set controller = \"siso\" or drop {k}")
         if self.controller == "siso" and any(self.orientation_weights_per_s):
             raise ValueError("orientation_weights_per_s belongs to controller = \"contour\" (the SISO loops are uncoupled)")
         if any(w < 0 for w in self.orientation_weights_per_s):

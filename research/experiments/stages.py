@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from research.experiments.config import PER_AXIS_DRIVES
+from research.experiments.config_drive import PER_AXIS_DRIVES
 from research.trajectory import Trajectory
 
 

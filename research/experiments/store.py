@@ -35,7 +35,6 @@ Example:
 
 from __future__ import annotations
 
-import errno
 import hashlib
 import io
 import json
@@ -44,60 +43,23 @@ import os
 import shutil
 import tempfile
 from dataclasses import dataclass, field
-from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 
-import research
 from research.errors import StoreError
+from research.experiments.store_io import TMP_SUFFIX, atomic_write, fsync_dir, store_error, write_synced
+from research.experiments.store_key import COSMETIC, code_version, file_digest, json_default, result_key
 
-#: fields of a config that do not change its results (not hashed)
-COSMETIC = ("name", "reproduces", "description", "output", "sweep", "paper")
-
-
-@lru_cache(maxsize=1)
-def code_version() -> str:
-    """``<package version>+<16 hex digits>``: a hash of every ``.py`` file of the ``research`` package
-    (path and bytes), so any change of code invalidates stored results."""
-    root = Path(research.__file__).resolve().parent
-    h = hashlib.sha256()
-    for f in sorted(root.rglob("*.py")):
-        h.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes() + b"\0")
-    return f"{research.__version__}+{h.hexdigest()[:16]}"
-
-
-def file_digest(path: str | Path) -> str:
-    """SHA-256 of a file's bytes (hex)."""
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
-def result_key(config: dict, inputs: dict[str, str | Path] | None = None, *, kind: str = "point") -> str:
-    """Hex SHA-256 of ``config`` (JSON, sorted keys), :func:`code_version` and the input files' bytes.
-
-    Args:
-        config: JSON-ready dictionary of everything that sets the result (no cosmetic fields).
-        inputs: ``{name: file}`` read by the computation.
-        kind: what the entry holds (``"point"``, ``"chunk"``, ...); part of the key.
-    """
-    payload = {
-        "kind": kind,
-        "config": config,
-        "code": code_version(),
-        "inputs": {k: file_digest(p) for k, p in sorted((inputs or {}).items())},
-    }
-    return hashlib.sha256(json.dumps(payload, sort_keys=True, default=_json_default).encode()).hexdigest()
-
+#: the keys (:mod:`~research.experiments.store_key`) and durable writes (:mod:`~research.experiments.store_io`)
+#: are importable from here as before
+__all__ = ["COSMETIC", "MANIFEST", "MANIFEST_FORMAT", "Entry", "Problem", "ResultStore", "atomic_write", "code_version",
+           "file_digest", "gc_store", "result_key", "verify_store"]
 
 #: name of the checksum manifest inside every entry, and its format version
 MANIFEST = "manifest.json"
 MANIFEST_FORMAT = 1
-#: suffixes of the temporary folders / files of writes in progress (removed by :func:`gc_store`)
-_TMP_SUFFIX = ".tmp"
+#: suffix of the folders of replaced bad entries, like ``TMP_SUFFIX`` removed by :func:`gc_store`
 _TRASH_SUFFIX = ".bad"
 
 log = logging.getLogger(__name__)
@@ -196,7 +158,7 @@ class ResultStore:
             StoreError: the store cannot be written (full disk, permissions); no partial entry is left.
         """
         final = self.folder(key)
-        contents = {"record.json": json.dumps(record, indent=1, default=_json_default).encode()}
+        contents = {"record.json": json.dumps(record, indent=1, default=json_default).encode()}
         if arrays:
             buf = io.BytesIO()
             np.savez(buf, **{k: np.asarray(v) for k, v in arrays.items()})
@@ -210,17 +172,17 @@ class ResultStore:
         tmp = None
         try:
             final.parent.mkdir(parents=True, exist_ok=True)
-            tmp = Path(tempfile.mkdtemp(dir=final.parent, prefix=f".{key[:12]}.", suffix=_TMP_SUFFIX))
+            tmp = Path(tempfile.mkdtemp(dir=final.parent, prefix=f".{key[:12]}.", suffix=TMP_SUFFIX))
             for name, data in contents.items():
-                _write_synced(tmp / name, data)
-            _write_synced(tmp / MANIFEST, _manifest(key, contents))
+                write_synced(tmp / name, data)
+            write_synced(tmp / MANIFEST, _manifest(key, contents))
             os.chmod(tmp, 0o755)
-            _fsync_dir(tmp)
+            fsync_dir(tmp)
             self._install(key, tmp, final)
             tmp = None
-            _fsync_dir(final.parent)
+            fsync_dir(final.parent)
         except OSError as e:
-            raise _store_error(final, e) from None
+            raise store_error(final, e) from None
         finally:
             if tmp is not None:
                 shutil.rmtree(tmp, ignore_errors=True)
@@ -293,7 +255,7 @@ def verify_store(root: str | Path) -> tuple[int, list[Problem]]:
                 problems.append(Problem(d, "not a store shard folder (stray file or folder)"))
                 continue
             for p in sorted(d.iterdir()):
-                if p.name.endswith((_TMP_SUFFIX, _TRASH_SUFFIX)):
+                if p.name.endswith((TMP_SUFFIX, _TRASH_SUFFIX)):
                     problems.append(Problem(p, "leftover of an interrupted write"))
                 elif not (p.is_dir() and _is_key(p.name) and p.name[:2] == d.name):
                     problems.append(Problem(p, "not a store entry (stray file or folder)"))
@@ -304,7 +266,7 @@ def verify_store(root: str | Path) -> tuple[int, list[Problem]]:
                     else:
                         good += 1
     except OSError as e:
-        raise _store_error(root, e, "read") from None
+        raise store_error(root, e, "read") from None
     return good, problems
 
 
@@ -331,35 +293,8 @@ def gc_store(root: str | Path, *, dry_run: bool = False, stale_code: bool = Fals
                 else:
                     p.unlink(missing_ok=True)
         except OSError as e:
-            raise _store_error(Path(root), e) from None
+            raise store_error(Path(root), e) from None
     return problems, stale
-
-
-def atomic_write(target: str | Path, data: bytes) -> Path:
-    """Write ``data`` through a temporary file in the same folder, fsync, then rename: never a half-written file.
-
-    Raises:
-        StoreError: the folder cannot be written (full disk, permissions); the temporary file is removed.
-    """
-    target = Path(target)
-    tmp = None
-    try:
-        target.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=_TMP_SUFFIX)
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, target)
-        tmp = None
-        _fsync_dir(target.parent)
-    except OSError as e:
-        raise _store_error(target.parent, e) from None
-    finally:
-        if tmp is not None:
-            Path(tmp).unlink(missing_ok=True)
-    return target
 
 
 # -- helpers -----------------------------------------------------------------------------------------
@@ -369,7 +304,7 @@ def _is_key(name) -> bool:
 
 def _check_name(folder: Path, name) -> None:
     if (not isinstance(name, str) or name in ("", ".", "..", MANIFEST, "record.json") or "/" in name
-            or "\\" in name or "\0" in name or name.endswith((_TMP_SUFFIX, _TRASH_SUFFIX))):
+            or "\\" in name or "\0" in name or name.endswith((TMP_SUFFIX, _TRASH_SUFFIX))):
         raise StoreError(f"{folder}: bad entry file name {name!r}; expected a plain file name "
                          f"other than {MANIFEST!r} and 'record.json'")
 
@@ -428,51 +363,6 @@ def _load(key: str, folder: Path) -> tuple[Entry | None, str]:
                     return None, f"record.json is not JSON ({e})"
         return Entry(key, folder, record, manifest), ""
     except OSError as e:
-        raise _store_error(folder, e, "read") from None
+        raise store_error(folder, e, "read") from None
 
 
-def _write_synced(path: Path, data: bytes) -> None:
-    with open(path, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
-
-
-def _fsync_dir(folder: Path) -> None:
-    """fsync a folder so a rename in it is durable (a no-op where folders cannot be opened)."""
-    try:
-        fd = os.open(folder, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError as e:
-        if e.errno not in (errno.EINVAL, errno.EBADF, errno.ENOTSUP):
-            raise
-    finally:
-        os.close(fd)
-
-
-def _store_error(folder: Path, e: OSError, action: str = "write") -> StoreError:
-    """A :class:`StoreError` naming ``folder`` and the cause (full disk, permissions, ...)."""
-    if isinstance(e, StoreError):
-        return e
-    hints = {errno.ENOSPC: "the disk is full", errno.EDQUOT: "the disk quota is exceeded",
-             errno.EACCES: "permission denied", errno.EPERM: "operation not permitted",
-             errno.EROFS: "read-only file system"}
-    what = hints.get(e.errno, e.strerror or str(e))
-    where = f" ({e.filename})" if e.filename and str(e.filename) != str(folder) else ""
-    if action == "read":
-        return StoreError(f"{folder}: cannot read the results store: {what}{where} (fix permissions, or pass --cache DIR)")
-    return StoreError(f"{folder}: cannot write: {what}{where}; nothing partial was left "
-                      "(free space or fix permissions, or pass --cache DIR)")
-
-
-def _json_default(x):
-    if isinstance(x, np.ndarray) or hasattr(x, "__array__"):
-        return np.asarray(x).tolist()
-    if isinstance(x, (np.floating, np.integer, np.bool_)):
-        return x.item()
-    if isinstance(x, Path):
-        return str(x)
-    raise TypeError(f"not JSON serializable: {type(x).__name__}")

@@ -30,7 +30,8 @@ def field_label(field: str, cfg) -> str:
     """
     import re
 
-    from research.experiments.config import ExperimentConfig, _models_in
+    from research.experiments.config import ExperimentConfig
+    from research.experiments.config_messages import models_in
     from research.experiments.sweep_points import parse_field
 
     try:
@@ -56,7 +57,7 @@ def field_label(field: str, cfg) -> str:
             return field
         desc = field_info.description
         node = getattr(node, part, None)
-        models = _models_in(field_info.annotation) or models
+        models = models_in(field_info.annotation) or models
     if not desc:
         return field
     desc = re.sub(r"\s*\([^()]*\)$", "", desc)  # a trailing remark: "damping ratio [-] (2 %: ...)"

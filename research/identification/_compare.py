@@ -16,12 +16,20 @@ import numpy as np
 
 from research.errors import ParameterError
 from research.identification._log import DriveLog
-from research.identification._report import fit_percent
 from research.identification._result import IdentifiedDrive
 from research.identification._structure_fit import StructureFit
 
 #: two-sided 99 % normal quantile of the residual tests
 Z99 = 2.5758293035489
+
+
+def fit_percent(y, y_hat) -> float:
+    """``100 (1 - ||y - y_hat|| / ||y - mean(y)||)`` [%] (100 = perfect, 0 = as good as the mean, can be < 0)."""
+    y, y_hat = np.asarray(y, dtype=np.float64), np.asarray(y_hat, dtype=np.float64)
+    den = np.linalg.norm(y - y.mean())
+    if den == 0:
+        raise ParameterError("fit_percent: the measured signal is constant, the fit is undefined")
+    return float(100.0 * (1.0 - np.linalg.norm(y - y_hat) / den))
 
 
 def simulate_model(model, log: DriveLog, *, initial: str = "data", force=None) -> tuple[np.ndarray | None, str | None]:

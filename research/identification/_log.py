@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -36,7 +37,9 @@ from research.identification._log_units import (
     convert_position,
     time_factor,
 )
-from research.trajectory import Trajectory
+
+if TYPE_CHECKING:
+    from research.trajectory import Trajectory
 
 __all__ = ["ANGLE_UNITS", "LENGTH_UNITS", "POSITION_UNITS", "TIME_UNITS", "DriveLog", "Plausibility", "load_axis_logs",
            "load_drive_log", "save_drive_log", "_numeric", "_read_table"]
@@ -229,6 +232,8 @@ class DriveLog:
     def reference_trajectory(self) -> Trajectory:
         """The reference as a one-axis :class:`Trajectory` on the uniform grid ``k Ts`` (time from 0);
         derivatives by second-order finite differences (``Trajectory.from_positions``)."""
+        from research.trajectory import Trajectory  # imports JAX: only here, a log loads without it
+
         t = np.arange(self.n_samples) * self.sample_period
         return Trajectory.from_positions(t, self.reference[:, None], axes=("x",))
 

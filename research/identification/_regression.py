@@ -29,14 +29,17 @@ of ``a3/a2 Ts/2`` (2.6 % for Table 6.1) that moves the real pole; tested in ``te
 from __future__ import annotations
 
 import dataclasses
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
 from scipy.signal import butter, sosfiltfilt
 
-from research.drives import ClosedLoopModel
 from research.errors import DriveLogError, ParameterError
 from research.identification._log import DriveLog
+
+if TYPE_CHECKING:
+    from research.drives import ClosedLoopModel
 
 #: names of the columns of Phi (eq 6.9), in order; the parameter of each is in :data:`PARAMETERS`
 COLUMNS = ("e", "-x''", "-x'", "x_r''", "x_r'", "x_r", "-sign(x')")

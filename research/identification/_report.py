@@ -10,19 +10,10 @@ from pathlib import Path
 import numpy as np
 
 from research.drives import frequency_response, pole_zero_report
-from research.errors import ParameterError
+from research.identification._compare import fit_percent
 from research.identification._log import DriveLog
 from research.identification._output_error import simulate_log
 from research.identification._result import IdentifiedDrive
-
-
-def fit_percent(y, y_hat) -> float:
-    """``100 (1 - ||y - y_hat|| / ||y - mean(y)||)`` [%] (100 = perfect, 0 = as good as the mean, can be < 0)."""
-    y, y_hat = np.asarray(y, dtype=np.float64), np.asarray(y_hat, dtype=np.float64)
-    den = np.linalg.norm(y - y.mean())
-    if den == 0:
-        raise ParameterError("fit_percent: the measured signal is constant, the fit is undefined")
-    return float(100.0 * (1.0 - np.linalg.norm(y - y_hat) / den))
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

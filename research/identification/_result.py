@@ -3,15 +3,18 @@
 from __future__ import annotations
 
 import dataclasses
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from research.drives import ClosedLoopModel
 from research.errors import ParameterError
 from research.identification._regression import (
     coefficients_from_theta,
     theta_from_coefficients,
 )
+
+if TYPE_CHECKING:
+    from research.drives import ClosedLoopModel
 
 COEFFICIENTS = ("a1", "a2", "a3", "b0", "b1", "b2", "dc")
 
@@ -109,6 +112,8 @@ class IdentifiedDrive:
                 f"{self.method} fit of {self.source} has negative Coulomb friction dc = {c['dc']:.6g} mm/s^2; "
                 "it is not a physical eq 6.3 model"
             )
+        from research.drives import ClosedLoopModel  # imports JAX: only here, a fit is made and read without it
+
         return ClosedLoopModel(*(c[k] for k in COEFFICIENTS))
 
     def to_dict(self) -> dict:

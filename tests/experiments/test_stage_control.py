@@ -22,14 +22,16 @@ def config(**control):
 @pytest.mark.parametrize("control, message", [
     ({"controler": "siso"}, r"key 'control.controler': unknown key \(typo\? did you mean 'controller'\?\)"),
     ({"controller": "pid"}, r"key 'control.controller'"),
-    ({"controller": "siso", "tip_Ks": [1.0, 1.0, 1.0]}, r"tip_\* gains belong to controller = \"contour\""),
+    ({"controller": "siso", "tip_Ks": [1.0, 1.0, 1.0]}, r"key 'control.tip_Ks': .*tip_\* gains belong to controller = \"contour\" \(thesis Table 5.3"),
     ({"controller": "siso", "orientation_weights_per_s": [3.0, 3.0]}, r"orientation_weights_per_s belongs to"),
     ({"siso_Ks": [1.0, 2.0]}, r"key 'control.siso_Ks'"),
     ({"orientation_weights_per_s": [-1.0, 0.0]}, r"W must be >= 0"),
     ({"amplifier_limit_V": 10.0, "mirror_passes": 1}, r"amplifier_limit_V with mirror_passes > 0"),
     ({"feed_mm_per_s": "50 mm/s"}, r"key 'control.feed_mm_per_s'"),
     # the contour controller does not use the SISO X, Y, Z gains: setting siso_* with it names the key
-    ({"siso_Ks": [7.0, 5.0, 5.0, 0.5, 1.0]}, r"key 'control.siso_Ks': .*controller = \"contour\" does not use"),
+    # (thesis Table 5.2 lists the SISO gains per axis X Y Z A C, Table 5.3 the contour controller's per Frenet direction and A, C)
+    ({"siso_Ks": [7.0, 5.0, 5.0, 0.5, 1.0]}, r"key 'control.siso_Ks': .*controller = \"contour\" does not use the SISO gains \(thesis Table 5.2"),
+    ({"controller": "contour", "siso_Gamma": [25.0, 30.0, 15.0, 3.0, 3.0]}, r"key 'control.siso_Gamma': .*rotary_Gamma"),
     ({"controller": "contour", "siso_bandwidth_rad_per_s": [200.0] * 5}, r"key 'control.siso_bandwidth_rad_per_s'"),
     ({"controller": "siso", "rotary_Ks": [0.5, 1.0]}, r"key 'control.rotary_Ks': .*rotary_\* gains belong to"),
     # cases: each merged with the table and validated again, the case and key named
