@@ -151,8 +151,7 @@ def _moving_average(breaks, coeffs, delay):
         C[K, 0, a] = v
     n = 2 * (K + 1)
     new_breaks = np.empty(n)
-    out = np.zeros((n - 1, D + 1, A))
-    scratch = np.empty((D + 1, A))
+    now, before = np.empty(n - 1, np.int64), np.empty(n - 1, np.int64)
     i, j = 0, 0  # breaks of C(t) taken, breaks of C(t - T) taken (ties: C(t) first)
     for p in range(n):
         if j > K or (i <= K and breaks[i] <= breaks[j] + delay):
@@ -161,14 +160,21 @@ def _moving_average(breaks, coeffs, delay):
         else:
             new_breaks[p] = breaks[j] + delay
             j += 1
-        if p == n - 1:
-            break
+        if p < n - 1:
+            # piece i - 1 of C holds the new piece at t, piece j - 1 at t - T (-1: before breaks[0],
+            # where C is zero; K: after breaks[K], where C holds its end value)
+            now[p], before[p] = i - 1, j - 1
+    out = np.zeros((n - 1, D + 1, A))
+    scratch = np.empty((D + 1, A))
+    for p in range(n - 1):
         left = new_breaks[p]
-        # piece i - 1 of C holds the new piece at t, piece j - 1 at t - T (-1: before breaks[0],
-        # where C is zero; K: after breaks[K], where C holds its end value)
-        _add_shifted(C, i - 1, left - breaks[i - 1], 1.0, out, p, scratch)
-        if j >= 1:
-            _add_shifted(C, j - 1, (left - delay) - breaks[j - 1], -1.0, out, p, scratch)
+        if new_breaks[p + 1] == left:
+            # an empty piece: never evaluated (a right search takes the next piece), integrates to
+            # 0, and the pieces of the next filter that take it from here are empty too
+            continue
+        _add_shifted(C, now[p], left - breaks[now[p]], 1.0, out, p, scratch)
+        if before[p] >= 0:
+            _add_shifted(C, before[p], (left - delay) - breaks[before[p]], -1.0, out, p, scratch)
         for m in range(D + 1):
             for a in range(A):
                 out[p, m, a] = out[p, m, a] / delay

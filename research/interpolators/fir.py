@@ -69,7 +69,7 @@ from research.interpolators._fir_limits import (
 from research.interpolators._fir_lookahead import look_ahead
 from research.interpolators import _fir_profile
 from research.interpolators._fir_overlap import overlap_time
-from research.interpolators._fir_verify import corner_distances, path_deviations, vertex_distances
+from research.interpolators._fir_verify import RoundChecks, corner_distances
 from research.limits import AxisLimits
 from research.paths.polyline import Polyline
 from research.paths.toolpath import ToolPath
@@ -235,8 +235,9 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         gaps = np.concatenate([Td_np - overlaps, np.zeros(Mp - M + 1)])
         starts, ends, breaks, coeffs, centre = _fir_profile.profile(tp.start, table.geo, table.block, table.gap, frac,
                                                                     piece_tv, gaps, d_np)
+        durations = np.where(table.gap, np.append(gaps, 0.0)[table.block], frac * piece_tv)  # of the input pieces
         return (F_np * cruise, overlaps, ends[:M] - starts[:M], starts[:M], NumpyPiecewise(breaks, coeffs),
-                centre[: M - 1], (factor.copy(), head, tail, full, shrink.copy(), others, arc_rel))
+                centre[: M - 1], (factor.copy(), head, tail, full, shrink.copy(), others, arc_rel), durations)
 
     def traced_plan(factor, head, tail, full, shrink, others, arc_rel):
         """The JAX form of :func:`schedule` (differentiable through ``feed``, ``delays``, ``tolerance``)."""
@@ -264,9 +265,10 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         bracket's upper end (:attr:`CornerBisection.bound_scale`), above which it never ends."""
         factor, shrink = factor.copy(), np.ones(M - 1)
         bisection, checked, repaired = CornerBisection(M - 1), np.zeros(M, dtype=bool), False
+        checks = RoundChecks(tp, tb_np, table.block, Td_np, check_period)  # redone only where the profile changed
 
         def alone(g):  # ``_fir_limits`` phase 1: each block's own peaks (every corner an exact stop)
-            _, _, pulse, starts, position, _, _ = schedule(factor * g[:, None], head, tail, full, np.zeros(M - 1), others,
+            _, _, pulse, starts, position, *_ = schedule(factor * g[:, None], head, tail, full, np.zeros(M - 1), others,
                                                          arc_rel)
             return block_peak_ratios(position, starts, pulse, Td_np, limits)
 
@@ -281,7 +283,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             max_rounds = MAX_ROUNDS + (2 * M if limits is not None else 0)
             tol_due = True  # the tolerance state changed since the last tolerance check
             for rounds in range(1, max_rounds + 1):
-                _, _, pulse_np, starts_np, pos_np, centre_np, _ = state
+                _, _, pulse_np, starts_np, pos_np, centre_np, _, durations = state
                 too_fast, slowed = False, False
                 if limits is not None and M > 1:
                     ratios = corner_limit_ratios(pos_np, starts_np, pulse_np, Td_np, limits)
@@ -314,11 +316,10 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                 # nondecreasing in A and B), while windows of three or more blocks and arcs have no
                 # such proof -- hence the final check rather than trusting it.
                 if tol_due or not too_fast:
-                    if refine and M > 1:
-                        errors = vertex_distances(pos_np, tp.vertices, centre_np, 0.5 * Td_np)
+                    if refine:
+                        errors, deviation, at_vertex, at_block = checks(pos_np, starts_np, centre_np, durations, M > 1)
                     viol = errors > limit_v
                     if refine:
-                        deviation, at_vertex, at_block = path_deviations(pos_np, tp, starts_np, centre_np, Td_np, tb_np, check_period)
                         for j, e in at_vertex.items():
                             viol[j], errors[j] = True, max(errors[j], e)
                         for k, e in at_block.items():
