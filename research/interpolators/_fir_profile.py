@@ -52,8 +52,8 @@ def overlaps(tolerance: np.ndarray, speed_change: np.ndarray, delays: np.ndarray
     if d.size > 2:
         m = dF.size
         pad = bucket_size(m, 16) - m
-        out = _overlap_jit(np.pad(tol, (0, pad), constant_values=1.0), np.pad(dF, (0, pad), constant_values=1.0), d)
-        return np.asarray(out)[:m]
+        out = _overlap_jit(np.pad(tol.ravel(), (0, pad), constant_values=1.0), np.pad(dF.ravel(), (0, pad), constant_values=1.0), d)
+        return np.asarray(out)[:m].reshape(dF.shape)
     Td = float(d.sum())
     turning = dF > 0
     h_full = kernel_second_integral(np.array(0.5 * Td), d)

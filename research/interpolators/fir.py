@@ -185,10 +185,14 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     _check_inputs(delays, feed, tolerance, M)
     table = _pulse_table(tp)
     Mp = table.m_pad
-    delays = jnp.asarray(delays, dtype=jnp.float64).reshape(-1)
-    feeds_cmd = jnp.broadcast_to(jnp.asarray(feed, dtype=jnp.float64), (M,))
-    tol_block = jnp.broadcast_to(jnp.asarray(tolerance, dtype=jnp.float64), (M,))
-    tol_vertex = jnp.minimum(tol_block[:-1], tol_block[1:])
+    # the rounds decide on concrete arrays (``_fir_profile``: NumPy and Numba, no JAX dispatch); the
+    # plan returned is rebuilt with JAX only where an input is a tracer (its differentiable form)
+    traced = any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves((delays, feed, tolerance)))
+    xp = jnp if traced else np
+    delays = xp.asarray(delays, dtype=np.float64).reshape(-1)
+    feeds_cmd = xp.broadcast_to(xp.asarray(feed, dtype=np.float64), (M,))
+    tol_block = xp.broadcast_to(xp.asarray(tolerance, dtype=np.float64), (M,))
+    tol_vertex = xp.minimum(tol_block[:-1], tol_block[1:])
     d_np, F_np, tb_np = (np.asarray(_primal(x), dtype=np.float64) for x in (delays, feeds_cmd, tol_block))
     tv_np = np.minimum(tb_np[:-1], tb_np[1:])
     Td_np = float(d_np.sum())
@@ -204,9 +208,6 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     head, tail = np.zeros(M), np.zeros(M)
     full = np.zeros(M - 1, dtype=bool)
     others = np.zeros(M - 1)  # tolerance taken by the other direction changes of a dwell corner's window
-    # the rounds decide on concrete arrays (``_fir_profile``: NumPy and Numba, no JAX dispatch); the
-    # plan returned is rebuilt with JAX only where an input is a tracer (its differentiable form)
-    traced = any(isinstance(x, jax.core.Tracer) for x in (delays, feeds_cmd, tol_block))
     lengths_np = np.concatenate([tp.lengths, np.ones(Mp - M + 1)])
     feeds_np = np.concatenate([F_np, np.ones(Mp - M + 1)])
     pad_b = Mp - M  # per-block inputs padded to the bucketed block count (one compiled JAX kernel)
@@ -398,7 +399,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     else:
         feeds, overlaps, pulse, starts, centre = (jnp.asarray(state[i]) for i in (0, 1, 2, 3, 5))
         position = PiecewisePolynomial(jnp.asarray(state[4].breaks), jnp.asarray(state[4].coeffs))
-    return FIRPlan(starts, pulse, overlaps, feeds, delays, position, centre, jnp.asarray(tp.vertices),
+    return FIRPlan(starts, pulse, overlaps, feeds, jnp.asarray(delays), position, centre, jnp.asarray(tp.vertices),
                    float(deviation), int(rounds), tp.axes)
 
 
