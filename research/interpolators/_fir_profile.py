@@ -104,8 +104,9 @@ def _antiderivative(breaks, coeffs, initial):
     hp = np.empty(D)
     for i in range(K):
         h = breaks[i + 1] - breaks[i]
-        for m in range(D):
-            hp[m] = math.pow(h, m + 1.0)
+        hp[0] = h
+        for m in range(1, D):
+            hp[m] = hp[m - 1] * h  # h^(m + 1) by products (a C pow costs tens of ns)
         for a in range(A):
             s = 0.0
             for m in range(D):
@@ -197,10 +198,12 @@ def _profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
             dur = fraction[i] * piece_tv[i]
         acc += dur
         breaks[i + 1] = max(breaks[i], acc)  # cummax of the running sum
-        for m in range(D):
-            s = math.pow(piece_tv[i], -(m + 1.0))  # d/dt = (1 / T_v) d/du
+        inv = 1.0 / piece_tv[i]
+        s = inv
+        for m in range(D):  # d/dt = (1 / T_v) d/du: the u'^m coefficient over T_v^(m + 1)
             for a in range(A):
                 coeffs[i, m, a] = 0.0 if gap[i] else geo[i, m, a] * s
+            s *= inv
     vb, vc = breaks, coeffs
     for k in range(delays.size):
         vb, vc = _moving_average(vb, vc, delays[k])
