@@ -162,7 +162,7 @@ class RoundChecks:
     def __init__(self, path: ToolPath, tol_block: np.ndarray, piece_block: np.ndarray, Td: float, check_period: float):
         self.path, self.tol, self.Td, self.period = path, tol_block, Td, check_period
         self.piece_block = np.minimum(piece_block, path.n_blocks - 1)
-        self.durations = None
+        self.durations, self.samples = None, 0
 
     def __call__(self, position: NumpyPiecewise, starts: np.ndarray, centre: np.ndarray, durations: np.ndarray,
                  vertex_errors: bool):
@@ -195,6 +195,7 @@ class RoundChecks:
         if vertex_errors and err_v.any():
             self.errors[err_v] = vertex_distances(position, path.vertices[err_v], centre[err_v], half)
         redo = np.concatenate([redo_v, redo_b])
+        self.samples = 0  # path samples taken by this check
         if redo.any():
             s_lo, s_hi = _merged(np.concatenate([lo_v[redo_v], lo_b[redo_b]]), np.concatenate([hi_v[redo_v], hi_b[redo_b]]))
             first = np.maximum(np.ceil((s_lo - t0) / self.period), 0).astype(np.int64)
@@ -204,6 +205,7 @@ class RoundChecks:
             grid = np.repeat(first - np.cumsum(count) + count, count) + np.arange(count.sum())
             t = np.concatenate([t0 + grid * self.period, centre[redo_v[: M - 1]], [t1]])
             dist, key, bad = _charged_samples(position, path, np.clip(t, t0, t1), starts, centre, self.Td, self.tol)
+            self.samples = t.size
             fresh = redo[key]
             self.worst[redo], self.bad[redo] = -np.inf, -np.inf
             scatter_max(self.worst, key[fresh], dist[fresh])

@@ -124,3 +124,15 @@ def test_hinted_search_is_searchsorted_right():
         v = float(rng.integers(-2, 22)) + float(rng.choice([0.0, 0.5]))
         hint = int(rng.integers(-3, n + 4))
         assert _right_from(a, v, hint) == np.searchsorted(a, v, side="right")
+
+
+def test_scatter_max_is_numpys_maximum_at():
+    from research.interpolators._fir_kernels import scatter_max
+
+    rng = np.random.default_rng(1)
+    index, values = rng.integers(0, 50, 3000), rng.normal(size=3000)
+    want = np.full(60, -np.inf)
+    np.maximum.at(want, index, values)
+    got = np.full(60, -np.inf)
+    scatter_max(got, index, values)
+    np.testing.assert_array_equal(got, want)
