@@ -137,9 +137,10 @@ def _add_shifted(src, k, delta, sign, out, p, c):
 
 @numba.njit(**_OPTIONS)
 def _moving_average(breaks, coeffs, delay):
-    """``PiecewisePolynomial.moving_average`` (Sencer 2015 eq 1): breaks ``(2K + 2,)`` and
-    coefficients ``(2K + 1, D + 1, A)`` of ``(C(t) - C(t - T)) / T``, ``C`` the antiderivative of a
-    function that is zero outside its breaks."""
+    """``PiecewisePolynomial.moving_average`` (Sencer 2015 eq 1): breaks ``(K' + 1,)`` and
+    coefficients ``(K', D + 1, A)`` of ``(C(t) - C(t - T)) / T``, ``C`` the antiderivative of a
+    function that is zero outside its breaks, on the ``K' <= 2K + 1`` pieces of positive length of
+    the merge of ``b`` and ``b + T`` (the JAX form keeps the empty ones too)."""
     K, D, A = coeffs.shape
     # C and, as row K, its end value after its last break (Horner on the last piece)
     C = np.zeros((K + 1, D + 1, A))
@@ -165,21 +166,33 @@ def _moving_average(breaks, coeffs, delay):
             # piece i - 1 of C holds the new piece at t, piece j - 1 at t - T (-1: before breaks[0],
             # where C is zero; K: after breaks[K], where C holds its end value)
             now[p], before[p] = i - 1, j - 1
-    out = np.zeros((n - 1, D + 1, A))
-    scratch = np.empty((D + 1, A))
+    # keep the pieces of positive length only: an empty one is never evaluated (a right search
+    # takes the next piece), integrates to 0, and the next filter's pieces that would take their
+    # coefficients from it are empty too; the breaks are the same values, the function the same
+    keep = np.zeros(n - 1, np.bool_)
     for p in range(n - 1):
-        left = new_breaks[p]
-        if new_breaks[p + 1] == left:
-            # an empty piece: never evaluated (a right search takes the next piece), integrates to
-            # 0, and the pieces of the next filter that take it from here are empty too
+        keep[p] = new_breaks[p + 1] > new_breaks[p]
+    count = max(int(keep.sum()), 1)
+    if not keep.any():
+        keep[0] = True
+    out = np.zeros((count, D + 1, A))
+    out_breaks = np.empty(count + 1)
+    out_breaks[0] = new_breaks[0]
+    scratch = np.empty((D + 1, A))
+    q = 0
+    for p in range(n - 1):
+        if not keep[p]:
             continue
-        _add_shifted(C, now[p], left - breaks[now[p]], 1.0, out, p, scratch)
+        left = new_breaks[p]
+        out_breaks[q + 1] = new_breaks[p + 1]
+        _add_shifted(C, now[p], left - breaks[now[p]], 1.0, out, q, scratch)
         if before[p] >= 0:
-            _add_shifted(C, before[p], (left - delay) - breaks[before[p]], -1.0, out, p, scratch)
+            _add_shifted(C, before[p], (left - delay) - breaks[before[p]], -1.0, out, q, scratch)
         for m in range(D + 1):
             for a in range(A):
-                out[p, m, a] = out[p, m, a] / delay
-    return new_breaks, out
+                out[q, m, a] = out[q, m, a] / delay
+        q += 1
+    return out_breaks, out
 
 
 @numba.njit(**_OPTIONS)

@@ -22,6 +22,7 @@ from research.interpolators._fir_kernels import sampled_line_distances, scatter_
 from research.piecewise import NumpyPiecewise, PiecewisePolynomial, bucket_size
 
 _GRID = 9  # grid points per corner window for the corner-error search
+_CHUNK = 1 << 15  # path samples checked at once (about 2 MB of work arrays)
 _NEWTON_STEPS = 4
 
 
@@ -98,14 +99,27 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
     t0, t1 = float(position.breaks[0]), float(position.breaks[-1])
     n = int(np.ceil((t1 - t0) / check_period)) + 1
     t = np.concatenate([t0 + np.arange(n) * check_period, centre, [t1]])
-    dist, key, bad = _charged_samples(position, path, np.clip(t, t0, t1), starts, centre, Td, tol_block)
     M = path.n_blocks
-    worst = np.full(2 * M - 1, -np.inf)
-    bad &= key >= 0
-    scatter_max(worst, key[bad], dist[bad])
-    at_vertex = {int(v): float(worst[v]) for v in np.flatnonzero(worst[: M - 1] > -np.inf)}
-    at_block = {int(b): float(worst[M - 1 + b]) for b in np.flatnonzero(worst[M - 1:] > -np.inf)}
-    return float(dist.max()), at_vertex, at_block
+    worst, bad = np.full(2 * M - 1, -np.inf), np.full(2 * M - 1, -np.inf)
+    deviation = _scan(position, path, np.clip(t, t0, t1), starts, centre, Td, tol_block, worst, bad, None)
+    at_vertex = {int(v): float(bad[v]) for v in np.flatnonzero(bad[: M - 1] > -np.inf)}
+    at_block = {int(b): float(bad[M - 1 + b]) for b in np.flatnonzero(bad[M - 1:] > -np.inf)}
+    return deviation, at_vertex, at_block
+
+
+def _scan(position, path, t, starts, centre, Td, tol_block, worst, bad, redo) -> float:
+    """Check the samples ``t`` in chunks of :data:`_CHUNK` (bounded memory): the largest distance of
+    each charge key into ``worst`` and of its violations into ``bad`` (keys where ``redo``, all if
+    None). Returns the largest distance over all samples."""
+    deviation = -np.inf
+    for i in range(0, t.size, _CHUNK):
+        dist, key, over = _charged_samples(position, path, t[i: i + _CHUNK], starts, centre, Td, tol_block)
+        deviation = max(deviation, float(dist.max()))
+        keep = key >= 0 if redo is None else redo[key]
+        scatter_max(worst, key[keep], dist[keep])
+        keep &= over
+        scatter_max(bad, key[keep], dist[keep])
+    return deviation
 
 
 def _charged_samples(position: NumpyPiecewise, path: ToolPath, t: np.ndarray, starts: np.ndarray, centre: np.ndarray,
@@ -204,12 +218,9 @@ class RoundChecks:
             count = np.maximum(last - first + 1, 0)
             grid = np.repeat(first - np.cumsum(count) + count, count) + np.arange(count.sum())
             t = np.concatenate([t0 + grid * self.period, centre[redo_v[: M - 1]], [t1]])
-            dist, key, bad = _charged_samples(position, path, np.clip(t, t0, t1), starts, centre, self.Td, self.tol)
             self.samples = t.size
-            fresh = redo[key]
             self.worst[redo], self.bad[redo] = -np.inf, -np.inf
-            scatter_max(self.worst, key[fresh], dist[fresh])
-            scatter_max(self.bad, key[fresh & bad], dist[fresh & bad])
+            _scan(position, path, np.clip(t, t0, t1), starts, centre, self.Td, self.tol, self.worst, self.bad, redo)
         at_vertex = {int(v): float(self.bad[v]) for v in np.flatnonzero(self.bad[: M - 1] > -np.inf)}
         at_block = {int(b): float(self.bad[M - 1 + b]) for b in np.flatnonzero(self.bad[M - 1:] > -np.inf)}
         errors = self.errors if vertex_errors else np.zeros(M - 1)
