@@ -22,7 +22,7 @@ from research.interpolators._fir_kernels import sampled_line_distances, scatter_
 from research.piecewise import NumpyPiecewise, PiecewisePolynomial, bucket_size
 
 _GRID = 9  # grid points per corner window for the corner-error search
-_CHUNK = 1 << 15  # path samples checked at once (about 2 MB of work arrays)
+_CHUNK = 1 << 13  # path samples checked at once (about 1 MB of work arrays; results do not depend on it)
 _NEWTON_STEPS = 4
 
 

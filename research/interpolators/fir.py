@@ -31,7 +31,11 @@ CAM programs (beyond the paper, which assumes every block longer than the window
   quadratic in feed); after :data:`_SCALING_ROUNDS` rounds a vertex still violating becomes an exact
   stop, which puts it on the trajectory whatever its neighbours do. Deviations inside an arc slow
   that arc. At most :data:`MAX_ROUNDS` rounds; the rounds needed are reported in
-  :attr:`FIRPlan.rounds`.
+  :attr:`FIRPlan.rounds`. The rounds decide on concrete arrays (``_fir_profile``: the same timing
+  and exact profile in NumPy/Numba, no JAX dispatch) and re-check only the vertex windows and path
+  stretches whose profile a repair changed (``_fir_verify.RoundChecks``); the plan returned is
+  built with JAX only when ``feed``, ``delays`` or ``tolerance`` is a tracer (its differentiable
+  form, with the empty pieces that the concrete build drops).
 
 One call is not monotone in ``eps`` (a looser tolerance can change the candidates and repairs
 and come out slower); :func:`plan_fir_sweep` keeps, over a tolerance sweep, the fastest verified
