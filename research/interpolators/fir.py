@@ -254,13 +254,12 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         lengths_p = jnp.asarray(lengths_np)
         feeds_p = jnp.concatenate([feeds_cmd, jnp.ones(Mp - M + 1)])
         blk = jnp.asarray(table.block)
-        piece_tv, overlaps = _timing_kernel(lengths_p, feeds_p, blk, jnp.asarray(piece_factor), jnp.asarray(motion_ends_np),
-                                            jnp.asarray(tangents_np), jnp.asarray(corner), tol_vertex_p, delays)
-        overlaps = overlaps[: M - 1]
-        gaps = jnp.concatenate([jnp.sum(delays) - overlaps, jnp.zeros(Mp - M + 1)])
-        starts, ends, position, centre = build_profile(
-            jnp.asarray(tp.start), jnp.asarray(table.geo), blk, jnp.asarray(table.gap), jnp.asarray(frac), piece_tv, gaps, delays)
-        return feeds_cmd * jnp.asarray(cruise), overlaps, ends[:M] - starts[:M], starts[:M], position, centre[: M - 1]
+        overlaps, starts, ends, position, centre = _traced_build(
+            lengths_p, feeds_p, blk, jnp.asarray(piece_factor), jnp.asarray(motion_ends_np), jnp.asarray(tangents_np),
+            jnp.asarray(corner), tol_vertex_p, delays, jnp.asarray(tp.start), jnp.asarray(table.geo),
+            jnp.asarray(table.gap), jnp.asarray(frac), jnp.arange(Mp - 1) < M - 1)
+        return (feeds_cmd * jnp.asarray(cruise), overlaps[: M - 1], ends[:M] - starts[:M], starts[:M], position,
+                centre[: M - 1])
 
     def settle(factor, head, tail, full, others, arc_rel):
         """Verify and repair one candidate plan, one round per step: a generator that yields the
@@ -435,6 +434,20 @@ def plan_fir_sweep(path, feed, delays, tolerances, *, limits: AxisLimits | None 
     own = tuple(float(_primal(p.cycle_time)) for p in plans)
     pick = envelope(vectors, own)
     return FIRSweep(tols, tuple(plans[i] for i in pick), pick, own)
+
+
+@jax.jit
+def _traced_build(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, corner, tol_vertex, delays, start, geo,
+                  gap, frac, real_corner):
+    """:func:`_timing_kernel` and ``build_profile`` in one compiled dispatch (the plan returned when
+    an input is a tracer). ``real_corner``: ``(M_pad - 1,)`` True on the path's corners (the others
+    are padding and get no gap). Returns ``(overlaps, block starts, block ends, position, centre)``
+    on the padded shapes."""
+    piece_tv, overlaps = _timing_kernel(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, corner, tol_vertex,
+                                        delays)
+    gaps = jnp.concatenate([jnp.where(real_corner, jnp.sum(delays) - overlaps, 0.0), jnp.zeros(1)])
+    starts, ends, position, centre = build_profile(start, geo, blk, gap, frac, piece_tv, gaps, delays)
+    return overlaps, starts, ends, position, centre
 
 
 @jax.jit
