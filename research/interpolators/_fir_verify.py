@@ -18,7 +18,7 @@ from jax import Array
 
 from research.paths.toolpath import ToolPath
 from research.interpolators._fir_kernels import corner_distances as _corner_kernel
-from research.interpolators._fir_kernels import sampled_line_distances, scatter_max
+from research.interpolators._fir_kernels import sample_charges, sampled_line_distances, scatter_max
 from research.piecewise import NumpyPiecewise, PiecewisePolynomial, bucket_size
 
 _GRID = 9  # grid points per corner window for the corner-error search
@@ -127,28 +127,14 @@ def _charged_samples(position: NumpyPiecewise, path: ToolPath, t: np.ndarray, st
     """Distance [mm] from the trajectory at each sample time ``t`` to the path, the key it is
     charged to (vertex ``j < M - 1``, or ``M - 1 + block``: see :func:`path_deviations`) and whether
     it breaks its tolerance."""
-    M = path.n_blocks
     # first the blocks the window is centred on (almost every sample is within tolerance of them),
     # then, for the rest, the k nearest path samples as well
     q, block, dist = _three_block_distance(path, position, t, starts, Td)
-    limit = tol_block[block]
-    near = np.full(t.size, -1)
-    if M > 1:
-        k = np.clip(np.searchsorted(centre, t), 1, M - 1)
-        j = np.where(np.abs(centre[k - 1] - t) <= np.abs(centre[np.minimum(k, M - 2)] - t), k - 1, np.minimum(k, M - 2))
-        close = np.abs(centre[j] - t) <= 0.5 * Td
-        near = np.where(close, j, -1)
-        tol_v = np.minimum(tol_block[:-1], tol_block[1:])
-        limit = np.where(close, np.minimum(limit, tol_v[np.maximum(j, 0)]), limit)
-    bad = dist > limit * (1.0 + 1e-9) + 1e-9
+    limit, key, bad = sample_charges(np.ascontiguousarray(t), np.ascontiguousarray(centre, dtype=np.float64), block, dist,
+                                     np.ascontiguousarray(tol_block, dtype=np.float64), path.is_arc, 0.5 * Td)
     if bad.any():
         dist[bad] = np.minimum(dist[bad], path.distance_bound(q[bad], near=block[bad]))
         bad = dist > limit * (1.0 + 1e-9) + 1e-9
-    # a violation near a corner instant, or on a line, is charged to a vertex; inside an arc to the arc
-    to_vertex = (near >= 0) | ~path.is_arc[block]
-    key = np.where(to_vertex, np.where(near >= 0, near, np.clip(block, 0, max(M - 2, 0))), M - 1 + block)
-    if M == 1:
-        key = np.where(to_vertex, -1, key)  # one line: no vertex to charge
     return dist, key, bad
 
 
