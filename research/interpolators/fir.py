@@ -32,7 +32,7 @@ CAM programs (beyond the paper, which assumes every block longer than the window
   stop, which puts it on the trajectory whatever its neighbours do. Deviations inside an arc slow
   that arc. At most :data:`MAX_ROUNDS` rounds; the rounds needed are reported in
   :attr:`FIRPlan.rounds`. The rounds decide on concrete arrays (``_fir_profile``: the same timing
-  and exact profile in NumPy/Numba, no JAX dispatch) and re-check only the vertex windows and path
+  and exact profile in NumPy/Numba, no JAX dispatch for one or two filters) and re-check only the vertex windows and path
   stretches whose profile a repair changed (``_fir_verify.RoundChecks``); the plan returned is
   built with JAX only when ``feed``, ``delays`` or ``tolerance`` is a tracer (its differentiable
   form, with the empty pieces that the concrete build drops).
