@@ -19,6 +19,7 @@ bucketed so paths of similar size share compiled code).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import jax
 import jax.numpy as jnp
@@ -105,16 +106,23 @@ class PulseTable:
         """Shares and feed factors of every piece for line heads / tails of shares ``head``,
         ``tail`` ``(M,)`` and feed factors ``factor`` ``(M, 3)`` (head, body, tail); a sub-arc takes
         its block's body factor times its own ``arc_rel`` ``(A,)`` (<= 1; default 1)."""
+        (i0, b0), (i1, b1), (i2, b2), blk, column, real = self._roles
         frac = self.fraction.copy()
-        blk = np.minimum(self.block, self.n_blocks - 1)
-        r = self.role
-        frac[r == 0] = head[blk[r == 0]]
-        frac[r == 1] = 1.0 - head[blk[r == 1]] - tail[blk[r == 1]]
-        frac[r == 2] = tail[blk[r == 2]]
-        f = factor[blk, np.where(r < 0, 1, r)]
+        frac[i0] = head[b0]
+        frac[i1] = 1.0 - head[b1] - tail[b1]
+        frac[i2] = tail[b2]
+        f = factor[blk, column]
         if arc_rel is not None:
             f[self.arc_pieces] *= arc_rel
-        return np.where(self.block < self.n_blocks, frac, 0.0), np.where(self.block < self.n_blocks, f, 1.0)
+        return np.where(real, frac, 0.0), np.where(real, f, 1.0)
+
+    @cached_property
+    def _roles(self):
+        """Index arrays of :meth:`pieces` (the head, body and tail pieces of lines and their blocks;
+        each piece's block and factor column; the real pieces), made once per table."""
+        blk = np.minimum(self.block, self.n_blocks - 1)
+        rows = tuple((i, blk[i]) for i in (np.flatnonzero(self.role == k) for k in range(3)))
+        return rows + (blk, np.where(self.role < 0, 1, self.role), self.block < self.n_blocks)
 
 
 def _arc_pieces(path: ToolPath, k: int, n: int) -> np.ndarray:

@@ -104,8 +104,9 @@ def _displacement(s, du, rho, sign, p, norm, prefix, binom, direct, q, F, out):
             x = abs(s[i] - q) / F if F > 0 else np.inf
             h = 0.0
             for r_i in range(rho.size):
-                r = max(rho[r_i] - x, 0.0)
-                h += sign[r_i] * math.pow(r, pf)
+                r = rho[r_i] - x
+                if r > 0.0:  # (r)_+^p: a term of 0 adds nothing (skipped, the same sum)
+                    h += sign[r_i] * math.pow(r, pf)
             w = h * norm * F
             for k in range(d):
                 out[k] += w * du[i, k]
@@ -338,3 +339,81 @@ def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton
             d2 += e * e
         out[c] = math.sqrt(min(d2, best_d2))
     return out
+
+
+@numba.njit(**_OPTIONS)
+def scatter_max(out, index, values):
+    """``np.maximum.at(out, index, values)`` in one compiled pass (NumPy's ``ufunc.at`` costs tens
+    of ns an element)."""
+    for i in range(index.size):
+        k = index[i]
+        if values[i] > out[k]:
+            out[k] = values[i]
+
+
+@numba.njit(**_OPTIONS)
+def _left_from(a, v, hint):
+    """``np.searchsorted(a, v, side="left")`` (the count of entries ``< v``) by a galloping search
+    from ``hint``, as :func:`_right_from`."""
+    n = a.size
+    i = min(max(hint, 0), n)
+    if i > 0 and a[i - 1] >= v:
+        hi, step = i, 1
+        lo = hi - step
+        while lo > 0 and a[lo - 1] >= v:
+            hi = lo
+            step *= 2
+            lo = max(hi - step, 0)
+        lo = max(lo, 0)
+    else:
+        lo, step = i, 1
+        hi = lo + step
+        while hi <= n and a[hi - 1] < v:
+            lo = hi
+            step *= 2
+            hi = lo + step
+        hi = min(hi, n)
+    return lo + _left(a[lo:hi], v)
+
+
+@numba.njit(**_OPTIONS)
+def sample_charges(t, centre, block, dist, tol_block, is_arc, half_window):
+    """Tolerance, violation and charge key of path samples (``_fir_verify._charged_samples``).
+
+    Sample ``i`` at time ``t[i]``, its window's block ``block[i]`` and distance ``dist[i]``: it is
+    near the corner whose instant (``centre``, ``(M - 1,)``, sorted) is closest, when within
+    ``half_window``; its tolerance is its block's, or the smaller of that and the vertex's (the
+    smaller of the vertex's two blocks) when near. Key: the near vertex; else, on a line, the vertex
+    ``clip(block, 0, M - 2)``; else (inside an arc) ``M - 1 + block``; ``-1`` on a one-block path's
+    line. The same comparisons as the NumPy form it replaces.
+
+    Returns:
+        ``(limit (N,), key (N,), bad (N,))``.
+    """
+    N, C = t.size, centre.size
+    M = C + 1
+    limit = np.empty(N)
+    key = np.empty(N, np.int64)
+    bad = np.empty(N, np.bool_)
+    hint = 0
+    for i in range(N):
+        b = block[i]
+        lim = tol_block[b]
+        near = -1
+        if M > 1:
+            hint = _left_from(centre, t[i], hint)
+            k = min(max(hint, 1), M - 1)
+            k2 = min(k, M - 2)
+            j = k - 1 if abs(centre[k - 1] - t[i]) <= abs(centre[k2] - t[i]) else k2
+            if abs(centre[j] - t[i]) <= half_window:
+                near = j
+                lim = min(lim, min(tol_block[j], tol_block[j + 1]))
+        limit[i] = lim
+        bad[i] = dist[i] > lim * (1.0 + 1e-9) + 1e-9
+        if near >= 0:
+            key[i] = near
+        elif not is_arc[b]:
+            key[i] = min(max(b, 0), max(M - 2, 0)) if M > 1 else -1
+        else:
+            key[i] = M - 1 + b
+    return limit, key, bad

@@ -10,17 +10,13 @@ the windows that reach into each line (:func:`line_pieces`).
 
 from __future__ import annotations
 
-import jax
 import numpy as np
 
 from research.interpolators._fir_blocks import PulseTable
-from research.interpolators._fir_chain import kernel_second_integral
 from research.interpolators._fir_feed import ChainError, range_min
-from research.interpolators._fir_overlap import overlap_time
+from research.interpolators._fir_profile import kernel_second_integral, overlaps
 from research.paths.toolpath import ToolPath
 from research.piecewise import bucket_size
-
-_overlap_jit = jax.jit(overlap_time)  # eq 13/14 on concrete, padded arrays (one dispatch)
 
 
 def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in, t_out):
@@ -75,10 +71,10 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
             memo[key] = f[~gap]
         return memo[key]
 
-    # eq 13/14 overlaps for the two tolerances a dwell may use (one compiled call, padded shapes)
+    # eq 13/14 overlaps for the two tolerances a dwell may use (concrete arrays, _fir_profile)
     pad = bucket_size(M - 1, 16) - (M - 1)
     both = np.pad(np.stack([np.maximum(budget, 0.0), tol_v]), ((0, 0), (0, pad)), constant_values=1.0)
-    Tk_budget, Tk_whole = np.asarray(_overlap_jit(both, np.tile(np.pad(dF, (0, pad), constant_values=1.0), (2, 1)), delays))[:, : M - 1]
+    Tk_budget, Tk_whole = overlaps(both, np.tile(np.pad(dF, (0, pad), constant_values=1.0), (2, 1)), delays)[:, : M - 1]
     out = []
     for rule_budget, Tk, choice in ((budget, Tk_budget, "cost"), (tol_v, Tk_whole, "cost"), (tol_v, Tk_whole, "all"),
                                     (tol_v, Tk_whole, "none")):

@@ -18,10 +18,11 @@ from jax import Array
 
 from research.paths.toolpath import ToolPath
 from research.interpolators._fir_kernels import corner_distances as _corner_kernel
-from research.interpolators._fir_kernels import sampled_line_distances
+from research.interpolators._fir_kernels import sample_charges, sampled_line_distances, scatter_max
 from research.piecewise import NumpyPiecewise, PiecewisePolynomial, bucket_size
 
 _GRID = 9  # grid points per corner window for the corner-error search
+_CHUNK = 1 << 13  # path samples checked at once (about 1 MB of work arrays; results do not depend on it)
 _NEWTON_STEPS = 4
 
 
@@ -98,40 +99,133 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
     t0, t1 = float(position.breaks[0]), float(position.breaks[-1])
     n = int(np.ceil((t1 - t0) / check_period)) + 1
     t = np.concatenate([t0 + np.arange(n) * check_period, centre, [t1]])
-    t = np.clip(t, t0, t1)
     M = path.n_blocks
+    worst, bad = np.full(2 * M - 1, -np.inf), np.full(2 * M - 1, -np.inf)
+    deviation = _scan(position, path, np.clip(t, t0, t1), starts, centre, Td, tol_block, worst, bad, None)
+    at_vertex = {int(v): float(bad[v]) for v in np.flatnonzero(bad[: M - 1] > -np.inf)}
+    at_block = {int(b): float(bad[M - 1 + b]) for b in np.flatnonzero(bad[M - 1:] > -np.inf)}
+    return deviation, at_vertex, at_block
+
+
+def _scan(position, path, t, starts, centre, Td, tol_block, worst, bad, redo) -> float:
+    """Check the samples ``t`` in chunks of :data:`_CHUNK` (bounded memory): the largest distance of
+    each charge key into ``worst`` and of its violations into ``bad`` (keys where ``redo``, all if
+    None). Returns the largest distance over all samples."""
+    deviation = -np.inf
+    for i in range(0, t.size, _CHUNK):
+        dist, key, over = _charged_samples(position, path, t[i: i + _CHUNK], starts, centre, Td, tol_block)
+        deviation = max(deviation, float(dist.max()))
+        keep = key >= 0 if redo is None else redo[key]
+        scatter_max(worst, key[keep], dist[keep])
+        keep &= over
+        scatter_max(bad, key[keep], dist[keep])
+    return deviation
+
+
+def _charged_samples(position: NumpyPiecewise, path: ToolPath, t: np.ndarray, starts: np.ndarray, centre: np.ndarray,
+                     Td: float, tol_block: np.ndarray):
+    """Distance [mm] from the trajectory at each sample time ``t`` to the path, the key it is
+    charged to (vertex ``j < M - 1``, or ``M - 1 + block``: see :func:`path_deviations`) and whether
+    it breaks its tolerance."""
     # first the blocks the window is centred on (almost every sample is within tolerance of them),
     # then, for the rest, the k nearest path samples as well
     q, block, dist = _three_block_distance(path, position, t, starts, Td)
-    limit = tol_block[block]
-    near = np.full(t.size, -1)
-    if M > 1:
-        k = np.clip(np.searchsorted(centre, t), 1, M - 1)
-        j = np.where(np.abs(centre[k - 1] - t) <= np.abs(centre[np.minimum(k, M - 2)] - t), k - 1, np.minimum(k, M - 2))
-        close = np.abs(centre[j] - t) <= 0.5 * Td
-        near = np.where(close, j, -1)
-        tol_v = np.minimum(tol_block[:-1], tol_block[1:])
-        limit = np.where(close, np.minimum(limit, tol_v[np.maximum(j, 0)]), limit)
-    bad = dist > limit * (1.0 + 1e-9) + 1e-9
+    limit, key, bad = sample_charges(np.ascontiguousarray(t), np.ascontiguousarray(centre, dtype=np.float64), block, dist,
+                                     np.ascontiguousarray(tol_block, dtype=np.float64), path.is_arc, 0.5 * Td)
     if bad.any():
         dist[bad] = np.minimum(dist[bad], path.distance_bound(q[bad], near=block[bad]))
         bad = dist > limit * (1.0 + 1e-9) + 1e-9
-    i = np.flatnonzero(bad)
-    # a violation near a corner instant, or on a line, is charged to a vertex; inside an arc to the arc
-    to_vertex = (near[i] >= 0) | ~path.is_arc[block[i]]
-    iv, ib = i[to_vertex], i[~to_vertex]
-    at_vertex: dict[int, float] = {}
-    if M > 1 and iv.size:
-        jj = np.where(near[iv] >= 0, near[iv], np.clip(block[iv], 0, M - 2))
-        worst = np.full(M - 1, -np.inf)
-        np.maximum.at(worst, jj, dist[iv])
-        at_vertex = {int(v): float(worst[v]) for v in np.flatnonzero(worst > -np.inf)}
-    at_block: dict[int, float] = {}
-    if ib.size:
-        worst = np.full(M, -np.inf)
-        np.maximum.at(worst, block[ib], dist[ib])
-        at_block = {int(b): float(worst[b]) for b in np.flatnonzero(worst > -np.inf)}
-    return float(dist.max()), at_vertex, at_block
+    return dist, key, bad
+
+
+class RoundChecks:
+    """The checks of ``plan_fir``'s verification rounds on one path, redone only where the profile
+    changed since the last check.
+
+    A repair changes the input pulses of some blocks (feeds, overlaps); the filtered output changes
+    over ``[start of the change, its end + T_d]`` (the window averages the last ``T_d`` of input),
+    and everything later is the old output shifted in time. So a vertex error is recomputed when its
+    search window ``centre +- T_d / 2`` meets a changed span, and the path samples of a charge key
+    (vertex or arc block, :func:`path_deviations`) when the times it collects samples from meet
+    one: ``[min(start_j + T_d / 2, centre_j - T_d / 2), centre_j + T_d / 2]`` for vertex ``j``
+    (samples near its corner instant, and those on the line before it), ``[start_b + T_d / 2,
+    start_b+1 + T_d / 2]`` for block ``b``. Those keys are sampled afresh on the same grid as a full
+    check (``t0 + i check_period``, the corner instants, the end); the others keep their last
+    values, which the new profile reproduces up to the time shift. The first check is the full one.
+
+    Args:
+        path: the programmed path; tol_block: ``(M,)`` tolerance per block [mm];
+        piece_block: ``(P,)`` block of each input piece (``PulseTable.block``); Td: total delay [s];
+        check_period: sample spacing [s].
+    """
+
+    def __init__(self, path: ToolPath, tol_block: np.ndarray, piece_block: np.ndarray, Td: float, check_period: float):
+        self.path, self.tol, self.Td, self.period = path, tol_block, Td, check_period
+        self.piece_block = np.minimum(piece_block, path.n_blocks - 1)
+        self.durations, self.samples = None, 0
+
+    def __call__(self, position: NumpyPiecewise, starts: np.ndarray, centre: np.ndarray, durations: np.ndarray,
+                 vertex_errors: bool):
+        """Checks of the plan whose input pieces last ``durations`` ``(P,)`` [s] (gaps included).
+
+        Returns:
+            ``(vertex errors (M - 1,), max deviation, {vertex: deviation}, {block: deviation})`` as
+            :func:`vertex_distances` (zeros unless ``vertex_errors``) and :func:`path_deviations`.
+        """
+        path, M, half = self.path, self.path.n_blocks, 0.5 * self.Td
+        if M == 1:
+            return (np.zeros(0),) + path_deviations(position, path, starts, centre, self.Td, self.tol, self.period)
+        t0, t1 = float(position.breaks[0]), float(position.breaks[-1])
+        lo_v = np.minimum(starts[:-1] + half, centre - half)
+        hi_v = centre + half
+        lo_v[0], hi_v[-1] = t0, t1
+        lo_b = starts + half
+        hi_b = np.append(starts[1:] + half, t1)
+        if self.durations is None:
+            err_v, redo_v, redo_b = np.ones(M - 1, bool), np.ones(M - 1, bool), np.ones(M, bool)
+            self.errors, self.worst, self.bad = np.zeros(M - 1), np.full(2 * M - 1, -np.inf), np.full(2 * M - 1, -np.inf)
+        else:
+            changed = np.unique(self.piece_block[durations != self.durations])
+            r_lo, r_hi = starts[changed], np.append(starts, np.inf)[changed + 1] + self.Td
+            r_lo, r_hi = _merged(r_lo, r_hi)
+            err_v = _meets(centre - half, hi_v, r_lo, r_hi)
+            redo_v = _meets(lo_v, hi_v, r_lo, r_hi)
+            redo_b = _meets(lo_b, hi_b, r_lo, r_hi)
+        self.durations = durations.copy()
+        if vertex_errors and err_v.any():
+            self.errors[err_v] = vertex_distances(position, path.vertices[err_v], centre[err_v], half)
+        redo = np.concatenate([redo_v, redo_b])
+        self.samples = 0  # path samples taken by this check
+        if redo.any():
+            s_lo, s_hi = _merged(np.concatenate([lo_v[redo_v], lo_b[redo_b]]), np.concatenate([hi_v[redo_v], hi_b[redo_b]]))
+            first = np.maximum(np.ceil((s_lo - t0) / self.period), 0).astype(np.int64)
+            n = int(np.ceil((t1 - t0) / self.period)) + 1
+            last = np.minimum(np.floor((s_hi - t0) / self.period).astype(np.int64), n - 1)
+            count = np.maximum(last - first + 1, 0)
+            grid = np.repeat(first - np.cumsum(count) + count, count) + np.arange(count.sum())
+            t = np.concatenate([t0 + grid * self.period, centre[redo_v[: M - 1]], [t1]])
+            self.samples = t.size
+            self.worst[redo], self.bad[redo] = -np.inf, -np.inf
+            _scan(position, path, np.clip(t, t0, t1), starts, centre, self.Td, self.tol, self.worst, self.bad, redo)
+        at_vertex = {int(v): float(self.bad[v]) for v in np.flatnonzero(self.bad[: M - 1] > -np.inf)}
+        at_block = {int(b): float(self.bad[M - 1 + b]) for b in np.flatnonzero(self.bad[M - 1:] > -np.inf)}
+        errors = self.errors if vertex_errors else np.zeros(M - 1)
+        return errors.copy(), float(self.worst.max()), at_vertex, at_block
+
+
+def _merged(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The union of the intervals ``[lo_i, hi_i]`` as sorted, disjoint intervals."""
+    order = np.argsort(lo, kind="stable")
+    lo, hi = lo[order], np.maximum.accumulate(hi[order])
+    start = np.concatenate([[True], lo[1:] > hi[:-1]]) if lo.size else np.zeros(0, bool)
+    ends = np.append(np.flatnonzero(start)[1:] - 1, lo.size - 1) if lo.size else np.zeros(0, np.int64)
+    return lo[start], hi[ends]
+
+
+def _meets(lo: np.ndarray, hi: np.ndarray, r_lo: np.ndarray, r_hi: np.ndarray) -> np.ndarray:
+    """Whether each interval ``[lo, hi]`` meets one of the sorted disjoint intervals ``[r_lo, r_hi]``."""
+    i = np.searchsorted(r_hi, lo, side="left")  # the first that ends at or after lo
+    return (i < r_lo.size) & (r_lo[np.minimum(i, max(r_lo.size - 1, 0))] <= hi) if r_lo.size else np.zeros(lo.size, bool)
 
 
 def _three_block_distance(path: ToolPath, position: NumpyPiecewise, t: np.ndarray, starts: np.ndarray, Td: float):
@@ -156,4 +250,4 @@ def _three_block_distance(path: ToolPath, position: NumpyPiecewise, t: np.ndarra
         if arc.any():
             rows = np.nonzero(arc)
             d2[rows] = path._block_distance(q[rows[0]], nb[rows]) ** 2
-    return q, block, np.sqrt(d2.min(axis=1))
+    return q, block, np.sqrt(np.minimum(np.minimum(d2[:, 0], d2[:, 1]), d2[:, 2]))

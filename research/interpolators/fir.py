@@ -31,7 +31,11 @@ CAM programs (beyond the paper, which assumes every block longer than the window
   quadratic in feed); after :data:`_SCALING_ROUNDS` rounds a vertex still violating becomes an exact
   stop, which puts it on the trajectory whatever its neighbours do. Deviations inside an arc slow
   that arc. At most :data:`MAX_ROUNDS` rounds; the rounds needed are reported in
-  :attr:`FIRPlan.rounds`.
+  :attr:`FIRPlan.rounds`. The rounds decide on concrete arrays (``_fir_profile``: the same timing
+  and exact profile in NumPy/Numba, no JAX dispatch for one or two filters) and re-check only the vertex windows and path
+  stretches whose profile a repair changed (``_fir_verify.RoundChecks``); the plan returned is
+  built with JAX only when ``feed``, ``delays`` or ``tolerance`` is a tracer (its differentiable
+  form, with the empty pieces that the concrete build drops).
 
 One call is not monotone in ``eps`` (a looser tolerance can change the candidates and repairs
 and come out slower); :func:`plan_fir_sweep` keeps, over a tolerance sweep, the fastest verified
@@ -67,12 +71,13 @@ from research.interpolators._fir_limits import (
     own_span_ratios,
 )
 from research.interpolators._fir_lookahead import look_ahead
+from research.interpolators import _fir_profile
 from research.interpolators._fir_overlap import overlap_time
-from research.interpolators._fir_verify import corner_distances, path_deviations, vertex_distances
+from research.interpolators._fir_verify import RoundChecks, corner_distances
 from research.limits import AxisLimits
 from research.paths.polyline import Polyline
 from research.paths.toolpath import ToolPath
-from research.piecewise import NumpyPiecewise
+from research.piecewise import NumpyPiecewise, PiecewisePolynomial
 from research.trajectory import Trajectory
 
 _SCALING_ROUNDS = 6  # rounds that shrink overlaps / feeds before violators become exact stops
@@ -184,10 +189,14 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     _check_inputs(delays, feed, tolerance, M)
     table = _pulse_table(tp)
     Mp = table.m_pad
-    delays = jnp.asarray(delays, dtype=jnp.float64).reshape(-1)
-    feeds_cmd = jnp.broadcast_to(jnp.asarray(feed, dtype=jnp.float64), (M,))
-    tol_block = jnp.broadcast_to(jnp.asarray(tolerance, dtype=jnp.float64), (M,))
-    tol_vertex = jnp.minimum(tol_block[:-1], tol_block[1:])
+    # the rounds decide on concrete arrays (``_fir_profile``: NumPy and Numba, no JAX dispatch); the
+    # plan returned is rebuilt with JAX only where an input is a tracer (its differentiable form)
+    traced = any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves((delays, feed, tolerance)))
+    xp = jnp if traced else np
+    delays = xp.asarray(delays, dtype=np.float64).reshape(-1)
+    feeds_cmd = xp.broadcast_to(xp.asarray(feed, dtype=np.float64), (M,))
+    tol_block = xp.broadcast_to(xp.asarray(tolerance, dtype=np.float64), (M,))
+    tol_vertex = xp.minimum(tol_block[:-1], tol_block[1:])
     d_np, F_np, tb_np = (np.asarray(_primal(x), dtype=np.float64) for x in (delays, feeds_cmd, tol_block))
     tv_np = np.minimum(tb_np[:-1], tb_np[1:])
     Td_np = float(d_np.sum())
@@ -203,39 +212,54 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     head, tail = np.zeros(M), np.zeros(M)
     full = np.zeros(M - 1, dtype=bool)
     others = np.zeros(M - 1)  # tolerance taken by the other direction changes of a dwell corner's window
-    lengths_p = jnp.asarray(np.concatenate([tp.lengths, np.ones(Mp - M + 1)]))
-    feeds_p = jnp.concatenate([feeds_cmd, jnp.ones(Mp - M + 1)])
-    blk = jnp.asarray(table.block)
-    # per-block and per-corner inputs padded to the bucketed block count (one compiled kernel)
-    pad_b, pad_c = Mp - M, Mp - M
-    motion_ends = jnp.asarray(np.stack([np.pad(table.first_motion, (0, pad_b)), np.pad(table.last_motion, (0, pad_b))]))
-    tangents_p = jnp.asarray(np.stack([np.pad(t_in, ((0, pad_b), (0, 0))), np.pad(t_out, ((0, pad_b), (0, 0)))]))
-    tol_vertex_p = jnp.concatenate([tol_vertex, jnp.ones(pad_c)])  # padding: any tolerance > 0 (finite gradients)
+    lengths_np = np.concatenate([tp.lengths, np.ones(Mp - M + 1)])
+    feeds_np = np.concatenate([F_np, np.ones(Mp - M + 1)])
+    pad_b = Mp - M  # per-block inputs padded to the bucketed block count (one compiled JAX kernel)
+    motion_ends_np = np.stack([np.pad(table.first_motion, (0, pad_b)), np.pad(table.last_motion, (0, pad_b))])
+    tangents_np = np.stack([np.pad(t_in, ((0, pad_b), (0, 0))), np.pad(t_out, ((0, pad_b), (0, 0)))])
 
     def timing(factor, head, tail, full, shrink, others, arc_rel):
-        """Piece shares, feed factors, pulse lengths and overlaps of a plan (no filtering)."""
+        """Piece shares, pulse lengths, block top feeds and overlaps of a plan (no filtering)."""
         frac, piece_factor = table.pieces(head, tail, factor, arc_rel)
         cruise = np.maximum.reduceat(piece_factor[: table.last_motion[-1] + 1], table.first_motion)  # block's top feed
-        corner = np.stack([np.pad(np.asarray(full, dtype=np.float64), (0, pad_c), constant_values=1.0),
-                           np.pad(shrink, (0, pad_c), constant_values=1.0), np.pad(others, (0, pad_c))])
-        piece_tv, overlaps = _timing_kernel(lengths_p, feeds_p, blk, jnp.asarray(piece_factor), motion_ends, tangents_p,
-                                            jnp.asarray(corner), tol_vertex_p, delays)
-        return frac, piece_tv, cruise, overlaps[: M - 1]
+        piece_tv, overlaps = _fir_profile.timing(lengths_np, feeds_np, table.block, piece_factor, motion_ends_np,
+                                                 tangents_np, full, shrink, others, tv_np, d_np)
+        return frac, piece_tv, cruise, overlaps
 
     def predicted_time(candidate, shrink=None) -> float:
         """Cycle time of a candidate (or of a repaired one, with its overlap ``shrink``) before
         verification: a lower bound on its verified time, because repairs only shrink overlaps and
         lower feeds."""
         frac, piece_tv, _, overlaps = timing(*candidate[:4], np.ones(M - 1) if shrink is None else shrink, *candidate[4:])
-        return float(np.sum(frac * np.asarray(_primal(piece_tv))) + np.sum(Td_np - np.asarray(_primal(overlaps))) + Td_np)
+        return float(np.sum(frac * piece_tv) + np.sum(Td_np - overlaps) + Td_np)
 
     def schedule(factor, head, tail, full, shrink, others, arc_rel):
+        """``(feeds, overlaps, pulse lengths, pulse starts, position, corner instants, inputs)`` on
+        concrete arrays (the position a :class:`NumpyPiecewise`)."""
         frac, piece_tv, cruise, overlaps = timing(factor, head, tail, full, shrink, others, arc_rel)
-        Td = jnp.sum(delays)
-        gaps = jnp.concatenate([Td - overlaps, jnp.zeros(Mp - M + 1)])
-        starts, ends, position, centre = build_profile(
-            jnp.asarray(tp.start), jnp.asarray(table.geo), blk, jnp.asarray(table.gap), jnp.asarray(frac), piece_tv, gaps, delays)
-        return feeds_cmd * jnp.asarray(cruise), overlaps, ends[:M] - starts[:M], starts[:M], position, centre[: M - 1]
+        gaps = np.concatenate([Td_np - overlaps, np.zeros(Mp - M + 1)])
+        starts, ends, breaks, coeffs, centre = _fir_profile.profile(tp.start, table.geo, table.block, table.gap, frac,
+                                                                    piece_tv, gaps, d_np)
+        durations = np.where(table.gap, np.append(gaps, 0.0)[table.block], frac * piece_tv)  # of the input pieces
+        return (F_np * cruise, overlaps, ends[:M] - starts[:M], starts[:M], NumpyPiecewise(breaks, coeffs),
+                centre[: M - 1], (factor.copy(), head, tail, full, shrink.copy(), others, arc_rel), durations)
+
+    def traced_plan(factor, head, tail, full, shrink, others, arc_rel):
+        """The JAX form of :func:`schedule` (differentiable through ``feed``, ``delays``, ``tolerance``)."""
+        frac, piece_factor = table.pieces(head, tail, factor, arc_rel)
+        cruise = np.maximum.reduceat(piece_factor[: table.last_motion[-1] + 1], table.first_motion)
+        corner = np.stack([np.pad(np.asarray(full, dtype=np.float64), (0, pad_b), constant_values=1.0),
+                           np.pad(shrink, (0, pad_b), constant_values=1.0), np.pad(others, (0, pad_b))])
+        tol_vertex_p = jnp.concatenate([tol_vertex, jnp.ones(pad_b)])  # padding: any tolerance > 0 (finite gradients)
+        lengths_p = jnp.asarray(lengths_np)
+        feeds_p = jnp.concatenate([feeds_cmd, jnp.ones(Mp - M + 1)])
+        blk = jnp.asarray(table.block)
+        overlaps, starts, ends, position, centre = _traced_build(
+            lengths_p, feeds_p, blk, jnp.asarray(piece_factor), jnp.asarray(motion_ends_np), jnp.asarray(tangents_np),
+            jnp.asarray(corner), tol_vertex_p, delays, jnp.asarray(tp.start), jnp.asarray(table.geo),
+            jnp.asarray(table.gap), jnp.asarray(frac), jnp.arange(Mp - 1) < M - 1)
+        return (feeds_cmd * jnp.asarray(cruise), overlaps[: M - 1], ends[:M] - starts[:M], starts[:M], position,
+                centre[: M - 1])
 
     def settle(factor, head, tail, full, others, arc_rel):
         """Verify and repair one candidate plan, one round per step: a generator that yields the
@@ -245,11 +269,12 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         bracket's upper end (:attr:`CornerBisection.bound_scale`), above which it never ends."""
         factor, shrink = factor.copy(), np.ones(M - 1)
         bisection, checked, repaired = CornerBisection(M - 1), np.zeros(M, dtype=bool), False
+        checks = RoundChecks(tp, tb_np, table.block, Td_np, check_period)  # redone only where the profile changed
 
         def alone(g):  # ``_fir_limits`` phase 1: each block's own peaks (every corner an exact stop)
-            *_, pulse, starts, position, _ = schedule(factor * g[:, None], head, tail, full, np.zeros(M - 1), others, arc_rel)
-            pos_np = NumpyPiecewise(np.asarray(_primal(position.breaks)), np.asarray(_primal(position.coeffs)))
-            return block_peak_ratios(pos_np, np.asarray(_primal(starts)), np.asarray(_primal(pulse)), Td_np, limits)
+            _, _, pulse, starts, position, *_ = schedule(factor * g[:, None], head, tail, full, np.zeros(M - 1), others,
+                                                         arc_rel)
+            return block_peak_ratios(position, starts, pulse, Td_np, limits)
 
         if limits is not None and M == 1:
             g = hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), np.ones(1, dtype=bool))
@@ -262,12 +287,9 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             max_rounds = MAX_ROUNDS + (2 * M if limits is not None else 0)
             tol_due = True  # the tolerance state changed since the last tolerance check
             for rounds in range(1, max_rounds + 1):
-                feeds, overlaps, pulse, starts, position, centre = state
-                pos_np = NumpyPiecewise(np.asarray(_primal(position.breaks)), np.asarray(_primal(position.coeffs)))
-                starts_np, centre_np = np.asarray(_primal(starts)), np.asarray(_primal(centre))
+                _, _, pulse_np, starts_np, pos_np, centre_np, _, durations = state
                 too_fast, slowed = False, False
                 if limits is not None and M > 1:
-                    pulse_np = np.asarray(_primal(pulse))
                     ratios = corner_limit_ratios(pos_np, starts_np, pulse_np, Td_np, limits)
                     own = own_span_ratios(pos_np, starts_np, pulse_np, Td_np, limits)
                     bad, own_bad = ratios > 1.0 + LIMIT_RTOL, own > 1.0 + LIMIT_RTOL
@@ -298,11 +320,10 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                 # nondecreasing in A and B), while windows of three or more blocks and arcs have no
                 # such proof -- hence the final check rather than trusting it.
                 if tol_due or not too_fast:
-                    if refine and M > 1:
-                        errors = vertex_distances(pos_np, tp.vertices, centre_np, 0.5 * Td_np)
+                    if refine:
+                        errors, deviation, at_vertex, at_block = checks(pos_np, starts_np, centre_np, durations, M > 1)
                     viol = errors > limit_v
                     if refine:
-                        deviation, at_vertex, at_block = path_deviations(pos_np, tp, starts_np, centre_np, Td_np, tb_np, check_period)
                         for j, e in at_vertex.items():
                             viol[j], errors[j] = True, max(errors[j], e)
                         for k, e in at_block.items():
@@ -362,7 +383,8 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                 heapq.heappush(queue, (max(bound, step), i, steps))
             except StopIteration as done:
                 repaired = done.value[3]
-                t = float(_primal(done.value[0][4].end - done.value[0][4].start))
+                breaks = done.value[0][4].breaks
+                t = float(breaks[-1] - breaks[0])
                 if t < best_time:
                     best, best_time = done.value, t
             if extra and repaired:
@@ -375,8 +397,12 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         capped = lambda: plans(np.minimum(base, safe_feed / F_np))  # noqa: E731
     best = verify(plans(base), capped)
     state, rounds, deviation, _ = best
-    feeds, overlaps, pulse, starts, position, centre = state
-    return FIRPlan(starts, pulse, overlaps, feeds, delays, position, centre, jnp.asarray(tp.vertices),
+    if traced:
+        feeds, overlaps, pulse, starts, position, centre = traced_plan(*state[6])
+    else:
+        feeds, overlaps, pulse, starts, centre = (jnp.asarray(state[i]) for i in (0, 1, 2, 3, 5))
+        position = PiecewisePolynomial(jnp.asarray(state[4].breaks), jnp.asarray(state[4].coeffs))
+    return FIRPlan(starts, pulse, overlaps, feeds, jnp.asarray(delays), position, centre, jnp.asarray(tp.vertices),
                    float(deviation), int(rounds), tp.axes)
 
 
@@ -408,6 +434,20 @@ def plan_fir_sweep(path, feed, delays, tolerances, *, limits: AxisLimits | None 
     own = tuple(float(_primal(p.cycle_time)) for p in plans)
     pick = envelope(vectors, own)
     return FIRSweep(tols, tuple(plans[i] for i in pick), pick, own)
+
+
+@jax.jit
+def _traced_build(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, corner, tol_vertex, delays, start, geo,
+                  gap, frac, real_corner):
+    """:func:`_timing_kernel` and ``build_profile`` in one compiled dispatch (the plan returned when
+    an input is a tracer). ``real_corner``: ``(M_pad - 1,)`` True on the path's corners (the others
+    are padding and get no gap). Returns ``(overlaps, block starts, block ends, position, centre)``
+    on the padded shapes."""
+    piece_tv, overlaps = _timing_kernel(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, corner, tol_vertex,
+                                        delays)
+    gaps = jnp.concatenate([jnp.where(real_corner, jnp.sum(delays) - overlaps, 0.0), jnp.zeros(1)])
+    starts, ends, position, centre = build_profile(start, geo, blk, gap, frac, piece_tv, gaps, delays)
+    return overlaps, starts, ends, position, centre
 
 
 @jax.jit

@@ -17,8 +17,10 @@ Paths of 2 axes may hold arcs (their plane is the xy plane); 1-axis paths hold l
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 
 from research.errors import PathError
@@ -292,6 +294,8 @@ class ToolPath:
         if near is not None:
             near = np.asarray(near, dtype=np.int64).reshape(-1, 1)
             blocks = np.concatenate([blocks, np.clip(near + np.arange(-1, 2)[None, :], 0, self.n_blocks - 1)], axis=1)
+        if not self.is_arc[blocks].any():  # lines only: one compiled pass, the same arithmetic
+            return _nearest_line(np.ascontiguousarray(q), np.ascontiguousarray(blocks), self.starts, self.ends)
         rows = np.repeat(np.arange(len(q)), blocks.shape[1])
         d = self._block_distance(q[rows], blocks.ravel()).reshape(blocks.shape)
         return d.min(axis=1)
@@ -327,6 +331,32 @@ class ToolPath:
 
             self._cache["tree"] = (cKDTree(centres), owner, float(step.max()))
         return self._cache["tree"]
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _nearest_line(q, blocks, starts, ends):
+    """``min_c`` of :meth:`ToolPath._block_distance` (line blocks) from ``q[i]`` to ``blocks[i, c]``:
+    the same projection, clamp and norm, summed in axis order as NumPy's reductions."""
+    N, C, d = q.shape[0], blocks.shape[1], q.shape[1]
+    out = np.empty(N)
+    for i in range(N):
+        best = np.inf
+        for c in range(C):
+            k = blocks[i, c]
+            ab2, dot = 0.0, 0.0
+            for a in range(d):
+                ab = ends[k, a] - starts[k, a]
+                ab2 += ab * ab
+                dot += (q[i, a] - starts[k, a]) * ab
+            u = min(max(dot / (ab2 if ab2 > 0 else 1.0), 0.0), 1.0)
+            acc = 0.0
+            for a in range(d):
+                ab = ends[k, a] - starts[k, a]
+                r = q[i, a] - (starts[k, a] + u * ab)
+                acc += r * r
+            best = min(best, math.sqrt(acc))
+        out[i] = best
+    return out
 
 
 def _lift(p: np.ndarray) -> np.ndarray:

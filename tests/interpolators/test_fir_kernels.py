@@ -124,3 +124,40 @@ def test_hinted_search_is_searchsorted_right():
         v = float(rng.integers(-2, 22)) + float(rng.choice([0.0, 0.5]))
         hint = int(rng.integers(-3, n + 4))
         assert _right_from(a, v, hint) == np.searchsorted(a, v, side="right")
+
+
+def test_scatter_max_is_numpys_maximum_at():
+    from research.interpolators._fir_kernels import scatter_max
+
+    rng = np.random.default_rng(1)
+    index, values = rng.integers(0, 50, 3000), rng.normal(size=3000)
+    want = np.full(60, -np.inf)
+    np.maximum.at(want, index, values)
+    got = np.full(60, -np.inf)
+    scatter_max(got, index, values)
+    np.testing.assert_array_equal(got, want)
+
+
+def test_sample_charges_match_the_vectorised_rule():
+    """Near corner, tolerance, violation and key of path samples against the NumPy statement of
+    the rule (nearest corner instant within T_d / 2; lines charge their vertex, arcs their block)."""
+    from research.interpolators._fir_kernels import sample_charges
+
+    rng = np.random.default_rng(2)
+    M, half = 40, 0.05
+    centre = np.sort(rng.uniform(0.0, 4.0, M - 1))
+    t = np.concatenate([np.sort(rng.uniform(-0.1, 4.1, 3000)), centre, [4.1]])
+    block = rng.integers(0, M, t.size)
+    tol = rng.uniform(0.01, 0.05, M)
+    dist = rng.uniform(0.0, 0.06, t.size)
+    arc = rng.random(M) < 0.3
+    limit, key, bad = sample_charges(t, centre, block, dist, tol, arc, half)
+    k = np.clip(np.searchsorted(centre, t), 1, M - 1)
+    j = np.where(np.abs(centre[k - 1] - t) <= np.abs(centre[np.minimum(k, M - 2)] - t), k - 1, np.minimum(k, M - 2))
+    close = np.abs(centre[j] - t) <= half
+    want_limit = np.where(close, np.minimum(tol[block], np.minimum(tol[:-1], tol[1:])[j]), tol[block])
+    want_key = np.where(close, j, np.where(~arc[block], np.clip(block, 0, M - 2), M - 1 + block))
+    np.testing.assert_array_equal(limit, want_limit)
+    np.testing.assert_array_equal(key, want_key)
+    np.testing.assert_array_equal(bad, dist > want_limit * (1 + 1e-9) + 1e-9)
+    assert close.any() and (~close).any() and (want_key >= M - 1).any()

@@ -1,0 +1,238 @@
+"""The FIR planner's schedule and exact profile on concrete arrays (NumPy + Numba), for its rounds.
+
+``plan_fir`` decides on primal values: which corners dwell, which feeds a window lowers, which
+corners a verification round repairs. Those rounds need the timing of a candidate (eq 5 pulse
+lengths, eq 13/14 overlaps) and its exact filtered profile, many times per plan; built with JAX
+(``fir._timing_kernel``, ``_fir_blocks.build_profile``) each costs a dispatch and a device sync,
+and XLA's moving average (a general merge by two searches and a gather) dominates long paths. Here
+the same formulas run on NumPy arrays: :func:`timing` mirrors ``fir._timing_kernel`` and
+:func:`profile` mirrors ``build_profile`` (the same pieces, padding included, so a plan built here
+has the same arrays as the JAX one up to rounding). The moving average of a piecewise polynomial
+(Sencer 2015 eq 1-4: ``y(t) = (C(t) - C(t - T)) / T`` with ``C`` the antiderivative) is one linear
+merge of the breaks ``b`` and ``b + T``, each new piece two Taylor re-centrings
+(:func:`_moving_average`), as ``research.piecewise.PiecewisePolynomial.moving_average``.
+
+JAX stays the differentiable form: ``plan_fir`` rebuilds the chosen plan with it when an input is
+a tracer (``jax.grad`` / ``jax.jacfwd``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import numba
+import numpy as np
+
+from research.interpolators._fir_overlap import overlap_time
+from research.piecewise import bucket_size
+
+_OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
+_overlap_jit = jax.jit(overlap_time)  # three or more filters: the optimistix inversion of H2
+
+
+def kernel_second_integral(r: np.ndarray, delays: np.ndarray) -> np.ndarray:
+    """``H2(r)`` of ``_fir_chain.kernel_second_integral`` in NumPy (same subsets, same order)."""
+    n = delays.size
+    r = np.asarray(r, dtype=np.float64)
+    total = np.zeros_like(r)
+    for bits in range(1 << n):
+        subset = np.array([(bits >> (n - 1 - i)) & 1 for i in range(n)], dtype=np.float64)  # itertools.product order
+        shift = np.sum(subset * delays)
+        total = total + (-1.0) ** int(subset.sum()) * np.maximum(r - shift, 0.0) ** (n + 1)
+    return total / (math.factorial(n + 1) * np.prod(delays))
+
+
+def overlaps(tolerance: np.ndarray, speed_change: np.ndarray, delays: np.ndarray) -> np.ndarray:
+    """``_fir_overlap.overlap_time`` (eq 13/14) on concrete arrays: the closed forms of one and two
+    filters in NumPy; three or more filters through the jitted JAX inversion (padded shapes)."""
+    d = np.sort(np.asarray(delays, dtype=np.float64))[::-1]
+    dF = np.asarray(speed_change, dtype=np.float64)
+    tol = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), dF.shape)
+    if d.size > 2:
+        m = dF.size
+        pad = bucket_size(m, 16) - m
+        out = _overlap_jit(np.pad(tol.ravel(), (0, pad), constant_values=1.0), np.pad(dF.ravel(), (0, pad), constant_values=1.0), d)
+        return np.asarray(out)[:m].reshape(dF.shape)
+    Td = float(d.sum())
+    turning = dF > 0
+    h_full = kernel_second_integral(np.array(0.5 * Td), d)
+    h = np.minimum(tol / np.where(turning, dF, 1.0), h_full)
+    if d.size == 1:
+        Tk = np.sqrt(8.0 * d[0] * h)  # eq 13
+    else:
+        T1, T2 = d[0], d[1]
+        in_first = h <= T2**2 / (6.0 * T1)
+        first = np.cbrt(48.0 * T1 * T2 * h)  # eq 14, first branch
+        second = T2 + np.sqrt(np.where(in_first, 1.0, 8.0 * T1 * h - T2**2 / 3.0))  # eq 14, second branch
+        Tk = np.where(in_first, first, second)
+    return np.where(turning & (h < h_full), np.clip(Tk, 0.0, Td), Td)
+
+
+def timing(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, full, shrink, others, tol_vertex, delays):
+    """``fir._timing_kernel`` on the real corners (``M - 1``), NumPy: the pulse length of every
+    piece ``(P,)`` [s] (eq 5 at its feed) and the overlap of every corner ``(M - 1,)`` [s] (eq 13/14,
+    or ``T_d`` at full overlap, times its shrink factor)."""
+    piece_tv = lengths_p[blk] / (feeds_p[blk] * piece_factor)
+    M = tol_vertex.size + 1
+    f_in = feeds_p[:M] * piece_factor[motion_ends[0][:M]]
+    f_out = feeds_p[:M] * piece_factor[motion_ends[1][:M]]
+    x = f_in[1:, None] * tangents[0][1:M] - f_out[:-1, None] * tangents[1][: M - 1]
+    s = np.sum(x * x, axis=-1)
+    dF = np.where(s > 0, np.sqrt(np.where(s > 0, s, 1.0)), 0.0)
+    Td = float(np.sum(delays))
+    ov = np.where(full, Td, overlaps(np.maximum(tol_vertex - others, 0.0), dF, delays)) if M > 1 else np.zeros(0)
+    return piece_tv, ov * shrink
+
+
+def profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
+    """``_fir_blocks.build_profile`` on concrete arrays (same arguments and results, NumPy):
+    ``(block_starts, block_ends, breaks, coeffs, centre)`` with the position profile as its breaks
+    ``(K + 1,)`` and ascending local coefficients ``(K, D, d)``."""
+    return _profile(np.ascontiguousarray(start, dtype=np.float64), np.ascontiguousarray(geo, dtype=np.float64),
+                    np.ascontiguousarray(block), np.ascontiguousarray(gap), np.ascontiguousarray(fraction, dtype=np.float64),
+                    np.ascontiguousarray(piece_tv, dtype=np.float64), np.ascontiguousarray(gaps, dtype=np.float64),
+                    np.ascontiguousarray(delays, dtype=np.float64))
+
+
+@numba.njit(**_OPTIONS)
+def _antiderivative(breaks, coeffs, initial):
+    """Integral from ``breaks[0]`` plus ``initial`` ``(A,)`` (``PiecewisePolynomial.antiderivative``)."""
+    K, D, A = coeffs.shape
+    out = np.empty((K, D + 1, A))
+    acc = np.zeros(A)
+    hp = np.empty(D)
+    for i in range(K):
+        h = breaks[i + 1] - breaks[i]
+        hp[0] = h
+        for m in range(1, D):
+            hp[m] = hp[m - 1] * h  # h^(m + 1) by products (a C pow costs tens of ns)
+        for a in range(A):
+            s = 0.0
+            for m in range(D):
+                c = coeffs[i, m, a] / (m + 1.0)
+                out[i, m + 1, a] = c
+                s += c * hp[m]
+            acc[a] += s
+            out[i, 0, a] = (acc[a] - s) + initial[a]
+    return out
+
+
+@numba.njit(**_OPTIONS)
+def _add_shifted(src, k, delta, sign, out, p, c):
+    """``out[p] += sign * src[k]`` re-centred by ``delta``: the Taylor shift of ascending
+    coefficients ``(D, A)`` of ``research.piecewise._taylor_shift``; ``c`` ``(D, A)`` is scratch."""
+    D, A = src.shape[1], src.shape[2]
+    for m in range(D):
+        for a in range(A):
+            c[m, a] = src[k, m, a]
+    for i in range(D - 1):
+        for m in range(D - 2, i - 1, -1):
+            for a in range(A):
+                c[m, a] = c[m, a] + delta * c[m + 1, a]
+    for m in range(D):
+        for a in range(A):
+            out[p, m, a] += sign * c[m, a]
+
+
+@numba.njit(**_OPTIONS)
+def _moving_average(breaks, coeffs, delay):
+    """``PiecewisePolynomial.moving_average`` (Sencer 2015 eq 1): breaks ``(K' + 1,)`` and
+    coefficients ``(K', D + 1, A)`` of ``(C(t) - C(t - T)) / T``, ``C`` the antiderivative of a
+    function that is zero outside its breaks, on the ``K' <= 2K + 1`` pieces of positive length of
+    the merge of ``b`` and ``b + T`` (the JAX form keeps the empty ones too)."""
+    K, D, A = coeffs.shape
+    # C and, as row K, its end value after its last break (Horner on the last piece)
+    C = np.zeros((K + 1, D + 1, A))
+    C[:K] = _antiderivative(breaks, coeffs, np.zeros(A))
+    h = breaks[K] - breaks[K - 1]
+    for a in range(A):
+        v = C[K - 1, D, a]
+        for m in range(D - 1, -1, -1):
+            v = v * h + C[K - 1, m, a]
+        C[K, 0, a] = v
+    n = 2 * (K + 1)
+    new_breaks = np.empty(n)
+    now, before = np.empty(n - 1, np.int64), np.empty(n - 1, np.int64)
+    i, j = 0, 0  # breaks of C(t) taken, breaks of C(t - T) taken (ties: C(t) first)
+    for p in range(n):
+        if j > K or (i <= K and breaks[i] <= breaks[j] + delay):
+            new_breaks[p] = breaks[i]
+            i += 1
+        else:
+            new_breaks[p] = breaks[j] + delay
+            j += 1
+        if p < n - 1:
+            # piece i - 1 of C holds the new piece at t, piece j - 1 at t - T (-1: before breaks[0],
+            # where C is zero; K: after breaks[K], where C holds its end value)
+            now[p], before[p] = i - 1, j - 1
+    # keep the pieces of positive length only: an empty one is never evaluated (a right search
+    # takes the next piece), integrates to 0, and the next filter's pieces that would take their
+    # coefficients from it are empty too; the breaks are the same values, the function the same
+    keep = np.zeros(n - 1, np.bool_)
+    for p in range(n - 1):
+        keep[p] = new_breaks[p + 1] > new_breaks[p]
+    count = max(int(keep.sum()), 1)
+    if not keep.any():
+        keep[0] = True
+    out = np.zeros((count, D + 1, A))
+    out_breaks = np.empty(count + 1)
+    out_breaks[0] = new_breaks[0]
+    scratch = np.empty((D + 1, A))
+    q = 0
+    for p in range(n - 1):
+        if not keep[p]:
+            continue
+        left = new_breaks[p]
+        out_breaks[q + 1] = new_breaks[p + 1]
+        _add_shifted(C, now[p], left - breaks[now[p]], 1.0, out, q, scratch)
+        if before[p] >= 0:
+            _add_shifted(C, before[p], (left - delay) - breaks[before[p]], -1.0, out, q, scratch)
+        for m in range(D + 1):
+            for a in range(A):
+                out[q, m, a] = out[q, m, a] / delay
+        q += 1
+    return out_breaks, out
+
+
+@numba.njit(**_OPTIONS)
+def _profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
+    P, D, A = geo.shape
+    Mp = gaps.size
+    breaks = np.empty(P + 1)
+    coeffs = np.empty((P, D, A))
+    breaks[0] = 0.0
+    acc = 0.0
+    for i in range(P):
+        b = block[i]
+        if gap[i]:
+            dur = gaps[b] if b < Mp else 0.0
+        else:
+            dur = fraction[i] * piece_tv[i]
+        acc += dur
+        breaks[i + 1] = max(breaks[i], acc)  # cummax of the running sum
+        inv = 1.0 / piece_tv[i]
+        s = inv
+        for m in range(D):  # d/dt = (1 / T_v) d/du: the u'^m coefficient over T_v^(m + 1)
+            for a in range(A):
+                coeffs[i, m, a] = 0.0 if gap[i] else geo[i, m, a] * s
+            s *= inv
+    vb, vc = breaks, coeffs
+    for k in range(delays.size):
+        vb, vc = _moving_average(vb, vc, delays[k])
+    position = _antiderivative(vb, vc, start)
+    starts, ends, centre = np.empty(Mp), np.empty(Mp), np.empty(Mp)
+    Td = 0.0
+    for k in range(delays.size):
+        Td += delays[k]
+    first = 0
+    for k in range(Mp):
+        while first < P and block[first] < k:
+            first += 1
+        last = first
+        while last < P and block[last] <= k:
+            last += 1
+        starts[k] = breaks[first]
+        ends[k] = breaks[last] - gaps[k]
+        centre[k] = ends[k] + 0.5 * gaps[k] + 0.5 * Td
+    return starts, ends, vb, position, centre

@@ -1,0 +1,132 @@
+"""The planner's concrete-array schedule and profile (``_fir_profile``) and its local re-checks
+(``_fir_verify.RoundChecks``) against independent computations.
+
+References: the moving average of a piecewise-constant function integrated exactly from its steps
+(Sencer 2015 eq 1: ``y(t) = (1 / T) integral_{t - T}^t x``); eq 14's two closed-form branches as
+printed in ``_fir_overlap``'s docstring; the JAX build (``_fir_blocks.build_profile``, another
+implementation: a merge by searches, XLA's sums); full checks on the whole profile. Nothing is
+compared with the planner's earlier output."""
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from research.interpolators import _fir_profile
+from research.interpolators._fir_blocks import PulseTable, build_profile
+from research.interpolators._fir_overlap import overlap_time
+from research.interpolators._fir_verify import RoundChecks, path_deviations, vertex_distances
+from research.paths import Polyline
+from research.paths.library import random_program
+from research.paths.toolpath import ToolPath
+from research.piecewise import NumpyPiecewise
+
+
+def test_moving_average_is_the_window_mean_of_the_steps():
+    """One filter on random steps (zero-length pieces included): the value at any time is the exact
+    mean of the steps over the last ``T`` (integrated step by step here)."""
+    rng = np.random.default_rng(0)
+    widths = np.where(rng.random(40) < 0.3, 0.0, rng.uniform(0.001, 0.05, 40))
+    breaks = np.concatenate([[0.0], np.cumsum(widths)])
+    values = rng.normal(size=(40, 2))
+    T = 0.037
+    b, c = _fir_profile._moving_average(breaks, values[:, None, :], T)
+    t = rng.uniform(0.0, breaks[-1] + T, 300)
+    got = NumpyPiecewise(b, c)(t)
+    lo = np.clip(t[:, None] - T, breaks[None, :-1], breaks[None, 1:])
+    hi = np.clip(t[:, None], breaks[None, :-1], breaks[None, 1:])
+    want = (hi - lo) @ values / T
+    assert np.max(np.abs(got - want)) <= 1e-12 * np.max(np.abs(values))
+
+
+@pytest.mark.parametrize("delays", [(0.06, 0.03), (0.05, 0.03, 0.02)])
+def test_profile_matches_the_jax_build(delays):
+    """Lines and arcs, random head/tail shares, feeds and gaps: the same starts, ends and corner
+    instants (to rounding) and the same position (to 1e-9 mm) as ``build_profile``; the motion ends
+    on the path's end point."""
+    rng = np.random.default_rng(4)
+    tp = random_program(np.random.default_rng(2), arcs=True)
+    assert tp.is_arc.any() and (~tp.is_arc).any()
+    table = PulseTable.from_path(tp)
+    M, Mp = tp.n_blocks, table.m_pad
+    d = np.asarray(delays)
+    head, tail = rng.uniform(0.0, 0.4, M), rng.uniform(0.0, 0.4, M)
+    frac, factor = table.pieces(head, tail, rng.uniform(0.3, 1.0, (M, 3)), rng.uniform(0.5, 1.0, table.arc_pieces.size))
+    piece_tv = np.concatenate([tp.lengths, np.ones(Mp - M + 1)])[table.block] / (150.0 * factor)
+    gaps = np.concatenate([rng.uniform(0.0, d.sum(), M - 1), np.zeros(Mp - M + 1)])
+    args = (tp.start, table.geo, table.block, table.gap, frac, piece_tv, gaps, d)
+    starts, ends, breaks, coeffs, centre = _fir_profile.profile(*args)
+    s_j, e_j, pos_j, c_j = build_profile(*(jnp.asarray(a) for a in args))
+    for got, want in ((starts, s_j), (ends, e_j), (centre, c_j)):
+        np.testing.assert_allclose(got, np.asarray(want), rtol=1e-12, atol=1e-12)
+    t = np.linspace(0.0, float(breaks[-1]), 4001)
+    ours = NumpyPiecewise(breaks, coeffs)
+    theirs = NumpyPiecewise(np.asarray(pos_j.breaks), np.asarray(pos_j.coeffs))
+    assert np.max(np.abs(ours(t) - theirs(t))) <= 1e-9
+    assert np.max(np.abs(ours(t, 1) - theirs(t, 1))) <= 1e-7  # mm/s
+    np.testing.assert_allclose(ours(np.array([breaks[-1]]))[0], tp.ends[-1], atol=1e-9)
+
+
+def test_overlaps_follow_eq14_and_the_jax_inversion():
+    """Two filters: eq 14's branches, ``(24 T1 T2 eps / (F sin(b/2)))^(1/3)`` up to ``2 T2`` and
+    ``T2 + sqrt(4 T1 eps / (F sin(b/2)) - T2^2 / 3)`` beyond (with ``|dF| = 2 F sin(b/2)``); full
+    overlap where even ``T_d`` keeps the tolerance. Three filters: the JAX inversion of ``H2``."""
+    T1, T2 = 0.06, 0.03
+    F, eps = 200.0, np.array([1e-4, 5e-3, 0.05, 1.0, 2.0, 10.0])
+    sin_half = np.full(eps.size, np.sin(np.radians(45.0)))
+    got = _fir_profile.overlaps(eps, 2.0 * F * sin_half, np.array([T2, T1]))  # any order of delays
+    first = np.cbrt(24.0 * T1 * T2 * eps / (F * sin_half))
+    second = T2 + np.sqrt(np.maximum(4.0 * T1 * eps / (F * sin_half) - T2**2 / 3.0, 0.0))
+    want = np.where(first <= 2.0 * T2, first, np.minimum(second, T1 + T2))
+    assert np.any(first <= 2 * T2) and np.any((first > 2 * T2) & (second < T1 + T2))  # both branches
+    np.testing.assert_allclose(got, want, rtol=1e-12)
+    assert got[-1] == T1 + T2
+    three = np.array([0.05, 0.03, 0.02])
+    dF = np.linspace(1.0, 300.0, 7)
+    np.testing.assert_allclose(_fir_profile.overlaps(0.01, dF, three), np.asarray(overlap_time(0.01, dF, three)),
+                               rtol=1e-14)
+
+
+def _zigzag_profile(feed_scale):
+    rng = np.random.default_rng(5)
+    pts = np.cumsum(np.column_stack([rng.uniform(0.5, 3.0, 80), rng.uniform(-1.0, 1.0, 80)]), axis=0)
+    tp = ToolPath.from_polyline(Polyline(pts))
+    table = PulseTable.from_path(tp)
+    M, Mp = tp.n_blocks, table.m_pad
+    d = np.array([0.06, 0.03])
+    frac, factor = table.pieces(np.zeros(M), np.zeros(M), np.repeat(feed_scale[:, None], 3, axis=1))
+    piece_tv = np.concatenate([tp.lengths, np.ones(Mp - M + 1)])[table.block] / (100.0 * factor)
+    gaps = np.concatenate([np.full(M - 1, 0.01), np.zeros(Mp - M + 1)])
+    starts, ends, breaks, coeffs, centre = _fir_profile.profile(tp.start, table.geo, table.block, table.gap, frac,
+                                                                piece_tv, gaps, d)
+    durations = np.where(table.gap, np.append(gaps, 0.0)[table.block], frac * piece_tv)
+    return tp, table, NumpyPiecewise(breaks, coeffs), starts[:M], centre[: M - 1], durations, float(d.sum())
+
+
+def test_round_checks_redo_only_the_changed_stretch_and_agree_with_full_checks():
+    """First call: exactly the full checks. After slowing two blocks: every vertex error equals the
+    full recomputation on the new profile (to 1e-9 mm: unchanged windows are the old output shifted
+    in time) and fewer path samples are taken. The sampled deviations of stretches not redone were
+    taken on the grid of an earlier check, shifted against the new one: each is within the
+    sampling bound ``v_max check_period / 2`` of a full check's (the distance to the path changes
+    at most at the trajectory's speed), and a corner flagged by one check only is within it of
+    the tolerance."""
+    scale = np.ones(80)
+    tp, table, pos, starts, centre, durations, Td = _zigzag_profile(scale)
+    tol = np.full(80, 0.02)
+    checks = RoundChecks(tp, tol, table.block, Td, 1e-3)
+    errors, dev, at_v, at_b = checks(pos, starts, centre, durations, True)
+    np.testing.assert_array_equal(errors, vertex_distances(pos, tp.vertices, centre, 0.5 * Td))
+    assert (dev, at_v, at_b) == path_deviations(pos, tp, starts, centre, Td, tol, 1e-3)
+    assert len(at_v) > 5  # the tolerance is broken at some corners: a real check
+    full_samples = checks.samples
+    scale[[30, 31]] = 0.5
+    tp, table, pos, starts, centre, durations, Td = _zigzag_profile(scale)
+    errors, dev, at_v, _ = checks(pos, starts, centre, durations, True)
+    np.testing.assert_allclose(errors, vertex_distances(pos, tp.vertices, centre, 0.5 * Td), rtol=0, atol=1e-9)
+    assert checks.samples < 0.5 * full_samples
+    dev_full, at_full, _ = path_deviations(pos, tp, starts, centre, Td, tol, 1e-3)
+    bound = 0.5 * 1e-3 * np.max(np.linalg.norm(pos(np.linspace(0.0, pos.breaks[-1], 20001), 1), axis=1))
+    assert abs(dev - dev_full) <= bound
+    for j in set(at_v) | set(at_full):
+        a, b = at_v.get(j, tol[0]), at_full.get(j, tol[0])
+        assert abs(a - b) <= bound
