@@ -394,24 +394,11 @@ def position(layout: Layout, z: np.ndarray, t: np.ndarray, nu: int = 0) -> np.nd
     return out
 
 
-def hessian_of_lagrangian(nlp) -> ca.Function:
-    """``triu(d^2 (lam_f f + lam_g . g) / dz^2)`` of an SX ``nlp``, in the form ``nlpsol``'s
-    ``hess_lag`` option takes. The same matrix IPOPT's default builds; built this way (one
-    ``ca.hessian`` of the scalar Lagrangian) its construction took 5.1 s against ``nlpsol``'s own
-    7.1 s on the zigzag's NLP (2,981 rows, 88 variables), with identical iterates."""
-    z, f, g = nlp["x"], nlp["f"], nlp["g"]
-    lam_f, lam_g = ca.SX.sym("lam_f"), ca.SX.sym("lam_g", g.shape[0])
-    H = ca.triu(ca.hessian(lam_f * f + ca.dot(lam_g, g), z)[0])
-    return ca.Function("nlp_hess_l", [z, ca.SX.sym("p", 0), lam_f, lam_g], [H], ["x", "p", "lam_f", "lam_g"],
-                       ["triu_hess_gamma_x_x"])
-
-
 def solve(nlp, lbg, ubg, z0, lo, hi, max_iter: int, options=None):
-    """IPOPT on ``nlp`` from ``z0`` (exact Hessian, :func:`hessian_of_lagrangian`): ``(z,
-    multipliers of g, status, iterations)``."""
+    """IPOPT on ``nlp`` from ``z0``: ``(z, multipliers of g, status, iterations)``."""
     solver = ca.nlpsol("fir_smooth", "ipopt", nlp, {
         "ipopt.print_level": 0, "print_time": False, "ipopt.max_iter": int(max_iter), "ipopt.tol": 1e-9, "ipopt.constr_viol_tol": 1e-10, "ipopt.bound_relax_factor": 0.0,
-        "ipopt.mu_strategy": "adaptive", "ipopt.sb": "yes", "hess_lag": hessian_of_lagrangian(nlp), **(options or {})})
+        "ipopt.mu_strategy": "adaptive", "ipopt.sb": "yes", **(options or {})})
     lo_f, hi_f = np.where(np.isfinite(lo), lo, -1e20), np.where(np.isfinite(hi), hi, 1e20)
     res = solver(x0=np.clip(z0, lo, hi), lbx=lo_f, ubx=hi_f, lbg=lbg, ubg=ubg)
     stats = solver.stats()
