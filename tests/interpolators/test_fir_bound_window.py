@@ -89,7 +89,7 @@ def test_bound_below_plans_on_random_programs():
         tp = random_program(np.random.default_rng(seed), arcs=False)
         path = Polyline(np.vstack([tp.start, tp.ends]))
         plan = plan_fir(path, F, DELAYS, EPS)
-        bound, _ = window_lower_bound(path, F, DELAYS, EPS, ds=1e-4)
+        bound, _ = window_lower_bound(path, F, DELAYS, EPS, ds=1e-4, n_directions=24)
         assert bound <= float(plan.cycle_time)
 
 
@@ -107,7 +107,7 @@ def test_bound_does_not_grow_with_the_tolerance():
     """l*_k is the least loss with m(l) <= eps and m does not depend on eps: a looser tolerance
     never raises the bound."""
     path = short_path(5)
-    values = [window_lower_bound(path, F, DELAYS, e, ds=1e-4)[0] for e in (0.02, 0.05, 0.2)]
+    values = [window_lower_bound(path, F, DELAYS, e, ds=1e-4, n_directions=24)[0] for e in (0.02, 0.05, 0.2)]
     assert values[0] >= values[1] >= values[2]
 
 
