@@ -23,8 +23,9 @@ shorter leg (so the losses of neighbouring corners lie on disjoint stretches and
 whole leg where it ends the path (the reference rests there). The window must hold only points of
 the two legs: the bound is stated only where ``F T_d <= L`` for every leg that does not end the path (a window
 holds the passage of ``V`` and spans ``T_d``; long-block paths: corner90, the diamond);
-elsewhere only the trivial ``sum L / F + T_d`` is returned. Limits are not used: the bound holds
-for every limit set, and a plan that meets it is optimal within the family.
+elsewhere only the trivial ``sum L / F + T_d`` is returned (``_fir_window_bound`` (B2) bounds
+those paths). Limits are not used: the bound holds for every limit set, and a plan that meets it
+is optimal within the family.
 """
 
 from __future__ import annotations

@@ -18,7 +18,9 @@ profile in closed form (each pulse filtered is a B-spline CDF) with the order of
 fixed, so that every constraint above, and the residual vibration of given structural modes, is
 smooth; IPOPT solves that, the order is re-linearised at the answer a bounded number of times, and
 only answers verified on the exact profile are kept. The older SLSQP runs (``"paper"``,
-``"safe"``) work on the exact profile directly:
+``"safe"``) work on the exact profile directly (below). The best verified answer is then polished
+(``_fir_polish``: overlaps and block feeds raised one at a time, every move verified exactly).
+
 
 The profile is the one ``plan_fir`` builds (``_fir_blocks.build_profile``: exact piecewise
 polynomial, differentiable in ``T_k`` and ``F_k``); peaks are exact per piece (ends, and where the
@@ -56,6 +58,7 @@ from research.errors import ParameterError, PathError
 from research.interpolators._fir_blocks import build_profile
 from research.interpolators._fir_chain import check_delays
 from research.interpolators._fir_limits import DEGENERATE_PIECE, LIMIT_RTOL, corner_peak_ratios, feed_caps
+from research.interpolators._fir_polish import polish
 from research.interpolators._fir_reorder import mode_tuples, profile_residuals, smooth_search
 from research.interpolators._fir_verify import corner_distances, path_deviations
 from research.interpolators.fir import CHECK_PERIOD, FIRPlan, _as_toolpath, _pulse_table, plan_fir
@@ -105,13 +108,14 @@ def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: 
         piece_shares: fixed shares of each block's pieces in the ``"smooth"`` search (default: head,
             body and tail of 1/4, 1/2, 1/4 on paths of up to :data:`_PIECED` blocks, one piece
             per block beyond: the NLP grows with the number of breaks).
-        full_output: also return a dict ``{"start_time", "runs", "kept", "quiet", "wall_time"}``: cycle time
+        full_output: also return a dict ``{"start_time", "runs", "kept", "quiet", "polish", "wall_time"}``: cycle time
             of the feasible start plan [s]; per start its SLSQP iterations, message, the solver's
             own cycle time [s], the share ``backtrack`` of the step to it kept feasible (NaN: an
             earlier iterate was kept) and the resulting time [s] (``"smooth"``: per NLP round its
             ``time``, ``status``, ``iterations``, ``verified``, ``margin``, ``swaps``); ``"optimized"``
             or ``"plan_fir"``; ``"quiet"``: the result meets the residual bound (True without
-            ``modes``); wall time [s].
+            ``modes``); ``"polish"``: cycle time [s] ``before`` and ``after`` the verified coordinate
+            ascent of ``_fir_polish`` and its number of exact ``checks``; wall time [s].
 
     Returns:
         A :class:`FIRPlan` (``rounds`` = 0), or ``(plan, info)`` with ``full_output``; the
@@ -205,6 +209,16 @@ def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: 
                 x_best, t_best = x_run, problem.time(x_run)
                 run["time"], run["backtrack"] = t_best, theta
         runs.append(run)
+    polished = {"before": t_best, "after": t_best, "checks": 0}
+    if np.isfinite(t_best):  # x_best verified (tolerance, limits and, with modes, the residual)
+        def verified(x):
+            if not problem.feasible(x, check_period):
+                return False
+            return not modes or bool(np.all(profile_residuals(problem.plan(x, check_period).position, modes)
+                                            <= residual * (1 + 1e-6) + 1e-9))
+
+        x_best, polished["checks"] = polish(problem, x_best, verified)
+        t_best = polished["after"] = problem.time(x_best)
     plan = problem.plan(x_best, check_period)
     kept = "optimized"
     # never slower than the limit-holding plan_fir, where that plan holds the limits (exact peaks)
@@ -214,7 +228,7 @@ def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: 
     if not full_output:
         return plan
     quiet = not modes or bool(np.all(profile_residuals(plan.position, modes) <= residual * (1 + 1e-6) + 1e-9))
-    return plan, {"start_time": t_safe, "runs": runs, "kept": kept, "quiet": quiet,
+    return plan, {"start_time": t_safe, "runs": runs, "kept": kept, "quiet": quiet, "polish": polished,
                   "wall_time": time.perf_counter() - t_wall}
 
 

@@ -97,3 +97,27 @@ def test_bad_input():
         optimize_fir(path, F, DELAYS, EPS, modes=[(0, -1.0, 0.02)])
     with pytest.raises(ParameterError, match="starts"):
         optimize_fir(path, F, DELAYS, EPS, starts=("nowhere",))
+
+
+def test_polish_reaches_the_paper_overlaps_from_exact_stops():
+    """_fir_polish from exact stops on three corners (90, 45, 120 deg) of 50 mm legs (longer than
+    F T_d: the corners do not interact) at feed F, no limits: the overlaps it finds are eq 14's
+    (``overlap_time``, Sencer 2015: the largest overlap whose corner error is eps) to the
+    bisection's resolution; the plan it returns verifies exactly and is faster than the start."""
+    from research.interpolators._fir_optimize import _Problem
+    from research.interpolators._fir_overlap import overlap_time
+    from research.interpolators._fir_polish import polish
+    from research.interpolators.fir import CHECK_PERIOD
+
+    heading = np.radians(np.cumsum([0.0, 90.0, 45.0, 120.0]))
+    steps = 50.0 * np.column_stack([np.cos(heading), np.sin(heading)])
+    path = Polyline(np.vstack([[0.0, 0.0], np.cumsum(steps, axis=0)]))
+    d = np.asarray(DELAYS)
+    problem = _Problem(path, F, d, EPS, None, 2e-3)
+    x0 = np.concatenate([np.zeros(3), np.ones(12), np.full(8, 0.25)])
+    assert problem.feasible(x0, CHECK_PERIOD)
+    x, checks = polish(problem, x0, lambda y: problem.feasible(y, CHECK_PERIOD))
+    expect = np.asarray(overlap_time(EPS, 2 * F * np.sin(np.radians([45.0, 22.5, 60.0])), d))
+    assert checks > 0 and problem.feasible(x, CHECK_PERIOD) and problem.time(x) < problem.time(x0)
+    np.testing.assert_allclose(x[:3] * d.sum(), expect, atol=d.sum() / 64)
+    np.testing.assert_array_equal(x[3:], x0[3:])  # feeds already at F, shares untouched
