@@ -23,17 +23,29 @@ from research.piecewise import bucket_size
 _overlap_jit = jax.jit(overlap_time)  # eq 13/14 on concrete, padded arrays (one dispatch)
 
 
-def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in, t_out):
-    """Candidate plans, one per dwell rule, each ``(factor, head, tail, full, others, arc_rel)``:
-    feed factors ``(M, 3)`` (head, body, tail), head and tail shares ``(M,)``, full-overlap flags
-    ``(M - 1,)``, the tolerance other turns take at dwell corners ``(M - 1,)`` and the slow-down of
-    every sub-arc ``(A,)`` (a window reaching into an arc slows only the sub-arcs it covers).
+#: The dwell decisions of the tolerances ``eps * NEST_RATIO^k``, ``k = 1 .. NEST_STEPS``, are offered
+#: at ``eps`` as well (nesting in eps, module docstring). Swept in benchmarks/README.md (bench_cam
+#: section): ratio 2^-1/2 and 4 steps (down to eps / 4).
+NEST_RATIO = 2.0 ** -0.5
+NEST_STEPS = 4
 
-    The rule decides where eq 13/14's dwell may replace a slow-down: ``"budget"`` gives the dwell
-    what the other direction changes of its window leave of the tolerance at full overlap
-    (triangle inequality; right for curves cut into chords), ``"isolated"`` gives it the whole
-    tolerance (right for isolated corners and for zigzags whose neighbours dwell too). Both are
-    verified; the faster plan is kept."""
+
+def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in, t_out):
+    """Candidate plans, each ``(factor, head, tail, full, others, arc_rel)``: feed factors ``(M, 3)``
+    (head, body, tail), head and tail shares ``(M,)``, full-overlap flags ``(M - 1,)``, the
+    tolerance other turns take at dwell corners ``(M - 1,)`` and the slow-down of every sub-arc
+    ``(A,)`` (a window reaching into an arc slows only the sub-arcs it covers).
+
+    A candidate is a set of dwell vertices (the rest run at full overlap) and the dwell corners'
+    tolerance rule; its feeds and overlaps are then those of ``tol_v`` (eq 13/14 at the dwell
+    corners, the window feeds of the other vertices on the chain without the dwell turns). The
+    rule says how much of the tolerance a dwell corner may use: ``"budget"`` gives it what the
+    other direction changes of its window leave at full overlap (triangle inequality; right for
+    curves cut into chords), ``"isolated"`` the whole tolerance (right for isolated corners and
+    zigzags whose neighbours dwell too). The dwell sets: where the dwell is estimated cheaper than
+    the slow-down (both rules), every vertex that can dwell, none (:func:`_dwell_sets`) -- decided
+    at ``tol_v`` and at each tighter tolerance ``tol_v * NEST_RATIO^k`` (module docstring: why).
+    All are verified; the fastest verified plan is kept."""
     M = tp.n_blocks
     Td = float(delays.sum())
     F = F_cmd * base
@@ -51,14 +63,25 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
 
     every = chain(np.ones(M - 1, dtype=bool))
     d_all = every.displacement(s_v, Fv)
-    # what the other direction changes in the window add at full overlap: eq 13/14's dwell gets the
-    # rest of the tolerance (triangle inequality), and is valid only where some is left
-    budget = tol_v - np.linalg.norm(d_all - Fv[:, None] * du * h_full, axis=1)
+    # what the other direction changes in the window add at full overlap (tolerance-free): a dwell
+    # under the "budget" rule gets the rest of the tolerance (triangle inequality), if any is left
+    other = np.linalg.norm(d_all - Fv[:, None] * du * h_full, axis=1)
     e_all = np.linalg.norm(d_all, axis=1)
-    need = e_all > tol_v
-    f_w = Fv.copy()
-    f_w[need] = every.largest_feed(s_v[need], Fv[need], tol_v[need], e_all[need])
+    # row 0: the tolerance itself; rows 1 .. NEST_STEPS: the tighter ones whose dwell sets are offered too
+    levels = tol_v[None, :] * (NEST_RATIO ** np.arange(NEST_STEPS + 1))[:, None]
+    need = e_all > levels
+    f_lv = np.broadcast_to(Fv, levels.shape).copy()
+    k_q, j_q = np.nonzero(need)
+    if k_q.size:  # window feeds on the whole chain, every level in one root search
+        f_lv[k_q, j_q] = every.largest_feed(s_v[j_q], Fv[j_q], levels[k_q, j_q], e_all[j_q])
+    budget = levels - other
+    # eq 13/14 overlaps for the two tolerances a dwell may use, at every level (one compiled call)
+    K1, pad = levels.shape[0], bucket_size(M - 1, 16) - (M - 1)
+    both = np.pad(np.concatenate([np.maximum(budget, 0.0), levels]), ((0, 0), (0, pad)), constant_values=1.0)
+    Tk = np.asarray(_overlap_jit(both, np.tile(np.pad(dF, (0, pad), constant_values=1.0), (2 * K1, 1)), delays))[:, : M - 1]
+    Tk_budget, Tk_whole = Tk[:K1], Tk[K1:]
     reach = Fv * every.rho.max()  # a window at a feed <= Fv sums the turns strictly inside s_v +- reach
+    f_w = f_lv[0]
     memo = {}
 
     def feeds_without(gap):
@@ -75,37 +98,54 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
             memo[key] = f[~gap]
         return memo[key]
 
-    # eq 13/14 overlaps for the two tolerances a dwell may use (one compiled call, padded shapes)
-    pad = bucket_size(M - 1, 16) - (M - 1)
-    both = np.pad(np.stack([np.maximum(budget, 0.0), tol_v]), ((0, 0), (0, pad)), constant_values=1.0)
-    Tk_budget, Tk_whole = np.asarray(_overlap_jit(both, np.tile(np.pad(dF, (0, pad), constant_values=1.0), (2, 1)), delays))[:, : M - 1]
+    L = tp.lengths
+    sets, seen = [], set()
+    for k in range(K1):
+        for rule, gap in _dwell_sets(L, Td, Fv, f_lv[k], need[k], levels[k], budget[k], Tk_budget[k], Tk_whole[k]):
+            # the dwell set and rule define the candidate; at tol_v a vertex that needs a slow-down
+            # and has no feed (zero tolerance) stops exactly whatever the set
+            gap = gap | (need[0] & ((f_w <= 0) | (tol_v <= 0)))
+            key = (rule if gap.any() else 1, gap.tobytes())
+            if key not in seen:
+                seen.add(key)
+                sets.append((rule, gap))
     out = []
-    for rule_budget, Tk, choice in ((budget, Tk_budget, "cost"), (tol_v, Tk_whole, "cost"), (tol_v, Tk_whole, "all"),
-                                    (tol_v, Tk_whole, "none")):
-        c = _dwell_rule(tp, table, F_cmd, F, Fv, f_w, need, rule_budget, Tk, delays, tol_v, s_v, feeds_without, choice)
+    for rule, gap in sets:
+        c = _candidate(tp, table, F_cmd, F, gap, (budget[0], tol_v)[rule], delays, tol_v, s_v, feeds_without)
         if not any(np.array_equal(c[3], o[3]) and np.array_equal(c[4], o[4]) for o in out):
             out.append(c)
     return out
 
 
-def _dwell_rule(tp, table, F_cmd, F, Fv, f_w, need, budget, Tk, delays, tol_v, s_v, feeds_without, choice="cost"):
-    """One candidate of :func:`look_ahead` for the tolerance ``budget`` a dwell corner may use
-    (``Tk``: its eq 13/14 overlaps); ``choice`` says which vertices that need a slow-down dwell
-    instead: those where the dwell is estimated cheaper (``"cost"``), all that can (``"all"``),
-    none that need not (``"none"``)."""
-    M = tp.n_blocks
-    Td = float(delays.sum())
-    # dwell where it costs less than the slow-down: T_d - T_k against the time lost on the stretch
-    # the vertex's window slows, f T_d, or its share of the blocks when neighbouring windows join
-    L = tp.lengths
+def _dwell_sets(L, Td, Fv, f_w, need, tol, budget, Tk_budget, Tk_whole):
+    """The dwell sets of one tolerance ``tol`` ``(M - 1,)``, each ``(rule, mask)`` (rule 0:
+    "budget", 1: "isolated"): where the dwell is estimated cheaper than the slow-down (both rules),
+    every vertex that can dwell, none.
+
+    A vertex can dwell where it needs a slow-down (``need``), its rule leaves it some tolerance and
+    eq 13/14 gives a gap (``T_k < T_d``). The estimate: the dwell costs ``T_d - T_k``, the slow-down
+    to the window feed ``f_w`` the time lost on the stretch the vertex's window slows, ``f T_d``, or
+    its share of the blocks when neighbouring windows join."""
     stretch = np.minimum(f_w * Td, 0.5 * (L[:-1] + L[1:]))
     with np.errstate(divide="ignore"):
         slow_cost = stretch * (1.0 / np.maximum(f_w, 1e-300) - 1.0 / Fv)
-    can = need & (budget > 0) & (Tk < Td * (1 - 1e-12))
-    gap = {"cost": can & (Td - Tk <= slow_cost), "all": can, "none": np.zeros_like(can)}[choice]
-    gap |= need & ((f_w <= 0) | (tol_v <= 0))  # no feed keeps a turn within a zero tolerance: exact stop
+    out = []
+    for rule, b, Tk in ((0, budget, Tk_budget), (1, tol, Tk_whole)):
+        can = need & (b > 0) & (Tk < Td * (1 - 1e-12))
+        out.append((rule, can & (Td - Tk <= slow_cost)))
+        if rule == 1:
+            out += [(1, can), (1, np.zeros_like(can))]
+    return out
+
+
+def _candidate(tp, table, F_cmd, F, gap, budget, delays, tol_v, s_v, feeds_without):
+    """The candidate of :func:`look_ahead` whose vertices ``gap`` dwell, each with the tolerance
+    ``budget`` [mm] (what other turns take of ``tol_v`` is handed on as ``others``); the other
+    vertices at full overlap with their window feeds on the chain without the dwell turns."""
+    M = tp.n_blocks
+    Td = float(delays.sum())
+    L = tp.lengths
     query = np.flatnonzero(~gap)
-    # without dwells the chain is every turn, whose feeds are already known
     f = feeds_without(gap)
     # the estimate holds a constant feed through the window: a vertex between blocks of different
     # feeds (a line entering a slower arc) gets the lower one on both sides of it
