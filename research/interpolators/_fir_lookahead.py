@@ -6,6 +6,41 @@ verifies: for every vertex, either eq 13/14's dwell (a gap of ``T_d - T_k``) or 
 the largest feed whose windowed displacement (``_fir_feed``: every direction change inside the
 window, with their cancellation) stays within the tolerance; block feeds follow the staircase of
 the windows that reach into each line (:func:`line_pieces`).
+
+**Nesting in eps** (issue "FIR cornering on real CAM programs": a cycle time that never increases
+when eps grows). A candidate is a *dwell set* (which vertices dwell, and under which of the two
+tolerance rules) plus the feeds and overlaps that follow from the tolerance. The dwell sets are
+decisions on estimates (dwell cost ``T_d - T_k`` against the slow-down cost), and they change with
+eps in a way that is not nested: at a looser eps a vertex's slow-down gets cheaper, or eq 13/14
+allows full overlap there while its window still needs a slow-down, and the small-gap dwell that
+made the tighter eps fast is no longer offered (measured: benchmarks/README.md, bench_cam section).
+So a call at ``eps`` also offers the dwell sets its rules decide at ``eps q^k``, ``q = NEST_RATIO``,
+``k = 1 .. NEST_STEPS``, each planned with ``eps``'s own feeds and overlaps.
+
+What is exact:
+
+1. The candidates at ``eps`` hold every dwell set that a call at ``eps q^k`` (``k <= NEST_STEPS``)
+   decides at its own tolerance: the decision at a level uses the same quantities as that call's
+   own (the whole-chain window feeds by the same root search, eq 13/14 at the level's tolerance,
+   the tolerance-free displacement of the other turns). Lines exactly (up to the rounding of
+   ``eps q^k``); with arcs, the levels keep ``eps``'s arc feeds (eq 8) and sampled arc turns, so
+   there the sets are those of the level's rules on ``eps``'s feeds, not the call's own.
+2. ``plan_fir`` returns the least verified cycle time over its candidates (its branch and bound
+   drops a candidate only on a lower bound of that candidate's verified time, and each
+   candidate's verification is independent of the others), so offering more candidates never
+   makes a plan slower.
+
+What is not proven, and rests on the verification (measured instead): that a dwell set planned at
+the looser eps verifies no slower than at the tighter one. Its ingredients move the right way --
+eq 13/14's ``T_k`` does not fall as the tolerance grows at a fixed speed change, and a feed within
+a tolerance is within every larger one -- but a larger window feed changes the speed change at a
+neighbouring dwell corner, the largest feed of a window whose turns cancel is not monotone in the
+tolerance, and a repair (a window's feeds scaled by ``sqrt(eps / error)``) can leave the looser plan
+slower. Nor are dwell sets of tolerances between the levels, or below ``eps q^NEST_STEPS``,
+offered: for a ratio that is not a power of ``q`` only the decisions of the nearby levels are.
+An exact construction over a sweep is ``plan_fir_sweep`` (``_fir_candidates``), which plans each
+tolerance; one call cannot be made exactly monotone this way without planning every tighter
+tolerance.
 """
 
 from __future__ import annotations
@@ -23,9 +58,11 @@ from research.piecewise import bucket_size
 _overlap_jit = jax.jit(overlap_time)  # eq 13/14 on concrete, padded arrays (one dispatch)
 
 
-#: The dwell decisions of the tolerances ``eps * NEST_RATIO^k``, ``k = 1 .. NEST_STEPS``, are offered
-#: at ``eps`` as well (nesting in eps, module docstring). Swept in benchmarks/README.md (bench_cam
-#: section): ratio 2^-1/2 and 4 steps (down to eps / 4).
+#: The dwell sets of the tolerances ``eps * NEST_RATIO^k``, ``k = 1 .. NEST_STEPS``, are offered at
+#: ``eps`` as well (nesting in eps, module docstring); ``NEST_STEPS = 0`` is the planner without
+#: nesting. Swept (benchmarks/README.md, bench_cam section: 0, 1, 2, 4 steps of 2^-1/2, 8 of 2^-1/4):
+#: 4 steps of 2^-1/2 (down to eps / 4) is where the rate of rising programs stops falling fast
+#: against the planning cost.
 NEST_RATIO = 2.0 ** -0.5
 NEST_STEPS = 4
 
@@ -70,16 +107,16 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     # row 0: the tolerance itself; rows 1 .. NEST_STEPS: the tighter ones whose dwell sets are offered too
     levels = tol_v[None, :] * (NEST_RATIO ** np.arange(NEST_STEPS + 1))[:, None]
     need = e_all > levels
-    f_lv = np.broadcast_to(Fv, levels.shape).copy()
-    k_q, j_q = np.nonzero(need)
-    if k_q.size:  # window feeds on the whole chain, every level in one root search
-        f_lv[k_q, j_q] = every.largest_feed(s_v[j_q], Fv[j_q], levels[k_q, j_q], e_all[j_q])
     budget = levels - other
     # eq 13/14 overlaps for the two tolerances a dwell may use, at every level (one compiled call)
     K1, pad = levels.shape[0], bucket_size(M - 1, 16) - (M - 1)
     both = np.pad(np.concatenate([np.maximum(budget, 0.0), levels]), ((0, 0), (0, pad)), constant_values=1.0)
     Tk = np.asarray(_overlap_jit(both, np.tile(np.pad(dF, (0, pad), constant_values=1.0), (2 * K1, 1)), delays))[:, : M - 1]
     Tk_budget, Tk_whole = Tk[:K1], Tk[K1:]
+    f_lv = np.broadcast_to(Fv, levels.shape).copy()
+    k_q, j_q = np.nonzero(need)
+    if k_q.size:  # window feeds on the whole chain, every level in one root search
+        f_lv[k_q, j_q] = every.largest_feed(s_v[j_q], Fv[j_q], levels[k_q, j_q], e_all[j_q])
     reach = Fv * every.rho.max()  # a window at a feed <= Fv sums the turns strictly inside s_v +- reach
     f_w = f_lv[0]
     memo = {}
@@ -117,6 +154,15 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     return out
 
 
+def _slow_cost(L, Td, Fv, f):
+    """Estimated time lost slowing a vertex's window from ``Fv`` to ``f`` [mm/s]: on the stretch
+    the window slows, ``f T_d``, or its share of the blocks when neighbouring windows join
+    (non-increasing in ``f``)."""
+    stretch = np.minimum(f * Td, 0.5 * (L[:-1] + L[1:]))
+    with np.errstate(divide="ignore"):
+        return stretch * (1.0 / np.maximum(f, 1e-300) - 1.0 / Fv)
+
+
 def _dwell_sets(L, Td, Fv, f_w, need, tol, budget, Tk_budget, Tk_whole):
     """The dwell sets of one tolerance ``tol`` ``(M - 1,)``, each ``(rule, mask)`` (rule 0:
     "budget", 1: "isolated"): where the dwell is estimated cheaper than the slow-down (both rules),
@@ -126,9 +172,7 @@ def _dwell_sets(L, Td, Fv, f_w, need, tol, budget, Tk_budget, Tk_whole):
     eq 13/14 gives a gap (``T_k < T_d``). The estimate: the dwell costs ``T_d - T_k``, the slow-down
     to the window feed ``f_w`` the time lost on the stretch the vertex's window slows, ``f T_d``, or
     its share of the blocks when neighbouring windows join."""
-    stretch = np.minimum(f_w * Td, 0.5 * (L[:-1] + L[1:]))
-    with np.errstate(divide="ignore"):
-        slow_cost = stretch * (1.0 / np.maximum(f_w, 1e-300) - 1.0 / Fv)
+    slow_cost = _slow_cost(L, Td, Fv, f_w)
     out = []
     for rule, b, Tk in ((0, budget, Tk_budget), (1, tol, Tk_whole)):
         can = need & (b > 0) & (Tk < Td * (1 - 1e-12))
