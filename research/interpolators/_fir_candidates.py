@@ -33,7 +33,8 @@ is the cycle-time envelope of a tolerance sweep, and costs nothing beyond planni
 
 What it does not give: a single :func:`plan_fir` call is still a function of its own tolerance
 alone, so two separate calls can still disagree (the envelope needs the tighter tolerances to be
-planned). Making one call monotone by the same argument needs the plans of *every* tighter
+planned). One call offers the dwell sets of the tighter tolerances ``eps 2^-k/2`` (``_fir_lookahead``,
+nesting in eps), which removes most such disagreements but proves none away. Making one call monotone by the same argument needs the plans of *every* tighter
 tolerance, an infinite set; no finite set of tighter tolerances is nested across all ``eps``
 without a lower bound on the cycle time at all tighter tolerances, which this planner does not
 have (zigzag chains cancel, so a vertex's turning angle bounds nothing).

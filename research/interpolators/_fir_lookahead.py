@@ -6,6 +6,41 @@ verifies: for every vertex, either eq 13/14's dwell (a gap of ``T_d - T_k``) or 
 the largest feed whose windowed displacement (``_fir_feed``: every direction change inside the
 window, with their cancellation) stays within the tolerance; block feeds follow the staircase of
 the windows that reach into each line (:func:`line_pieces`).
+
+**Nesting in eps** (issue "FIR cornering on real CAM programs": a cycle time that never increases
+when eps grows). A candidate is a *dwell set* (which vertices dwell, and under which of the two
+tolerance rules) plus the feeds and overlaps that follow from the tolerance. The dwell sets are
+decisions on estimates (dwell cost ``T_d - T_k`` against the slow-down cost), and they change with
+eps in a way that is not nested: at a looser eps a vertex's slow-down gets cheaper, or eq 13/14
+allows full overlap there while its window still needs a slow-down, and the small-gap dwell that
+made the tighter eps fast is no longer offered (measured: benchmarks/README.md, bench_cam section).
+So a call at ``eps`` also offers the dwell sets its rules decide at ``eps q^k``, ``q = NEST_RATIO``,
+``k = 1 .. NEST_STEPS``, each planned with ``eps``'s own feeds and overlaps.
+
+What is exact:
+
+1. The candidates at ``eps`` hold every dwell set that a call at ``eps q^k`` (``k <= NEST_STEPS``)
+   decides at its own tolerance: the decision at a level uses the same quantities as that call's
+   own (the whole-chain window feeds by the same root search, eq 13/14 at the level's tolerance,
+   the tolerance-free displacement of the other turns). Lines exactly (up to the rounding of
+   ``eps q^k``); with arcs, the levels keep ``eps``'s arc feeds (eq 8) and sampled arc turns, so
+   there the sets are those of the level's rules on ``eps``'s feeds, not the call's own.
+2. ``plan_fir`` returns the least verified cycle time over its candidates (its branch and bound
+   drops a candidate only on a lower bound of that candidate's verified time, and each
+   candidate's verification is independent of the others), so offering more candidates never
+   makes a plan slower.
+
+What is not proven, and rests on the verification (measured instead): that a dwell set planned at
+the looser eps verifies no slower than at the tighter one. Its ingredients move the right way --
+eq 13/14's ``T_k`` does not fall as the tolerance grows at a fixed speed change, and a feed within
+a tolerance is within every larger one -- but a larger window feed changes the speed change at a
+neighbouring dwell corner, the largest feed of a window whose turns cancel is not monotone in the
+tolerance, and a repair (a window's feeds scaled by ``sqrt(eps / error)``) can leave the looser plan
+slower. Nor are dwell sets of tolerances between the levels, or below ``eps q^NEST_STEPS``,
+offered: for a ratio that is not a power of ``q`` only the decisions of the nearby levels are.
+An exact construction over a sweep is ``plan_fir_sweep`` (``_fir_candidates``), which plans each
+tolerance; one call cannot be made exactly monotone this way without planning every tighter
+tolerance.
 """
 
 from __future__ import annotations
@@ -19,17 +54,31 @@ from research.paths.toolpath import ToolPath
 from research.piecewise import bucket_size
 
 
-def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in, t_out):
-    """Candidate plans, one per dwell rule, each ``(factor, head, tail, full, others, arc_rel)``:
-    feed factors ``(M, 3)`` (head, body, tail), head and tail shares ``(M,)``, full-overlap flags
-    ``(M - 1,)``, the tolerance other turns take at dwell corners ``(M - 1,)`` and the slow-down of
-    every sub-arc ``(A,)`` (a window reaching into an arc slows only the sub-arcs it covers).
+#: The dwell sets of the tolerances ``eps * NEST_RATIO^k``, ``k = 1 .. NEST_STEPS``, are offered at
+#: ``eps`` as well (nesting in eps, module docstring); ``NEST_STEPS = 0`` is the planner without
+#: nesting. Swept (benchmarks/README.md, bench_cam section: 0, 1, 2, 4 steps of 2^-1/2, 8 of 2^-1/4):
+#: 4 steps of 2^-1/2 (down to eps / 4) is where the rate of rising programs stops falling fast
+#: against the planning cost.
+NEST_RATIO = 2.0 ** -0.5
+NEST_STEPS = 4
 
-    The rule decides where eq 13/14's dwell may replace a slow-down: ``"budget"`` gives the dwell
-    what the other direction changes of its window leave of the tolerance at full overlap
-    (triangle inequality; right for curves cut into chords), ``"isolated"`` gives it the whole
-    tolerance (right for isolated corners and for zigzags whose neighbours dwell too). Both are
-    verified; the faster plan is kept."""
+
+def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in, t_out):
+    """Candidate plans, each ``(factor, head, tail, full, others, arc_rel)``: feed factors ``(M, 3)``
+    (head, body, tail), head and tail shares ``(M,)``, full-overlap flags ``(M - 1,)``, the
+    tolerance other turns take at dwell corners ``(M - 1,)`` and the slow-down of every sub-arc
+    ``(A,)`` (a window reaching into an arc slows only the sub-arcs it covers).
+
+    A candidate is a set of dwell vertices (the rest run at full overlap) and the dwell corners'
+    tolerance rule; its feeds and overlaps are then those of ``tol_v`` (eq 13/14 at the dwell
+    corners, the window feeds of the other vertices on the chain without the dwell turns). The
+    rule says how much of the tolerance a dwell corner may use: ``"budget"`` gives it what the
+    other direction changes of its window leave at full overlap (triangle inequality; right for
+    curves cut into chords), ``"isolated"`` the whole tolerance (right for isolated corners and
+    zigzags whose neighbours dwell too). The dwell sets: where the dwell is estimated cheaper than
+    the slow-down (both rules), every vertex that can dwell, none (:func:`_dwell_sets`) -- decided
+    at ``tol_v`` and at each tighter tolerance ``tol_v * NEST_RATIO^k`` (module docstring: why).
+    All are verified; the fastest verified plan is kept."""
     M = tp.n_blocks
     Td = float(delays.sum())
     F = F_cmd * base
@@ -47,14 +96,25 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
 
     every = chain(np.ones(M - 1, dtype=bool))
     d_all = every.displacement(s_v, Fv)
-    # what the other direction changes in the window add at full overlap: eq 13/14's dwell gets the
-    # rest of the tolerance (triangle inequality), and is valid only where some is left
-    budget = tol_v - np.linalg.norm(d_all - Fv[:, None] * du * h_full, axis=1)
+    # what the other direction changes in the window add at full overlap (tolerance-free): a dwell
+    # under the "budget" rule gets the rest of the tolerance (triangle inequality), if any is left
+    other = np.linalg.norm(d_all - Fv[:, None] * du * h_full, axis=1)
     e_all = np.linalg.norm(d_all, axis=1)
-    need = e_all > tol_v
-    f_w = Fv.copy()
-    f_w[need] = every.largest_feed(s_v[need], Fv[need], tol_v[need], e_all[need])
+    # row 0: the tolerance itself; rows 1 .. NEST_STEPS: the tighter ones whose dwell sets are offered too
+    levels = tol_v[None, :] * (NEST_RATIO ** np.arange(NEST_STEPS + 1))[:, None]
+    need = e_all > levels
+    budget = levels - other
+    # eq 13/14 overlaps for the two tolerances a dwell may use, at every level (concrete arrays, _fir_profile)
+    K1, pad = levels.shape[0], bucket_size(M - 1, 16) - (M - 1)
+    both = np.pad(np.concatenate([np.maximum(budget, 0.0), levels]), ((0, 0), (0, pad)), constant_values=1.0)
+    Tk = overlaps(both, np.tile(np.pad(dF, (0, pad), constant_values=1.0), (2 * K1, 1)), delays)[:, : M - 1]
+    Tk_budget, Tk_whole = Tk[:K1], Tk[K1:]
+    f_lv = np.broadcast_to(Fv, levels.shape).copy()
+    k_q, j_q = np.nonzero(need)
+    if k_q.size:  # window feeds on the whole chain, every level in one root search
+        f_lv[k_q, j_q] = every.largest_feed(s_v[j_q], Fv[j_q], levels[k_q, j_q], e_all[j_q])
     reach = Fv * every.rho.max()  # a window at a feed <= Fv sums the turns strictly inside s_v +- reach
+    f_w = f_lv[0]
     memo = {}
 
     def feeds_without(gap):
@@ -71,37 +131,61 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
             memo[key] = f[~gap]
         return memo[key]
 
-    # eq 13/14 overlaps for the two tolerances a dwell may use (concrete arrays, _fir_profile)
-    pad = bucket_size(M - 1, 16) - (M - 1)
-    both = np.pad(np.stack([np.maximum(budget, 0.0), tol_v]), ((0, 0), (0, pad)), constant_values=1.0)
-    Tk_budget, Tk_whole = overlaps(both, np.tile(np.pad(dF, (0, pad), constant_values=1.0), (2, 1)), delays)[:, : M - 1]
+    L = tp.lengths
+    sets, seen = [], set()
+    for k in range(K1):
+        for rule, gap in _dwell_sets(L, Td, Fv, f_lv[k], need[k], levels[k], budget[k], Tk_budget[k], Tk_whole[k]):
+            # the dwell set and rule define the candidate; at tol_v a vertex that needs a slow-down
+            # and has no feed (zero tolerance) stops exactly whatever the set
+            gap = gap | (need[0] & ((f_w <= 0) | (tol_v <= 0)))
+            key = (rule if gap.any() else 1, gap.tobytes())
+            if key not in seen:
+                seen.add(key)
+                sets.append((rule, gap))
     out = []
-    for rule_budget, Tk, choice in ((budget, Tk_budget, "cost"), (tol_v, Tk_whole, "cost"), (tol_v, Tk_whole, "all"),
-                                    (tol_v, Tk_whole, "none")):
-        c = _dwell_rule(tp, table, F_cmd, F, Fv, f_w, need, rule_budget, Tk, delays, tol_v, s_v, feeds_without, choice)
+    for rule, gap in sets:
+        c = _candidate(tp, table, F_cmd, F, gap, (budget[0], tol_v)[rule], delays, tol_v, s_v, feeds_without)
         if not any(np.array_equal(c[3], o[3]) and np.array_equal(c[4], o[4]) for o in out):
             out.append(c)
     return out
 
 
-def _dwell_rule(tp, table, F_cmd, F, Fv, f_w, need, budget, Tk, delays, tol_v, s_v, feeds_without, choice="cost"):
-    """One candidate of :func:`look_ahead` for the tolerance ``budget`` a dwell corner may use
-    (``Tk``: its eq 13/14 overlaps); ``choice`` says which vertices that need a slow-down dwell
-    instead: those where the dwell is estimated cheaper (``"cost"``), all that can (``"all"``),
-    none that need not (``"none"``)."""
+def _slow_cost(L, Td, Fv, f):
+    """Estimated time lost slowing a vertex's window from ``Fv`` to ``f`` [mm/s]: on the stretch
+    the window slows, ``f T_d``, or its share of the blocks when neighbouring windows join
+    (non-increasing in ``f``)."""
+    stretch = np.minimum(f * Td, 0.5 * (L[:-1] + L[1:]))
+    with np.errstate(divide="ignore"):
+        return stretch * (1.0 / np.maximum(f, 1e-300) - 1.0 / Fv)
+
+
+def _dwell_sets(L, Td, Fv, f_w, need, tol, budget, Tk_budget, Tk_whole):
+    """The dwell sets of one tolerance ``tol`` ``(M - 1,)``, each ``(rule, mask)`` (rule 0:
+    "budget", 1: "isolated"): where the dwell is estimated cheaper than the slow-down (both rules),
+    every vertex that can dwell, none.
+
+    A vertex can dwell where it needs a slow-down (``need``), its rule leaves it some tolerance and
+    eq 13/14 gives a gap (``T_k < T_d``). The estimate: the dwell costs ``T_d - T_k``, the slow-down
+    to the window feed ``f_w`` the time lost on the stretch the vertex's window slows, ``f T_d``, or
+    its share of the blocks when neighbouring windows join."""
+    slow_cost = _slow_cost(L, Td, Fv, f_w)
+    out = []
+    for rule, b, Tk in ((0, budget, Tk_budget), (1, tol, Tk_whole)):
+        can = need & (b > 0) & (Tk < Td * (1 - 1e-12))
+        out.append((rule, can & (Td - Tk <= slow_cost)))
+        if rule == 1:
+            out += [(1, can), (1, np.zeros_like(can))]
+    return out
+
+
+def _candidate(tp, table, F_cmd, F, gap, budget, delays, tol_v, s_v, feeds_without):
+    """The candidate of :func:`look_ahead` whose vertices ``gap`` dwell, each with the tolerance
+    ``budget`` [mm] (what other turns take of ``tol_v`` is handed on as ``others``); the other
+    vertices at full overlap with their window feeds on the chain without the dwell turns."""
     M = tp.n_blocks
     Td = float(delays.sum())
-    # dwell where it costs less than the slow-down: T_d - T_k against the time lost on the stretch
-    # the vertex's window slows, f T_d, or its share of the blocks when neighbouring windows join
     L = tp.lengths
-    stretch = np.minimum(f_w * Td, 0.5 * (L[:-1] + L[1:]))
-    with np.errstate(divide="ignore"):
-        slow_cost = stretch * (1.0 / np.maximum(f_w, 1e-300) - 1.0 / Fv)
-    can = need & (budget > 0) & (Tk < Td * (1 - 1e-12))
-    gap = {"cost": can & (Td - Tk <= slow_cost), "all": can, "none": np.zeros_like(can)}[choice]
-    gap |= need & ((f_w <= 0) | (tol_v <= 0))  # no feed keeps a turn within a zero tolerance: exact stop
     query = np.flatnonzero(~gap)
-    # without dwells the chain is every turn, whose feeds are already known
     f = feeds_without(gap)
     # the estimate holds a constant feed through the window: a vertex between blocks of different
     # feeds (a line entering a slower arc) gets the lower one on both sides of it

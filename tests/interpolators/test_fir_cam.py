@@ -280,14 +280,17 @@ def test_chord_tolerance_costs_what_the_sagitta_takes_from_eps(chord_tol):
     it. The filter averages that offset, so the vertex error is the eq 8 shrink of the circle plus
     2/3 delta, the shrink may use only eps - 2/3 delta, and (shrink ~ F^2) the chords run
     sqrt(eps / (eps - 2 delta / 3)) slower than the arc block on a curvature-limited circle
-    (R 20 mm, F 150 mm/s, eps 50 um: 3.5 % at 5 um, 7.4 % at 10 um). Within 1 %."""
+    (R 20 mm, F 150 mm/s, eps 50 um: 3.5 % at 5 um, 7.4 % at 10 um). Within 1 %, on the speed
+    along the circle (the arc blocks' feed over the chords' median feed): the derivation is about
+    the steady motion, not the lead-in line and the circle's end, where the look-ahead's choices
+    move the cycle time by about 0.5 % (more dwell sets offered since the eps nesting)."""
     R, eps = 20.0, 0.05
     tp = (ToolPath.from_polyline(Polyline([[R, -5.0], [R, 0.0]]))
           .then_arc(np.array([-R, 0.0]), np.array([0.0, 0.0]), ccw=True)
           .then_arc(np.array([R, 0.0]), np.array([0.0, 0.0]), ccw=True))
-    arc_time = float(plan_fir(tp, 150.0, DELAYS, eps).cycle_time)
+    arc_feed = float(np.asarray(plan_fir(tp, 150.0, DELAYS, eps).feeds)[1])
     chords, _ = tp.to_polyline(chord_tol)
-    ratio = float(plan_fir(chords, 150.0, DELAYS, eps).cycle_time) / arc_time
+    ratio = arc_feed / float(np.median(np.asarray(plan_fir(chords, 150.0, DELAYS, eps).feeds)[1:]))
     assert ratio == pytest.approx(np.sqrt(eps / (eps - 2.0 * chord_tol / 3.0)), abs=0.01)
 
 
