@@ -351,6 +351,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         shrink[j] *= min(0.98 * ratio ** (1.0 / (n_f + 1)), 1.0)
                 for k in np.flatnonzero(arc_slow):
                     factor[k] *= min(0.98 * np.sqrt(tb_np[k] / arc_slow[k]), 0.98)
+                state = pos_np = None  # suspended in the branch and bound, a candidate keeps no profile
                 yield predicted_time((factor, head, tail, full, others, arc_rel), shrink * bisection.bound_scale), repaired
                 state = schedule(factor, head, tail, full, shrink * bisection.scale, others, arc_rel)
         return state, rounds, deviation, repaired

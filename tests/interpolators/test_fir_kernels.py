@@ -11,7 +11,7 @@ import pytest
 from research.interpolators import plan_fir
 from research.interpolators._fir_chain import kernel_second_integral
 from research.interpolators._fir_feed import ChainError
-from research.interpolators._fir_kernels import sampled_line_distances
+from research.interpolators._fir_kernels import _displacement, sampled_line_distances
 from research.interpolators._fir_verify import corner_distances, vertex_distances
 from research.paths import Polyline
 from research.piecewise import NumpyPiecewise
@@ -42,6 +42,26 @@ def test_window_displacement_matches_the_term_by_term_sum(delays, span):
     want = slow_displacement(s, du, delays, sq, F)
     scale = np.max(np.abs(want))
     assert np.max(np.abs(got - want)) <= 1e-9 * scale
+
+
+@pytest.mark.parametrize("delays", [(0.06, 0.03), (0.05, 0.02, 0.01)])
+@pytest.mark.parametrize("span", [2000.0, 40.0])  # direct sums, prefix sums
+def test_window_slope_matches_central_differences_of_the_term_by_term_sum(delays, span):
+    """``d d_j / dF`` (the Newton search's slope) against ``(d_j(F (1 + h)) - d_j(F (1 - h))) / (2 F h)``
+    of the independent sum, ``h = 1e-6`` (truncation ``O(h^2)``, rounding ``1e-16 / h``)."""
+    rng = np.random.default_rng(11)
+    T = 800
+    s = np.sort(rng.uniform(0.0, span, T))
+    du = rng.normal(0.0, 0.05, (T, 3))
+    chain = ChainError(s, du, np.asarray(delays))
+    h = 1e-6
+    worst, scale = 0.0, 0.0
+    for sq, F in zip(rng.uniform(0.0, span, 20), rng.uniform(5.0, 300.0, 20)):
+        out, dout = np.zeros(3), np.zeros(3)
+        _displacement(*chain._args(), sq - chain.origin, F, out, dout)
+        fd = (slow_displacement(s, du, delays, sq, F * (1 + h)) - slow_displacement(s, du, delays, sq, F * (1 - h)))[0] / (2 * F * h)
+        worst, scale = max(worst, float(np.max(np.abs(dout - fd)))), max(scale, float(np.max(np.abs(fd))))
+    assert scale > 0 and worst <= 1e-6 * scale
 
 
 def test_largest_feed_is_the_root_of_the_window_error():
