@@ -89,10 +89,19 @@ def profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
     """``_fir_blocks.build_profile`` on concrete arrays (same arguments and results, NumPy):
     ``(block_starts, block_ends, breaks, coeffs, centre)`` with the position profile as its breaks
     ``(K + 1,)`` and ascending local coefficients ``(K, D, d)``."""
-    return _profile(np.ascontiguousarray(start, dtype=np.float64), np.ascontiguousarray(geo, dtype=np.float64),
-                    np.ascontiguousarray(block), np.ascontiguousarray(gap), np.ascontiguousarray(fraction, dtype=np.float64),
-                    np.ascontiguousarray(piece_tv, dtype=np.float64), np.ascontiguousarray(gaps, dtype=np.float64),
-                    np.ascontiguousarray(delays, dtype=np.float64))
+    starts, ends, breaks, coeffs, centre = _profile(
+        np.ascontiguousarray(start, dtype=np.float64), np.ascontiguousarray(geo, dtype=np.float64),
+        np.ascontiguousarray(block), np.ascontiguousarray(gap), np.ascontiguousarray(fraction, dtype=np.float64),
+        np.ascontiguousarray(piece_tv, dtype=np.float64), np.ascontiguousarray(gaps, dtype=np.float64),
+        np.ascontiguousarray(delays, dtype=np.float64))
+    # a closing rest piece of zero length at the end (as the JAX form's trailing empty piece): the
+    # right-hand limit at the end time is the machine at rest (v = a = j = 0), not the last
+    # decelerating piece's left limit (sampled trajectories end at rest, ``Trajectory.from_piecewise``)
+    h = breaks[-1] - breaks[-2]
+    end = np.polynomial.polynomial.polyval(h, coeffs[-1])  # (d,) end position
+    rest = np.zeros((1,) + coeffs.shape[1:])
+    rest[0, 0] = end
+    return starts, ends, np.append(breaks, breaks[-1]), np.concatenate([coeffs, rest]), centre
 
 
 @numba.njit(**_OPTIONS)
