@@ -32,16 +32,21 @@ def test_fit_percent_definition():
 
 
 def test_output_error_is_not_biased_by_the_thesis_encoder(tmp_path):
-    """With the thesis' 2.9 um encoder (§4.5) the equation-error fits are far off (differentiating
-    quantized positions: here zeta +2.8 % with dc = 300 mm/s^2); the output-error fit of the JAX model recovers wn, zeta, p
-    within 1 % and dc within 2 %. Short program (25 moves, seed 0) to keep the test fast."""
+    """With the thesis' 2.9 um encoder (§4.5) the equation-error fit differentiates quantized positions
+    and is biased; the output-error fit of the JAX model recovers wn, zeta, p within 1 % and dc within 2 %,
+    and is closer to the truth than the equation-error fit on the same log. Short program (25 moves, seed 0).
+
+    The size of the equation-error bias is a property of one quantization realization, not a constant: on
+    this program its worst relative error was 1.6 % (no dither) and 1.0-4.4 % with a 0.1 um dither (seeds
+    0-3), while the output-error fit stayed at 0.5-0.8 %; four samples near the start that flip one count
+    move it by 1.2 points. So the test compares the two fits rather than fixing the bias's size."""
     truth = with_friction(table_6_1_closed_loop(), ASSUMED_FRICTION)
     ref = identification_program(0, n_moves=25).trajectory()
     log = synthetic_log(truth, ref, encoder=THESIS_LINEAR_ENCODER, seed=0, source="table 6.1, 2.9 um encoder")
     vp = bounded_fit(log)
     oe = output_error_fit(log, initial=vp)
-    assert np.max(relative_errors(vp, truth)) > 0.02
     assert np.all(relative_errors(oe, truth) < 0.01), oe.pole_parameters()
+    assert np.max(relative_errors(oe, truth)) < np.max(relative_errors(vp, truth))
     assert oe.dc == pytest.approx(ASSUMED_FRICTION, rel=0.02)  # 1.1 % here (3 mm/s^2)
     assert oe.loss < oe.info["initial_loss"]
     rep = fit_report(oe, log, truth=truth)
