@@ -12,16 +12,15 @@ from research.interpolators._fir_window_bound import kernel_cell_masses, window_
 from research.paths import Polyline, named_path
 from research.paths.library import random_program
 
+from ._paths import turning_path
+
 DELAYS = (0.06, 0.03)
 F, EPS = 200.0, 0.05
 
 
 def short_path(seed: int, n: int = 3) -> Polyline:
     """Seeded 2-D path of ``n`` blocks of 2-6 mm (shorter than F T_d = 18 mm) turning by up to +-60 deg."""
-    rng = np.random.default_rng(seed)
-    heading = np.cumsum(rng.uniform(-np.radians(60), np.radians(60), n))
-    steps = rng.uniform(2.0, 6.0, n)[:, None] * np.column_stack([np.cos(heading), np.sin(heading)])
-    return Polyline(np.vstack([[0.0, 0.0], np.cumsum(steps, axis=0)]))
+    return turning_path(seed, n, (2.0, 6.0), 60.0)
 
 
 def test_kernel_cell_masses_are_the_trapezoid():

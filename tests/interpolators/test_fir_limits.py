@@ -19,14 +19,14 @@ from research.limits import AxisLimits
 from research.metrics import corner_errors, limit_ratios, peak_axis_values
 from research.paths import Polyline, named_path
 
+from ._paths import turning_path
+
 PAPER_DELAYS = (0.148, 0.089)
 
 
 def random_path(seed: int, n: int = 6) -> Polyline:
-    rng = np.random.default_rng(seed)
-    heading = np.cumsum(rng.uniform(-np.radians(120), np.radians(120), n))
-    steps = rng.uniform(3.0, 30.0, n)[:, None] * np.column_stack([np.cos(heading), np.sin(heading)])
-    return Polyline(np.vstack([[0.0, 0.0], np.cumsum(steps, axis=0)]))
+    """Seeded 2-D path of ``n`` segments of 3-30 mm turning by up to +-120 deg."""
+    return turning_path(seed, n, (3.0, 30.0), 120.0)
 
 
 def test_never_slower_than_plain_where_plain_holds_zigzag():

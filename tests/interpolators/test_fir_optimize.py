@@ -19,16 +19,15 @@ from research.paths import Polyline
 from research.paths.toolpath import ToolPath
 from research.piecewise import NumpyPiecewise
 
+from ._paths import turning_path
+
 DELAYS = (0.06, 0.03)
 F, EPS = 200.0, 0.1
 
 
 def random_path(seed: int, n: int = 4) -> Polyline:
     """Seeded 2-D path of ``n`` segments of 4-15 mm turning by up to +-110 deg."""
-    rng = np.random.default_rng(seed)
-    heading = np.cumsum(rng.uniform(-np.radians(110), np.radians(110), n))
-    steps = rng.uniform(4.0, 15.0, n)[:, None] * np.column_stack([np.cos(heading), np.sin(heading)])
-    return Polyline(np.vstack([[0.0, 0.0], np.cumsum(steps, axis=0)]))
+    return turning_path(seed, n, (4.0, 15.0), 110.0)
 
 
 @pytest.mark.parametrize("seed,starts", [(12, ("paper",)), (13, ("paper",)), (12, ("smooth",))])
