@@ -29,6 +29,10 @@ class PathConfig(_Strict):
     gcode: str | None = Field(None, description="G-code file, relative to the config file")
     points_mm: list[list[float]] | None = Field(None, description="polyline vertices [mm]")
     chord_tolerance_um: float = Field(1.0, gt=0, description="arc-to-chord tolerance for G2/G3 [um]")
+    start_mm: list[float] = Field([0.0, 0.0, 0.0], description="position before the G-code program's first move "
+                                  "(x, y, z) [mm]; with gcode only")
+    home_mm: list[float] | None = Field(None, description="machine home (x, y, z) [mm, program frame], the target "
+                                        "of G28; a program with G28 needs it; with gcode only")
     bspline: BSplinePathConfig | None = Field(None, description="B-spline path ([path.bspline]: control points, knots, degree)")
 
     @model_validator(mode="after")
@@ -36,9 +40,21 @@ class PathConfig(_Strict):
         given = [k for k in ("name", "gcode", "points_mm", "bspline") if getattr(self, k) is not None]
         if len(given) != 1:
             raise ValueError(f"give exactly one of name, gcode, points_mm, bspline (got {given or 'none'})")
+        if self.gcode is None:
+            extra = [k for k in ("home_mm", "start_mm") if k in self.model_fields_set]
+            if extra:
+                raise ValueError(f"{', '.join(extra)} only apply to a G-code path (gcode = ...); remove them or give gcode")
         if self.name is not None and self.name not in PATHS:
             raise ValueError(f"unknown path name {self.name!r}; expected one of {sorted(PATHS)}")
         return self
+
+    @field_validator("start_mm", "home_mm")
+    @classmethod
+    def _xyz(cls, v, info):
+        if v is not None and (len(v) != 3 or any(abs(c) > MAX_COORDINATE_MM for c in v)):
+            raise ValueError(f"{info.field_name} = {v}: expected 3 coordinates (x, y, z) within "
+                             f"+-{MAX_COORDINATE_MM:g} mm")
+        return v
 
     @field_validator("points_mm")
     @classmethod
@@ -94,7 +110,9 @@ def build_path(cfg: PathConfig, base: Path) -> tuple[Polyline, np.ndarray | None
 
 def read_program(cfg: PathConfig, base: Path):
     """The :class:`~research.paths.gcode.GCodeProgram` of a G-code path config (read relative to
-    ``base``; arcs as chords at ``chord_tolerance_um`` and as blocks)."""
+    ``base``; arcs as chords at ``chord_tolerance_um`` and as blocks; from ``start_mm``, ``G28`` to
+    ``home_mm``)."""
     from research.paths.gcode import read_gcode
 
-    return read_gcode(base / cfg.gcode, chord_tolerance=cfg.chord_tolerance_um * 1e-3)
+    return read_gcode(base / cfg.gcode, chord_tolerance=cfg.chord_tolerance_um * 1e-3, start=tuple(cfg.start_mm),
+                      home=None if cfg.home_mm is None else tuple(cfg.home_mm))

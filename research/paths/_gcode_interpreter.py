@@ -39,7 +39,8 @@ _G_ACCEPT = {
     900: "distance", 910: "distance",
     901: "arc_distance", 911: "arc_distance",
     400: "cutter_comp",
-    490: "tool_length",
+    430: "tool_length", 490: "tool_length",
+    280: "home",
     **{k: "work_offset" for k in (540, 550, 560, 570, 580, 590)},
     610: "path_mode", 611: "path_mode", 640: "path_mode",
     940: "feed_mode",
@@ -61,16 +62,14 @@ _G_REFUSE = {
     171: "G17.1 (UV plane) is not supported: only the G17, G18, G19 planes",
     181: "G18.1 (WU plane) is not supported: only the G17, G18, G19 planes",
     191: "G19.1 (VW plane) is not supported: only the G17, G18, G19 planes",
-    280: "G28 (return to home) is not supported: the machine home position is unknown",
     300: "G30 (return to secondary home) is not supported",
     330: "G33 (spindle-synchronized motion) is not supported",
     410: "G41 (cutter compensation left) is not supported: post-process with compensation off (G40)",
     411: "G41.1 (dynamic cutter compensation left) is not supported: post-process with compensation off (G40)",
     420: "G42 (cutter compensation right) is not supported: post-process with compensation off (G40)",
     421: "G42.1 (dynamic cutter compensation right) is not supported: post-process with compensation off (G40)",
-    430: "G43 (tool length compensation) is not supported: only G49 (offset off) is accepted",
-    431: "G43.1 (dynamic tool length compensation) is not supported: only G49 (offset off) is accepted",
-    432: "G43.2 (additional tool length offset) is not supported: only G49 (offset off) is accepted",
+    431: "G43.1 (dynamic tool length compensation) is not supported: only G43 H<n> and G49",
+    432: "G43.2 (additional tool length offset) is not supported: only G43 H<n> and G49",
     530: "G53 (machine coordinates) is not supported",
     730: f"canned cycle G73 is not supported: {_CUT}",
     760: f"canned cycle G76 is not supported: {_CUT}",
@@ -90,12 +89,11 @@ _M_REFUSE = {
 _LETTER_REFUSE = {
     **{c: f"{c} (extra axis) is not supported: only X, Y, Z" for c in "ABCUVW"},
     "D": "D (cutter radius offset) is not supported: cutter compensation G41/G42 is refused",
-    "H": "H (tool length offset) is not supported: tool length compensation G43 is refused",
     "L": "L (repeat count / G10 parameter) is not supported",
 }
-_ACCEPTED_LETTERS = frozenset("GMNOFSTXYZIJKRPQ")
-_ACCEPTED_G_TEXT = ("G0 G1 G2 G3 G80 G17 G18 G19 G20 G21 G40 G49 G54-G59 G61 G61.1 G64 G90 G91 G90.1 "
-                    "G91.1 G94")
+_ACCEPTED_LETTERS = frozenset("GMNOFSTXYZIJKRPQH")
+_ACCEPTED_G_TEXT = ("G0 G1 G2 G3 G80 G17 G18 G19 G20 G21 G28 G40 G43 G49 G54-G59 G61 G61.1 G64 G90 G91 "
+                    "G90.1 G91.1 G94")
 _ACCEPTED_M_TEXT = "M2 M3 M4 M5 M6 M7 M8 M9 M30"
 # code text: optional '+', leading zeros, 1-4 digits, optionally '.' and one digit (trailing zeros ok)
 _CODE_TEXT = re.compile(r"\+?0*([0-9]{1,4})(?:\.([0-9]?)0*)?")
@@ -136,8 +134,9 @@ class _Interpreter:
     """Modal state machine; ``line(words, lineno)`` executes one block, ``simple(...)`` a plain move."""
 
     def __init__(self, chord_tolerance, rapid_feed_mm_s, initial_feed_mm_s, start, arc_radius_tolerance,
-                 arc_relative_tolerance):
+                 arc_relative_tolerance, home=None):
         self.tol = chord_tolerance
+        self.home = home  # G28 target (x, y, z) [mm], or None: G28 is an error
         self.arc_tol = arc_radius_tolerance  # mm, or None: LinuxCNC's (unit dependent)
         self.arc_rel = arc_relative_tolerance
         self.rapid_feed = rapid_feed_mm_s
@@ -234,7 +233,7 @@ class _Interpreter:
                 vals[letter] = (num, k)
             elif refused is None:  # reported after the G-codes: "G41 D1" names G41, not D
                 refused = _LineError(_LETTER_REFUSE[letter], k) if letter in _LETTER_REFUSE else _LineError(
-                    f"unknown word letter {letter!r}; expected one of G M N O F S T X Y Z I J K R P Q", k)
+                    f"unknown word letter {letter!r}; expected one of G M N O F S T X Y Z I J K R P Q H", k)
 
         # G codes, at most one per modal group; G80 with a motion code: the motion code wins (LinuxCNC)
         groups = {}
@@ -278,7 +277,8 @@ class _Interpreter:
             m_end = m_end or kind == "end"
 
         if vals:
-            for letter, what in (("N", "line number"), ("T", "tool number"), ("O", "program number")):
+            for letter, what in (("N", "line number"), ("T", "tool number"), ("O", "program number"),
+                                 ("H", "tool length offset number")):
                 if letter in vals:
                     num, k = vals[letter]
                     if not _INT_TEXT.fullmatch(num):
@@ -289,6 +289,10 @@ class _Interpreter:
                 v = float(num)
                 if not 0.0 <= v < math.inf:
                     raise _LineError(f"S{_short(num)}: expected a finite spindle speed >= 0", k)
+
+        if "H" in vals and groups.get("tool_length", (None,))[0] != 430:
+            raise _LineError("H word with no G43 to use it; expected H (tool length offset number) only with G43",
+                             vals["H"][1])
 
         # modes, in RS274/NGC order: units, feed, path control, distance modes, plane, motion
         if "units" in groups:
@@ -330,6 +334,9 @@ class _Interpreter:
         if "motion" in groups:
             self.motion = _MOTION[groups["motion"][0]]
 
+        if "home" in groups:
+            self._home(vals, lineno, groups)
+            vals = {k: v for k, v in vals.items() if k not in "XYZ"}  # G28's axis words are its own
         moves = not _AXIS_LETTERS.isdisjoint(vals)
         if "P" in vals and not g64 and not (moves and self.motion in (2, 3)):
             raise _LineError("P word with no G2/G3 or G64 to use it; expected P only as G64 P<tolerance> or "
@@ -359,6 +366,39 @@ class _Interpreter:
             self.ended = lineno
 
     # -- motion ------------------------------------------------------------------------------
+    def _home(self, vals, lineno, groups):
+        """``G28 [X] [Y] [Z]`` (LinuxCNC): a rapid to the point of the axis words (G90/G91 as usual),
+        then a rapid of those axes (of every axis when none is given) to ``home``; other axes stay."""
+        k = groups["home"][1]
+        if self.home is None:
+            raise _LineError("G28 (return to home) needs the machine home position; expected home=(x, y, z) "
+                             "[mm, program frame] given to parse_gcode / read_gcode", k)
+        if self.ended:
+            raise _LineError(f"motion after the program end (M2/M30 on line {self.ended}); expected no G28 after it", k)
+        if "motion" in groups and not _AXIS_LETTERS.isdisjoint(vals):
+            raise _LineError(f"G28 and G{_fmt_key(groups['motion'][0])} on one line with axis words; expected "
+                             "the motion code on a line of its own (both would use the axis words)", k)
+        if not _ARC_LETTERS.isdisjoint(vals):
+            letter = min(_ARC_LETTERS.intersection(vals), key=lambda c: vals[c][1])
+            raise _LineError(f"{letter} with G28; expected only X, Y, Z (the intermediate point)", vals[letter][1])
+        named = [i for i, letter in enumerate("XYZ") if letter in vals]
+        via = self._target(vals)
+        self._rapid_to(via, lineno)
+        self._rapid_to([self.home[i] if (i in named or not named) else via[i] for i in range(3)], lineno)
+
+    def _rapid_to(self, target, lineno):
+        self.pos = tuple(target)
+        last = self.last
+        dx, dy, dz = target[0] - last[0], target[1] - last[1], target[2] - last[2]
+        if dx * dx + dy * dy + dz * dz <= ZERO_LENGTH_MM * ZERO_LENGTH_MM:
+            self.no_motion.append(lineno)
+            return
+        self.points.extend(self.pos)
+        self.last = self.pos
+        self.meta.append((self.rapid_feed, True, lineno, self.path_tol))
+        self.counts.append(1)
+        self.nblocks += 1
+
     def _target(self, vals):
         s = self.scale
         t = list(self.pos)

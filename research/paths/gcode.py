@@ -23,13 +23,19 @@ Accepted words (anything else is a :class:`~research.errors.GCodeError` naming f
 * path control: ``G64 P<tol>`` (blend tolerance of the following blocks, ``block_tolerance``),
   ``G64 P<tol> Q<tol>`` (Q, LinuxCNC's naive-CAM tolerance, is accepted and ignored), ``G64``
   without ``P`` (no tolerance given: NaN), ``G61``/``G61.1`` (exact path / exact stop: tolerance 0);
-* harmless modal codes that do not change the geometry: ``G40`` (cutter compensation off), ``G49``
-  (tool length offset off), ``G54``-``G59`` (work offsets: the program frame is taken as the work
-  frame), ``G94`` (feed per minute, the only feed mode supported);
+* harmless modal codes that do not change the geometry: ``G40`` (cutter compensation off), ``G43``
+  ``[H<n>]`` / ``G49`` (tool length offset on / off: the program coordinates are taken as tool-tip
+  coordinates, so the offset moves only the machine's Z, as the work offsets move its frame),
+  ``G54``-``G59`` (work offsets: the program frame is taken as the work frame), ``G94`` (feed per
+  minute, the only feed mode supported);
+* ``G28 [X] [Y] [Z]`` (return to home, LinuxCNC: a rapid to the point of the axis words, then a
+  rapid of those axes, or of all three when none is given, to the home position) when ``home`` is
+  given to the reader; without it an error that asks for it;
 * ``M2 M30`` (program end: motion after them is an error), ``M3 M4 M5`` (spindle), ``M6``
   (tool change), ``M7 M8 M9`` (coolant);
 * ``N`` (line number), ``O`` (program number; both non-negative integers of at most 15 digits,
   ignored), ``S`` (spindle speed >= 0, ignored), ``T`` (tool number, non-negative integer, ignored),
+  ``H`` (tool length offset number, non-negative integer, only with ``G43``, ignored),
   ``F`` (feed > 0, modal), ``X Y Z``, ``I J K R`` (arc centre / radius), ``P`` (``G64`` tolerance,
   or number of turns of ``G2``/``G3``: an integer >= 1, P1 the plain arc, as LinuxCNC), ``Q`` (with
   ``G64`` only);
@@ -46,12 +52,12 @@ below ``RADIUS_TOLERANCE_MM`` = 0.00127 mm are zero-radius arcs (refused).
 Refused with a message naming the feature: O-word subroutines and control flow (``o100 sub``,
 ``o<name> call``, ``if``, ``while`` ...), ``M98``/``M99``, ``#`` parameters (``#1``, ``#<name>``),
 expressions ``[...]`` and functions (``sin[30]``), ``/`` block delete; ``G17.1 G18.1 G19.1`` (UVW
-planes), ``G41 G42 G41.1 G42.1`` (cutter compensation), ``G43 G43.1 G43.2`` (tool length
-compensation), ``G4`` (dwell: the program model has no pauses), ``G5 G5.1 G5.2`` (splines),
-``G28 G30 G53 G92`` (machine / coordinate-system moves), ``G73 G76 G81``-``G89 G98 G99`` (canned
+planes), ``G41 G42 G41.1 G42.1`` (cutter compensation), ``G43.1 G43.2`` (dynamic / additional tool length
+offsets), ``G4`` (dwell: the program model has no pauses), ``G5 G5.1 G5.2`` (splines),
+``G28`` without ``home``, ``G30 G53 G92`` (machine / coordinate-system moves), ``G73 G76 G81``-``G89 G98 G99`` (canned
 cycles), ``G93 G95`` (inverse-time / per-revolution feed), every other G or M code (a code with more
 than one decimal digit such as ``G1.00000001`` is not read as ``G1``); the letters ``A B C U V W``
-(extra axes), ``D H`` (tool offsets), ``L``, every other letter; the off-plane centre word (``K`` in
+(extra axes), ``D`` (cutter radius offset), ``H`` without ``G43``, ``L``, every other letter; the off-plane centre word (``K`` in
 G17, ``J`` in G18, ``I`` in G19), ``P`` or ``Q`` with nothing to use them; two G-codes of one modal
 group on one line (e.g. two motion codes), a letter given twice on one line, a malformed number
 (``X1.2.3``, ``X``), a number that is not finite or beyond the bounds (coordinates, centres, radii
@@ -292,6 +298,7 @@ def parse_gcode(
     start=(0.0, 0.0, 0.0),
     arc_radius_tolerance: float | None = None,
     arc_relative_tolerance: float = SPIRAL_RELATIVE_TOLERANCE,
+    home=None,
 ) -> GCodeProgram:
     """Read a G-code program into blocks (lines and arcs) and straight chords with feeds.
 
@@ -316,6 +323,8 @@ def parse_gcode(
             either limit is a :class:`GCodeError` naming both radii; within them the radius is
             blended linearly along the arc (a spiral, as LinuxCNC does), so the arc ends exactly at
             the programmed point.
+        home: the machine home position ``(x, y, z)`` [mm] in the program frame, the target of ``G28``;
+            ``None`` (default) makes ``G28`` an error that asks for it (the reader cannot know it).
 
     Semantics worth knowing:
 
@@ -375,12 +384,22 @@ def parse_gcode(
     if st.shape != (3,) or not np.all(np.abs(st) <= MAX_COORDINATE_MM):
         raise ParameterError(f"parse_gcode: start must be 3 finite numbers (x, y, z) within +-{MAX_COORDINATE_MM:g} "
                              f"mm, got {start!r}")
+    home_t = None
+    if home is not None:
+        try:
+            h = np.asarray(home, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError):
+            raise ParameterError(f"parse_gcode: home must be 3 finite numbers (x, y, z) [mm], got {home!r}") from None
+        if h.shape != (3,) or not np.all(np.abs(h) <= MAX_COORDINATE_MM):
+            raise ParameterError(f"parse_gcode: home must be 3 finite numbers (x, y, z) within "
+                                 f"+-{MAX_COORDINATE_MM:g} mm, got {home!r}")
+        home_t = tuple(h.tolist())
     if not isinstance(text, str):
         raise GCodeError(f"expected the program as str, got {type(text).__name__}", source=source, line=0, column=0)
     if "\r" in text:
         text = text.replace("\r\n", "\n").replace("\r", "\n")
 
-    it = _Interpreter(tol, rapid, feed0, tuple(st.tolist()), arc_tol, arc_rel)
+    it = _Interpreter(tol, rapid, feed0, tuple(st.tolist()), arc_tol, arc_rel, home_t)
     line_fn = it.line
     simple_fn = it.simple
     simple_match = _SIMPLE.fullmatch
@@ -467,7 +486,7 @@ def read_gcode(path: str | PathLike, **kwargs) -> GCodeProgram:
         path: file to read; its path string becomes ``source`` in messages and the result.
         **kwargs: as :func:`parse_gcode` (``chord_tolerance`` [mm], ``rapid_feed`` [mm/min],
             ``initial_feed`` [mm/min], ``start`` [mm], ``arc_radius_tolerance`` [mm],
-            ``arc_relative_tolerance``).
+            ``arc_relative_tolerance``, ``home`` [mm]).
 
     Raises:
         GCodeError: the file cannot be read (line 0), or as :func:`parse_gcode`.

@@ -85,6 +85,25 @@ def test_gcode_path_uses_program_feeds(tmp_path):
     np.testing.assert_allclose(result.record["details"]["fir"]["feeds"], [20.0, 10.0])  # mm/min -> mm/s
 
 
+def test_gcode_path_with_g28_needs_home_mm(tmp_path):
+    """A post-processor's G28 G91 Z0 retract: with ``home_mm`` the program reads and runs (the retract
+    from z = 5 to the home z = 20 is a rapid block of 15 mm, X then home from (10, 0)); without it the
+    run stops with the reader's error naming the file, line 4 and what to give. ``home_mm`` with a named
+    path is a config error."""
+    (tmp_path / "part.nc").write_text("G21 G90\nG0 Z5\nG1 X10 F1200\nG28 G91 Z0\nG90\nG28 X10\nM30\n")
+    text = GOOD.replace('name = "corner90"', 'gcode = "part.nc"\nhome_mm = [0.0, 0.0, 20.0]')
+    text = text.replace("feed_mm_per_s = 200.0\n", "")
+    result = run_experiment(write(tmp_path, text), cache_dir=tmp_path / "c", figures_dir=tmp_path / "f", log=lambda s: None)
+    traj = Trajectory.load(tmp_path / "c" / "t" / "trajectory.npz")
+    np.testing.assert_allclose(traj.q[-1], [0.0, 0.0, 20.0], atol=1e-9)
+    assert result.record["details"]["fir"]["feeds"][0] == pytest.approx(15000.0 / 60.0)  # G0 at the rapid feed
+    with pytest.raises(Exception, match=r"part.nc:4:1: G28 \(return to home\) needs the machine home position"):
+        run_experiment(write(tmp_path, text.replace("home_mm = [0.0, 0.0, 20.0]\n", ""), "b.toml"),
+                       cache_dir=tmp_path / "c2", figures_dir=tmp_path / "f", log=lambda s: None)
+    with pytest.raises(ConfigError, match=r"home_mm"):
+        load_config(write(tmp_path, GOOD.replace('name = "corner90"', 'name = "corner90"\nhome_mm = [0, 0, 1]'), "c.toml"))
+
+
 # -- strict configs (issue: nothing silently wrong) -------------------------------------------------------
 BASE = 'name = "t"\nreproduces = "test"\n'
 PATH = '[path]\nname = "corner90"\n'

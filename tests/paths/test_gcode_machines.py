@@ -19,6 +19,8 @@ from research.paths.polyline import Polyline
 
 PROGRAMS = pathlib.Path(__file__).parent / "programs"
 PI = math.pi
+#: reader arguments a test program needs (mill_post.ngc returns home with G28)
+PROGRAM_ARGS = {"mill_post.ngc": {"home": (0.0, 0.0, 50.0), "start": (0.0, 0.0, 50.0)}}
 NAN = float("nan")
 
 
@@ -172,6 +174,32 @@ def test_cam_post_output():
     check_consistent(prog)
 
 
+def test_mill_post_with_home_and_tool_length_offset():
+    """mill_post.ngc read with home = (0, 0, 50), from (0, 0, 50). By hand (LinuxCNC G28 semantics):
+    line 8 ``G28 G91 Z0`` goes via the current point to z = 50 (already there: no move); G43 Z15 H1 is
+    a plain rapid to z = 15 in program (tool-tip) coordinates; line 21 ``G28 G91 Z0`` from (25, 20, 15)
+    to (25, 20, 50); line 23 ``G28 X30 Y20`` (G90 again) a rapid to (30, 20, 50), then X and Y home to
+    (0, 0, 50), Z unchanged."""
+    prog = read("mill_post.ngc", home=(0.0, 0.0, 50.0), start=(0.0, 0.0, 50.0))
+    b = prog.blocks
+    ends = [[10, 5, 50], [10, 5, 15], [10, 5, 5], [10, 5, -1], [20, 5, -1], [25, 10, -1], [25, 20, -1],
+            [25, 20, 15], [25, 20, 50], [30, 20, 50], [0, 0, 50]]
+    np.testing.assert_allclose(b.ends, ends, atol=1e-12)
+    assert prog.block_lines.tolist() == [13, 14, 15, 16, 17, 18, 19, 20, 21, 23, 23]
+    assert b.is_arc.tolist() == [False] * 5 + [True] + [False] * 5
+    assert prog.block_rapid.tolist() == [True, True, True, False, False, False, False, True, True, True, True]
+    assert 8 in prog.no_motion_lines
+    check_consistent(prog)
+
+
+def test_g28_without_home_asks_for_it():
+    """The reader cannot know the machine home: G28 without ``home`` is an error at its line and column
+    naming the argument to pass."""
+    with pytest.raises(GCodeError, match=r"mill_post.ngc:8:1: G28 \(return to home\) needs the machine home "
+                                         r"position; expected home=\(x, y, z\)"):
+        read("mill_post.ngc")
+
+
 def test_spiral_beyond_tolerance_names_both_radii():
     """40 um at r = 50 exceeds LinuxCNC's 0.0283 mm: refused, with both radii in the message."""
     with pytest.raises(GCodeError, match=r"<string>:2:14: G3 end point is not on the arc: start radius 50 mm and "
@@ -202,7 +230,7 @@ def test_programs_round_trip_through_to_gcode_with_arcs(name):
     """to_gcode(program) writes the blocks (arcs as G2/G3 with G91.1 offsets, P turns, G64 P changes);
     reading it back gives the same ends (exactly), tolerances, feeds, rapid flags, and sweeps/centres
     within float rounding of the offset."""
-    prog = read(name)
+    prog = read(name, **PROGRAM_ARGS.get(name, {}))
     again = parse_gcode(to_gcode(prog), start=prog.blocks.start)
     a, b = prog.blocks, again.blocks
     np.testing.assert_array_equal(b.ends, a.ends)
