@@ -98,22 +98,39 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
     """
     t0, t1 = float(position.breaks[0]), float(position.breaks[-1])
     n = int(np.ceil((t1 - t0) / check_period)) + 1
-    t = np.concatenate([t0 + np.arange(n) * check_period, centre, [t1]])
     M = path.n_blocks
     worst, bad = np.full(2 * M - 1, -np.inf), np.full(2 * M - 1, -np.inf)
-    deviation = _scan(position, path, np.clip(t, t0, t1), starts, centre, Td, tol_block, worst, bad, None)
+    times = _sample_times(np.zeros(1, np.int64), np.array([n]), t0, t1, check_period, centre)
+    deviation = _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, None)
     at_vertex = {int(v): float(bad[v]) for v in np.flatnonzero(bad[: M - 1] > -np.inf)}
     at_block = {int(b): float(bad[M - 1 + b]) for b in np.flatnonzero(bad[M - 1:] > -np.inf)}
     return deviation, at_vertex, at_block
 
 
-def _scan(position, path, t, starts, centre, Td, tol_block, worst, bad, redo) -> float:
-    """Check the samples ``t`` in chunks of :data:`_CHUNK` (bounded memory): the largest distance of
-    each charge key into ``worst`` and of its violations into ``bad`` (keys where ``redo``, all if
-    None). Returns the largest distance over all samples."""
+def _sample_times(first: np.ndarray, count: np.ndarray, t0: float, t1: float, period: float, extra: np.ndarray):
+    """The check's sample times in chunks of at most :data:`_CHUNK` (bounded memory, never the
+    whole list at once): the grid points ``t0 + i period`` for ``i`` in ``first[r] .. first[r] +
+    count[r] - 1`` of each run ``r`` (in order), then the times ``extra`` and ``t1``, all clipped to
+    ``[t0, t1]``. The values are those of the full list, whatever the chunking."""
+    ends = np.cumsum(count)  # sample index after each run
+    n_grid = int(ends[-1]) if ends.size else 0
+    for i in range(0, n_grid, _CHUNK):
+        j = np.arange(i, min(i + _CHUNK, n_grid))
+        run = np.searchsorted(ends, j, side="right")  # the run holding sample j
+        grid = first[run] + (j - (ends[run] - count[run]))
+        yield np.clip(t0 + grid * period, t0, t1)
+    tail = np.append(extra, t1)
+    for i in range(0, tail.size, _CHUNK):
+        yield np.clip(tail[i: i + _CHUNK], t0, t1)
+
+
+def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo) -> float:
+    """Check the sample chunks ``times`` (an iterable of time arrays, :func:`_sample_times`): the
+    largest distance of each charge key into ``worst`` and of its violations into ``bad`` (keys
+    where ``redo``, all if None). Returns the largest distance over all samples."""
     deviation = -np.inf
-    for i in range(0, t.size, _CHUNK):
-        dist, key, over = _charged_samples(position, path, t[i: i + _CHUNK], starts, centre, Td, tol_block)
+    for t in times:
+        dist, key, over = _charged_samples(position, path, t, starts, centre, Td, tol_block)
         deviation = max(deviation, float(dist.max()))
         keep = key >= 0 if redo is None else redo[key]
         scatter_max(worst, key[keep], dist[keep])
@@ -202,11 +219,11 @@ class RoundChecks:
             n = int(np.ceil((t1 - t0) / self.period)) + 1
             last = np.minimum(np.floor((s_hi - t0) / self.period).astype(np.int64), n - 1)
             count = np.maximum(last - first + 1, 0)
-            grid = np.repeat(first - np.cumsum(count) + count, count) + np.arange(count.sum())
-            t = np.concatenate([t0 + grid * self.period, centre[redo_v[: M - 1]], [t1]])
-            self.samples = t.size
+            extra = centre[redo_v[: M - 1]]
+            self.samples = int(count.sum()) + extra.size + 1
             self.worst[redo], self.bad[redo] = -np.inf, -np.inf
-            _scan(position, path, np.clip(t, t0, t1), starts, centre, self.Td, self.tol, self.worst, self.bad, redo)
+            times = _sample_times(first, count, t0, t1, self.period, extra)
+            _scan(position, path, times, starts, centre, self.Td, self.tol, self.worst, self.bad, redo)
         at_vertex = {int(v): float(self.bad[v]) for v in np.flatnonzero(self.bad[: M - 1] > -np.inf)}
         at_block = {int(b): float(self.bad[M - 1 + b]) for b in np.flatnonzero(self.bad[M - 1:] > -np.inf)}
         errors = self.errors if vertex_errors else np.zeros(M - 1)
