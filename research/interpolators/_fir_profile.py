@@ -89,26 +89,18 @@ def profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
     """``_fir_blocks.build_profile`` on concrete arrays (same arguments and results, NumPy):
     ``(block_starts, block_ends, breaks, coeffs, centre)`` with the position profile as its breaks
     ``(K + 1,)`` and ascending local coefficients ``(K, D, d)``."""
-    starts, ends, breaks, coeffs, centre = _profile(
+    return _profile(
         np.ascontiguousarray(start, dtype=np.float64), np.ascontiguousarray(geo, dtype=np.float64),
         np.ascontiguousarray(block), np.ascontiguousarray(gap), np.ascontiguousarray(fraction, dtype=np.float64),
         np.ascontiguousarray(piece_tv, dtype=np.float64), np.ascontiguousarray(gaps, dtype=np.float64),
         np.ascontiguousarray(delays, dtype=np.float64))
-    # a closing rest piece of zero length at the end (as the JAX form's trailing empty piece): the
-    # right-hand limit at the end time is the machine at rest (v = a = j = 0), not the last
-    # decelerating piece's left limit (sampled trajectories end at rest, ``Trajectory.from_piecewise``)
-    h = breaks[-1] - breaks[-2]
-    end = np.polynomial.polynomial.polyval(h, coeffs[-1])  # (d,) end position
-    rest = np.zeros((1,) + coeffs.shape[1:])
-    rest[0, 0] = end
-    return starts, ends, np.append(breaks, breaks[-1]), np.concatenate([coeffs, rest]), centre
 
 
 @numba.njit(**_OPTIONS)
-def _antiderivative(breaks, coeffs, initial):
-    """Integral from ``breaks[0]`` plus ``initial`` ``(A,)`` (``PiecewisePolynomial.antiderivative``)."""
+def _antiderivative(breaks, coeffs, initial, out):
+    """Integral from ``breaks[0]`` plus ``initial`` ``(A,)`` (``PiecewisePolynomial.antiderivative``)
+    into the first ``K`` rows of ``out`` ``(>= K, D + 1, A)``."""
     K, D, A = coeffs.shape
-    out = np.empty((K, D + 1, A))
     acc = np.zeros(A)
     hp = np.empty(D)
     for i in range(K):
@@ -124,7 +116,6 @@ def _antiderivative(breaks, coeffs, initial):
                 s += c * hp[m]
             acc[a] += s
             out[i, 0, a] = (acc[a] - s) + initial[a]
-    return out
 
 
 @numba.njit(**_OPTIONS)
@@ -153,54 +144,48 @@ def _moving_average(breaks, coeffs, delay):
     K, D, A = coeffs.shape
     # C and, as row K, its end value after its last break (Horner on the last piece)
     C = np.zeros((K + 1, D + 1, A))
-    C[:K] = _antiderivative(breaks, coeffs, np.zeros(A))
+    _antiderivative(breaks, coeffs, np.zeros(A), C)
     h = breaks[K] - breaks[K - 1]
     for a in range(A):
         v = C[K - 1, D, a]
         for m in range(D - 1, -1, -1):
             v = v * h + C[K - 1, m, a]
         C[K, 0, a] = v
-    n = 2 * (K + 1)
-    new_breaks = np.empty(n)
-    now, before = np.empty(n - 1, np.int64), np.empty(n - 1, np.int64)
-    i, j = 0, 0  # breaks of C(t) taken, breaks of C(t - T) taken (ties: C(t) first)
-    for p in range(n):
-        if j > K or (i <= K and breaks[i] <= breaks[j] + delay):
-            new_breaks[p] = breaks[i]
-            i += 1
-        else:
-            new_breaks[p] = breaks[j] + delay
-            j += 1
-        if p < n - 1:
-            # piece i - 1 of C holds the new piece at t, piece j - 1 at t - T (-1: before breaks[0],
-            # where C is zero; K: after breaks[K], where C holds its end value)
-            now[p], before[p] = i - 1, j - 1
-    # keep the pieces of positive length only: an empty one is never evaluated (a right search
-    # takes the next piece), integrates to 0, and the next filter's pieces that would take their
-    # coefficients from it are empty too; the breaks are the same values, the function the same
-    keep = np.zeros(n - 1, np.bool_)
-    for p in range(n - 1):
-        keep[p] = new_breaks[p + 1] > new_breaks[p]
-    count = max(int(keep.sum()), 1)
-    if not keep.any():
-        keep[0] = True
-    out = np.zeros((count, D + 1, A))
-    out_breaks = np.empty(count + 1)
-    out_breaks[0] = new_breaks[0]
-    scratch = np.empty((D + 1, A))
-    q = 0
-    for p in range(n - 1):
-        if not keep[p]:
-            continue
-        left = new_breaks[p]
-        out_breaks[q + 1] = new_breaks[p + 1]
-        _add_shifted(C, now[p], left - breaks[now[p]], 1.0, out, q, scratch)
-        if before[p] >= 0:
-            _add_shifted(C, before[p], (left - delay) - breaks[before[p]], -1.0, out, q, scratch)
-        for m in range(D + 1):
-            for a in range(A):
-                out[q, m, a] = out[q, m, a] / delay
-        q += 1
+    # two passes of the same merge (no merged arrays kept): count the new pieces of positive
+    # length, then fill them. An empty piece is never evaluated (a right search takes the next
+    # piece), integrates to 0, and the next filter's pieces that would take their coefficients
+    # from it are empty too; the breaks are the same values, the function the same
+    count, keep_first = 0, False
+    out, out_breaks, scratch = np.zeros((1, D + 1, A)), np.empty(2), np.empty((D + 1, A))
+    for sweep in range(2):
+        if sweep == 1:
+            keep_first = count == 0  # every piece empty: keep the first one
+            out, out_breaks = np.zeros((max(count, 1), D + 1, A)), np.empty(max(count, 1) + 1)
+        i, j, q = 0, 0, 0  # breaks of C(t) taken, breaks of C(t - T) taken (ties: C(t) first), pieces kept
+        left, now, before = 0.0, -1, -1
+        for p in range(2 * (K + 1)):
+            if j > K or (i <= K and breaks[i] <= breaks[j] + delay):
+                b = breaks[i]
+                i += 1
+            else:
+                b = breaks[j] + delay
+                j += 1
+            if p == 0:
+                out_breaks[0] = b
+            elif b > left or (keep_first and p == 1):
+                # the piece [left, b): piece ``now`` of C holds it at t, ``before`` at t - T (-1:
+                # before breaks[0], where C is zero; K: after breaks[K], where C holds its end value)
+                if sweep == 1:
+                    out_breaks[q + 1] = b
+                    _add_shifted(C, now, left - breaks[now], 1.0, out, q, scratch)
+                    if before >= 0:
+                        _add_shifted(C, before, (left - delay) - breaks[before], -1.0, out, q, scratch)
+                    for m in range(D + 1):
+                        for a in range(A):
+                            out[q, m, a] = out[q, m, a] / delay
+                q += 1
+            left, now, before = b, i - 1, j - 1
+        count = q
     return out_breaks, out
 
 
@@ -229,7 +214,23 @@ def _profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
     vb, vc = breaks, coeffs
     for k in range(delays.size):
         vb, vc = _moving_average(vb, vc, delays[k])
-    position = _antiderivative(vb, vc, start)
+    # the position, and a closing rest piece of zero length at the end (as the JAX form's trailing
+    # empty piece): the right-hand limit at the end time is the machine at rest (v = a = j = 0), not
+    # the last decelerating piece's left limit (sampled trajectories end at rest,
+    # ``Trajectory.from_piecewise``); its value is the end position (Horner on the last piece)
+    K, Dv = vc.shape[0], vc.shape[1]
+    position = np.empty((K + 1, Dv + 1, A))
+    _antiderivative(vb, vc, start, position)
+    position[K] = 0.0
+    h = vb[K] - vb[K - 1]
+    for a in range(A):
+        v = position[K - 1, Dv, a]
+        for m in range(Dv - 1, -1, -1):
+            v = position[K - 1, m, a] + v * h
+        position[K, 0, a] = v
+    pos_breaks = np.empty(K + 2)
+    pos_breaks[: K + 1] = vb
+    pos_breaks[K + 1] = vb[K]
     starts, ends, centre = np.empty(Mp), np.empty(Mp), np.empty(Mp)
     Td = 0.0
     for k in range(delays.size):
@@ -244,4 +245,4 @@ def _profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
         starts[k] = breaks[first]
         ends[k] = breaks[last] - gaps[k]
         centre[k] = ends[k] + 0.5 * gaps[k] + 0.5 * Td
-    return starts, ends, vb, position, centre
+    return starts, ends, pos_breaks, position, centre
