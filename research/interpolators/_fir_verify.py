@@ -178,12 +178,13 @@ class RoundChecks:
 
     def __init__(self, path: ToolPath, tol_block: np.ndarray, piece_block: np.ndarray, Td: float, check_period: float):
         self.path, self.tol, self.Td, self.period = path, tol_block, Td, check_period
-        self.piece_block = np.minimum(piece_block, path.n_blocks - 1)
+        self.piece_block = piece_block  # padding pieces (block M_pad) count as the last block's
         self.durations, self.samples = None, 0
 
     def __call__(self, position: NumpyPiecewise, starts: np.ndarray, centre: np.ndarray, durations: np.ndarray,
                  vertex_errors: bool):
-        """Checks of the plan whose input pieces last ``durations`` ``(P,)`` [s] (gaps included).
+        """Checks of the plan whose input pieces last ``durations`` ``(P,)`` [s] (gaps included;
+        kept until the next call, which compares against it: not to be changed in place).
 
         Returns:
             ``(vertex errors (M - 1,), max deviation, {vertex: deviation}, {block: deviation})`` as
@@ -202,13 +203,13 @@ class RoundChecks:
             err_v, redo_v, redo_b = np.ones(M - 1, bool), np.ones(M - 1, bool), np.ones(M, bool)
             self.errors, self.worst, self.bad = np.zeros(M - 1), np.full(2 * M - 1, -np.inf), np.full(2 * M - 1, -np.inf)
         else:
-            changed = np.unique(self.piece_block[durations != self.durations])
+            changed = np.unique(np.minimum(self.piece_block[durations != self.durations], M - 1))
             r_lo, r_hi = starts[changed], np.append(starts, np.inf)[changed + 1] + self.Td
             r_lo, r_hi = _merged(r_lo, r_hi)
             err_v = _meets(centre - half, hi_v, r_lo, r_hi)
             redo_v = _meets(lo_v, hi_v, r_lo, r_hi)
             redo_b = _meets(lo_b, hi_b, r_lo, r_hi)
-        self.durations = durations.copy()
+        self.durations = durations  # kept, not copied: the planner builds a new array every round
         if vertex_errors and err_v.any():
             self.errors[err_v] = vertex_distances(position, path.vertices[err_v], centre[err_v], half)
         redo = np.concatenate([redo_v, redo_b])

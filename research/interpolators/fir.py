@@ -351,7 +351,8 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         shrink[j] *= min(0.98 * ratio ** (1.0 / (n_f + 1)), 1.0)
                 for k in np.flatnonzero(arc_slow):
                     factor[k] *= min(0.98 * np.sqrt(tb_np[k] / arc_slow[k]), 0.98)
-                state = pos_np = None  # suspended in the branch and bound, a candidate keeps no profile
+                # suspended in the branch and bound, a candidate keeps no profile and no round's arrays
+                state = pos_np = pulse_np = starts_np = centre_np = durations = at_vertex = at_block = None
                 yield predicted_time((factor, head, tail, full, others, arc_rel), shrink * bisection.bound_scale), repaired
                 state = schedule(factor, head, tail, full, shrink * bisection.scale, others, arc_rel)
         return state, rounds, deviation, repaired
