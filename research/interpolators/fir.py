@@ -287,7 +287,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             max_rounds = MAX_ROUNDS + (2 * M if limits is not None else 0)
             tol_due = True  # the tolerance state changed since the last tolerance check
             for rounds in range(1, max_rounds + 1):
-                _, _, pulse_np, starts_np, pos_np, centre_np, _, durations = state
+                (pulse_np, starts_np, pos_np, centre_np), durations = state[2:6], state[7]
                 too_fast, slowed = False, False
                 if limits is not None and M > 1:
                     ratios = corner_limit_ratios(pos_np, starts_np, pulse_np, Td_np, limits)
