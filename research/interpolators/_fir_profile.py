@@ -97,10 +97,13 @@ def profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
 
 
 @numba.njit(**_OPTIONS)
-def _antiderivative(breaks, coeffs, initial, out):
-    """Integral from ``breaks[0]`` plus ``initial`` ``(A,)`` (``PiecewisePolynomial.antiderivative``)
-    into the first ``K`` rows of ``out`` ``(>= K, D + 1, A)``."""
+def _constants(breaks, coeffs):
+    """Constant terms ``(K + 1, A)`` of ``C``, the integral of the function from ``breaks[0]``
+    (``PiecewisePolynomial.antiderivative``; the other coefficients of piece ``i`` are
+    ``coeffs[i, m] / (m + 1)``, :func:`_c_row`), and as row ``K`` its end value (Horner on the
+    last piece)."""
     K, D, A = coeffs.shape
+    out = np.empty((K + 1, A))
     acc = np.zeros(A)
     hp = np.empty(D)
     for i in range(K):
@@ -111,28 +114,42 @@ def _antiderivative(breaks, coeffs, initial, out):
         for a in range(A):
             s = 0.0
             for m in range(D):
-                c = coeffs[i, m, a] / (m + 1.0)
-                out[i, m + 1, a] = c
-                s += c * hp[m]
+                s += (coeffs[i, m, a] / (m + 1.0)) * hp[m]
             acc[a] += s
-            out[i, 0, a] = (acc[a] - s) + initial[a]
+            out[i, a] = (acc[a] - s) + 0.0
+    h = breaks[K] - breaks[K - 1]
+    for a in range(A):
+        v = coeffs[K - 1, D - 1, a] / D
+        for m in range(D - 1, 0, -1):
+            v = v * h + coeffs[K - 1, m - 1, a] / m
+        out[K, a] = v * h + out[K - 1, a]
+    return out
 
 
 @numba.njit(**_OPTIONS)
-def _add_shifted(src, k, delta, sign, out, p, c):
-    """``out[p] += sign * src[k]`` re-centred by ``delta``: the Taylor shift of ascending
-    coefficients ``(D, A)`` of ``research.piecewise._taylor_shift``; ``c`` ``(D, A)`` is scratch."""
-    D, A = src.shape[1], src.shape[2]
+def _c_row(coeffs, consts, k, c):
+    """Piece ``k`` of ``C`` as ascending coefficients ``(D + 1, A)`` into ``c``: row ``K`` is the end
+    value held after the last break."""
+    K, D, A = coeffs.shape
+    for a in range(A):
+        c[0, a] = consts[k, a]
     for m in range(D):
         for a in range(A):
-            c[m, a] = src[k, m, a]
+            c[m + 1, a] = coeffs[k, m, a] / (m + 1.0) if k < K else 0.0
+
+
+@numba.njit(**_OPTIONS)
+def _add_shifted(c, delta, sign, out):
+    """``out += sign * c`` re-centred by ``delta``: the Taylor shift of ascending coefficients
+    ``(D, A)`` of ``research.piecewise._taylor_shift`` (``c`` is overwritten)."""
+    D, A = c.shape
     for i in range(D - 1):
         for m in range(D - 2, i - 1, -1):
             for a in range(A):
                 c[m, a] = c[m, a] + delta * c[m + 1, a]
     for m in range(D):
         for a in range(A):
-            out[p, m, a] += sign * c[m, a]
+            out[m, a] += sign * c[m, a]
 
 
 @numba.njit(**_OPTIONS)
@@ -141,26 +158,32 @@ def _moving_average(breaks, coeffs, delay):
     coefficients ``(K', D + 1, A)`` of ``(C(t) - C(t - T)) / T``, ``C`` the antiderivative of a
     function that is zero outside its breaks, on the ``K' <= 2K + 1`` pieces of positive length of
     the merge of ``b`` and ``b + T`` (the JAX form keeps the empty ones too)."""
+    return _filter(breaks, coeffs, delay, np.zeros(coeffs.shape[2]), False)
+
+
+@numba.njit(**_OPTIONS)
+def _filter(breaks, coeffs, delay, initial, integrate):
+    """:func:`_moving_average`, or with ``integrate`` its integral from the first break plus
+    ``initial`` ``(A,)`` (``(K' + 1, D + 2, A)`` coefficients on ``K' + 2`` breaks), built piece by
+    piece as the average comes (no averaged profile kept), closed by a rest piece of zero length
+    whose value is the end value. ``C`` is never held: its constants (:func:`_constants`) and the
+    input coefficients give each of its pieces when needed (:func:`_c_row`)."""
     K, D, A = coeffs.shape
-    # C and, as row K, its end value after its last break (Horner on the last piece)
-    C = np.zeros((K + 1, D + 1, A))
-    _antiderivative(breaks, coeffs, np.zeros(A), C)
-    h = breaks[K] - breaks[K - 1]
-    for a in range(A):
-        v = C[K - 1, D, a]
-        for m in range(D - 1, -1, -1):
-            v = v * h + C[K - 1, m, a]
-        C[K, 0, a] = v
+    consts = _constants(breaks, coeffs)
     # two passes of the same merge (no merged arrays kept): count the new pieces of positive
     # length, then fill them. An empty piece is never evaluated (a right search takes the next
     # piece), integrates to 0, and the next filter's pieces that would take their coefficients
     # from it are empty too; the breaks are the same values, the function the same
+    R = D + 2 if integrate else D + 1  # coefficient rows of a result piece
     count, keep_first = 0, False
-    out, out_breaks, scratch = np.zeros((1, D + 1, A)), np.empty(2), np.empty((D + 1, A))
+    out, out_breaks = np.zeros((1, R, A)), np.empty(2)
+    c, v, hp, acc = np.empty((D + 1, A)), np.empty((D + 1, A)), np.empty(D + 1), np.zeros(A)
     for sweep in range(2):
         if sweep == 1:
             keep_first = count == 0  # every piece empty: keep the first one
-            out, out_breaks = np.zeros((max(count, 1), D + 1, A)), np.empty(max(count, 1) + 1)
+            n_out = max(count, 1)
+            out = np.zeros((n_out + 1, R, A)) if integrate else np.zeros((n_out, R, A))
+            out_breaks = np.empty(n_out + 2) if integrate else np.empty(n_out + 1)
         i, j, q = 0, 0, 0  # breaks of C(t) taken, breaks of C(t - T) taken (ties: C(t) first), pieces kept
         left, now, before = 0.0, -1, -1
         for p in range(2 * (K + 1)):
@@ -177,15 +200,42 @@ def _moving_average(breaks, coeffs, delay):
                 # before breaks[0], where C is zero; K: after breaks[K], where C holds its end value)
                 if sweep == 1:
                     out_breaks[q + 1] = b
-                    _add_shifted(C, now, left - breaks[now], 1.0, out, q, scratch)
+                    v[:] = 0.0
+                    _c_row(coeffs, consts, now, c)
+                    _add_shifted(c, left - breaks[now], 1.0, v)
                     if before >= 0:
-                        _add_shifted(C, before, (left - delay) - breaks[before], -1.0, out, q, scratch)
+                        _c_row(coeffs, consts, before, c)
+                        _add_shifted(c, (left - delay) - breaks[before], -1.0, v)
                     for m in range(D + 1):
                         for a in range(A):
-                            out[q, m, a] = out[q, m, a] / delay
+                            v[m, a] = v[m, a] / delay
+                    if not integrate:
+                        out[q] = v
+                    else:  # ``PiecewisePolynomial.antiderivative`` of this piece, in order
+                        h = b - left
+                        hp[0] = h
+                        for m in range(1, D + 1):
+                            hp[m] = hp[m - 1] * h
+                        for a in range(A):
+                            s = 0.0
+                            for m in range(D + 1):
+                                cm = v[m, a] / (m + 1.0)
+                                out[q, m + 1, a] = cm
+                                s += cm * hp[m]
+                            acc[a] += s
+                            out[q, 0, a] = (acc[a] - s) + initial[a]
                 q += 1
             left, now, before = b, i - 1, j - 1
         count = q
+    if integrate:  # the closing rest piece: the end value (Horner on the last piece), v = a = j = 0
+        n_out = max(count, 1)
+        h = out_breaks[n_out] - out_breaks[n_out - 1]
+        for a in range(A):
+            w = out[n_out - 1, R - 1, a]
+            for m in range(R - 2, -1, -1):
+                w = out[n_out - 1, m, a] + w * h
+            out[n_out, 0, a] = w
+        out_breaks[n_out + 1] = out_breaks[n_out]
     return out_breaks, out
 
 
@@ -212,25 +262,13 @@ def _profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
                 coeffs[i, m, a] = 0.0 if gap[i] else geo[i, m, a] * s
             s *= inv
     vb, vc = breaks, coeffs
-    for k in range(delays.size):
+    for k in range(delays.size - 1):
         vb, vc = _moving_average(vb, vc, delays[k])
-    # the position, and a closing rest piece of zero length at the end (as the JAX form's trailing
-    # empty piece): the right-hand limit at the end time is the machine at rest (v = a = j = 0), not
-    # the last decelerating piece's left limit (sampled trajectories end at rest,
-    # ``Trajectory.from_piecewise``); its value is the end position (Horner on the last piece)
-    K, Dv = vc.shape[0], vc.shape[1]
-    position = np.empty((K + 1, Dv + 1, A))
-    _antiderivative(vb, vc, start, position)
-    position[K] = 0.0
-    h = vb[K] - vb[K - 1]
-    for a in range(A):
-        v = position[K - 1, Dv, a]
-        for m in range(Dv - 1, -1, -1):
-            v = position[K - 1, m, a] + v * h
-        position[K, 0, a] = v
-    pos_breaks = np.empty(K + 2)
-    pos_breaks[: K + 1] = vb
-    pos_breaks[K + 1] = vb[K]
+    # the last filter integrated as it goes: the position, closed by a rest piece of zero length (as
+    # the JAX form's trailing empty piece): the right-hand limit at the end time is the machine at
+    # rest (v = a = j = 0), not the last decelerating piece's left limit (sampled trajectories end
+    # at rest, ``Trajectory.from_piecewise``)
+    pos_breaks, position = _filter(vb, vc, delays[delays.size - 1], start, True)
     starts, ends, centre = np.empty(Mp), np.empty(Mp), np.empty(Mp)
     Td = 0.0
     for k in range(delays.size):
