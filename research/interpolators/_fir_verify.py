@@ -115,13 +115,17 @@ def _sample_times(first: np.ndarray, count: np.ndarray, t0: float, t1: float, pe
     ends = np.cumsum(count)  # sample index after each run
     n_grid = int(ends[-1]) if ends.size else 0
     for i in range(0, n_grid, _CHUNK):
-        j = np.arange(i, min(i + _CHUNK, n_grid))
-        run = np.searchsorted(ends, j, side="right")  # the run holding sample j
-        grid = first[run] + (j - (ends[run] - count[run]))
-        yield np.clip(t0 + grid * period, t0, t1)
+        yield _grid_chunk(i, min(i + _CHUNK, n_grid), first, count, ends, t0, t1, period)
     tail = np.append(extra, t1)
     for i in range(0, tail.size, _CHUNK):
         yield np.clip(tail[i: i + _CHUNK], t0, t1)
+
+
+def _grid_chunk(i: int, j: int, first, count, ends, t0: float, t1: float, period: float) -> np.ndarray:
+    """Grid samples ``i .. j - 1`` of :func:`_sample_times` (its work arrays end with the call)."""
+    k = np.arange(i, j)
+    run = np.searchsorted(ends, k, side="right")  # the run holding sample k
+    return np.clip(t0 + (first[run] + (k - (ends[run] - count[run]))) * period, t0, t1)
 
 
 def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo) -> float:
@@ -201,7 +205,8 @@ class RoundChecks:
         hi_b = np.append(starts[1:] + half, t1)
         if self.durations is None:
             err_v, redo_v, redo_b = np.ones(M - 1, bool), np.ones(M - 1, bool), np.ones(M, bool)
-            self.errors, self.worst, self.bad = np.zeros(M - 1), np.full(2 * M - 1, -np.inf), np.full(2 * M - 1, -np.inf)
+            self.errors, self.worst = np.zeros(M - 1), np.full(2 * M - 1, -np.inf)
+            self.bad = (np.zeros(0, np.int64), np.zeros(0))
         else:
             changed = np.unique(np.minimum(self.piece_block[durations != self.durations], M - 1))
             r_lo, r_hi = starts[changed], np.append(starts, np.inf)[changed + 1] + self.Td
@@ -222,11 +227,16 @@ class RoundChecks:
             count = np.maximum(last - first + 1, 0)
             extra = centre[redo_v[: M - 1]]
             self.samples = int(count.sum()) + extra.size + 1
-            self.worst[redo], self.bad[redo] = -np.inf, -np.inf
+            bad = np.full(2 * M - 1, -np.inf)  # dense while checking, its few entries kept between checks
+            bad[self.bad[0]] = self.bad[1]
+            self.worst[redo], bad[redo] = -np.inf, -np.inf
             times = _sample_times(first, count, t0, t1, self.period, extra)
-            _scan(position, path, times, starts, centre, self.Td, self.tol, self.worst, self.bad, redo)
-        at_vertex = {int(v): float(self.bad[v]) for v in np.flatnonzero(self.bad[: M - 1] > -np.inf)}
-        at_block = {int(b): float(self.bad[M - 1 + b]) for b in np.flatnonzero(self.bad[M - 1:] > -np.inf)}
+            _scan(position, path, times, starts, centre, self.Td, self.tol, self.worst, bad, redo)
+            keys = np.flatnonzero(bad > -np.inf)
+            self.bad = (keys, bad[keys])
+        keys, values = self.bad
+        at_vertex = {int(k): float(e) for k, e in zip(keys, values) if k < M - 1}
+        at_block = {int(k) - (M - 1): float(e) for k, e in zip(keys, values) if k >= M - 1}
         errors = self.errors if vertex_errors else np.zeros(M - 1)
         return errors.copy(), float(self.worst.max()), at_vertex, at_block
 
