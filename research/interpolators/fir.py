@@ -282,8 +282,6 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         state = schedule(factor, head, tail, full, shrink, others, arc_rel)
         rounds, deviation = 0, float("nan")
         if refine or limits is not None:
-            cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
-            limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
             max_rounds = MAX_ROUNDS + (2 * M if limits is not None else 0)
             tol_due = True  # the tolerance state changed since the last tolerance check
             for rounds in range(1, max_rounds + 1):
@@ -397,7 +395,10 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     capped = None
     if limits is not None and np.any(safe_feed < F_np * base):
         capped = lambda: plans(np.minimum(base, safe_feed / F_np))  # noqa: E731
-    best = verify(plans(base), capped)
+    candidates = plans(base)
+    cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])  # shared by the candidates' repairs (settle)
+    limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
+    best = verify(candidates, capped)
     state, rounds, deviation, _ = best
     if traced:
         feeds, overlaps, pulse, starts, position, centre = traced_plan(*state[6])
