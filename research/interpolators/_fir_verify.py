@@ -22,8 +22,9 @@ from research.interpolators._fir_kernels import sample_charges, sampled_line_dis
 from research.piecewise import NumpyPiecewise, PiecewisePolynomial, bucket_size
 
 _GRID = 9  # grid points per corner window for the corner-error search
-_CHUNK = 1 << 13  # path samples checked at once (about 1 MB of work arrays; results do not depend on it)
+_CHUNK = 1 << 12  # path samples checked at once (about 0.25 MB of work arrays; results do not depend on it)
 _NEWTON_STEPS = 4
+_BATCH = 1 << 10  # samples that wait for ToolPath.distance_bound together (:func:`_scan`)
 
 
 def corner_distances(position: PiecewisePolynomial, vertices: Array, centre: Array, half_window: Array) -> Array:
@@ -131,32 +132,63 @@ def _grid_chunk(i: int, j: int, first, count, ends, t0: float, t1: float, period
 def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo) -> float:
     """Check the sample chunks ``times`` (an iterable of time arrays, :func:`_sample_times`): the
     largest distance of each charge key into ``worst`` and of its violations into ``bad`` (keys
-    where ``redo``, all if None). Returns the largest distance over all samples."""
+    where ``redo``, all if None). Returns the largest distance over all samples.
+
+    The samples outside tolerance of their three blocks (:func:`_charged_samples`) wait in a batch
+    of about :data:`_BATCH` for :meth:`ToolPath.distance_bound` (a fixed cost per call that would
+    otherwise come with every chunk); each sample's distance is its own, so the batching changes
+    no value, and the maxima are the same in any order."""
     deviation = -np.inf
+    waiting: list[tuple[np.ndarray, ...]] = []
+    n_waiting = 0
     for t in times:
-        dist, key, over = _charged_samples(position, path, t, starts, centre, Td, tol_block)
-        deviation = max(deviation, float(dist.max()))
+        dist, key, over, late, wait = _charged_samples(position, path, t, starts, centre, Td, tol_block)
         keep = key >= 0 if redo is None else redo[key]
-        scatter_max(worst, key[keep], dist[keep])
-        keep &= over
-        scatter_max(bad, key[keep], dist[keep])
+        near = ~over
+        if near.any():
+            deviation = max(deviation, float(dist[near].max()))
+        final = keep & near
+        scatter_max(worst, key[final], dist[final])
+        final &= late
+        scatter_max(bad, key[final], dist[final])
+        if wait is not None:
+            waiting.append(wait + (keep[over],))
+            n_waiting += wait[0].shape[0]
+        if n_waiting >= _BATCH:
+            deviation = max(deviation, _bound_waiting(path, waiting, worst, bad))
+            waiting, n_waiting = [], 0
+    if waiting:
+        deviation = max(deviation, _bound_waiting(path, waiting, worst, bad))
     return deviation
+
+
+def _bound_waiting(path: ToolPath, waiting, worst, bad) -> float:
+    """The distances of the waiting samples (``(q, block, dist, limit, key, keep)`` rows of
+    :func:`_charged_samples`) to the path by :meth:`ToolPath.distance_bound` (the smaller of it and
+    the three-block distance), into ``worst`` and ``bad``; returns their largest."""
+    q, block, dist, limit, key, keep = (np.concatenate(parts) for parts in zip(*waiting))
+    dist = np.minimum(dist, path.distance_bound(q, near=block))
+    scatter_max(worst, key[keep], dist[keep])
+    keep &= dist > limit * (1.0 + 1e-9) + 1e-9
+    scatter_max(bad, key[keep], dist[keep])
+    return float(dist.max())
 
 
 def _charged_samples(position: NumpyPiecewise, path: ToolPath, t: np.ndarray, starts: np.ndarray, centre: np.ndarray,
                      Td: float, tol_block: np.ndarray):
-    """Distance [mm] from the trajectory at each sample time ``t`` to the path, the key it is
-    charged to (vertex ``j < M - 1``, or ``M - 1 + block``: see :func:`path_deviations`) and whether
-    it breaks its tolerance."""
-    # first the blocks the window is centred on (almost every sample is within tolerance of them),
-    # then, for the rest, the k nearest path samples as well
+    """Distance [mm] from the trajectory at each sample time ``t`` to the three blocks around the
+    one its window is centred on, the key it is charged to (vertex ``j < M - 1``, or ``M - 1 +
+    block``: see :func:`path_deviations`), whether that distance breaks its tolerance (``over``:
+    the nearest path samples are to be tried as well, :func:`_scan`), whether it does so by the
+    NumPy comparison where the compiled one said no (``late``; none, to rounding), and for the
+    samples ``over`` the rows ``(q, block, dist, limit, key)`` that the bound needs (None if none).
+    Returns ``(dist, key, over, late, rows)``."""
     q, block, dist = _three_block_distance(path, position, t, starts, Td)
-    limit, key, bad = sample_charges(np.ascontiguousarray(t), np.ascontiguousarray(centre, dtype=np.float64), block, dist,
-                                     np.ascontiguousarray(tol_block, dtype=np.float64), path.is_arc, 0.5 * Td)
-    if bad.any():
-        dist[bad] = np.minimum(dist[bad], path.distance_bound(q[bad], near=block[bad]))
-        bad = dist > limit * (1.0 + 1e-9) + 1e-9
-    return dist, key, bad
+    limit, key, over = sample_charges(np.ascontiguousarray(t), np.ascontiguousarray(centre, dtype=np.float64), block,
+                                      dist, np.ascontiguousarray(tol_block, dtype=np.float64), path.is_arc, 0.5 * Td)
+    late = ~over & (dist > limit * (1.0 + 1e-9) + 1e-9)
+    rows = (q[over], block[over], dist[over], limit[over], key[over]) if over.any() else None
+    return dist, key, over, late, rows
 
 
 class RoundChecks:
