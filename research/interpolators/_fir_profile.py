@@ -89,26 +89,21 @@ def profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
     """``_fir_blocks.build_profile`` on concrete arrays (same arguments and results, NumPy):
     ``(block_starts, block_ends, breaks, coeffs, centre)`` with the position profile as its breaks
     ``(K + 1,)`` and ascending local coefficients ``(K, D, d)``."""
-    starts, ends, breaks, coeffs, centre = _profile(
+    return _profile(
         np.ascontiguousarray(start, dtype=np.float64), np.ascontiguousarray(geo, dtype=np.float64),
         np.ascontiguousarray(block), np.ascontiguousarray(gap), np.ascontiguousarray(fraction, dtype=np.float64),
         np.ascontiguousarray(piece_tv, dtype=np.float64), np.ascontiguousarray(gaps, dtype=np.float64),
         np.ascontiguousarray(delays, dtype=np.float64))
-    # a closing rest piece of zero length at the end (as the JAX form's trailing empty piece): the
-    # right-hand limit at the end time is the machine at rest (v = a = j = 0), not the last
-    # decelerating piece's left limit (sampled trajectories end at rest, ``Trajectory.from_piecewise``)
-    h = breaks[-1] - breaks[-2]
-    end = np.polynomial.polynomial.polyval(h, coeffs[-1])  # (d,) end position
-    rest = np.zeros((1,) + coeffs.shape[1:])
-    rest[0, 0] = end
-    return starts, ends, np.append(breaks, breaks[-1]), np.concatenate([coeffs, rest]), centre
 
 
 @numba.njit(**_OPTIONS)
-def _antiderivative(breaks, coeffs, initial):
-    """Integral from ``breaks[0]`` plus ``initial`` ``(A,)`` (``PiecewisePolynomial.antiderivative``)."""
+def _constants(breaks, coeffs):
+    """Constant terms ``(K + 1, A)`` of ``C``, the integral of the function from ``breaks[0]``
+    (``PiecewisePolynomial.antiderivative``; the other coefficients of piece ``i`` are
+    ``coeffs[i, m] / (m + 1)``, :func:`_c_row`), and as row ``K`` its end value (Horner on the
+    last piece)."""
     K, D, A = coeffs.shape
-    out = np.empty((K, D + 1, A))
+    out = np.empty((K + 1, A))
     acc = np.zeros(A)
     hp = np.empty(D)
     for i in range(K):
@@ -119,29 +114,42 @@ def _antiderivative(breaks, coeffs, initial):
         for a in range(A):
             s = 0.0
             for m in range(D):
-                c = coeffs[i, m, a] / (m + 1.0)
-                out[i, m + 1, a] = c
-                s += c * hp[m]
+                s += (coeffs[i, m, a] / (m + 1.0)) * hp[m]
             acc[a] += s
-            out[i, 0, a] = (acc[a] - s) + initial[a]
+            out[i, a] = (acc[a] - s) + 0.0
+    h = breaks[K] - breaks[K - 1]
+    for a in range(A):
+        v = coeffs[K - 1, D - 1, a] / D
+        for m in range(D - 1, 0, -1):
+            v = v * h + coeffs[K - 1, m - 1, a] / m
+        out[K, a] = v * h + out[K - 1, a]
     return out
 
 
 @numba.njit(**_OPTIONS)
-def _add_shifted(src, k, delta, sign, out, p, c):
-    """``out[p] += sign * src[k]`` re-centred by ``delta``: the Taylor shift of ascending
-    coefficients ``(D, A)`` of ``research.piecewise._taylor_shift``; ``c`` ``(D, A)`` is scratch."""
-    D, A = src.shape[1], src.shape[2]
+def _c_row(coeffs, consts, k, c):
+    """Piece ``k`` of ``C`` as ascending coefficients ``(D + 1, A)`` into ``c``: row ``K`` is the end
+    value held after the last break."""
+    K, D, A = coeffs.shape
+    for a in range(A):
+        c[0, a] = consts[k, a]
     for m in range(D):
         for a in range(A):
-            c[m, a] = src[k, m, a]
+            c[m + 1, a] = coeffs[k, m, a] / (m + 1.0) if k < K else 0.0
+
+
+@numba.njit(**_OPTIONS)
+def _add_shifted(c, delta, sign, out):
+    """``out += sign * c`` re-centred by ``delta``: the Taylor shift of ascending coefficients
+    ``(D, A)`` of ``research.piecewise._taylor_shift`` (``c`` is overwritten)."""
+    D, A = c.shape
     for i in range(D - 1):
         for m in range(D - 2, i - 1, -1):
             for a in range(A):
                 c[m, a] = c[m, a] + delta * c[m + 1, a]
     for m in range(D):
         for a in range(A):
-            out[p, m, a] += sign * c[m, a]
+            out[m, a] += sign * c[m, a]
 
 
 @numba.njit(**_OPTIONS)
@@ -150,57 +158,84 @@ def _moving_average(breaks, coeffs, delay):
     coefficients ``(K', D + 1, A)`` of ``(C(t) - C(t - T)) / T``, ``C`` the antiderivative of a
     function that is zero outside its breaks, on the ``K' <= 2K + 1`` pieces of positive length of
     the merge of ``b`` and ``b + T`` (the JAX form keeps the empty ones too)."""
+    return _filter(breaks, coeffs, delay, np.zeros(coeffs.shape[2]), False)
+
+
+@numba.njit(**_OPTIONS)
+def _filter(breaks, coeffs, delay, initial, integrate):
+    """:func:`_moving_average`, or with ``integrate`` its integral from the first break plus
+    ``initial`` ``(A,)`` (``(K' + 1, D + 2, A)`` coefficients on ``K' + 2`` breaks), built piece by
+    piece as the average comes (no averaged profile kept), closed by a rest piece of zero length
+    whose value is the end value. ``C`` is never held: its constants (:func:`_constants`) and the
+    input coefficients give each of its pieces when needed (:func:`_c_row`)."""
     K, D, A = coeffs.shape
-    # C and, as row K, its end value after its last break (Horner on the last piece)
-    C = np.zeros((K + 1, D + 1, A))
-    C[:K] = _antiderivative(breaks, coeffs, np.zeros(A))
-    h = breaks[K] - breaks[K - 1]
-    for a in range(A):
-        v = C[K - 1, D, a]
-        for m in range(D - 1, -1, -1):
-            v = v * h + C[K - 1, m, a]
-        C[K, 0, a] = v
-    n = 2 * (K + 1)
-    new_breaks = np.empty(n)
-    now, before = np.empty(n - 1, np.int64), np.empty(n - 1, np.int64)
-    i, j = 0, 0  # breaks of C(t) taken, breaks of C(t - T) taken (ties: C(t) first)
-    for p in range(n):
-        if j > K or (i <= K and breaks[i] <= breaks[j] + delay):
-            new_breaks[p] = breaks[i]
-            i += 1
-        else:
-            new_breaks[p] = breaks[j] + delay
-            j += 1
-        if p < n - 1:
-            # piece i - 1 of C holds the new piece at t, piece j - 1 at t - T (-1: before breaks[0],
-            # where C is zero; K: after breaks[K], where C holds its end value)
-            now[p], before[p] = i - 1, j - 1
-    # keep the pieces of positive length only: an empty one is never evaluated (a right search
-    # takes the next piece), integrates to 0, and the next filter's pieces that would take their
-    # coefficients from it are empty too; the breaks are the same values, the function the same
-    keep = np.zeros(n - 1, np.bool_)
-    for p in range(n - 1):
-        keep[p] = new_breaks[p + 1] > new_breaks[p]
-    count = max(int(keep.sum()), 1)
-    if not keep.any():
-        keep[0] = True
-    out = np.zeros((count, D + 1, A))
-    out_breaks = np.empty(count + 1)
-    out_breaks[0] = new_breaks[0]
-    scratch = np.empty((D + 1, A))
-    q = 0
-    for p in range(n - 1):
-        if not keep[p]:
-            continue
-        left = new_breaks[p]
-        out_breaks[q + 1] = new_breaks[p + 1]
-        _add_shifted(C, now[p], left - breaks[now[p]], 1.0, out, q, scratch)
-        if before[p] >= 0:
-            _add_shifted(C, before[p], (left - delay) - breaks[before[p]], -1.0, out, q, scratch)
-        for m in range(D + 1):
-            for a in range(A):
-                out[q, m, a] = out[q, m, a] / delay
-        q += 1
+    consts = _constants(breaks, coeffs)
+    # two passes of the same merge (no merged arrays kept): count the new pieces of positive
+    # length, then fill them. An empty piece is never evaluated (a right search takes the next
+    # piece), integrates to 0, and the next filter's pieces that would take their coefficients
+    # from it are empty too; the breaks are the same values, the function the same
+    R = D + 2 if integrate else D + 1  # coefficient rows of a result piece
+    count, keep_first = 0, False
+    out, out_breaks = np.zeros((1, R, A)), np.empty(2)
+    c, v, hp, acc = np.empty((D + 1, A)), np.empty((D + 1, A)), np.empty(D + 1), np.zeros(A)
+    for sweep in range(2):
+        if sweep == 1:
+            keep_first = count == 0  # every piece empty: keep the first one
+            n_out = max(count, 1)
+            out = np.zeros((n_out + 1, R, A)) if integrate else np.zeros((n_out, R, A))
+            out_breaks = np.empty(n_out + 2) if integrate else np.empty(n_out + 1)
+        i, j, q = 0, 0, 0  # breaks of C(t) taken, breaks of C(t - T) taken (ties: C(t) first), pieces kept
+        left, now, before = 0.0, -1, -1
+        for p in range(2 * (K + 1)):
+            if j > K or (i <= K and breaks[i] <= breaks[j] + delay):
+                b = breaks[i]
+                i += 1
+            else:
+                b = breaks[j] + delay
+                j += 1
+            if p == 0:
+                out_breaks[0] = b
+            elif b > left or (keep_first and p == 1):
+                # the piece [left, b): piece ``now`` of C holds it at t, ``before`` at t - T (-1:
+                # before breaks[0], where C is zero; K: after breaks[K], where C holds its end value)
+                if sweep == 1:
+                    out_breaks[q + 1] = b
+                    v[:] = 0.0
+                    _c_row(coeffs, consts, now, c)
+                    _add_shifted(c, left - breaks[now], 1.0, v)
+                    if before >= 0:
+                        _c_row(coeffs, consts, before, c)
+                        _add_shifted(c, (left - delay) - breaks[before], -1.0, v)
+                    for m in range(D + 1):
+                        for a in range(A):
+                            v[m, a] = v[m, a] / delay
+                    if not integrate:
+                        out[q] = v
+                    else:  # ``PiecewisePolynomial.antiderivative`` of this piece, in order
+                        h = b - left
+                        hp[0] = h
+                        for m in range(1, D + 1):
+                            hp[m] = hp[m - 1] * h
+                        for a in range(A):
+                            s = 0.0
+                            for m in range(D + 1):
+                                cm = v[m, a] / (m + 1.0)
+                                out[q, m + 1, a] = cm
+                                s += cm * hp[m]
+                            acc[a] += s
+                            out[q, 0, a] = (acc[a] - s) + initial[a]
+                q += 1
+            left, now, before = b, i - 1, j - 1
+        count = q
+    if integrate:  # the closing rest piece: the end value (Horner on the last piece), v = a = j = 0
+        n_out = max(count, 1)
+        h = out_breaks[n_out] - out_breaks[n_out - 1]
+        for a in range(A):
+            w = out[n_out - 1, R - 1, a]
+            for m in range(R - 2, -1, -1):
+                w = out[n_out - 1, m, a] + w * h
+            out[n_out, 0, a] = w
+        out_breaks[n_out + 1] = out_breaks[n_out]
     return out_breaks, out
 
 
@@ -227,9 +262,13 @@ def _profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
                 coeffs[i, m, a] = 0.0 if gap[i] else geo[i, m, a] * s
             s *= inv
     vb, vc = breaks, coeffs
-    for k in range(delays.size):
+    for k in range(delays.size - 1):
         vb, vc = _moving_average(vb, vc, delays[k])
-    position = _antiderivative(vb, vc, start)
+    # the last filter integrated as it goes: the position, closed by a rest piece of zero length (as
+    # the JAX form's trailing empty piece): the right-hand limit at the end time is the machine at
+    # rest (v = a = j = 0), not the last decelerating piece's left limit (sampled trajectories end
+    # at rest, ``Trajectory.from_piecewise``)
+    pos_breaks, position = _filter(vb, vc, delays[delays.size - 1], start, True)
     starts, ends, centre = np.empty(Mp), np.empty(Mp), np.empty(Mp)
     Td = 0.0
     for k in range(delays.size):
@@ -244,4 +283,4 @@ def _profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
         starts[k] = breaks[first]
         ends[k] = breaks[last] - gaps[k]
         centre[k] = ends[k] + 0.5 * gaps[k] + 0.5 * Td
-    return starts, ends, vb, position, centre
+    return starts, ends, pos_breaks, position, centre

@@ -22,8 +22,9 @@ from research.interpolators._fir_kernels import sample_charges, sampled_line_dis
 from research.piecewise import NumpyPiecewise, PiecewisePolynomial, bucket_size
 
 _GRID = 9  # grid points per corner window for the corner-error search
-_CHUNK = 1 << 13  # path samples checked at once (about 1 MB of work arrays; results do not depend on it)
+_CHUNK = 1 << 12  # path samples checked at once (about 0.25 MB of work arrays; results do not depend on it)
 _NEWTON_STEPS = 4
+_BATCH = 1 << 10  # samples that wait for ToolPath.distance_bound together (:func:`_scan`)
 
 
 def corner_distances(position: PiecewisePolynomial, vertices: Array, centre: Array, half_window: Array) -> Array:
@@ -98,44 +99,96 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
     """
     t0, t1 = float(position.breaks[0]), float(position.breaks[-1])
     n = int(np.ceil((t1 - t0) / check_period)) + 1
-    t = np.concatenate([t0 + np.arange(n) * check_period, centre, [t1]])
     M = path.n_blocks
     worst, bad = np.full(2 * M - 1, -np.inf), np.full(2 * M - 1, -np.inf)
-    deviation = _scan(position, path, np.clip(t, t0, t1), starts, centre, Td, tol_block, worst, bad, None)
+    times = _sample_times(np.zeros(1, np.int64), np.array([n]), t0, t1, check_period, centre)
+    deviation = _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, None)
     at_vertex = {int(v): float(bad[v]) for v in np.flatnonzero(bad[: M - 1] > -np.inf)}
     at_block = {int(b): float(bad[M - 1 + b]) for b in np.flatnonzero(bad[M - 1:] > -np.inf)}
     return deviation, at_vertex, at_block
 
 
-def _scan(position, path, t, starts, centre, Td, tol_block, worst, bad, redo) -> float:
-    """Check the samples ``t`` in chunks of :data:`_CHUNK` (bounded memory): the largest distance of
-    each charge key into ``worst`` and of its violations into ``bad`` (keys where ``redo``, all if
-    None). Returns the largest distance over all samples."""
+def _sample_times(first: np.ndarray, count: np.ndarray, t0: float, t1: float, period: float, extra: np.ndarray):
+    """The check's sample times in chunks of at most :data:`_CHUNK` (bounded memory, never the
+    whole list at once): the grid points ``t0 + i period`` for ``i`` in ``first[r] .. first[r] +
+    count[r] - 1`` of each run ``r`` (in order), then the times ``extra`` and ``t1``, all clipped to
+    ``[t0, t1]``. The values are those of the full list, whatever the chunking."""
+    ends = np.cumsum(count)  # sample index after each run
+    n_grid = int(ends[-1]) if ends.size else 0
+    for i in range(0, n_grid, _CHUNK):
+        yield _grid_chunk(i, min(i + _CHUNK, n_grid), first, count, ends, t0, t1, period)
+    tail = np.append(extra, t1)
+    for i in range(0, tail.size, _CHUNK):
+        yield np.clip(tail[i: i + _CHUNK], t0, t1)
+
+
+def _grid_chunk(i: int, j: int, first, count, ends, t0: float, t1: float, period: float) -> np.ndarray:
+    """Grid samples ``i .. j - 1`` of :func:`_sample_times` (its work arrays end with the call)."""
+    k = np.arange(i, j)
+    run = np.searchsorted(ends, k, side="right")  # the run holding sample k
+    return np.clip(t0 + (first[run] + (k - (ends[run] - count[run]))) * period, t0, t1)
+
+
+def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo) -> float:
+    """Check the sample chunks ``times`` (an iterable of time arrays, :func:`_sample_times`): the
+    largest distance of each charge key into ``worst`` and of its violations into ``bad`` (keys
+    where ``redo``, all if None). Returns the largest distance over all samples.
+
+    The samples outside tolerance of their three blocks (:func:`_charged_samples`) wait in a batch
+    of about :data:`_BATCH` for :meth:`ToolPath.distance_bound` (a fixed cost per call that would
+    otherwise come with every chunk); each sample's distance is its own, so the batching changes
+    no value, and the maxima are the same in any order."""
     deviation = -np.inf
-    for i in range(0, t.size, _CHUNK):
-        dist, key, over = _charged_samples(position, path, t[i: i + _CHUNK], starts, centre, Td, tol_block)
-        deviation = max(deviation, float(dist.max()))
+    waiting: list[tuple[np.ndarray, ...]] = []
+    n_waiting = 0
+    for t in times:
+        dist, key, over, late, wait = _charged_samples(position, path, t, starts, centre, Td, tol_block)
         keep = key >= 0 if redo is None else redo[key]
-        scatter_max(worst, key[keep], dist[keep])
-        keep &= over
-        scatter_max(bad, key[keep], dist[keep])
+        near = ~over
+        if near.any():
+            deviation = max(deviation, float(dist[near].max()))
+        final = keep & near
+        scatter_max(worst, key[final], dist[final])
+        final &= late
+        scatter_max(bad, key[final], dist[final])
+        if wait is not None:
+            waiting.append(wait + (keep[over],))
+            n_waiting += wait[0].shape[0]
+        if n_waiting >= _BATCH:
+            deviation = max(deviation, _bound_waiting(path, waiting, worst, bad))
+            waiting, n_waiting = [], 0
+    if waiting:
+        deviation = max(deviation, _bound_waiting(path, waiting, worst, bad))
     return deviation
+
+
+def _bound_waiting(path: ToolPath, waiting, worst, bad) -> float:
+    """The distances of the waiting samples (``(q, block, dist, limit, key, keep)`` rows of
+    :func:`_charged_samples`) to the path by :meth:`ToolPath.distance_bound` (the smaller of it and
+    the three-block distance), into ``worst`` and ``bad``; returns their largest."""
+    q, block, dist, limit, key, keep = (np.concatenate(parts) for parts in zip(*waiting))
+    dist = np.minimum(dist, path.distance_bound(q, near=block))
+    scatter_max(worst, key[keep], dist[keep])
+    keep &= dist > limit * (1.0 + 1e-9) + 1e-9
+    scatter_max(bad, key[keep], dist[keep])
+    return float(dist.max())
 
 
 def _charged_samples(position: NumpyPiecewise, path: ToolPath, t: np.ndarray, starts: np.ndarray, centre: np.ndarray,
                      Td: float, tol_block: np.ndarray):
-    """Distance [mm] from the trajectory at each sample time ``t`` to the path, the key it is
-    charged to (vertex ``j < M - 1``, or ``M - 1 + block``: see :func:`path_deviations`) and whether
-    it breaks its tolerance."""
-    # first the blocks the window is centred on (almost every sample is within tolerance of them),
-    # then, for the rest, the k nearest path samples as well
+    """Distance [mm] from the trajectory at each sample time ``t`` to the three blocks around the
+    one its window is centred on, the key it is charged to (vertex ``j < M - 1``, or ``M - 1 +
+    block``: see :func:`path_deviations`), whether that distance breaks its tolerance (``over``:
+    the nearest path samples are to be tried as well, :func:`_scan`), whether it does so by the
+    NumPy comparison where the compiled one said no (``late``; none, to rounding), and for the
+    samples ``over`` the rows ``(q, block, dist, limit, key)`` that the bound needs (None if none).
+    Returns ``(dist, key, over, late, rows)``."""
     q, block, dist = _three_block_distance(path, position, t, starts, Td)
-    limit, key, bad = sample_charges(np.ascontiguousarray(t), np.ascontiguousarray(centre, dtype=np.float64), block, dist,
-                                     np.ascontiguousarray(tol_block, dtype=np.float64), path.is_arc, 0.5 * Td)
-    if bad.any():
-        dist[bad] = np.minimum(dist[bad], path.distance_bound(q[bad], near=block[bad]))
-        bad = dist > limit * (1.0 + 1e-9) + 1e-9
-    return dist, key, bad
+    limit, key, over = sample_charges(np.ascontiguousarray(t), np.ascontiguousarray(centre, dtype=np.float64), block,
+                                      dist, np.ascontiguousarray(tol_block, dtype=np.float64), path.is_arc, 0.5 * Td)
+    late = ~over & (dist > limit * (1.0 + 1e-9) + 1e-9)
+    rows = (q[over], block[over], dist[over], limit[over], key[over]) if over.any() else None
+    return dist, key, over, late, rows
 
 
 class RoundChecks:
@@ -161,12 +214,13 @@ class RoundChecks:
 
     def __init__(self, path: ToolPath, tol_block: np.ndarray, piece_block: np.ndarray, Td: float, check_period: float):
         self.path, self.tol, self.Td, self.period = path, tol_block, Td, check_period
-        self.piece_block = np.minimum(piece_block, path.n_blocks - 1)
+        self.piece_block = piece_block  # padding pieces (block M_pad) count as the last block's
         self.durations, self.samples = None, 0
 
     def __call__(self, position: NumpyPiecewise, starts: np.ndarray, centre: np.ndarray, durations: np.ndarray,
                  vertex_errors: bool):
-        """Checks of the plan whose input pieces last ``durations`` ``(P,)`` [s] (gaps included).
+        """Checks of the plan whose input pieces last ``durations`` ``(P,)`` [s] (gaps included;
+        kept until the next call, which compares against it: not to be changed in place).
 
         Returns:
             ``(vertex errors (M - 1,), max deviation, {vertex: deviation}, {block: deviation})`` as
@@ -183,15 +237,16 @@ class RoundChecks:
         hi_b = np.append(starts[1:] + half, t1)
         if self.durations is None:
             err_v, redo_v, redo_b = np.ones(M - 1, bool), np.ones(M - 1, bool), np.ones(M, bool)
-            self.errors, self.worst, self.bad = np.zeros(M - 1), np.full(2 * M - 1, -np.inf), np.full(2 * M - 1, -np.inf)
+            self.errors, self.worst = np.zeros(M - 1), np.full(2 * M - 1, -np.inf)
+            self.bad = (np.zeros(0, np.int64), np.zeros(0))
         else:
-            changed = np.unique(self.piece_block[durations != self.durations])
+            changed = np.unique(np.minimum(self.piece_block[durations != self.durations], M - 1))
             r_lo, r_hi = starts[changed], np.append(starts, np.inf)[changed + 1] + self.Td
             r_lo, r_hi = _merged(r_lo, r_hi)
             err_v = _meets(centre - half, hi_v, r_lo, r_hi)
             redo_v = _meets(lo_v, hi_v, r_lo, r_hi)
             redo_b = _meets(lo_b, hi_b, r_lo, r_hi)
-        self.durations = durations.copy()
+        self.durations = durations  # kept, not copied: the planner builds a new array every round
         if vertex_errors and err_v.any():
             self.errors[err_v] = vertex_distances(position, path.vertices[err_v], centre[err_v], half)
         redo = np.concatenate([redo_v, redo_b])
@@ -202,13 +257,18 @@ class RoundChecks:
             n = int(np.ceil((t1 - t0) / self.period)) + 1
             last = np.minimum(np.floor((s_hi - t0) / self.period).astype(np.int64), n - 1)
             count = np.maximum(last - first + 1, 0)
-            grid = np.repeat(first - np.cumsum(count) + count, count) + np.arange(count.sum())
-            t = np.concatenate([t0 + grid * self.period, centre[redo_v[: M - 1]], [t1]])
-            self.samples = t.size
-            self.worst[redo], self.bad[redo] = -np.inf, -np.inf
-            _scan(position, path, np.clip(t, t0, t1), starts, centre, self.Td, self.tol, self.worst, self.bad, redo)
-        at_vertex = {int(v): float(self.bad[v]) for v in np.flatnonzero(self.bad[: M - 1] > -np.inf)}
-        at_block = {int(b): float(self.bad[M - 1 + b]) for b in np.flatnonzero(self.bad[M - 1:] > -np.inf)}
+            extra = centre[redo_v[: M - 1]]
+            self.samples = int(count.sum()) + extra.size + 1
+            bad = np.full(2 * M - 1, -np.inf)  # dense while checking, its few entries kept between checks
+            bad[self.bad[0]] = self.bad[1]
+            self.worst[redo], bad[redo] = -np.inf, -np.inf
+            times = _sample_times(first, count, t0, t1, self.period, extra)
+            _scan(position, path, times, starts, centre, self.Td, self.tol, self.worst, bad, redo)
+            keys = np.flatnonzero(bad > -np.inf)
+            self.bad = (keys, bad[keys])
+        keys, values = self.bad
+        at_vertex = {int(k): float(e) for k, e in zip(keys, values) if k < M - 1}
+        at_block = {int(k) - (M - 1): float(e) for k, e in zip(keys, values) if k >= M - 1}
         errors = self.errors if vertex_errors else np.zeros(M - 1)
         return errors.copy(), float(self.worst.max()), at_vertex, at_block
 

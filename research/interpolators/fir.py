@@ -282,12 +282,10 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         state = schedule(factor, head, tail, full, shrink, others, arc_rel)
         rounds, deviation = 0, float("nan")
         if refine or limits is not None:
-            cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
-            limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
             max_rounds = MAX_ROUNDS + (2 * M if limits is not None else 0)
             tol_due = True  # the tolerance state changed since the last tolerance check
             for rounds in range(1, max_rounds + 1):
-                _, _, pulse_np, starts_np, pos_np, centre_np, _, durations = state
+                (pulse_np, starts_np, pos_np, centre_np), durations = state[2:6], state[7]
                 too_fast, slowed = False, False
                 if limits is not None and M > 1:
                     ratios = corner_limit_ratios(pos_np, starts_np, pulse_np, Td_np, limits)
@@ -351,7 +349,8 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         shrink[j] *= min(0.98 * ratio ** (1.0 / (n_f + 1)), 1.0)
                 for k in np.flatnonzero(arc_slow):
                     factor[k] *= min(0.98 * np.sqrt(tb_np[k] / arc_slow[k]), 0.98)
-                state = pos_np = None  # suspended in the branch and bound, a candidate keeps no profile
+                # suspended in the branch and bound, a candidate keeps no profile and no round's arrays
+                state = pos_np = pulse_np = starts_np = centre_np = durations = at_vertex = at_block = None
                 yield predicted_time((factor, head, tail, full, others, arc_rel), shrink * bisection.bound_scale), repaired
                 state = schedule(factor, head, tail, full, shrink * bisection.scale, others, arc_rel)
         return state, rounds, deviation, repaired
@@ -396,7 +395,10 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     capped = None
     if limits is not None and np.any(safe_feed < F_np * base):
         capped = lambda: plans(np.minimum(base, safe_feed / F_np))  # noqa: E731
-    best = verify(plans(base), capped)
+    candidates = plans(base)
+    cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])  # shared by the candidates' repairs (settle)
+    limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
+    best = verify(candidates, capped)
     state, rounds, deviation, _ = best
     if traced:
         feeds, overlaps, pulse, starts, position, centre = traced_plan(*state[6])
