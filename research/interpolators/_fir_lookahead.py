@@ -30,6 +30,27 @@ What is exact:
    candidate's verification is independent of the others), so offering more candidates never
    makes a plan slower.
 
+**Window reach** (issue "cycle time flat in the chord tolerance"). A vertex's window feed ``f`` is
+the largest *constant* feed at which its windowed displacement stays within the tolerance; the
+blocks then follow the staircase of the window feeds (:func:`line_pieces`: the minimum over the
+windows that cover a point). Holding each feed over the window's whole support, ``f T_d / 2`` each
+side, makes that staircase a minimum filter of width ``f T_d`` over the path: where the curvature
+varies, every block runs at the feed of the tightest vertex within ``f T_d / 2``, far below its own
+window's (measured on bench_cam's waterline file at 1 um chords: windows of 168-200 mm/s on blocks
+run at 105 mm/s, next to a stretch of R ~ 36 mm). At 10 um chords the dwell sets lifted that
+(a dwell vertex sets no window feed, and its chord turns are large enough for eq 13/14 to give a
+cheap gap), which is why the coarsest chords planned fastest. The displacement a window at feed
+``f`` sums is, for a turning path, the kernel's second moment ``f^2 sum T_i^2 / 12`` times the
+curvature (the filtered point of a curve of radius ``R`` at constant feed lies
+``f^2 var / (2 R)`` inside it, ``var = sum T_i^2 / 12``): the weight of a block falls off with its
+time offset from the vertex, to zero at ``T_d / 2``. So the feed is held over the kernel's rms
+half-width ``sigma = sqrt(var)`` each side (:func:`window_half_width`; 19.4 ms for 60/30 ms
+against 45 ms), and what the blocks beyond it add at their own (higher) window feeds is left to
+the verification, whose repairs slow the window of a vertex that breaks the tolerance. Swept
+(benchmarks/README.md, bench_cam section): held over 1, 0.75, 0.625, 0.5, 0.43 (``sigma``),
+0.375 and 0.25 of ``T_d / 2``, the quick file's four chord tolerances sum to 100.2, 97.9, 96.7,
+95.0, 94.7, 94.1 and 95.6 s: ``sigma`` lies in the flat optimum of the sweep (not fitted to it).
+
 What is not proven, and rests on the verification (measured instead): that a dwell set planned at
 the looser eps verifies no slower than at the tighter one. Its ingredients move the right way --
 eq 13/14's ``T_k`` does not fall as the tolerance grows at a fixed speed change, and a feed within
@@ -150,6 +171,18 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     return out
 
 
+def window_half_width(delays) -> float:
+    """Time [s] each side of a vertex over which its window's feed is held on the blocks: the
+    rms half-width of the filter kernel, ``sqrt(sum T_i^2 / 12)`` (module docstring, "Window
+    reach"), against the kernel's half support ``T_d / 2``.
+
+    Args:
+        delays: ``(n,)`` filter delays ``T_i`` [s].
+    """
+    d = np.asarray(delays, dtype=np.float64)
+    return float(np.sqrt(np.sum(d**2) / 12.0))
+
+
 def _slow_cost(L, Td, Fv, f):
     """Estimated time lost slowing a vertex's window from ``Fv`` to ``f`` [mm/s]: on the stretch
     the window slows, ``f T_d``, or its share of the blocks when neighbouring windows join
@@ -183,7 +216,6 @@ def _candidate(tp, table, F_cmd, F, gap, budget, delays, tol_v, s_v, feeds_witho
     ``budget`` [mm] (what other turns take of ``tol_v`` is handed on as ``others``); the other
     vertices at full overlap with their window feeds on the chain without the dwell turns."""
     M = tp.n_blocks
-    Td = float(delays.sum())
     L = tp.lengths
     query = np.flatnonzero(~gap)
     f = feeds_without(gap)
@@ -191,18 +223,19 @@ def _candidate(tp, table, F_cmd, F, gap, budget, delays, tol_v, s_v, feeds_witho
     # feeds (a line entering a slower arc) gets the lower one on both sides of it
     slow = f < np.maximum(F[:-1], F[1:])[query] * (1 - 1e-12)
     j, f = query[slow], f[slow]
-    lo, hi = s_v[j] - 0.5 * Td * f, s_v[j] + 0.5 * Td * f
+    half = window_half_width(delays)
+    lo, hi = s_v[j] - half * f, s_v[j] + half * f
     cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
     # blocks inside a window run at its feed; a window reaching into a block slows its head or tail
     first, last = np.searchsorted(cum, lo, side="left"), np.searchsorted(cum, hi, side="right") - 2
     body = range_min(first, last, f, M, F)
     k_r = np.clip(np.searchsorted(cum, hi, side="right") - 1, 0, M - 1)  # block holding the window's right end
     k_l = np.clip(np.searchsorted(cum, lo, side="right") - 1, 0, M - 1)
-    # the window spans T_d / 2 of *time* each side of its vertex: through the blocks it covers,
-    # which run at their (lower) body feeds, it reaches less far into the end block than f T_d / 2
+    # the window holds its feed for ``half`` of *time* each side of its vertex: through the blocks
+    # it covers, which run at their (lower) body feeds, it reaches less far into the end block than f half
     t_cum = np.concatenate([[0.0], np.cumsum(L / body)])
-    reach_r = np.minimum(hi - cum[k_r], np.maximum(0.5 * Td - (t_cum[k_r] - t_cum[j + 1]), 0.0) * f)
-    reach_l = np.minimum(cum[k_l + 1] - lo, np.maximum(0.5 * Td - (t_cum[j + 1] - t_cum[k_l + 1]), 0.0) * f)
+    reach_r = np.minimum(hi - cum[k_r], np.maximum(half - (t_cum[k_r] - t_cum[j + 1]), 0.0) * f)
+    reach_l = np.minimum(cum[k_l + 1] - lo, np.maximum(half - (t_cum[j + 1] - t_cum[k_l + 1]), 0.0) * f)
     inside_r = (hi < cum[k_r + 1]) & (reach_r > 0)
     inside_l = (lo > cum[k_l]) & (reach_l > 0)
     arc = tp.is_arc
