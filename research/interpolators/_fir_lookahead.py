@@ -121,6 +121,9 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     # under the "budget" rule gets the rest of the tolerance (triangle inequality), if any is left
     other = np.linalg.norm(d_all - Fv[:, None] * du * h_full, axis=1)
     e_all = np.linalg.norm(d_all, axis=1)
+    own = Fv * np.linalg.norm(du, axis=1) * h_full
+    with np.errstate(invalid="ignore"):
+        hold = window_half_width(delays, np.nan_to_num(own / (own + other), nan=1.0))
     # row 0: the tolerance itself; rows 1 .. NEST_STEPS: the tighter ones whose dwell sets are offered too
     levels = tol_v[None, :] * (NEST_RATIO ** np.arange(NEST_STEPS + 1))[:, None]
     need = e_all > levels
@@ -155,32 +158,44 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     L = tp.lengths
     sets, seen = [], set()
     for k in range(K1):
-        for rule, gap in _dwell_sets(L, Td, Fv, f_lv[k], need[k], levels[k], budget[k], Tk_budget[k], Tk_whole[k]):
+        for i, (rule, gap) in enumerate(_dwell_sets(L, Td, Fv, f_lv[k], need[k], levels[k], budget[k], Tk_budget[k],
+                                                    Tk_whole[k])):
             # the dwell set and rule define the candidate; at tol_v a vertex that needs a slow-down
             # and has no feed (zero tolerance) stops exactly whatever the set
             gap = gap | (need[0] & ((f_w <= 0) | (tol_v <= 0)))
             key = (rule if gap.any() else 1, gap.tobytes())
             if key not in seen:
                 seen.add(key)
-                sets.append((rule, gap))
+                sets.append((rule, gap, i == _EVERY_CAN))
+    # every set with its feeds held over the reach of window_half_width, and all but "every vertex
+    # that can dwell" over the whole support T_d / 2 as well (module docstring, "Window reach":
+    # neither is faster on every program)
+    support = np.full(M - 1, 0.5 * Td)
     out = []
-    for rule, gap in sets:
-        c = _candidate(tp, table, F_cmd, F, gap, (budget[0], tol_v)[rule], delays, tol_v, s_v, feeds_without)
-        if not any(np.array_equal(c[3], o[3]) and np.array_equal(c[4], o[4]) for o in out):
-            out.append(c)
+    for rule, gap, every_can in sets:
+        for h in (hold, support) if np.any(hold < support) and not every_can else (hold,):
+            c = _candidate(tp, table, F_cmd, F, gap, (budget[0], tol_v)[rule], h, tol_v, s_v, feeds_without)
+            if not any(all(np.array_equal(c[i], o[i]) for i in (3, 4, 0, 1, 2)) for o in out):
+                out.append(c)
     return out
 
 
-def window_half_width(delays) -> float:
-    """Time [s] each side of a vertex over which its window's feed is held on the blocks: the
-    rms half-width of the filter kernel, ``sqrt(sum T_i^2 / 12)`` (module docstring, "Window
-    reach"), against the kernel's half support ``T_d / 2``.
+def window_half_width(delays, own_share):
+    """Time [s] each side of a vertex over which its window's feed is held on the blocks
+    (module docstring, "Window reach"): the kernel's half support ``T_d / 2`` for the share of the
+    window's displacement that the vertex's own turn makes, its rms half-width
+    ``sqrt(sum T_i^2 / 12)`` for the share the other turns of the window make.
 
     Args:
         delays: ``(n,)`` filter delays ``T_i`` [s].
+        own_share: share in ``[0, 1]`` of the vertex's own turn in its window's displacement.
+
+    Returns:
+        Half-widths [s], shaped like ``own_share``.
     """
     d = np.asarray(delays, dtype=np.float64)
-    return float(np.sqrt(np.sum(d**2) / 12.0))
+    w = np.clip(np.asarray(own_share, dtype=np.float64), 0.0, 1.0)
+    return w * (0.5 * float(d.sum())) + (1.0 - w) * float(np.sqrt(np.sum(d**2) / 12.0))
 
 
 def _slow_cost(L, Td, Fv, f):
@@ -190,6 +205,9 @@ def _slow_cost(L, Td, Fv, f):
     stretch = np.minimum(f * Td, 0.5 * (L[:-1] + L[1:]))
     with np.errstate(divide="ignore"):
         return stretch * (1.0 / np.maximum(f, 1e-300) - 1.0 / Fv)
+
+
+_EVERY_CAN = 2  # index of "every vertex that can dwell" among the sets of _dwell_sets
 
 
 def _dwell_sets(L, Td, Fv, f_w, need, tol, budget, Tk_budget, Tk_whole):
@@ -211,10 +229,11 @@ def _dwell_sets(L, Td, Fv, f_w, need, tol, budget, Tk_budget, Tk_whole):
     return out
 
 
-def _candidate(tp, table, F_cmd, F, gap, budget, delays, tol_v, s_v, feeds_without):
+def _candidate(tp, table, F_cmd, F, gap, budget, hold, tol_v, s_v, feeds_without):
     """The candidate of :func:`look_ahead` whose vertices ``gap`` dwell, each with the tolerance
     ``budget`` [mm] (what other turns take of ``tol_v`` is handed on as ``others``); the other
-    vertices at full overlap with their window feeds on the chain without the dwell turns."""
+    vertices at full overlap with their window feeds on the chain without the dwell turns, each
+    feed held ``hold`` [s] ``(M - 1,)`` each side of its vertex (:func:`window_half_width`)."""
     M = tp.n_blocks
     L = tp.lengths
     query = np.flatnonzero(~gap)
@@ -223,7 +242,7 @@ def _candidate(tp, table, F_cmd, F, gap, budget, delays, tol_v, s_v, feeds_witho
     # feeds (a line entering a slower arc) gets the lower one on both sides of it
     slow = f < np.maximum(F[:-1], F[1:])[query] * (1 - 1e-12)
     j, f = query[slow], f[slow]
-    half = window_half_width(delays)
+    half = hold[j]
     lo, hi = s_v[j] - half * f, s_v[j] + half * f
     cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
     # blocks inside a window run at its feed; a window reaching into a block slows its head or tail
