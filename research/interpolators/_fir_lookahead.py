@@ -37,19 +37,25 @@ windows that cover a point). Holding each feed over the window's whole support, 
 side, makes that staircase a minimum filter of width ``f T_d`` over the path: where the curvature
 varies, every block runs at the feed of the tightest vertex within ``f T_d / 2``, far below its own
 window's (measured on bench_cam's waterline file at 1 um chords: windows of 168-200 mm/s on blocks
-run at 105 mm/s, next to a stretch of R ~ 36 mm). At 10 um chords the dwell sets lifted that
-(a dwell vertex sets no window feed, and its chord turns are large enough for eq 13/14 to give a
-cheap gap), which is why the coarsest chords planned fastest. The displacement a window at feed
-``f`` sums is, for a turning path, the kernel's second moment ``f^2 sum T_i^2 / 12`` times the
-curvature (the filtered point of a curve of radius ``R`` at constant feed lies
-``f^2 var / (2 R)`` inside it, ``var = sum T_i^2 / 12``): the weight of a block falls off with its
-time offset from the vertex, to zero at ``T_d / 2``. So the feed is held over the kernel's rms
-half-width ``sigma = sqrt(var)`` each side (:func:`window_half_width`; 19.4 ms for 60/30 ms
-against 45 ms), and what the blocks beyond it add at their own (higher) window feeds is left to
-the verification, whose repairs slow the window of a vertex that breaks the tolerance. Swept
-(benchmarks/README.md, bench_cam section): held over 1, 0.75, 0.625, 0.5, 0.43 (``sigma``),
-0.375 and 0.25 of ``T_d / 2``, the quick file's four chord tolerances sum to 100.2, 97.9, 96.7,
-95.0, 94.7, 94.1 and 95.6 s: ``sigma`` lies in the flat optimum of the sweep (not fitted to it).
+run at 105 mm/s, next to a stretch of R ~ 36 mm). At 10 um chords the dwell sets lifted that (a
+dwell vertex sets no window feed, and its chord turns are large enough for eq 13/14 to give a
+cheap gap), which is why the coarsest chords planned fastest. How far a feed must be held depends
+on which turns make the window's displacement. The vertex's own turn is a velocity step at the
+window's centre, felt over the whole support (eq 13/14), so its share needs ``T_d / 2``. The other
+turns of a curve cut into chords are spread over the window; on a curve of radius ``R`` at
+constant feed the filtered point lies ``f^2 var / (2 R)`` inside it, ``var = sum T_i^2 / 12`` the
+kernel's second moment, so the displacement is that of a window whose weight sits at the kernel's
+rms half-width ``sigma = sqrt(var)`` (19.4 ms for 60/30 ms, against 45 ms): their share is held
+over ``sigma``. :func:`window_half_width` weights the two by the shares of the tolerance-free
+displacement at full overlap (``T_d / 2`` on isolated corners, about ``sigma`` on fine chords); what
+the blocks beyond the reach add at their own (higher) window feeds is left to the verification,
+whose repairs slow the window of a vertex that breaks the tolerance. The shorter reach is not
+faster on every program (a repair scales whole blocks where the staircase slowed only their ends),
+so each dwell set is offered with both reaches, and the branch and bound's minimum is never slower
+than the whole-support candidates alone. Swept on the quick file (benchmarks/README.md, bench_cam
+section; one reach for every vertex, as a share of ``T_d / 2``): 1, 0.75, 0.625, 0.5, 0.43
+(``sigma``), 0.375 and 0.25 give the four chord tolerances a sum of 100.2, 97.9, 96.7, 95.0, 94.7,
+94.1 and 95.6 s: ``sigma`` lies in the flat optimum of the sweep (not fitted to it).
 
 What is not proven, and rests on the verification (measured instead): that a dwell set planned at
 the looser eps verifies no slower than at the tighter one. Its ingredients move the right way --
@@ -92,7 +98,8 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
 
     A candidate is a set of dwell vertices (the rest run at full overlap) and the dwell corners'
     tolerance rule; its feeds and overlaps are then those of ``tol_v`` (eq 13/14 at the dwell
-    corners, the window feeds of the other vertices on the chain without the dwell turns). The
+    corners, the window feeds of the other vertices on the chain without the dwell turns, held on
+    the blocks over the reach of :func:`window_half_width` and over the whole support). The
     rule says how much of the tolerance a dwell corner may use: ``"budget"`` gives it what the
     other direction changes of its window leave at full overlap (triangle inequality; right for
     curves cut into chords), ``"isolated"`` the whole tolerance (right for isolated corners and
@@ -158,22 +165,20 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     L = tp.lengths
     sets, seen = [], set()
     for k in range(K1):
-        for i, (rule, gap) in enumerate(_dwell_sets(L, Td, Fv, f_lv[k], need[k], levels[k], budget[k], Tk_budget[k],
-                                                    Tk_whole[k])):
+        for rule, gap in _dwell_sets(L, Td, Fv, f_lv[k], need[k], levels[k], budget[k], Tk_budget[k], Tk_whole[k]):
             # the dwell set and rule define the candidate; at tol_v a vertex that needs a slow-down
             # and has no feed (zero tolerance) stops exactly whatever the set
             gap = gap | (need[0] & ((f_w <= 0) | (tol_v <= 0)))
             key = (rule if gap.any() else 1, gap.tobytes())
             if key not in seen:
                 seen.add(key)
-                sets.append((rule, gap, i == _EVERY_CAN))
-    # every set with its feeds held over the reach of window_half_width, and all but "every vertex
-    # that can dwell" over the whole support T_d / 2 as well (module docstring, "Window reach":
-    # neither is faster on every program)
+                sets.append((rule, gap))
+    # every set with its feeds held over the reach of window_half_width, and over the whole
+    # support T_d / 2 as well (module docstring, "Window reach": neither is faster on every program)
     support = np.full(M - 1, 0.5 * Td)
     out = []
-    for rule, gap, every_can in sets:
-        for h in (hold, support) if np.any(hold < support) and not every_can else (hold,):
+    for rule, gap in sets:
+        for h in (hold, support) if np.any(hold < support) else (support,):
             c = _candidate(tp, table, F_cmd, F, gap, (budget[0], tol_v)[rule], h, tol_v, s_v, feeds_without)
             if not any(all(np.array_equal(c[i], o[i]) for i in (3, 4, 0, 1, 2)) for o in out):
                 out.append(c)
@@ -205,9 +210,6 @@ def _slow_cost(L, Td, Fv, f):
     stretch = np.minimum(f * Td, 0.5 * (L[:-1] + L[1:]))
     with np.errstate(divide="ignore"):
         return stretch * (1.0 / np.maximum(f, 1e-300) - 1.0 / Fv)
-
-
-_EVERY_CAN = 2  # index of "every vertex that can dwell" among the sets of _dwell_sets
 
 
 def _dwell_sets(L, Td, Fv, f_w, need, tol, budget, Tk_budget, Tk_whole):
