@@ -52,10 +52,13 @@ the blocks beyond the reach add at their own (higher) window feeds is left to th
 whose repairs slow the window of a vertex that breaks the tolerance. The shorter reach is not
 faster on every program (a repair scales whole blocks where the staircase slowed only their ends),
 so each dwell set is offered with both reaches, and the branch and bound's minimum is never slower
-than the whole-support candidates alone. Swept on the quick file (benchmarks/README.md, bench_cam
-section; one reach for every vertex, as a share of ``T_d / 2``): 1, 0.75, 0.625, 0.5, 0.43
-(``sigma``), 0.375 and 0.25 give the four chord tolerances a sum of 100.2, 97.9, 96.7, 95.0, 94.7,
-94.1 and 95.6 s: ``sigma`` lies in the flat optimum of the sweep (not fitted to it).
+than the whole-support candidates alone; but "every vertex that can dwell" only with the whole
+support (few of its vertices hold a window feed; its shorter-reach copies cost two more
+verification rounds on the quick CAM file and won 14 of 1,800 random plans, by up to 2.1 %).
+Swept on the quick file (benchmarks/README.md, bench_cam section; one reach for every vertex, as
+a share of ``T_d / 2``): 1, 0.75, 0.625, 0.5, 0.43 (``sigma``), 0.375 and 0.25 give the four chord
+tolerances a sum of 100.2, 97.9, 96.7, 95.0, 94.7, 94.1 and 95.6 s: ``sigma`` lies in the flat
+optimum of the sweep (not fitted to it).
 
 What is not proven, and rests on the verification (measured instead): that a dwell set planned at
 the looser eps verifies no slower than at the tighter one. Its ingredients move the right way --
@@ -165,20 +168,22 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     L = tp.lengths
     sets, seen = [], set()
     for k in range(K1):
-        for rule, gap in _dwell_sets(L, Td, Fv, f_lv[k], need[k], levels[k], budget[k], Tk_budget[k], Tk_whole[k]):
+        for i, (rule, gap) in enumerate(_dwell_sets(L, Td, Fv, f_lv[k], need[k], levels[k], budget[k], Tk_budget[k],
+                                                    Tk_whole[k])):
             # the dwell set and rule define the candidate; at tol_v a vertex that needs a slow-down
             # and has no feed (zero tolerance) stops exactly whatever the set
             gap = gap | (need[0] & ((f_w <= 0) | (tol_v <= 0)))
             key = (rule if gap.any() else 1, gap.tobytes())
             if key not in seen:
                 seen.add(key)
-                sets.append((rule, gap))
-    # every set with its feeds held over the reach of window_half_width, and over the whole
-    # support T_d / 2 as well (module docstring, "Window reach": neither is faster on every program)
+                sets.append((rule, gap, i == _EVERY_CAN))
+    # every set with its feeds held over the whole support T_d / 2, and over the reach of
+    # window_half_width as well (module docstring, "Window reach": neither is faster on every
+    # program), but "every vertex that can dwell", which few windows hold a feed in
     support = np.full(M - 1, 0.5 * Td)
     out = []
-    for rule, gap in sets:
-        for h in (hold, support) if np.any(hold < support) else (support,):
+    for rule, gap, every_can in sets:
+        for h in (hold, support) if np.any(hold < support) and not every_can else (support,):
             c = _candidate(tp, table, F_cmd, F, gap, (budget[0], tol_v)[rule], h, tol_v, s_v, feeds_without)
             if not any(all(np.array_equal(c[i], o[i]) for i in (3, 4, 0, 1, 2)) for o in out):
                 out.append(c)
@@ -210,6 +215,9 @@ def _slow_cost(L, Td, Fv, f):
     stretch = np.minimum(f * Td, 0.5 * (L[:-1] + L[1:]))
     with np.errstate(divide="ignore"):
         return stretch * (1.0 / np.maximum(f, 1e-300) - 1.0 / Fv)
+
+
+_EVERY_CAN = 2  # index of "every vertex that can dwell" among the sets of _dwell_sets
 
 
 def _dwell_sets(L, Td, Fv, f_w, need, tol, budget, Tk_budget, Tk_whole):
