@@ -386,3 +386,22 @@ def test_finer_chords_of_a_curve_are_not_slower_and_coarser_cost_at_most_the_sag
         times.append(float(plan.cycle_time))
     floor = np.sqrt((eps - 2e-3 / 3) / (eps - 2e-2 / 3))
     assert 1.0 <= times[1] / times[0] <= floor, (times, floor)
+
+
+def test_window_half_width_is_the_kernels_rms_half_width_for_spread_turns_and_its_half_support_for_its_own():
+    """``_fir_lookahead.window_half_width``: a vertex's window holds its feed over the FIR kernel's
+    rms half-width where the other turns make its displacement and over half the kernel's support
+    where its own turn does (module docstring, "Window reach"). Both computed here from the kernel
+    itself: the two boxes of 60 and 30 ms convolved numerically (1 us steps), its standard
+    deviation and the half-width of its support, and linear in the share between them."""
+    from research.interpolators._fir_lookahead import window_half_width
+    dt = 1e-6
+    kernel = np.convolve(np.ones(int(round(DELAYS[0] / dt))), np.ones(int(round(DELAYS[1] / dt))))
+    kernel /= kernel.sum()
+    t = (np.arange(kernel.size) - 0.5 * (kernel.size - 1)) * dt
+    rms = np.sqrt(np.sum(kernel * t**2))
+    half_support = 0.5 * (kernel.size + 1) * dt
+    got = window_half_width(np.asarray(DELAYS), np.array([0.0, 0.25, 1.0]))
+    assert got[0] == pytest.approx(rms, rel=1e-4)
+    assert got[2] == pytest.approx(half_support, rel=1e-4)
+    assert got[1] == pytest.approx(0.75 * rms + 0.25 * half_support, rel=1e-4)
