@@ -30,6 +30,36 @@ What is exact:
    candidate's verification is independent of the others), so offering more candidates never
    makes a plan slower.
 
+**Window reach** (issue "cycle time flat in the chord tolerance"). A vertex's window feed ``f`` is
+the largest *constant* feed at which its windowed displacement stays within the tolerance; the
+blocks then follow the staircase of the window feeds (:func:`line_pieces`: the minimum over the
+windows that cover a point). Holding each feed over the window's whole support, ``f T_d / 2`` each
+side, makes that staircase a minimum filter of width ``f T_d`` over the path: where the curvature
+varies, every block runs at the feed of the tightest vertex within ``f T_d / 2``, far below its own
+window's (measured on bench_cam's waterline file at 1 um chords: windows of 168-200 mm/s on blocks
+run at 105 mm/s, next to a stretch of R ~ 36 mm). At 10 um chords the dwell sets lifted that (a
+dwell vertex sets no window feed, and its chord turns are large enough for eq 13/14 to give a
+cheap gap), which is why the coarsest chords planned fastest. How far a feed must be held depends
+on which turns make the window's displacement. The vertex's own turn is a velocity step at the
+window's centre, felt over the whole support (eq 13/14), so its share needs ``T_d / 2``. The other
+turns of a curve cut into chords are spread over the window; on a curve of radius ``R`` at
+constant feed the filtered point lies ``f^2 var / (2 R)`` inside it, ``var = sum T_i^2 / 12`` the
+kernel's second moment, so the displacement is that of a window whose weight sits at the kernel's
+rms half-width ``sigma = sqrt(var)`` (19.4 ms for 60/30 ms, against 45 ms): their share is held
+over ``sigma``. :func:`window_half_width` weights the two by the shares of the tolerance-free
+displacement at full overlap (``T_d / 2`` on isolated corners, about ``sigma`` on fine chords); what
+the blocks beyond the reach add at their own (higher) window feeds is left to the verification,
+whose repairs slow the window of a vertex that breaks the tolerance. The shorter reach is not
+faster on every program (a repair scales whole blocks where the staircase slowed only their ends),
+so each dwell set is offered with both reaches, and the branch and bound's minimum is never slower
+than the whole-support candidates alone; but "every vertex that can dwell" only with the whole
+support (few of its vertices hold a window feed; its shorter-reach copies cost two more
+verification rounds on the quick CAM file and won 14 of 1,800 random plans, by up to 2.1 %).
+Swept on the quick file (benchmarks/README.md, bench_cam section; one reach for every vertex, as
+a share of ``T_d / 2``): 1, 0.75, 0.625, 0.5, 0.43 (``sigma``), 0.375 and 0.25 give the four chord
+tolerances a sum of 100.2, 97.9, 96.7, 95.0, 94.7, 94.1 and 95.6 s: ``sigma`` lies in the flat
+optimum of the sweep (not fitted to it).
+
 What is not proven, and rests on the verification (measured instead): that a dwell set planned at
 the looser eps verifies no slower than at the tighter one. Its ingredients move the right way --
 eq 13/14's ``T_k`` does not fall as the tolerance grows at a fixed speed change, and a feed within
@@ -71,7 +101,8 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
 
     A candidate is a set of dwell vertices (the rest run at full overlap) and the dwell corners'
     tolerance rule; its feeds and overlaps are then those of ``tol_v`` (eq 13/14 at the dwell
-    corners, the window feeds of the other vertices on the chain without the dwell turns). The
+    corners, the window feeds of the other vertices on the chain without the dwell turns, held on
+    the blocks over the reach of :func:`window_half_width` and over the whole support). The
     rule says how much of the tolerance a dwell corner may use: ``"budget"`` gives it what the
     other direction changes of its window leave at full overlap (triangle inequality; right for
     curves cut into chords), ``"isolated"`` the whole tolerance (right for isolated corners and
@@ -100,6 +131,9 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     # under the "budget" rule gets the rest of the tolerance (triangle inequality), if any is left
     other = np.linalg.norm(d_all - Fv[:, None] * du * h_full, axis=1)
     e_all = np.linalg.norm(d_all, axis=1)
+    own = Fv * np.linalg.norm(du, axis=1) * h_full
+    with np.errstate(invalid="ignore"):
+        hold = window_half_width(delays, np.nan_to_num(own / (own + other), nan=1.0))
     # row 0: the tolerance itself; rows 1 .. NEST_STEPS: the tighter ones whose dwell sets are offered too
     levels = tol_v[None, :] * (NEST_RATIO ** np.arange(NEST_STEPS + 1))[:, None]
     need = e_all > levels
@@ -134,20 +168,44 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     L = tp.lengths
     sets, seen = [], set()
     for k in range(K1):
-        for rule, gap in _dwell_sets(L, Td, Fv, f_lv[k], need[k], levels[k], budget[k], Tk_budget[k], Tk_whole[k]):
+        for i, (rule, gap) in enumerate(_dwell_sets(L, Td, Fv, f_lv[k], need[k], levels[k], budget[k], Tk_budget[k],
+                                                    Tk_whole[k])):
             # the dwell set and rule define the candidate; at tol_v a vertex that needs a slow-down
             # and has no feed (zero tolerance) stops exactly whatever the set
             gap = gap | (need[0] & ((f_w <= 0) | (tol_v <= 0)))
             key = (rule if gap.any() else 1, gap.tobytes())
             if key not in seen:
                 seen.add(key)
-                sets.append((rule, gap))
+                sets.append((rule, gap, i == _EVERY_CAN))
+    # every set with its feeds held over the whole support T_d / 2, and over the reach of
+    # window_half_width as well (module docstring, "Window reach": neither is faster on every
+    # program), but "every vertex that can dwell", which few windows hold a feed in
+    support = np.full(M - 1, 0.5 * Td)
     out = []
-    for rule, gap in sets:
-        c = _candidate(tp, table, F_cmd, F, gap, (budget[0], tol_v)[rule], delays, tol_v, s_v, feeds_without)
-        if not any(np.array_equal(c[3], o[3]) and np.array_equal(c[4], o[4]) for o in out):
-            out.append(c)
+    for rule, gap, every_can in sets:
+        for h in (hold, support) if np.any(hold < support) and not every_can else (support,):
+            c = _candidate(tp, table, F_cmd, F, gap, (budget[0], tol_v)[rule], h, tol_v, s_v, feeds_without)
+            if not any(all(np.array_equal(c[i], o[i]) for i in (3, 4, 0, 1, 2)) for o in out):
+                out.append(c)
     return out
+
+
+def window_half_width(delays, own_share):
+    """Time [s] each side of a vertex over which its window's feed is held on the blocks
+    (module docstring, "Window reach"): the kernel's half support ``T_d / 2`` for the share of the
+    window's displacement that the vertex's own turn makes, its rms half-width
+    ``sqrt(sum T_i^2 / 12)`` for the share the other turns of the window make.
+
+    Args:
+        delays: ``(n,)`` filter delays ``T_i`` [s].
+        own_share: share in ``[0, 1]`` of the vertex's own turn in its window's displacement.
+
+    Returns:
+        Half-widths [s], shaped like ``own_share``.
+    """
+    d = np.asarray(delays, dtype=np.float64)
+    w = np.clip(np.asarray(own_share, dtype=np.float64), 0.0, 1.0)
+    return w * (0.5 * float(d.sum())) + (1.0 - w) * float(np.sqrt(np.sum(d**2) / 12.0))
 
 
 def _slow_cost(L, Td, Fv, f):
@@ -157,6 +215,9 @@ def _slow_cost(L, Td, Fv, f):
     stretch = np.minimum(f * Td, 0.5 * (L[:-1] + L[1:]))
     with np.errstate(divide="ignore"):
         return stretch * (1.0 / np.maximum(f, 1e-300) - 1.0 / Fv)
+
+
+_EVERY_CAN = 2  # index of "every vertex that can dwell" among the sets of _dwell_sets
 
 
 def _dwell_sets(L, Td, Fv, f_w, need, tol, budget, Tk_budget, Tk_whole):
@@ -178,12 +239,12 @@ def _dwell_sets(L, Td, Fv, f_w, need, tol, budget, Tk_budget, Tk_whole):
     return out
 
 
-def _candidate(tp, table, F_cmd, F, gap, budget, delays, tol_v, s_v, feeds_without):
+def _candidate(tp, table, F_cmd, F, gap, budget, hold, tol_v, s_v, feeds_without):
     """The candidate of :func:`look_ahead` whose vertices ``gap`` dwell, each with the tolerance
     ``budget`` [mm] (what other turns take of ``tol_v`` is handed on as ``others``); the other
-    vertices at full overlap with their window feeds on the chain without the dwell turns."""
+    vertices at full overlap with their window feeds on the chain without the dwell turns, each
+    feed held ``hold`` [s] ``(M - 1,)`` each side of its vertex (:func:`window_half_width`)."""
     M = tp.n_blocks
-    Td = float(delays.sum())
     L = tp.lengths
     query = np.flatnonzero(~gap)
     f = feeds_without(gap)
@@ -191,18 +252,19 @@ def _candidate(tp, table, F_cmd, F, gap, budget, delays, tol_v, s_v, feeds_witho
     # feeds (a line entering a slower arc) gets the lower one on both sides of it
     slow = f < np.maximum(F[:-1], F[1:])[query] * (1 - 1e-12)
     j, f = query[slow], f[slow]
-    lo, hi = s_v[j] - 0.5 * Td * f, s_v[j] + 0.5 * Td * f
+    half = hold[j]
+    lo, hi = s_v[j] - half * f, s_v[j] + half * f
     cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
     # blocks inside a window run at its feed; a window reaching into a block slows its head or tail
     first, last = np.searchsorted(cum, lo, side="left"), np.searchsorted(cum, hi, side="right") - 2
     body = range_min(first, last, f, M, F)
     k_r = np.clip(np.searchsorted(cum, hi, side="right") - 1, 0, M - 1)  # block holding the window's right end
     k_l = np.clip(np.searchsorted(cum, lo, side="right") - 1, 0, M - 1)
-    # the window spans T_d / 2 of *time* each side of its vertex: through the blocks it covers,
-    # which run at their (lower) body feeds, it reaches less far into the end block than f T_d / 2
+    # the window holds its feed for ``half`` of *time* each side of its vertex: through the blocks
+    # it covers, which run at their (lower) body feeds, it reaches less far into the end block than f half
     t_cum = np.concatenate([[0.0], np.cumsum(L / body)])
-    reach_r = np.minimum(hi - cum[k_r], np.maximum(0.5 * Td - (t_cum[k_r] - t_cum[j + 1]), 0.0) * f)
-    reach_l = np.minimum(cum[k_l + 1] - lo, np.maximum(0.5 * Td - (t_cum[j + 1] - t_cum[k_l + 1]), 0.0) * f)
+    reach_r = np.minimum(hi - cum[k_r], np.maximum(half - (t_cum[k_r] - t_cum[j + 1]), 0.0) * f)
+    reach_l = np.minimum(cum[k_l + 1] - lo, np.maximum(half - (t_cum[j + 1] - t_cum[k_l + 1]), 0.0) * f)
     inside_r = (hi < cum[k_r + 1]) & (reach_r > 0)
     inside_l = (lo > cum[k_l]) & (reach_l > 0)
     arc = tp.is_arc

@@ -342,3 +342,66 @@ def test_end_pieces_are_a_staircase_regression():
     tight = float(plan_fir(path, 112.984, DELAYS, 0.0984).cycle_time)
     looser = float(plan_fir(path, 112.984, DELAYS, 0.1476).cycle_time)
     assert looser <= tight * (1 + 1e-12), (tight, looser)
+
+
+def _waterline(passes: int, chord_tol: float) -> Polyline:
+    """``passes`` waterline passes (each 0.2 mm lower and 0.5 % smaller) of benchmarks/bench_cam.py's
+    seed-0 closed 3-D Fourier curve (radius of curvature 6.9-2800 mm), tessellated by the local
+    radius into chords of sagitta ``chord_tol`` [mm] (bench_cam's ``tessellate``, unrounded)."""
+    rng = np.random.default_rng(0)
+    th = np.linspace(0.0, 2.0 * np.pi, 20001)
+    r = 28.0 * (1.0 + 0.12 * np.cos(2 * th + rng.uniform(0, 2 * np.pi)) + 0.06 * np.sin(3 * th + rng.uniform(0, 2 * np.pi))
+                + 0.06 * np.cos(5 * th + rng.uniform(0, 2 * np.pi)) + 0.03 * np.cos(8 * th + rng.uniform(0, 2 * np.pi)))
+    z = 1.5 * np.sin(2 * th + rng.uniform(0, 2 * np.pi)) + 0.5 * np.sin(3 * th + rng.uniform(0, 2 * np.pi))
+    base = np.column_stack([r * np.cos(th), r * np.sin(th), z])
+    base[-1] = base[0]
+    chunks = []
+    for lev in range(passes):
+        p = base * np.array([1 - 0.005 * lev, 1 - 0.005 * lev, 1.0]) - np.array([0.0, 0.0, 0.2 * lev])
+        s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
+        d1 = np.gradient(p, s, axis=0)
+        d2 = np.gradient(d1, s, axis=0)
+        k = np.linalg.norm(np.cross(d1, d2), axis=1) / np.linalg.norm(d1, axis=1) ** 3
+        dens = np.sqrt(np.maximum(k, 1e-4) / (8.0 * chord_tol))  # chords per mm: length sqrt(8 R delta)
+        cum = np.concatenate([[0.0], np.cumsum(0.5 * (dens[1:] + dens[:-1]) * np.diff(s))])
+        at = np.linspace(0.0, cum[-1], int(np.ceil(cum[-1])) + 1)
+        chunks.append(np.column_stack([np.interp(at, cum, p[:, i]) for i in range(3)]))
+    return Polyline(np.vstack(chunks))
+
+
+def test_finer_chords_of_a_curve_are_not_slower_and_coarser_cost_at_most_the_sagitta_floor_regression():
+    """Issue "cycle time flat in the chord tolerance": two waterline passes of bench_cam's curve at
+    1 and 10 um chords (F 200 mm/s, T 60/30 ms, eps 50 um). The chords of sagitta delta lie on
+    average 2/3 delta inside the curve (test above), so a curvature-limited stretch of the 10 um
+    chords runs at most ``sqrt((eps - 2/3 um) / (eps - 20/3 um)) = 1.067`` times slower than of the
+    1 um chords, a feed-limited one equally fast: ``1 <= T(10 um) / T(1 um) <= 1.067``. Before the
+    window reach (``_fir_lookahead``, "Window reach") the ratio was 0.988: each window's feed held
+    over ``f T_d / 2`` slowed the 1 um chords' blocks to the tightest window within reach, which
+    the 10 um chords' dwell sets escaped (now 1.025). Both plans keep eps at their vertices."""
+    eps = 0.05
+    times = []
+    for chord_tol in (1e-3, 1e-2):
+        plan = plan_fir(_waterline(2, chord_tol), 200.0, DELAYS, eps)
+        assert float(np.max(np.asarray(plan.corner_errors))) <= eps * (1 + 1e-6)
+        times.append(float(plan.cycle_time))
+    floor = np.sqrt((eps - 2e-3 / 3) / (eps - 2e-2 / 3))
+    assert 1.0 <= times[1] / times[0] <= floor, (times, floor)
+
+
+def test_window_half_width_is_the_kernels_rms_half_width_for_spread_turns_and_its_half_support_for_its_own():
+    """``_fir_lookahead.window_half_width``: a vertex's window holds its feed over the FIR kernel's
+    rms half-width where the other turns make its displacement and over half the kernel's support
+    where its own turn does (module docstring, "Window reach"). Both computed here from the kernel
+    itself: the two boxes of 60 and 30 ms convolved numerically (1 us steps), its standard
+    deviation and the half-width of its support, and linear in the share between them."""
+    from research.interpolators._fir_lookahead import window_half_width
+    dt = 1e-6
+    kernel = np.convolve(np.ones(int(round(DELAYS[0] / dt))), np.ones(int(round(DELAYS[1] / dt))))
+    kernel /= kernel.sum()
+    t = (np.arange(kernel.size) - 0.5 * (kernel.size - 1)) * dt
+    rms = np.sqrt(np.sum(kernel * t**2))
+    half_support = 0.5 * (kernel.size + 1) * dt
+    got = window_half_width(np.asarray(DELAYS), np.array([0.0, 0.25, 1.0]))
+    assert got[0] == pytest.approx(rms, rel=1e-4)
+    assert got[2] == pytest.approx(half_support, rel=1e-4)
+    assert got[1] == pytest.approx(0.75 * rms + 0.25 * half_support, rel=1e-4)
