@@ -276,6 +276,32 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                                                          arc_rel)
             return block_peak_ratios(position, starts, pulse, Td_np, limits)
 
+        def repair(viol, errors, arc_dev, late, factor, shrink, windows):
+            """One round's repairs, in place: every violating vertex ``viol`` (error ``errors``)
+            becomes an exact stop when ``late``, else a full-overlap vertex slows the blocks of its
+            window by ``sqrt(eps / error)`` (the error of a chain is quadratic in feed) and a dwell
+            corner shrinks its overlap by ``(eps / error)^(1/(n+1))``; an arc block whose own
+            deviation ``arc_dev`` [mm] is > 0 slows by ``sqrt(eps / deviation)``.
+            ``windows=False``: a vertex slows only its own two blocks, which every window of it
+            holds. Repairs so of a subset of the violators, at errors no larger, leave every factor
+            and shrink at least those of the full repair (the bound of a round's first half)."""
+            n_f = d_np.size
+            for j in np.flatnonzero(viol):
+                ratio = tv_np[j] / errors[j]
+                if late:
+                    shrink[j] = 0.0  # exact stop: the vertex is on the trajectory
+                elif full[j]:  # slow the window's blocks: the error of a chain is quadratic in feed
+                    lo, hi = j, j + 2
+                    if windows:
+                        half = 0.5 * Td_np * F_np[j] * factor[j, 2]
+                        lo = max(int(np.searchsorted(cum, cum[j + 1] - half, side="right")) - 1, 0)
+                        hi = min(int(np.searchsorted(cum, cum[j + 1] + half, side="left")), M)
+                    factor[lo:max(hi, j + 2)] *= 0.98 * np.sqrt(ratio)
+                else:
+                    shrink[j] *= min(0.98 * ratio ** (1.0 / (n_f + 1)), 1.0)
+            for k in np.flatnonzero(arc_dev):
+                factor[k] *= min(0.98 * np.sqrt(tb_np[k] / arc_dev[k]), 0.98)
+
         if limits is not None and M == 1:
             g = hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), np.ones(1, dtype=bool))
             factor, repaired = factor * g[:, None], bool(g[0] < 1.0)
@@ -321,7 +347,15 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                 # such proof -- hence the final check rather than trusting it.
                 if tol_due or not too_fast:
                     if refine:
-                        errors, deviation, at_vertex, at_block = checks(pos_np, starts_np, centre_np, durations, M > 1)
+                        errors = checks.vertices(pos_np, starts_np, centre_np, durations, M > 1)
+                        if M > 1 and np.any(errors > limit_v):
+                            # the vertex errors first: a bound from their repairs alone (a lower bound
+                            # on the whole round's) can rule the candidate out before its path samples
+                            low_f, low_s = factor.copy(), shrink.copy()
+                            repair(errors > limit_v, errors, np.zeros(M), rounds > _SCALING_ROUNDS, low_f, low_s, False)
+                            yield predicted_time((low_f, head, tail, full, others, arc_rel),
+                                                 low_s * bisection.bound_scale), repaired
+                        deviation, at_vertex, at_block = checks.samples_check()
                     viol = errors > limit_v
                     if refine:
                         for j, e in at_vertex.items():
@@ -337,20 +371,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         f"tolerance{' (or corners a limit)' if too_fast else ''} after {max_rounds} rounds",
                         residual=float(np.max(errors - limit_v, initial=0.0)), steps=rounds)
                 late = rounds > _SCALING_ROUNDS
-                n_f = d_np.size
-                for j in np.flatnonzero(viol):
-                    ratio = tv_np[j] / errors[j]
-                    if late:
-                        shrink[j] = 0.0  # exact stop: the vertex is on the trajectory
-                    elif full[j]:  # slow the window's blocks: the error of a chain is quadratic in feed
-                        half = 0.5 * Td_np * F_np[j] * factor[j, 2]
-                        lo = max(int(np.searchsorted(cum, cum[j + 1] - half, side="right")) - 1, 0)
-                        hi = min(int(np.searchsorted(cum, cum[j + 1] + half, side="left")), M)
-                        factor[lo:max(hi, j + 2)] *= 0.98 * np.sqrt(ratio)
-                    else:
-                        shrink[j] *= min(0.98 * ratio ** (1.0 / (n_f + 1)), 1.0)
-                for k in np.flatnonzero(arc_slow):
-                    factor[k] *= min(0.98 * np.sqrt(tb_np[k] / arc_slow[k]), 0.98)
+                repair(viol, errors, arc_slow, late, factor, shrink, True)
                 state = pos_np = None  # suspended in the branch and bound, a candidate keeps no profile
                 yield predicted_time((factor, head, tail, full, others, arc_rel), shrink * bisection.bound_scale), repaired
                 state = schedule(factor, head, tail, full, shrink * bisection.scale, others, arc_rel)
