@@ -31,7 +31,9 @@ CAM programs (beyond the paper, which assumes every block longer than the window
   quadratic in feed); after :data:`_SCALING_ROUNDS` rounds a vertex still violating becomes an exact
   stop, which puts it on the trajectory whatever its neighbours do. Deviations inside an arc slow
   that arc. At most :data:`MAX_ROUNDS` rounds; the rounds needed are reported in
-  :attr:`FIRPlan.rounds`. The rounds decide on concrete arrays (``_fir_profile``: the same timing
+  :attr:`FIRPlan.rounds`. A round checks the vertex errors first: the bound of their repairs alone
+  (``_fir_repair``, a lower bound on the whole round's) can put a candidate behind the others in
+  the branch and bound before its path samples are taken. The rounds decide on concrete arrays (``_fir_profile``: the same timing
   and exact profile in NumPy/Numba, no JAX dispatch for one or two filters) and re-check only the vertex windows and path
   stretches whose profile a repair changed (``_fir_verify.RoundChecks``); the plan returned is
   built with JAX only when ``feed``, ``delays`` or ``tolerance`` is a tracer (its differentiable
@@ -73,6 +75,7 @@ from research.interpolators._fir_limits import (
 from research.interpolators._fir_lookahead import look_ahead
 from research.interpolators import _fir_profile
 from research.interpolators._fir_overlap import overlap_time
+from research.interpolators._fir_repair import Repairs
 from research.interpolators._fir_verify import RoundChecks, corner_distances
 from research.limits import AxisLimits
 from research.paths.polyline import Polyline
@@ -270,37 +273,12 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         factor, shrink = factor.copy(), np.ones(M - 1)
         bisection, checked, repaired = CornerBisection(M - 1), np.zeros(M, dtype=bool), False
         checks = RoundChecks(tp, tb_np, table.block, Td_np, check_period)  # redone only where the profile changed
+        repairs = Repairs(full, tv_np, tb_np, F_np, tp.lengths, Td_np, d_np.size)
 
         def alone(g):  # ``_fir_limits`` phase 1: each block's own peaks (every corner an exact stop)
             _, _, pulse, starts, position, *_ = schedule(factor * g[:, None], head, tail, full, np.zeros(M - 1), others,
                                                          arc_rel)
             return block_peak_ratios(position, starts, pulse, Td_np, limits)
-
-        def repair(viol, errors, arc_dev, late, factor, shrink, windows):
-            """One round's repairs, in place: every violating vertex ``viol`` (error ``errors``)
-            becomes an exact stop when ``late``, else a full-overlap vertex slows the blocks of its
-            window by ``sqrt(eps / error)`` (the error of a chain is quadratic in feed) and a dwell
-            corner shrinks its overlap by ``(eps / error)^(1/(n+1))``; an arc block whose own
-            deviation ``arc_dev`` [mm] is > 0 slows by ``sqrt(eps / deviation)``.
-            ``windows=False``: a vertex slows only its own two blocks, which every window of it
-            holds. Repairs so of a subset of the violators, at errors no larger, leave every factor
-            and shrink at least those of the full repair (the bound of a round's first half)."""
-            n_f = d_np.size
-            for j in np.flatnonzero(viol):
-                ratio = tv_np[j] / errors[j]
-                if late:
-                    shrink[j] = 0.0  # exact stop: the vertex is on the trajectory
-                elif full[j]:  # slow the window's blocks: the error of a chain is quadratic in feed
-                    lo, hi = j, j + 2
-                    if windows:
-                        half = 0.5 * Td_np * F_np[j] * factor[j, 2]
-                        lo = max(int(np.searchsorted(cum, cum[j + 1] - half, side="right")) - 1, 0)
-                        hi = min(int(np.searchsorted(cum, cum[j + 1] + half, side="left")), M)
-                    factor[lo:max(hi, j + 2)] *= 0.98 * np.sqrt(ratio)
-                else:
-                    shrink[j] *= min(0.98 * ratio ** (1.0 / (n_f + 1)), 1.0)
-            for k in np.flatnonzero(arc_dev):
-                factor[k] *= min(0.98 * np.sqrt(tb_np[k] / arc_dev[k]), 0.98)
 
         if limits is not None and M == 1:
             g = hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), np.ones(1, dtype=bool))
@@ -308,7 +286,6 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         state = schedule(factor, head, tail, full, shrink, others, arc_rel)
         rounds, deviation = 0, float("nan")
         if refine or limits is not None:
-            cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
             limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
             max_rounds = MAX_ROUNDS + (2 * M if limits is not None else 0)
             tol_due = True  # the tolerance state changed since the last tolerance check
@@ -351,8 +328,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         if M > 1 and np.any(errors > limit_v):
                             # the vertex errors first: a bound from their repairs alone (a lower bound
                             # on the whole round's) can rule the candidate out before its path samples
-                            low_f, low_s = factor.copy(), shrink.copy()
-                            repair(errors > limit_v, errors, np.zeros(M), rounds > _SCALING_ROUNDS, low_f, low_s, False)
+                            low_f, low_s = repairs.bound(errors > limit_v, errors, rounds > _SCALING_ROUNDS, factor, shrink)
                             yield predicted_time((low_f, head, tail, full, others, arc_rel),
                                                  low_s * bisection.bound_scale), repaired
                         deviation, at_vertex, at_block = checks.samples_check()
@@ -371,7 +347,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         f"tolerance{' (or corners a limit)' if too_fast else ''} after {max_rounds} rounds",
                         residual=float(np.max(errors - limit_v, initial=0.0)), steps=rounds)
                 late = rounds > _SCALING_ROUNDS
-                repair(viol, errors, arc_slow, late, factor, shrink, True)
+                repairs.apply(viol, errors, arc_slow, late, factor, shrink)
                 state = pos_np = None  # suspended in the branch and bound, a candidate keeps no profile
                 yield predicted_time((factor, head, tail, full, others, arc_rel), shrink * bisection.bound_scale), repaired
                 state = schedule(factor, head, tail, full, shrink * bisection.scale, others, arc_rel)
