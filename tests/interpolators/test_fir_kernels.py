@@ -44,6 +44,28 @@ def test_window_displacement_matches_the_term_by_term_sum(delays, span):
     assert np.max(np.abs(got - want)) <= 1e-9 * scale
 
 
+@pytest.mark.parametrize("span", [2000.0, 40.0])  # sparse windows (no prefix sums made), dense ones
+def test_prefix_sums_are_made_only_for_windows_of_many_turns(span):
+    """Sparse windows (800 turns over 2000 mm, windows <= 300 mm/s x 0.045 s each side) are all
+    summed directly: no prefix sums are made and the displacements and feeds are those of a chain
+    that has them (the direct sums do not read them, bit for bit). Dense windows (over 40 mm) make
+    them, and match the term-by-term sum."""
+    rng = np.random.default_rng(5)
+    T, delays = 800, np.array([0.06, 0.03])
+    s = np.sort(rng.uniform(0.0, span, T))
+    du = rng.normal(0.0, 0.05, (T, 3))
+    sq, F = rng.uniform(0.0, span, 40), rng.uniform(5.0, 300.0, 40)
+    lazy, eager = ChainError(s, du, delays), ChainError(s, du, delays)
+    eager.prefix  # made up front
+    d = lazy.displacement(sq, F)
+    f = lazy.largest_feed(sq, F, 1e-3)
+    assert (lazy._prefix is None) == (span == 2000.0)
+    np.testing.assert_array_equal(d, eager.displacement(sq, F))
+    np.testing.assert_array_equal(f, eager.largest_feed(sq, F, 1e-3))
+    want = slow_displacement(s, du, delays, sq, F)
+    assert np.max(np.abs(d - want)) <= 1e-9 * np.max(np.abs(want))
+
+
 @pytest.mark.parametrize("delays", [(0.06, 0.03), (0.05, 0.02, 0.01)])
 @pytest.mark.parametrize("span", [2000.0, 40.0])  # direct sums, prefix sums
 def test_window_slope_matches_central_differences_of_the_term_by_term_sum(delays, span):
