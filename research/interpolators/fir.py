@@ -76,7 +76,7 @@ from research.interpolators._fir_lookahead import look_ahead
 from research.interpolators import _fir_profile
 from research.interpolators._fir_overlap import overlap_time
 from research.interpolators._fir_repair import Repairs
-from research.interpolators._fir_verify import RoundChecks, corner_distances
+from research.interpolators._fir_verify import RoundChecks, corner_distances, vertex_distances
 from research.limits import AxisLimits
 from research.paths.polyline import Polyline
 from research.paths.toolpath import ToolPath
@@ -89,6 +89,11 @@ _LIMIT_ROUNDS = BISECTION_STEPS + 2  # bisections of the overlaps of corners tha
 #: and rounds that slow arcs whose own deviation exceeds the tolerance (geometric, <= 0.7 a round);
 #: with limits, ``M - 1`` more for corners that become exact stops one by one (``_fir_limits``)
 MAX_ROUNDS = _LIMIT_ROUNDS + 24
+#: the first check of a candidate that competes with others looks at the vertex errors of its first
+#: ``M // _PREFIX_SHARE`` blocks first (``plan_fir``'s ``prefix_bound``), on paths of at least
+#: ``_PREFIX_SHARE * _PREFIX_MIN_BLOCKS`` blocks
+_PREFIX_SHARE = 8
+_PREFIX_MIN_BLOCKS = 32
 CHECK_PERIOD = 1e-3  # default spacing [s] of the path-deviation check: the usual interpolation period
 
 
@@ -274,12 +279,35 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         return (feeds_cmd * jnp.asarray(cruise), overlaps[: M - 1], ends[:M] - starts[:M], starts[:M], position,
                 centre[: M - 1])
 
-    def settle(factor, head, tail, full, others, arc_rel):
+    def prefix_bound(factor, head, tail, full, shrink, others, arc_rel, K, limit_v, repairs):
+        """Lower bound on a candidate's first repaired prediction from the vertex errors of its
+        first ``K`` blocks (None if none violates): the profile of the input up to block ``K``'s
+        start is the plan's own until that instant (the output at ``t`` averages the input over
+        ``[t - T_d, t]``), so the corners whose search window ``centre +- T_d / 2`` ends by then
+        have their errors of the full check; their repairs bound the first round's
+        (``_fir_repair``: a subset of the violators at the same errors)."""
+        frac, piece_tv, _, overlaps = timing(factor, head, tail, full, shrink, others, arc_rel)
+        c = int(table.first_motion[K])  # the pieces of blocks 0 .. K - 1 and their gaps
+        gaps = np.concatenate([Td_np - overlaps, np.zeros(Mp - M + 1)])
+        starts, _, breaks, coeffs, centre = _fir_profile.profile(tp.start, table.geo[:c], table.block[:c],
+                                                                 table.gap[:c], frac[:c], piece_tv[:c], gaps, d_np)
+        j = np.flatnonzero(centre[: K - 1] + 0.5 * Td_np <= starts[K])
+        errors = np.zeros(M - 1)
+        errors[j] = vertex_distances(NumpyPiecewise(breaks, coeffs), tp.vertices[j], centre[j], 0.5 * Td_np)
+        viol = errors > limit_v
+        if not viol.any():
+            return None
+        f, sh = repairs.bound(viol, errors, False, factor, shrink)
+        return predicted_time((f, head, tail, full, others, arc_rel), sh)
+
+    def settle(factor, head, tail, full, others, arc_rel, several=False):
         """Verify and repair one candidate plan, one round per step: a generator that yields the
         ``(predicted time, limit repaired so far)`` after each failed round and returns ``(state,
         rounds, deviation, limit_repaired)``. The prediction is a lower bound on the final time:
         repairs only shrink overlaps and lower feeds, and a bisecting corner is predicted at its
-        bracket's upper end (:attr:`CornerBisection.bound_scale`), above which it never ends."""
+        bracket's upper end (:attr:`CornerBisection.bound_scale`), above which it never ends.
+        ``several``: other candidates compete (worth a first bound from the first blocks,
+        :func:`prefix_bound`, before the whole profile)."""
         factor, shrink = factor.copy(), np.ones(M - 1)
         bisection, checked, repaired = CornerBisection(M - 1), np.zeros(M, dtype=bool), False
         checks = RoundChecks(tp, tb_np, table.block, Td_np, check_period)  # redone only where the profile changed
@@ -293,10 +321,17 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         if limits is not None and M == 1:
             g = hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), np.ones(1, dtype=bool))
             factor, repaired = factor * g[:, None], bool(g[0] < 1.0)
+        limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
+        K = M // _PREFIX_SHARE
+        if refine and limits is None and several and K >= _PREFIX_MIN_BLOCKS:
+            # the vertex errors of the first blocks alone, on the profile of their input: a loser
+            # (errors everywhere) falls behind the others for a share of a profile and its check
+            bound = prefix_bound(factor, head, tail, full, shrink, others, arc_rel, K, limit_v, repairs)
+            if bound is not None:
+                yield bound, repaired
         state = schedule(factor, head, tail, full, shrink, others, arc_rel)
         rounds, deviation = 0, float("nan")
         if refine or limits is not None:
-            limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
             max_rounds = MAX_ROUNDS + (2 * M if limits is not None else 0)
             tol_due = True  # the tolerance state changed since the last tolerance check
             for rounds in range(1, max_rounds + 1):
@@ -376,7 +411,8 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         its closed-form safe feed up front: slower blocks whose corners keep their overlap can beat
         exact stops) join the same queue. Returns the best settled ``(state, rounds, deviation, _)``."""
         best, best_time = None, np.inf
-        queue = [(predicted_time(c) if len(candidates) > 1 else 0.0, i, settle(*c)) for i, c in enumerate(candidates)]
+        several = len(candidates) > 1
+        queue = [(predicted_time(c) if several else 0.0, i, settle(*c, several=several)) for i, c in enumerate(candidates)]
         heapq.heapify(queue)
         extra = capped is not None
 
