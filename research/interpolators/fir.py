@@ -226,22 +226,12 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     motion_ends_np = np.stack([np.pad(table.first_motion, (0, pad_b)), np.pad(table.last_motion, (0, pad_b))])
     tangents_np = np.stack([np.pad(t_in, ((0, pad_b), (0, 0))), np.pad(t_out, ((0, pad_b), (0, 0)))])
 
-    recent = []  # the last timings: a candidate's prediction and its profile build share one
-
     def timing(factor, head, tail, full, shrink, others, arc_rel):
-        """Piece shares, pulse lengths, block top feeds and overlaps of a plan (no filtering);
-        the same result for the same inputs (head, tail, full, others, arc_rel the same arrays:
-        a candidate's own) as one of the last few calls."""
-        fixed = (head, tail, full, others, arc_rel)
-        for key, f, sh, out in recent:
-            if all(a is b for a, b in zip(key, fixed)) and np.array_equal(f, factor) and np.array_equal(sh, shrink):
-                return out
+        """Piece shares, pulse lengths, block top feeds and overlaps of a plan (no filtering)."""
         frac, piece_factor = table.pieces(head, tail, factor, arc_rel)
         cruise = np.maximum.reduceat(piece_factor[: table.last_motion[-1] + 1], table.first_motion)  # block's top feed
         piece_tv, overlaps = _fir_profile.timing(lengths_np, feeds_np, table.block, piece_factor, motion_ends_np,
                                                  tangents_np, full, shrink, others, tv_np, d_np)
-        recent.insert(0, (fixed, factor.copy(), np.array(shrink, copy=True), (frac, piece_tv, cruise, overlaps)))
-        del recent[16:]
         return frac, piece_tv, cruise, overlaps
 
     def predicted_time(candidate, shrink=None) -> float:
