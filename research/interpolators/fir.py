@@ -31,9 +31,12 @@ CAM programs (beyond the paper, which assumes every block longer than the window
   quadratic in feed); after :data:`_SCALING_ROUNDS` rounds a vertex still violating becomes an exact
   stop, which puts it on the trajectory whatever its neighbours do. Deviations inside an arc slow
   that arc. At most :data:`MAX_ROUNDS` rounds; the rounds needed are reported in
-  :attr:`FIRPlan.rounds`. A round checks the vertex errors first: the bound of their repairs alone
-  (``_fir_repair``, a lower bound on the whole round's) can put a candidate behind the others in
-  the branch and bound before its path samples are taken. The rounds decide on concrete arrays (``_fir_profile``: the same timing
+  :attr:`FIRPlan.rounds`. Candidates go through a branch and bound on lower bounds of their
+  verified times; a round checks the vertex errors first, and the bound of their repairs alone
+  (``_fir_repair``, a lower bound on the whole round's) can put a candidate behind the others
+  before its path samples are taken; a competing candidate's first check starts with the vertex
+  errors of its first blocks, on the profile of their input alone (the plan's own until that
+  input ends). The rounds decide on concrete arrays (``_fir_profile``: the same timing
   and exact profile in NumPy/Numba, no JAX dispatch for one or two filters) and re-check only the vertex windows and path
   stretches whose profile a repair changed (``_fir_verify.RoundChecks``); the plan returned is
   built with JAX only when ``feed``, ``delays`` or ``tolerance`` is a tracer (its differentiable
@@ -363,6 +366,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         if M > 1 and np.any(errors > limit_v):
                             # the vertex errors first: a bound from their repairs alone (a lower bound
                             # on the whole round's) can rule the candidate out before its path samples
+                            # (suspended here, it keeps its profile: the samples are taken on it)
                             low_f, low_s = repairs.bound(errors > limit_v, errors, rounds > _SCALING_ROUNDS, factor, shrink)
                             yield predicted_time((low_f, head, tail, full, others, arc_rel),
                                                  low_s * bisection.bound_scale), repaired
