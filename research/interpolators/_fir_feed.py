@@ -112,17 +112,36 @@ class ChainError:
         self.s = np.asarray(s, dtype=np.float64) - self.origin
         du = np.ascontiguousarray(du, dtype=np.float64).reshape(-1, np.shape(du)[-1])
         self.du = du
-        # prefix sums of du * s^m, m = 0 .. p
-        self.prefix = np.stack([np.vstack([np.zeros((1, du.shape[1])), np.cumsum(du * (self.s ** m)[:, None], axis=0)])
-                                for m in range(self.p + 1)])  # (p + 1, T + 1, d)
+        self._prefix = None
         self.binom = np.array([math.comb(self.p, m) for m in range(self.p + 1)], dtype=np.float64)
+
+    @property
+    def prefix(self) -> np.ndarray:
+        """``(p + 1, T + 1, d)`` prefix sums of ``du * s^m``, ``m = 0 .. p`` (made on first use)."""
+        if self._prefix is None:
+            du = self.du
+            self._prefix = np.stack([np.vstack([np.zeros((1, du.shape[1])), np.cumsum(du * (self.s ** m)[:, None], axis=0)])
+                                     for m in range(self.p + 1)])
+        return self._prefix
 
     def __call__(self, s_query: np.ndarray, feed: np.ndarray) -> np.ndarray:
         """``|d_j|`` [mm] at arc lengths ``s_query`` [mm] for feeds ``feed`` [mm/s] (both ``(J,)``)."""
         return np.linalg.norm(self.displacement(s_query, feed), axis=1)
 
-    def _args(self):
-        return (self.s, self.du, self.rho, self.sign, self.p, self.norm, self.prefix, self.binom, _DIRECT)
+    def _args(self, q=None, F=None):
+        """The kernels' chain arguments; for re-centred queries ``q`` at feeds up to ``F``, the
+        prefix sums only where one of their windows holds more than :data:`_DIRECT` turns (a
+        window grows with the feed; the count is the kernels' own, ``_fir_kernels._displacement``),
+        an empty array where every window is summed directly."""
+        prefix = None
+        if self._prefix is None and q is not None:
+            R = F * np.max(self.rho)
+            count = np.searchsorted(self.s, q + R, side="left") - np.searchsorted(self.s, q - R, side="right")
+            if not np.any(count > _DIRECT):
+                prefix = np.zeros((self.p + 1, 0, self.du.shape[1]))
+        if prefix is None:
+            prefix = self.prefix
+        return (self.s, self.du, self.rho, self.sign, self.p, self.norm, prefix, self.binom, _DIRECT)
 
     def displacement(self, s_query: np.ndarray, feed: np.ndarray) -> np.ndarray:
         """``d_j`` ``(J, d)`` [mm] at arc lengths ``s_query`` [mm] for feeds ``feed`` [mm/s].
@@ -134,7 +153,7 @@ class ChainError:
         queries (``_fir_kernels.chain_displacements``)."""
         q = np.asarray(s_query, dtype=np.float64).reshape(-1) - self.origin
         F = np.ascontiguousarray(np.broadcast_to(np.asarray(feed, dtype=np.float64), q.shape))
-        return chain_displacements(*self._args(), q, F)
+        return chain_displacements(*self._args(q, F), q, F)
 
     def largest_feed(self, s_query: np.ndarray, feed_max: np.ndarray, tolerance: np.ndarray,
                      error_max: np.ndarray | None = None) -> np.ndarray:
@@ -160,7 +179,7 @@ class ChainError:
         tol = np.ascontiguousarray(np.broadcast_to(np.asarray(tolerance, dtype=np.float64), hi.shape))
         e = self(s_query, hi) if error_max is None else np.array(error_max, dtype=np.float64).reshape(-1)
         q = np.asarray(s_query, dtype=np.float64).reshape(-1) - self.origin
-        return chain_largest_feeds(*self._args(), q, hi, tol, e, _BISECTION_STEPS, _CLOSE, _TINY)
+        return chain_largest_feeds(*self._args(q, hi), q, hi, tol, e, _BISECTION_STEPS, _CLOSE, _TINY)
 
 
 def range_min(first: np.ndarray, last: np.ndarray, values: np.ndarray, n: int, initial: np.ndarray) -> np.ndarray:

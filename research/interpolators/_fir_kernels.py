@@ -471,3 +471,69 @@ def sample_charges(t, centre, block, dist, tol_block, is_arc, half_window):
         else:
             key[i] = M - 1 + b
     return limit, key, bad
+
+
+@numba.njit(**_OPTIONS)
+def staircase_cuts(r_h, f_h, r_t, f_t, length, cap):
+    """``_fir_lookahead.staircase_cut`` for every line ``b``, one compiled loop: the cut
+    candidates ``x`` (0, the length, the reaches from each end, clipped and sorted), the allowed
+    feed on each interval between them (the covering windows' minimum, capped, ``1e-300`` at
+    least; ``inf`` on an empty interval), and the cuts ``a <= c`` of least ``cost(0, a) +
+    cost(a, c) + cost(c, n - 1)`` with ``cost(i, j) = (x_j - x_i) / min(allowed_i .. allowed_j-1)``
+    (0 on an empty piece; the first least in row-major order). The same operations in the same
+    order as the NumPy form it replaced (bit for bit). Returns ``(head share (B,), tail share
+    (B,), feeds (B, 3))``."""
+    B, H = r_h.shape
+    T = r_t.shape[1]
+    n = H + T + 2
+    head, tail, feeds = np.empty(B), np.empty(B), np.empty((B, 3))
+    x = np.empty(n)
+    allowed = np.empty(n - 1)
+    low = np.empty((n, n))
+    cost = np.empty((n, n))
+    for b in range(B):
+        L = length[b]
+        x[0], x[1] = 0.0, L
+        for h in range(H):
+            x[2 + h] = r_h[b, h]
+        for t in range(T):
+            x[2 + H + t] = L - r_t[b, t]
+        for i in range(n):
+            x[i] = min(max(x[i], 0.0), L)
+        x.sort()
+        for i in range(n - 1):
+            lo, hi = x[i], x[i + 1]
+            if hi > lo:
+                fh = np.inf
+                for h in range(H):
+                    if r_h[b, h] >= hi and f_h[b, h] < fh:
+                        fh = f_h[b, h]
+                ft = np.inf
+                for t in range(T):
+                    if L - r_t[b, t] <= lo and f_t[b, t] < ft:
+                        ft = f_t[b, t]
+                allowed[i] = max(min(min(fh, ft), cap[b]), 1e-300)
+            else:
+                allowed[i] = np.inf
+        for i in range(n):
+            m = np.inf
+            for j in range(n):
+                if j > i:
+                    m = min(m, allowed[j - 1])
+                    low[i, j] = m
+                else:
+                    low[i, j] = np.inf
+                span = x[j] - x[i]
+                cost[i, j] = span / low[i, j] if span > 0 else 0.0
+        best, a, c = np.inf, 0, 0
+        for i in range(n):
+            for j in range(i, n):
+                total = cost[0, i] + cost[i, j] + cost[j, n - 1]
+                if total < best:
+                    best, a, c = total, i, j
+        xa, xc = x[a], x[c]
+        head[b], tail[b] = xa / L, (L - xc) / L
+        feeds[b, 0] = min(low[0, a] if xa > 0 else cap[b], cap[b])
+        feeds[b, 1] = min(low[a, c] if xc > xa else cap[b], cap[b])
+        feeds[b, 2] = min(low[c, n - 1] if xc < L else cap[b], cap[b])
+    return head, tail, feeds

@@ -79,6 +79,7 @@ import numpy as np
 
 from research.interpolators._fir_blocks import PulseTable
 from research.interpolators._fir_feed import ChainError, range_min
+from research.interpolators._fir_kernels import staircase_cuts
 from research.interpolators._fir_profile import kernel_second_integral, overlaps
 from research.paths.toolpath import ToolPath
 from research.piecewise import bucket_size
@@ -358,35 +359,9 @@ def staircase_cut(r_h, f_h, r_t, f_t, length, cap):
     Returns:
         ``(head share (B,), tail share (B,), feeds (B, 3))``.
     """
-    r_h, f_h, r_t, f_t = (np.atleast_2d(np.asarray(a, dtype=np.float64)) for a in (r_h, f_h, r_t, f_t))
+    r_h, f_h, r_t, f_t = (np.ascontiguousarray(np.atleast_2d(np.asarray(a, dtype=np.float64))) for a in (r_h, f_h, r_t, f_t))
     length, cap = np.atleast_1d(np.asarray(length, dtype=np.float64)), np.atleast_1d(np.asarray(cap, dtype=np.float64))
-    B = length.size
-    x = np.sort(np.clip(np.concatenate([np.zeros((B, 1)), length[:, None], r_h, length[:, None] - r_t], axis=1),
-                        0.0, length[:, None]), axis=1)  # (B, n) cut candidates, duplicates allowed
-    n = x.shape[1]
-    left, right = x[:, :-1], x[:, 1:]
-    # allowed feed on each elementary interval: the windows that cover it (none on an empty one)
-    f_cov_h = np.min(np.where(r_h[:, None, :] >= right[:, :, None], f_h[:, None, :], np.inf), axis=2, initial=np.inf)
-    f_cov_t = np.min(np.where((length[:, None] - r_t)[:, None, :] <= left[:, :, None], f_t[:, None, :], np.inf), axis=2,
-                     initial=np.inf)
-    allowed = np.where(right > left, np.maximum(np.minimum(np.minimum(f_cov_h, f_cov_t), cap[:, None]), 1e-300), np.inf)
-    # low[:, i, j]: lowest allowed feed over intervals i .. j - 1 (piece from x_i to x_j)
-    low = np.full((B, n, n), np.inf)
-    for i in range(n - 1):
-        low[:, i, i + 1:] = np.minimum.accumulate(allowed[:, i:], axis=1)
-    span = x[:, None, :] - x[:, :, None]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        cost = np.where(span > 0, span / low, 0.0)
-    # cuts a <= c: pieces [x_0, x_a], [x_a, x_c], [x_c, x_n-1]
-    total = cost[:, 0, :, None] + cost + cost[:, None, :, n - 1]
-    total = np.where(np.triu(np.ones((n, n), dtype=bool))[None], total, np.inf)
-    best = np.argmin(total.reshape(B, -1), axis=1)
-    a, c = np.divmod(best, n)
-    rows = np.arange(B)
-    xa, xc = x[rows, a], x[rows, c]
-    feeds = np.stack([np.where(xa > 0, low[rows, 0, a], cap), np.where(xc > xa, low[rows, a, c], cap),
-                      np.where(xc < length, low[rows, c, n - 1], cap)], axis=1)
-    return xa / length, (length - xc) / length, np.minimum(feeds, cap[:, None])
+    return staircase_cuts(r_h, f_h, r_t, f_t, np.ascontiguousarray(length), np.ascontiguousarray(cap))
 
 
 def _arc_turns(tp: ToolPath, tol: float):

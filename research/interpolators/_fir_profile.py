@@ -18,6 +18,7 @@ a tracer (``jax.grad`` / ``jax.jacfwd``).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import jax
@@ -43,6 +44,15 @@ def kernel_second_integral(r: np.ndarray, delays: np.ndarray) -> np.ndarray:
     return total / (math.factorial(n + 1) * np.prod(delays))
 
 
+@functools.lru_cache(maxsize=64)
+def _h_full(delays: tuple) -> np.ndarray:
+    """``H2(T_d / 2)`` of the (sorted) delays: :func:`kernel_second_integral` once per chain."""
+    d = np.asarray(delays, dtype=np.float64)
+    h = kernel_second_integral(np.array(0.5 * float(d.sum())), d)
+    h.setflags(write=False)
+    return h
+
+
 def overlaps(tolerance: np.ndarray, speed_change: np.ndarray, delays: np.ndarray) -> np.ndarray:
     """``_fir_overlap.overlap_time`` (eq 13/14) on concrete arrays: the closed forms of one and two
     filters in NumPy; three or more filters through the jitted JAX inversion (padded shapes)."""
@@ -56,7 +66,7 @@ def overlaps(tolerance: np.ndarray, speed_change: np.ndarray, delays: np.ndarray
         return np.asarray(out)[:m].reshape(dF.shape)
     Td = float(d.sum())
     turning = dF > 0
-    h_full = kernel_second_integral(np.array(0.5 * Td), d)
+    h_full = _h_full(tuple(d.tolist()))
     h = np.minimum(tol / np.where(turning, dF, 1.0), h_full)
     if d.size == 1:
         Tk = np.sqrt(8.0 * d[0] * h)  # eq 13

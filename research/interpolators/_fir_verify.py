@@ -215,20 +215,32 @@ class RoundChecks:
     def __init__(self, path: ToolPath, tol_block: np.ndarray, piece_block: np.ndarray, Td: float, check_period: float):
         self.path, self.tol, self.Td, self.period = path, tol_block, Td, check_period
         self.piece_block = piece_block  # padding pieces (block M_pad) count as the last block's
-        self.durations, self.samples = None, 0
+        self.durations, self.samples, self._pending = None, 0, None
 
     def __call__(self, position: NumpyPiecewise, starts: np.ndarray, centre: np.ndarray, durations: np.ndarray,
                  vertex_errors: bool):
         """Checks of the plan whose input pieces last ``durations`` ``(P,)`` [s] (gaps included;
-        kept until the next call, which compares against it: not to be changed in place).
+        kept until the next call, which compares against it: not to be changed in place):
+        :meth:`vertices` then :meth:`samples_check`.
 
         Returns:
             ``(vertex errors (M - 1,), max deviation, {vertex: deviation}, {block: deviation})`` as
             :func:`vertex_distances` (zeros unless ``vertex_errors``) and :func:`path_deviations`.
         """
+        errors = self.vertices(position, starts, centre, durations, vertex_errors)
+        return (errors,) + self.samples_check()
+
+    def vertices(self, position: NumpyPiecewise, starts: np.ndarray, centre: np.ndarray, durations: np.ndarray,
+                 vertex_errors: bool) -> np.ndarray:
+        """First half of a check: the vertex errors ``(M - 1,)`` [mm] (zeros unless
+        ``vertex_errors``), recomputed where the profile changed; it also marks the charge keys
+        whose path samples :meth:`samples_check` (the second half, on the same profile) redoes.
+        The planner looks at the vertex errors first: their repairs alone can already rule a
+        candidate out, and the path samples cost more."""
         path, M, half = self.path, self.path.n_blocks, 0.5 * self.Td
+        self._pending = (position, starts, centre)
         if M == 1:
-            return (np.zeros(0),) + path_deviations(position, path, starts, centre, self.Td, self.tol, self.period)
+            return np.zeros(0)
         t0, t1 = float(position.breaks[0]), float(position.breaks[-1])
         lo_v = np.minimum(starts[:-1] + half, centre - half)
         hi_v = centre + half
@@ -249,6 +261,20 @@ class RoundChecks:
         self.durations = durations  # kept, not copied: the planner builds a new array every round
         if vertex_errors and err_v.any():
             self.errors[err_v] = vertex_distances(position, path.vertices[err_v], centre[err_v], half)
+        self._pending = (position, starts, centre, lo_v, hi_v, lo_b, hi_b, redo_v, redo_b)
+        return self.errors.copy() if vertex_errors else np.zeros(M - 1)
+
+    def samples_check(self):
+        """Second half of a check (after :meth:`vertices`, on its profile): the path samples of
+        the charge keys it marked. Returns ``(max deviation, {vertex: deviation}, {block:
+        deviation})`` as :func:`path_deviations`."""
+        path, M = self.path, self.path.n_blocks
+        if M == 1:
+            position, starts, centre = self._pending
+            return path_deviations(position, path, starts, centre, self.Td, self.tol, self.period)
+        position, starts, centre, lo_v, hi_v, lo_b, hi_b, redo_v, redo_b = self._pending
+        self._pending = None
+        t0, t1 = float(position.breaks[0]), float(position.breaks[-1])
         redo = np.concatenate([redo_v, redo_b])
         self.samples = 0  # path samples taken by this check
         if redo.any():
@@ -269,8 +295,7 @@ class RoundChecks:
         keys, values = self.bad
         at_vertex = {int(k): float(e) for k, e in zip(keys, values) if k < M - 1}
         at_block = {int(k) - (M - 1): float(e) for k, e in zip(keys, values) if k >= M - 1}
-        errors = self.errors if vertex_errors else np.zeros(M - 1)
-        return errors.copy(), float(self.worst.max()), at_vertex, at_block
+        return float(self.worst.max()), at_vertex, at_block
 
 
 def _merged(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -31,7 +31,12 @@ CAM programs (beyond the paper, which assumes every block longer than the window
   quadratic in feed); after :data:`_SCALING_ROUNDS` rounds a vertex still violating becomes an exact
   stop, which puts it on the trajectory whatever its neighbours do. Deviations inside an arc slow
   that arc. At most :data:`MAX_ROUNDS` rounds; the rounds needed are reported in
-  :attr:`FIRPlan.rounds`. The rounds decide on concrete arrays (``_fir_profile``: the same timing
+  :attr:`FIRPlan.rounds`. Candidates go through a branch and bound on lower bounds of their
+  verified times; a round checks the vertex errors first, and the bound of their repairs alone
+  (``_fir_repair``, a lower bound on the whole round's) can put a candidate behind the others
+  before its path samples are taken; a competing candidate's first check starts with the vertex
+  errors of its first blocks, on the profile of their input alone (the plan's own until that
+  input ends). The rounds decide on concrete arrays (``_fir_profile``: the same timing
   and exact profile in NumPy/Numba, no JAX dispatch for one or two filters) and re-check only the vertex windows and path
   stretches whose profile a repair changed (``_fir_verify.RoundChecks``); the plan returned is
   built with JAX only when ``feed``, ``delays`` or ``tolerance`` is a tracer (its differentiable
@@ -73,7 +78,8 @@ from research.interpolators._fir_limits import (
 from research.interpolators._fir_lookahead import look_ahead
 from research.interpolators import _fir_profile
 from research.interpolators._fir_overlap import overlap_time
-from research.interpolators._fir_verify import RoundChecks, corner_distances
+from research.interpolators._fir_repair import Repairs
+from research.interpolators._fir_verify import RoundChecks, corner_distances, vertex_distances
 from research.limits import AxisLimits
 from research.paths.polyline import Polyline
 from research.paths.toolpath import ToolPath
@@ -86,6 +92,11 @@ _LIMIT_ROUNDS = BISECTION_STEPS + 2  # bisections of the overlaps of corners tha
 #: and rounds that slow arcs whose own deviation exceeds the tolerance (geometric, <= 0.7 a round);
 #: with limits, ``M - 1`` more for corners that become exact stops one by one (``_fir_limits``)
 MAX_ROUNDS = _LIMIT_ROUNDS + 24
+#: the first check of a candidate that competes with others looks at the vertex errors of its first
+#: ``M // _PREFIX_SHARE`` blocks first (``plan_fir``'s ``prefix_bound``), on paths of at least
+#: ``_PREFIX_SHARE * _PREFIX_MIN_BLOCKS`` blocks
+_PREFIX_SHARE = 8
+_PREFIX_MIN_BLOCKS = 32
 CHECK_PERIOD = 1e-3  # default spacing [s] of the path-deviation check: the usual interpolation period
 
 
@@ -261,15 +272,39 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         return (feeds_cmd * jnp.asarray(cruise), overlaps[: M - 1], ends[:M] - starts[:M], starts[:M], position,
                 centre[: M - 1])
 
-    def settle(factor, head, tail, full, others, arc_rel):
+    def prefix_bound(factor, head, tail, full, shrink, others, arc_rel, K, limit_v, repairs):
+        """Lower bound on a candidate's first repaired prediction from the vertex errors of its
+        first ``K`` blocks (None if none violates): the profile of the input up to block ``K``'s
+        start is the plan's own until that instant (the output at ``t`` averages the input over
+        ``[t - T_d, t]``), so the corners whose search window ``centre +- T_d / 2`` ends by then
+        have their errors of the full check; their repairs bound the first round's
+        (``_fir_repair``: a subset of the violators at the same errors)."""
+        frac, piece_tv, _, overlaps = timing(factor, head, tail, full, shrink, others, arc_rel)
+        c = int(table.first_motion[K])  # the pieces of blocks 0 .. K - 1 and their gaps
+        gaps = np.concatenate([Td_np - overlaps, np.zeros(Mp - M + 1)])
+        starts, _, breaks, coeffs, centre = _fir_profile.profile(tp.start, table.geo[:c], table.block[:c],
+                                                                 table.gap[:c], frac[:c], piece_tv[:c], gaps, d_np)
+        j = np.flatnonzero(centre[: K - 1] + 0.5 * Td_np <= starts[K])
+        errors = np.zeros(M - 1)
+        errors[j] = vertex_distances(NumpyPiecewise(breaks, coeffs), tp.vertices[j], centre[j], 0.5 * Td_np)
+        viol = errors > limit_v
+        if not viol.any():
+            return None
+        f, sh = repairs.bound(viol, errors, False, factor, shrink)
+        return predicted_time((f, head, tail, full, others, arc_rel), sh)
+
+    def settle(factor, head, tail, full, others, arc_rel, several=False):
         """Verify and repair one candidate plan, one round per step: a generator that yields the
         ``(predicted time, limit repaired so far)`` after each failed round and returns ``(state,
         rounds, deviation, limit_repaired)``. The prediction is a lower bound on the final time:
         repairs only shrink overlaps and lower feeds, and a bisecting corner is predicted at its
-        bracket's upper end (:attr:`CornerBisection.bound_scale`), above which it never ends."""
+        bracket's upper end (:attr:`CornerBisection.bound_scale`), above which it never ends.
+        ``several``: other candidates compete (worth a first bound from the first blocks,
+        :func:`prefix_bound`, before the whole profile)."""
         factor, shrink = factor.copy(), np.ones(M - 1)
         bisection, checked, repaired = CornerBisection(M - 1), np.zeros(M, dtype=bool), False
         checks = RoundChecks(tp, tb_np, table.block, Td_np, check_period)  # redone only where the profile changed
+        repairs = Repairs(full, tv_np, tb_np, F_np, tp.lengths, Td_np, d_np.size)
 
         def alone(g):  # ``_fir_limits`` phase 1: each block's own peaks (every corner an exact stop)
             _, _, pulse, starts, position, *_ = schedule(factor * g[:, None], head, tail, full, np.zeros(M - 1), others,
@@ -279,6 +314,14 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         if limits is not None and M == 1:
             g = hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), np.ones(1, dtype=bool))
             factor, repaired = factor * g[:, None], bool(g[0] < 1.0)
+        limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
+        K = M // _PREFIX_SHARE
+        if refine and limits is None and several and K >= _PREFIX_MIN_BLOCKS:
+            # the vertex errors of the first blocks alone, on the profile of their input: a loser
+            # (errors everywhere) falls behind the others for a share of a profile and its check
+            bound = prefix_bound(factor, head, tail, full, shrink, others, arc_rel, K, limit_v, repairs)
+            if bound is not None:
+                yield bound, repaired
         state = schedule(factor, head, tail, full, shrink, others, arc_rel)
         rounds, deviation = 0, float("nan")
         if refine or limits is not None:
@@ -319,7 +362,15 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                 # such proof -- hence the final check rather than trusting it.
                 if tol_due or not too_fast:
                     if refine:
-                        errors, deviation, at_vertex, at_block = checks(pos_np, starts_np, centre_np, durations, M > 1)
+                        errors = checks.vertices(pos_np, starts_np, centre_np, durations, M > 1)
+                        if M > 1 and np.any(errors > limit_v):
+                            # the vertex errors first: a bound from their repairs alone (a lower bound
+                            # on the whole round's) can rule the candidate out before its path samples
+                            # (suspended here, it keeps its profile: the samples are taken on it)
+                            low_f, low_s = repairs.bound(errors > limit_v, errors, rounds > _SCALING_ROUNDS, factor, shrink)
+                            yield predicted_time((low_f, head, tail, full, others, arc_rel),
+                                                 low_s * bisection.bound_scale), repaired
+                        deviation, at_vertex, at_block = checks.samples_check()
                     viol = errors > limit_v
                     if refine:
                         for j, e in at_vertex.items():
@@ -335,20 +386,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         f"tolerance{' (or corners a limit)' if too_fast else ''} after {max_rounds} rounds",
                         residual=float(np.max(errors - limit_v, initial=0.0)), steps=rounds)
                 late = rounds > _SCALING_ROUNDS
-                n_f = d_np.size
-                for j in np.flatnonzero(viol):
-                    ratio = tv_np[j] / errors[j]
-                    if late:
-                        shrink[j] = 0.0  # exact stop: the vertex is on the trajectory
-                    elif full[j]:  # slow the window's blocks: the error of a chain is quadratic in feed
-                        half = 0.5 * Td_np * F_np[j] * factor[j, 2]
-                        lo = max(int(np.searchsorted(cum, cum[j + 1] - half, side="right")) - 1, 0)
-                        hi = min(int(np.searchsorted(cum, cum[j + 1] + half, side="left")), M)
-                        factor[lo:max(hi, j + 2)] *= 0.98 * np.sqrt(ratio)
-                    else:
-                        shrink[j] *= min(0.98 * ratio ** (1.0 / (n_f + 1)), 1.0)
-                for k in np.flatnonzero(arc_slow):
-                    factor[k] *= min(0.98 * np.sqrt(tb_np[k] / arc_slow[k]), 0.98)
+                repairs.apply(viol, errors, arc_slow, late, factor, shrink)
                 # suspended in the branch and bound, a candidate keeps no profile and no round's arrays
                 state = pos_np = pulse_np = starts_np = centre_np = durations = at_vertex = at_block = None
                 yield predicted_time((factor, head, tail, full, others, arc_rel), shrink * bisection.bound_scale), repaired
@@ -368,7 +406,8 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         its closed-form safe feed up front: slower blocks whose corners keep their overlap can beat
         exact stops) join the same queue. Returns the best settled ``(state, rounds, deviation, _)``."""
         best, best_time = None, np.inf
-        queue = [(predicted_time(c) if len(candidates) > 1 else 0.0, i, settle(*c)) for i, c in enumerate(candidates)]
+        several = len(candidates) > 1
+        queue = [(predicted_time(c) if several else 0.0, i, settle(*c, several=several)) for i, c in enumerate(candidates)]
         heapq.heapify(queue)
         extra = capped is not None
 

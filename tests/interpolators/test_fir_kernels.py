@@ -44,6 +44,28 @@ def test_window_displacement_matches_the_term_by_term_sum(delays, span):
     assert np.max(np.abs(got - want)) <= 1e-9 * scale
 
 
+@pytest.mark.parametrize("span", [2000.0, 40.0])  # sparse windows (no prefix sums made), dense ones
+def test_prefix_sums_are_made_only_for_windows_of_many_turns(span):
+    """Sparse windows (800 turns over 2000 mm, windows <= 300 mm/s x 0.045 s each side) are all
+    summed directly: no prefix sums are made and the displacements and feeds are those of a chain
+    that has them (the direct sums do not read them, bit for bit). Dense windows (over 40 mm) make
+    them, and match the term-by-term sum."""
+    rng = np.random.default_rng(5)
+    T, delays = 800, np.array([0.06, 0.03])
+    s = np.sort(rng.uniform(0.0, span, T))
+    du = rng.normal(0.0, 0.05, (T, 3))
+    sq, F = rng.uniform(0.0, span, 40), rng.uniform(5.0, 300.0, 40)
+    lazy, eager = ChainError(s, du, delays), ChainError(s, du, delays)
+    eager.prefix  # made up front
+    d = lazy.displacement(sq, F)
+    f = lazy.largest_feed(sq, F, 1e-3)
+    assert (lazy._prefix is None) == (span == 2000.0)
+    np.testing.assert_array_equal(d, eager.displacement(sq, F))
+    np.testing.assert_array_equal(f, eager.largest_feed(sq, F, 1e-3))
+    want = slow_displacement(s, du, delays, sq, F)
+    assert np.max(np.abs(d - want)) <= 1e-9 * np.max(np.abs(want))
+
+
 @pytest.mark.parametrize("delays", [(0.06, 0.03), (0.05, 0.02, 0.01)])
 @pytest.mark.parametrize("span", [2000.0, 40.0])  # direct sums, prefix sums
 def test_window_slope_matches_central_differences_of_the_term_by_term_sum(delays, span):
@@ -181,3 +203,51 @@ def test_sample_charges_match_the_vectorised_rule():
     np.testing.assert_array_equal(key, want_key)
     np.testing.assert_array_equal(bad, dist > want_limit * (1 + 1e-9) + 1e-9)
     assert close.any() and (~close).any() and (want_key >= M - 1).any()
+
+
+def numpy_staircase_cut(r_h, f_h, r_t, f_t, length, cap):
+    """``_fir_lookahead.staircase_cut`` by whole-array NumPy (its form before the compiled loop):
+    cut candidates sorted per line, allowed feeds per interval, the ``(B, n, n)`` piece costs and
+    the first least ``a <= c`` of the flattened totals."""
+    B = length.size
+    x = np.sort(np.clip(np.concatenate([np.zeros((B, 1)), length[:, None], r_h, length[:, None] - r_t], axis=1),
+                        0.0, length[:, None]), axis=1)
+    n = x.shape[1]
+    left, right = x[:, :-1], x[:, 1:]
+    f_cov_h = np.min(np.where(r_h[:, None, :] >= right[:, :, None], f_h[:, None, :], np.inf), axis=2, initial=np.inf)
+    f_cov_t = np.min(np.where((length[:, None] - r_t)[:, None, :] <= left[:, :, None], f_t[:, None, :], np.inf), axis=2,
+                     initial=np.inf)
+    allowed = np.where(right > left, np.maximum(np.minimum(np.minimum(f_cov_h, f_cov_t), cap[:, None]), 1e-300), np.inf)
+    low = np.full((B, n, n), np.inf)
+    for i in range(n - 1):
+        low[:, i, i + 1:] = np.minimum.accumulate(allowed[:, i:], axis=1)
+    span = x[:, None, :] - x[:, :, None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cost = np.where(span > 0, span / low, 0.0)
+    total = cost[:, 0, :, None] + cost + cost[:, None, :, n - 1]
+    total = np.where(np.triu(np.ones((n, n), dtype=bool))[None], total, np.inf)
+    a, c = np.divmod(np.argmin(total.reshape(B, -1), axis=1), n)
+    rows = np.arange(B)
+    xa, xc = x[rows, a], x[rows, c]
+    feeds = np.stack([np.where(xa > 0, low[rows, 0, a], cap), np.where(xc > xa, low[rows, a, c], cap),
+                      np.where(xc < length, low[rows, c, n - 1], cap)], axis=1)
+    return xa / length, (length - xc) / length, np.minimum(feeds, cap[:, None])
+
+
+def test_staircase_kernel_is_the_numpy_form_bit_for_bit():
+    """Random staircases: reaches inside, beyond and at the line's ends, repeated reaches and
+    feeds (ties between cuts), padding (reach 0, feed inf), feeds above the cap."""
+    from research.interpolators._fir_lookahead import staircase_cut
+    rng = np.random.default_rng(17)
+    for H, T in ((1, 1), (3, 2), (4, 4), (2, 5)):
+        B = 300
+        length = rng.choice([0.1, 1.0, 5.0], B) * rng.uniform(0.5, 1.5, B)
+        r_h = length[:, None] * rng.choice([0.0, 0.2, 0.5, 1.0, 1.3], (B, H)) * rng.choice([1.0, rng.uniform()], (B, H))
+        r_t = length[:, None] * rng.choice([0.0, 0.3, 0.5, 1.0, 2.0], (B, T))
+        f_h = np.where(r_h > 0, rng.choice([20.0, 50.0, 80.0, 150.0], (B, H)), np.inf)
+        f_t = np.where(r_t > 0, rng.choice([20.0, 50.0, 90.0, 150.0], (B, T)), np.inf)
+        cap = rng.choice([60.0, 100.0, 120.0], B)
+        got = staircase_cut(r_h, f_h, r_t, f_t, length, cap)
+        want = numpy_staircase_cut(r_h, f_h, r_t, f_t, length, cap)
+        for g, w in zip(got, want):
+            np.testing.assert_array_equal(g, w)

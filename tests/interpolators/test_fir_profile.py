@@ -130,3 +130,52 @@ def test_round_checks_redo_only_the_changed_stretch_and_agree_with_full_checks()
     for j in set(at_v) | set(at_full):
         a, b = at_v.get(j, tol[0]), at_full.get(j, tol[0])
         assert abs(a - b) <= bound
+
+
+def test_profile_of_the_first_blocks_is_the_plan_until_their_input_ends():
+    """``plan_fir``'s first bound of a competing candidate (``prefix_bound``) checks vertex errors
+    on the profile of the input of its first K blocks alone. The output at ``t`` averages the input
+    over ``[t - T_d, t]`` (Sencer 2015 eq 1), so up to the instant ``T_cut`` that input ends (block
+    K's start) it is the whole plan's; after it, it is not (the input stops). Checked on a random
+    line-and-arc program: positions and vertex errors of the corners whose search window ends by
+    ``T_cut`` are the whole profile's, bit for bit (the same pieces in the same order)."""
+    rng = np.random.default_rng(3)
+    tp = ToolPath.from_polyline(Polyline([[0.0, 0.0], [5.0, 0.0]]))
+    for _ in range(40):  # lines of 0.5-3 mm at turns up to 60 deg, every third block an arc
+        end, ang = tp.ends[-1], rng.uniform(-np.pi / 3, np.pi / 3)
+        if len(tp.sweeps) % 3 == 2:
+            radius = rng.uniform(2.0, 10.0)
+            centre = end + radius * np.array([-np.sin(ang), np.cos(ang)])
+            tp = tp.then_arc(centre + (end - centre) @ np.array([[np.cos(0.5), np.sin(0.5)], [-np.sin(0.5), np.cos(0.5)]]),
+                             centre, ccw=True)
+        else:
+            step = rng.uniform(0.5, 3.0) * np.array([np.cos(ang), np.sin(ang)])
+            tp = ToolPath(tp.start, np.vstack([tp.ends, end + step]), np.vstack([tp.centers, [[np.nan, np.nan]]]),
+                          np.vstack([tp.normals, [[np.nan] * 3]]), np.concatenate([tp.sweeps, [0.0]]))
+    assert tp.is_arc.sum() > 5
+    table = PulseTable.from_path(tp)
+    M, Mp = tp.n_blocks, table.m_pad
+    d = np.array([0.06, 0.03])
+    Td = float(d.sum())
+    frac, factor = table.pieces(np.zeros(M), np.zeros(M), np.ones((M, 3)), np.ones(table.arc_span.shape[0]))
+    piece_tv = np.concatenate([tp.lengths, np.ones(Mp - M + 1)])[table.block] / (40.0 * factor)
+    gaps = np.concatenate([np.random.default_rng(4).uniform(0.0, Td, M - 1), np.zeros(Mp - M + 1)])
+    starts, _, breaks, coeffs, centre = _fir_profile.profile(tp.start, table.geo, table.block, table.gap, frac,
+                                                             piece_tv, gaps, d)
+    whole = NumpyPiecewise(breaks, coeffs)
+    K = M // 2
+    c = int(table.first_motion[K])
+    p_starts, _, p_breaks, p_coeffs, p_centre = _fir_profile.profile(tp.start, table.geo[:c], table.block[:c],
+                                                                     table.gap[:c], frac[:c], piece_tv[:c], gaps, d)
+    part = NumpyPiecewise(p_breaks, p_coeffs)
+    t_cut = p_starts[K]
+    assert t_cut == starts[K]
+    t = np.linspace(0.0, t_cut, 2001)
+    np.testing.assert_array_equal(part(t), whole(t))  # the same pieces, computed in the same order
+    later = np.linspace(t_cut + 0.2 * Td, t_cut + Td, 50)  # the input has stopped: not the plan
+    assert np.max(np.abs(part(later) - whole(later))) > 1e-6
+    np.testing.assert_array_equal(p_centre[: K - 1], centre[: K - 1])
+    j = np.flatnonzero(centre[: K - 1] + 0.5 * Td <= t_cut)
+    assert j.size > 3
+    np.testing.assert_array_equal(vertex_distances(part, tp.vertices[j], centre[j], 0.5 * Td),
+                                  vertex_distances(whole, tp.vertices[j], centre[j], 0.5 * Td))

@@ -1,0 +1,80 @@
+"""The repairs of ``plan_fir``'s verification rounds, and a bound on them from the vertex errors.
+
+A round checks a candidate plan on its exact profile (vertex errors, then the sampled path
+deviation, ``_fir_verify.RoundChecks``) and repairs every violator (``fir`` module docstring): a
+full-overlap vertex slows the blocks of its window by ``sqrt(eps / error)`` (the error of a chain
+is quadratic in feed), a dwell corner shrinks its overlap by ``(eps / error)^(1/(n+1))`` (the
+small-overlap scaling of ``H2``, Sencer 2015 eq 13/14), an arc whose own deviation breaks its
+tolerance slows by ``sqrt(eps / deviation)``, and after the scaling rounds a violator becomes an
+exact stop.
+
+The branch and bound of ``plan_fir`` orders candidates by the predicted time of their repaired
+plans. :meth:`Repairs.bound` gives, from the vertex errors alone (the first half of a round),
+factors and shrinks at least as large as :meth:`Repairs.apply` leaves for the whole round, whose
+violators are a superset (path samples charged to vertices and arcs add to them) at errors no
+smaller (a vertex's error is the larger of its distance and its charged path deviation): each
+factor is ``0.98 sqrt(ratio) < 1`` or ``min(0.98 ratio^(1/(n+1)), 1) <= 1`` with ``ratio = eps /
+error`` no larger in the full round, and a vertex's window always holds its own two blocks (the
+window ``[lo, hi)`` of :meth:`Repairs.apply` has ``lo <= j`` and ``hi >= j + 2``), so the bound
+multiplies a subset of the factors each block gets in the full round. Its predicted time is then
+a lower bound on the full round's where the prediction falls as factors and shrinks grow (the
+assumption the branch and bound already rests on: repairs only lower feeds and shrink overlaps).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+class Repairs:
+    """The repairs of one candidate's rounds.
+
+    Args:
+        full: ``(M - 1,)`` full-overlap flags of the candidate's vertices.
+        tol_vertex: ``(M - 1,)`` tolerance per vertex [mm]; tol_block: ``(M,)`` per block [mm].
+        feeds: ``(M,)`` commanded feeds [mm/s]; lengths: ``(M,)`` block lengths [mm].
+        Td: total filter delay [s]; n_filters: the number of filters ``n``.
+    """
+
+    def __init__(self, full, tol_vertex, tol_block, feeds, lengths, Td: float, n_filters: int):
+        self.full, self.tv, self.tb, self.F = full, tol_vertex, tol_block, feeds
+        self.cum = np.concatenate([[0.0], np.cumsum(lengths)])
+        self.Td, self.n = float(Td), int(n_filters)
+        self.M = feeds.size
+
+    def apply(self, viol, errors, arc_dev, late: bool, factor, shrink) -> None:
+        """One round's repairs, in place on ``factor`` ``(M, 3)`` and ``shrink`` ``(M - 1,)``:
+        every violating vertex ``viol`` (error ``errors`` [mm]) becomes an exact stop when
+        ``late``, else slows its window's blocks (full overlap) or shrinks its overlap (dwell);
+        an arc block whose own deviation ``arc_dev`` [mm] is > 0 slows. Vertices in path order,
+        each window's width at the feed its earlier neighbours' repairs left."""
+        cum, M = self.cum, self.M
+        for j in np.flatnonzero(viol):
+            ratio = self.tv[j] / errors[j]
+            if late:
+                shrink[j] = 0.0  # exact stop: the vertex is on the trajectory
+            elif self.full[j]:  # slow the window's blocks: the error of a chain is quadratic in feed
+                half = 0.5 * self.Td * self.F[j] * factor[j, 2]
+                lo = max(int(np.searchsorted(cum, cum[j + 1] - half, side="right")) - 1, 0)
+                hi = min(int(np.searchsorted(cum, cum[j + 1] + half, side="left")), M)
+                factor[lo:max(hi, j + 2)] *= 0.98 * np.sqrt(ratio)
+            else:
+                shrink[j] *= min(0.98 * ratio ** (1.0 / (self.n + 1)), 1.0)
+        for k in np.flatnonzero(arc_dev):
+            factor[k] *= min(0.98 * np.sqrt(self.tb[k] / arc_dev[k]), 0.98)
+
+    def bound(self, viol, errors, late: bool, factor, shrink):
+        """New ``(factor, shrink)``, each entry ``>=`` what :meth:`apply` leaves for any superset
+        of the violators ``viol`` at errors ``>= errors`` (module docstring): the same repairs,
+        each full-overlap vertex slowing only its own two blocks."""
+        factor, shrink = factor.copy(), shrink.copy()
+        j = np.flatnonzero(viol)
+        if late:
+            shrink[j] = 0.0
+            return factor, shrink
+        ratio = self.tv[j] / errors[j]
+        w = self.full[j]
+        g = np.ones(self.M)
+        np.multiply.at(g, np.concatenate([j[w], j[w] + 1]), np.tile(0.98 * np.sqrt(ratio[w]), 2))
+        shrink[j[~w]] *= np.minimum(0.98 * ratio[~w] ** (1.0 / (self.n + 1)), 1.0)
+        return factor * g[:, None], shrink
