@@ -41,7 +41,8 @@ class PathConfig(_Strict):
         if len(given) != 1:
             raise ValueError(f"give exactly one of name, gcode, points_mm, bspline (got {given or 'none'})")
         if self.gcode is None:
-            extra = [k for k in ("home_mm", "start_mm") if k in self.model_fields_set]
+            # by value, not by fields set: a dumped config (sweeps, the store) writes every field back
+            extra = [k for k, v in (("home_mm", None), ("start_mm", [0.0, 0.0, 0.0])) if getattr(self, k) != v]
             if extra:
                 raise ValueError(f"{', '.join(extra)} only apply to a G-code path (gcode = ...); remove them or give gcode")
         if self.name is not None and self.name not in PATHS:
