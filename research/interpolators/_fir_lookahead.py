@@ -30,6 +30,17 @@ What is exact:
    candidate's verification is independent of the others), so offering more candidates never
    makes a plan slower.
 
+**Deeper levels.** Below ``eps q^NEST_STEPS`` the points ``q^m`` of a fixed grid (``m`` integer,
+tolerances in mm; :func:`deep_levels`) offer, ``DEEP_STEPS`` of them, one dwell set each: the
+"isolated" rule's cost set (where its dwell is estimated cheaper than the slow-down). A grid
+point, unlike ``eps q^k``, is the same tolerance for every eps within a factor ``q^-1`` of each
+other, so its set is offered at both ends of a small eps step unless the step crosses a grid
+point. Why that set only: on bench_cam's eps ladder (seeds 0-149, lines / arcs), 3 of the 8
+programs that rose were won at the lower eps by the "isolated" cost set of ``eps q^4``, below the
+higher eps's levels; every set of two more levels ``eps q^5, eps q^6`` (14 candidates more on the
+quick CAM file instead of 2) cost +16 % planning time there, and the same one set at
+``eps q^5, eps q^6`` instead of on the grid moved the rise to other programs (12, 106 arcs).
+
 **Window reach** (issue "cycle time flat in the chord tolerance"). A vertex's window feed ``f`` is
 the largest *constant* feed at which its windowed displacement stays within the tolerance; the
 blocks then follow the staircase of the window feeds (:func:`line_pieces`: the minimum over the
@@ -93,6 +104,12 @@ from research.piecewise import bucket_size
 NEST_RATIO = 2.0 ** -0.5
 NEST_STEPS = 4
 
+#: Below those, the levels ``k = NEST_STEPS + 1 .. NEST_STEPS + DEEP_STEPS`` offer one dwell set
+#: each: where the dwell under the "isolated" rule is estimated cheaper than the slow-down (module
+#: docstring, "Deeper levels": why that set, measured).
+DEEP_STEPS = 2
+_DEEP_SET = 1  # index of the "isolated" cost set among the sets of _dwell_sets
+
 
 def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in, t_out):
     """Candidate plans, each ``(factor, head, tail, full, others, arc_rel)``: feed factors ``(M, 3)``
@@ -136,7 +153,8 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     with np.errstate(invalid="ignore"):
         hold = window_half_width(delays, np.nan_to_num(own / (own + other), nan=1.0))
     # row 0: the tolerance itself; rows 1 .. NEST_STEPS: the tighter ones whose dwell sets are offered too
-    levels = tol_v[None, :] * (NEST_RATIO ** np.arange(NEST_STEPS + 1))[:, None]
+    levels = np.concatenate([tol_v[None, :] * (NEST_RATIO ** np.arange(NEST_STEPS + 1))[:, None],
+                             deep_levels(tol_v * NEST_RATIO**NEST_STEPS)])
     need = e_all > levels
     budget = levels - other
     # eq 13/14 overlaps for the two tolerances a dwell may use, at every level (concrete arrays, _fir_profile)
@@ -150,19 +168,32 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
         f_lv[k_q, j_q] = every.largest_feed(s_v[j_q], Fv[j_q], levels[k_q, j_q], e_all[j_q])
     reach = Fv * every.rho.max()  # a window at a feed <= Fv sums the turns strictly inside s_v +- reach
     f_w = f_lv[0]
-    memo = {}
+    # the vertices strictly inside each window's reach: indices [w_lo, w_hi)
+    w_lo, w_hi = np.searchsorted(s_v, s_v - reach, side="right"), np.searchsorted(s_v, s_v + reach, side="left")
+    memo, solved = {}, []
 
     def feeds_without(gap):
         """Window feeds of the vertices that do not dwell, on the chain without the dwell turns:
-        only windows that reach a removed turn change (the others sum the same turns)."""
+        only windows that reach a removed turn change (the others sum the same turns), and a
+        window whose reach holds the same dwell vertices as in a set solved before takes that
+        set's feed (it sums the same turns; up to the rounding of the chain's prefix sums)."""
         key = gap.tobytes()
         if key not in memo:
             removed = s_v[gap]
             hit = np.searchsorted(removed, s_v + reach, side="left") > np.searchsorted(removed, s_v - reach, side="right")
             f = f_w.copy()
-            q = np.flatnonzero(hit & ~gap)
+            q = hit & ~gap
+            for g_old, f_old in solved:
+                if not q.any():
+                    break
+                moved = np.concatenate([[0], np.cumsum(g_old != gap)])
+                same = q & (moved[w_hi] == moved[w_lo])
+                f[same] = f_old[same]
+                q &= ~same
+            q = np.flatnonzero(q)
             if q.size:
                 f[q] = chain(~gap).largest_feed(s_v[q], Fv[q], tol_v[q])
+            solved.append((gap, f))
             memo[key] = f[~gap]
         return memo[key]
 
@@ -171,24 +202,40 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     for k in range(K1):
         for i, (rule, gap) in enumerate(_dwell_sets(L, Td, Fv, f_lv[k], need[k], levels[k], budget[k], Tk_budget[k],
                                                     Tk_whole[k])):
+            if k > NEST_STEPS and i != _DEEP_SET:
+                continue
             # the dwell set and rule define the candidate; at tol_v a vertex that needs a slow-down
             # and has no feed (zero tolerance) stops exactly whatever the set
             gap = gap | (need[0] & ((f_w <= 0) | (tol_v <= 0)))
             key = (rule if gap.any() else 1, gap.tobytes())
             if key not in seen:
                 seen.add(key)
-                sets.append((rule, gap, i == _EVERY_CAN))
+                sets.append((rule, gap, i == _EVERY_CAN, k > NEST_STEPS))
     # every set with its feeds held over the whole support T_d / 2, and over the reach of
     # window_half_width as well (module docstring, "Window reach": neither is faster on every
     # program), but "every vertex that can dwell", which few windows hold a feed in
     support = np.full(M - 1, 0.5 * Td)
     out = []
-    for rule, gap, every_can in sets:
-        for h in (hold, support) if np.any(hold < support) and not every_can else (support,):
+    for rule, gap, every_can, deep in sets:
+        reaches = (hold,) if deep else (hold, support) if not every_can else (support,)
+        for h in reaches if np.any(hold < support) else (support,):
             c = _candidate(tp, table, F_cmd, F, gap, (budget[0], tol_v)[rule], h, tol_v, s_v, feeds_without)
             if not any(all(np.array_equal(c[i], o[i]) for i in (3, 4, 0, 1, 2)) for o in out):
                 out.append(c)
     return out
+
+
+def deep_levels(tol):
+    """Tolerances ``(DEEP_STEPS, M - 1)`` [mm]: the points ``NEST_RATIO^m`` of a fixed grid (``m``
+    integer, in mm) strictly below ``tol``, nearest first (module docstring, "Deeper levels");
+    0 where ``tol`` is 0."""
+    tol = np.asarray(tol, dtype=np.float64)
+    pos = tol > 0
+    with np.errstate(divide="ignore"):
+        m = np.floor(np.log(np.where(pos, tol, 1.0)) / np.log(NEST_RATIO))  # q^(m+1) < tol <= q^m up to rounding
+    grid = NEST_RATIO ** (m[None, :] + np.arange(1, DEEP_STEPS + 1)[:, None])
+    grid = np.where(grid < tol, grid, grid * NEST_RATIO)  # strictly below tol after rounding
+    return np.where(pos, grid, 0.0)
 
 
 def window_half_width(delays, own_share):
