@@ -37,7 +37,7 @@ point, unlike ``eps q^k``, is the same tolerance for every eps within a factor `
 other, so its set is offered at both ends of a small eps step unless the step crosses a grid
 point. Why that set only: on bench_cam's eps ladder (seeds 0-149, lines / arcs), 3 of the 8
 programs that rose were won at the lower eps by the "isolated" cost set of ``eps q^4``, below the
-higher eps's levels; every set of two more levels ``eps q^5, eps q^6`` (14 candidates more on the
+higher eps's levels; every set of two more levels ``eps q^5, eps q^6`` (6 candidates more on the
 quick CAM file instead of 2) cost +16 % planning time there, and the same one set at
 ``eps q^5, eps q^6`` instead of on the grid moved the rise to other programs (12, 106 arcs).
 
