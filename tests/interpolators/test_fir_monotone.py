@@ -116,3 +116,15 @@ def test_dwell_sets_of_tighter_tolerances_are_offered(monkeypatch):
                 for c in _look_ahead(tp, feed, eps * q**k):
                     assert any(np.array_equal(c[3], full) and np.allclose(c[4], others, rtol=1e-9, atol=1e-12 * eps)
                                for full, others in offered), (seed, k, ~c[3], c[4])
+
+
+def test_deep_levels_are_the_grid_points_just_below():
+    """``deep_levels``: the ``DEEP_STEPS`` largest powers ``q^m`` (``m`` integer) strictly below each
+    tolerance, nearest first, found here by listing the powers; 0 for a tolerance of 0; the same
+    points for two tolerances between the same grid points (why they nest across eps)."""
+    q, D = lookahead.NEST_RATIO, lookahead.DEEP_STEPS
+    tol = np.array([0.05, q**-3, 0.0625, 1.0, 0.33, 0.0])
+    powers = q ** np.arange(-20.0, 60.0)
+    expected = np.array([np.sort(powers[powers < t * (1 - 1e-12)])[::-1][:D] if t > 0 else np.zeros(D) for t in tol]).T
+    np.testing.assert_allclose(lookahead.deep_levels(tol), expected, rtol=1e-12)
+    np.testing.assert_array_equal(lookahead.deep_levels(np.array([0.045])), lookahead.deep_levels(np.array([0.05])))
