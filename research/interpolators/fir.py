@@ -97,6 +97,8 @@ MAX_ROUNDS = _LIMIT_ROUNDS + 24
 #: ``_PREFIX_SHARE * _PREFIX_MIN_BLOCKS`` blocks
 _PREFIX_SHARE = 8
 _PREFIX_MIN_BLOCKS = 32
+#: sent to a candidate suspended with its profile (``plan_fir``'s ``settle``) when another goes next
+_RELEASE = object()
 CHECK_PERIOD = 1e-3  # default spacing [s] of the path-deviation check: the usual interpolation period
 
 
@@ -229,10 +231,11 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     motion_ends_np = np.stack([np.pad(table.first_motion, (0, pad_b)), np.pad(table.last_motion, (0, pad_b))])
     tangents_np = np.stack([np.pad(t_in, ((0, pad_b), (0, 0))), np.pad(t_out, ((0, pad_b), (0, 0)))])
 
-    def timing(factor, head, tail, full, shrink, others, arc_rel):
-        """Piece shares, pulse lengths, block top feeds and overlaps of a plan (no filtering)."""
+    def timing(factor, head, tail, full, shrink, others, arc_rel, top=True):
+        """Piece shares, pulse lengths, block top feeds (None unless ``top``) and overlaps of a
+        plan (no filtering)."""
         frac, piece_factor = table.pieces(head, tail, factor, arc_rel)
-        cruise = np.maximum.reduceat(piece_factor[: table.last_motion[-1] + 1], table.first_motion)  # block's top feed
+        cruise = np.maximum.reduceat(piece_factor[: table.last_motion[-1] + 1], table.first_motion) if top else None
         piece_tv, overlaps = _fir_profile.timing(lengths_np, feeds_np, table.block, piece_factor, motion_ends_np,
                                                  tangents_np, full, shrink, others, tv_np, d_np)
         return frac, piece_tv, cruise, overlaps
@@ -241,7 +244,8 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         """Cycle time of a candidate (or of a repaired one, with its overlap ``shrink``) before
         verification: a lower bound on its verified time, because repairs only shrink overlaps and
         lower feeds."""
-        frac, piece_tv, _, overlaps = timing(*candidate[:4], np.ones(M - 1) if shrink is None else shrink, *candidate[4:])
+        frac, piece_tv, _, overlaps = timing(*candidate[:4], np.ones(M - 1) if shrink is None else shrink, *candidate[4:],
+                                             top=False)
         return float(np.sum(frac * piece_tv) + np.sum(Td_np - overlaps) + Td_np)
 
     def schedule(factor, head, tail, full, shrink, others, arc_rel):
@@ -279,7 +283,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         ``[t - T_d, t]``), so the corners whose search window ``centre +- T_d / 2`` ends by then
         have their errors of the full check; their repairs bound the first round's
         (``_fir_repair``: a subset of the violators at the same errors)."""
-        frac, piece_tv, _, overlaps = timing(factor, head, tail, full, shrink, others, arc_rel)
+        frac, piece_tv, _, overlaps = timing(factor, head, tail, full, shrink, others, arc_rel, top=False)
         c = int(table.first_motion[K])  # the pieces of blocks 0 .. K - 1 and their gaps
         gaps = np.concatenate([Td_np - overlaps, np.zeros(Mp - M + 1)])
         starts, _, breaks, coeffs, centre = _fir_profile.profile(tp.start, table.geo[:c], table.block[:c],
@@ -295,8 +299,10 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
 
     def settle(factor, head, tail, full, others, arc_rel, several=False):
         """Verify and repair one candidate plan, one round per step: a generator that yields the
-        ``(predicted time, limit repaired so far)`` after each failed round and returns ``(state,
-        rounds, deviation, limit_repaired)``. The prediction is a lower bound on the final time:
+        ``(predicted time, limit repaired so far, holds its profile)`` after each failed round and
+        returns ``(state, rounds, deviation, limit_repaired)``. Suspended after the vertex errors
+        (its profile kept for the path samples), it releases the profile when sent
+        :data:`_RELEASE` and rebuilds it on resuming. The prediction is a lower bound on the final time:
         repairs only shrink overlaps and lower feeds, and a bisecting corner is predicted at its
         bracket's upper end (:attr:`CornerBisection.bound_scale`), above which it never ends.
         ``several``: other candidates compete (worth a first bound from the first blocks,
@@ -321,7 +327,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             # (errors everywhere) falls behind the others for a share of a profile and its check
             bound = prefix_bound(factor, head, tail, full, shrink, others, arc_rel, K, limit_v, repairs)
             if bound is not None:
-                yield bound, repaired
+                yield bound, repaired, False
         state = schedule(factor, head, tail, full, shrink, others, arc_rel)
         rounds, deviation = 0, float("nan")
         if refine or limits is not None:
@@ -368,8 +374,16 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                             # on the whole round's) can rule the candidate out before its path samples
                             # (suspended here, it keeps its profile: the samples are taken on it)
                             low_f, low_s = repairs.bound(errors > limit_v, errors, rounds > _SCALING_ROUNDS, factor, shrink)
-                            yield predicted_time((low_f, head, tail, full, others, arc_rel),
-                                                 low_s * bisection.bound_scale), repaired
+                            low = predicted_time((low_f, head, tail, full, others, arc_rel), low_s * bisection.bound_scale)
+                            if (yield low, repaired, True) is _RELEASE:
+                                # another candidate goes next: release the profile, rebuild it from
+                                # the same inputs (identical arrays) when this one resumes
+                                inputs, state, pos_np = state[6], None, None
+                                checks.swap_profile(None)
+                                yield low, repaired, False
+                                state = schedule(*inputs)
+                                pos_np = state[4]
+                                checks.swap_profile(pos_np)
                         deviation, at_vertex, at_block = checks.samples_check()
                     viol = errors > limit_v
                     if refine:
@@ -389,7 +403,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                 repairs.apply(viol, errors, arc_slow, late, factor, shrink)
                 # suspended in the branch and bound, a candidate keeps no profile and no round's arrays
                 state = pos_np = pulse_np = starts_np = centre_np = durations = at_vertex = at_block = None
-                yield predicted_time((factor, head, tail, full, others, arc_rel), shrink * bisection.bound_scale), repaired
+                yield predicted_time((factor, head, tail, full, others, arc_rel), shrink * bisection.bound_scale), repaired, False
                 state = schedule(factor, head, tail, full, shrink * bisection.scale, others, arc_rel)
         return state, rounds, deviation, repaired
 
@@ -415,10 +429,14 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             for i, c in enumerate(capped(), start=len(candidates)):
                 heapq.heappush(queue, (predicted_time(c), i, settle(*c)))
 
+        held = None  # (bound, index, steps) of the one candidate suspended with its profile
         while queue and queue[0][0] < best_time:
             bound, i, steps = heapq.heappop(queue)
+            if held is not None and held[1] == i:
+                held = None
+            holds = False
             try:
-                step, repaired = next(steps)
+                step, repaired, holds = next(steps)
                 heapq.heappush(queue, (max(bound, step), i, steps))
             except StopIteration as done:
                 repaired = done.value[3]
@@ -429,6 +447,15 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             if extra and repaired:
                 extra = False
                 add_capped()
+            if holds and queue[0][1] != i:  # suspended with its profile while another goes next:
+                # the one of least bound among such keeps it (the likeliest to resume first)
+                mine = (max(bound, step), i, steps)
+                if held is not None and held[:2] > mine[:2]:
+                    held, mine = mine, held
+                if held is None:
+                    held = mine
+                else:
+                    mine[2].send(_RELEASE)
         return best
 
     capped = None
