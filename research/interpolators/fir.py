@@ -50,6 +50,7 @@ plan of every tighter tolerance, which is (``_fir_candidates``).
 from __future__ import annotations
 
 import heapq
+from types import SimpleNamespace
 
 import equinox as eqx
 import jax
@@ -97,8 +98,12 @@ MAX_ROUNDS = _LIMIT_ROUNDS + 24
 #: ``_PREFIX_SHARE * _PREFIX_MIN_BLOCKS`` blocks
 _PREFIX_SHARE = 8
 _PREFIX_MIN_BLOCKS = 32
-#: sent to a candidate suspended with its profile (``plan_fir``'s ``settle``) when another goes next
+#: sent to a candidate suspended with its profile (``plan_fir``'s ``settle``) to release it; of
+#: the candidates suspended with their profiles while another goes on, the ``_HELD_PROFILES`` of
+#: least bound keep them (each rebuild costs a profile; each profile held ~0.5 kB/segment)
 _RELEASE = object()
+_HELD_PROFILES = 1
+_NO_BISECTION = SimpleNamespace(scale=1.0, bound_scale=1.0)  # plan_fir's CornerBisection without limits
 CHECK_PERIOD = 1e-3  # default spacing [s] of the path-deviation check: the usual interpolation period
 
 
@@ -308,7 +313,9 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         ``several``: other candidates compete (worth a first bound from the first blocks,
         :func:`prefix_bound`, before the whole profile)."""
         factor, shrink = factor.copy(), np.ones(M - 1)
-        bisection, checked, repaired = CornerBisection(M - 1), np.zeros(M, dtype=bool), False
+        # without limits no corner bisects: its multipliers stay 1 (no (M - 1,) arrays per candidate)
+        bisection = CornerBisection(M - 1) if limits is not None else _NO_BISECTION
+        checked, repaired = np.zeros(M, dtype=bool), False
         checks = RoundChecks(tp, tb_np, table.block, Td_np, check_period)  # redone only where the profile changed
         repairs = Repairs(full, tv_np, tb_np, F_np, tp.lengths, Td_np, d_np.size)
 
@@ -429,11 +436,10 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             for i, c in enumerate(capped(), start=len(candidates)):
                 heapq.heappush(queue, (predicted_time(c), i, settle(*c)))
 
-        held = None  # (bound, index, steps) of the one candidate suspended with its profile
+        held = {}  # index -> (bound, steps) of the candidates suspended with their profiles
         while queue and queue[0][0] < best_time:
             bound, i, steps = heapq.heappop(queue)
-            if held is not None and held[1] == i:
-                held = None
+            held.pop(i, None)
             holds = False
             try:
                 step, repaired, holds = next(steps)
@@ -448,14 +454,11 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                 extra = False
                 add_capped()
             if holds and queue[0][1] != i:  # suspended with its profile while another goes next:
-                # the one of least bound among such keeps it (the likeliest to resume first)
-                mine = (max(bound, step), i, steps)
-                if held is not None and held[:2] > mine[:2]:
-                    held, mine = mine, held
-                if held is None:
-                    held = mine
-                else:
-                    mine[2].send(_RELEASE)
+                # the _HELD_PROFILES of least bound among such keep theirs (the likeliest to resume)
+                held[i] = (max(bound, step), steps)
+                if len(held) > _HELD_PROFILES:
+                    j = max(held, key=lambda k: (held[k][0], k))
+                    held.pop(j)[1].send(_RELEASE)
         return best
 
     capped = None
