@@ -379,11 +379,11 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         if M > 1 and np.any(errors > limit_v):
                             # the vertex errors first: a bound from their repairs alone (a lower bound
                             # on the whole round's) can rule the candidate out before its path samples
-                            # (suspended here, it keeps its profile: the samples are taken on it)
+                            # (suspended here, it keeps its profile for the samples unless released)
                             low_f, low_s = repairs.bound(errors > limit_v, errors, rounds > _SCALING_ROUNDS, factor, shrink)
                             low = predicted_time((low_f, head, tail, full, others, arc_rel), low_s * bisection.bound_scale)
                             if (yield low, repaired, True) is _RELEASE:
-                                # another candidate goes next: release the profile, rebuild it from
+                                # released while others go on: drop the profile, rebuild it from
                                 # the same inputs (identical arrays) when this one resumes
                                 inputs, state, pos_np = state[6], None, None
                                 checks.swap_profile(None)
