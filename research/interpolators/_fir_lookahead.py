@@ -215,13 +215,15 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     # window_half_width as well (module docstring, "Window reach": neither is faster on every
     # program), but "every vertex that can dwell", which few windows hold a feed in
     support = np.full(M - 1, 0.5 * Td)
-    out = []
+    out, shared = [], {}
     for rule, gap, every_can, deep in sets:
         reaches = (hold,) if deep else (hold, support) if not every_can else (support,)
         for h in reaches if np.any(hold < support) else (support,):
             c = _candidate(tp, table, F_cmd, F, gap, (budget[0], tol_v)[rule], h, tol_v, s_v, feeds_without)
             if not any(all(np.array_equal(c[i], o[i]) for i in (3, 4, 0, 1, 2)) for o in out):
-                out.append(c)
+                # equal full-overlap flags, tolerances of other turns and arc slow-downs are one
+                # array (the verification reads them only): the search holds each once
+                out.append(tuple(shared.setdefault((i, x.tobytes()), x) if i >= 3 else x for i, x in enumerate(c)))
     return out
 
 

@@ -23,6 +23,7 @@ assumption the branch and bound already rests on: repairs only lower feeds and s
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 
@@ -48,18 +49,11 @@ class Repairs:
         ``late``, else slows its window's blocks (full overlap) or shrinks its overlap (dwell);
         an arc block whose own deviation ``arc_dev`` [mm] is > 0 slows. Vertices in path order,
         each window's width at the feed its earlier neighbours' repairs left."""
-        cum, M = self.cum, self.M
-        for j in np.flatnonzero(viol):
-            ratio = self.tv[j] / errors[j]
-            if late:
-                shrink[j] = 0.0  # exact stop: the vertex is on the trajectory
-            elif self.full[j]:  # slow the window's blocks: the error of a chain is quadratic in feed
-                half = 0.5 * self.Td * self.F[j] * factor[j, 2]
-                lo = max(int(np.searchsorted(cum, cum[j + 1] - half, side="right")) - 1, 0)
-                hi = min(int(np.searchsorted(cum, cum[j + 1] + half, side="left")), M)
-                factor[lo:max(hi, j + 2)] *= 0.98 * np.sqrt(ratio)
-            else:
-                shrink[j] *= min(0.98 * ratio ** (1.0 / (self.n + 1)), 1.0)
+        j = np.flatnonzero(viol)
+        if late:
+            shrink[j] = 0.0  # exact stop: the vertex is on the trajectory
+        elif j.size:
+            _repair_vertices(j, self.tv[j] / errors[j], self.full, self.F, self.cum, self.Td, self.n, factor, shrink)
         for k in np.flatnonzero(arc_dev):
             factor[k] *= min(0.98 * np.sqrt(self.tb[k] / arc_dev[k]), 0.98)
 
@@ -78,3 +72,25 @@ class Repairs:
         np.multiply.at(g, np.concatenate([j[w], j[w] + 1]), np.tile(0.98 * np.sqrt(ratio[w]), 2))
         shrink[j[~w]] *= np.minimum(0.98 * ratio[~w] ** (1.0 / (self.n + 1)), 1.0)
         return factor * g[:, None], shrink
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _repair_vertices(viol, ratio, full, F, cum, Td, n, factor, shrink):
+    """The vertex repairs of :meth:`Repairs.apply` (not late), in place, vertices ``viol`` in path
+    order with ``ratio = eps / error``: a full-overlap vertex slows the blocks of its window
+    ``[lo, max(hi, j + 2))``, its half-width ``T_d F_j / 2`` at the tail feed its earlier
+    neighbours' repairs left, by ``0.98 sqrt(ratio)``; a dwell corner shrinks its overlap by
+    ``min(0.98 ratio^(1/(n+1)), 1)``. A compiled loop: each window depends on the repairs before it."""
+    M = F.size
+    for q in range(viol.size):
+        j = viol[q]
+        if full[j]:  # slow the window's blocks: the error of a chain is quadratic in feed
+            half = 0.5 * Td * F[j] * factor[j, 2]
+            lo = max(np.searchsorted(cum, cum[j + 1] - half, side="right") - 1, 0)
+            hi = max(min(np.searchsorted(cum, cum[j + 1] + half, side="left"), M), j + 2)
+            g = 0.98 * np.sqrt(ratio[q])
+            for k in range(lo, hi):
+                for c in range(3):
+                    factor[k, c] *= g
+        else:
+            shrink[j] *= min(0.98 * ratio[q] ** (1.0 / (n + 1)), 1.0)

@@ -264,6 +264,12 @@ class RoundChecks:
         self._pending = (position, starts, centre, lo_v, hi_v, lo_b, hi_b, redo_v, redo_b)
         return self.errors.copy() if vertex_errors else np.zeros(M - 1)
 
+    def swap_profile(self, position) -> None:
+        """Hand the check pending between :meth:`vertices` and :meth:`samples_check` another
+        profile: ``None`` to release it while the planner suspends the candidate, the same profile
+        rebuilt (identical arrays) to resume it."""
+        self._pending = (position,) + self._pending[1:]
+
     def samples_check(self):
         """Second half of a check (after :meth:`vertices`, on its profile): the path samples of
         the charge keys it marked. Returns ``(max deviation, {vertex: deviation}, {block:

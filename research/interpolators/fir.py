@@ -50,6 +50,7 @@ plan of every tighter tolerance, which is (``_fir_candidates``).
 from __future__ import annotations
 
 import heapq
+from types import SimpleNamespace
 
 import equinox as eqx
 import jax
@@ -97,6 +98,12 @@ MAX_ROUNDS = _LIMIT_ROUNDS + 24
 #: ``_PREFIX_SHARE * _PREFIX_MIN_BLOCKS`` blocks
 _PREFIX_SHARE = 8
 _PREFIX_MIN_BLOCKS = 32
+#: sent to a candidate suspended with its profile (``plan_fir``'s ``settle``) to release it; of
+#: the candidates suspended with their profiles while another goes on, the ``_HELD_PROFILES`` of
+#: least bound keep them (each rebuild costs a profile; each profile held ~0.5 kB/segment)
+_RELEASE = object()
+_HELD_PROFILES = 1
+_NO_BISECTION = SimpleNamespace(scale=1.0, bound_scale=1.0)  # plan_fir's CornerBisection without limits
 CHECK_PERIOD = 1e-3  # default spacing [s] of the path-deviation check: the usual interpolation period
 
 
@@ -229,10 +236,11 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     motion_ends_np = np.stack([np.pad(table.first_motion, (0, pad_b)), np.pad(table.last_motion, (0, pad_b))])
     tangents_np = np.stack([np.pad(t_in, ((0, pad_b), (0, 0))), np.pad(t_out, ((0, pad_b), (0, 0)))])
 
-    def timing(factor, head, tail, full, shrink, others, arc_rel):
-        """Piece shares, pulse lengths, block top feeds and overlaps of a plan (no filtering)."""
+    def timing(factor, head, tail, full, shrink, others, arc_rel, top=True):
+        """Piece shares, pulse lengths, block top feeds (None unless ``top``) and overlaps of a
+        plan (no filtering)."""
         frac, piece_factor = table.pieces(head, tail, factor, arc_rel)
-        cruise = np.maximum.reduceat(piece_factor[: table.last_motion[-1] + 1], table.first_motion)  # block's top feed
+        cruise = np.maximum.reduceat(piece_factor[: table.last_motion[-1] + 1], table.first_motion) if top else None
         piece_tv, overlaps = _fir_profile.timing(lengths_np, feeds_np, table.block, piece_factor, motion_ends_np,
                                                  tangents_np, full, shrink, others, tv_np, d_np)
         return frac, piece_tv, cruise, overlaps
@@ -241,7 +249,8 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         """Cycle time of a candidate (or of a repaired one, with its overlap ``shrink``) before
         verification: a lower bound on its verified time, because repairs only shrink overlaps and
         lower feeds."""
-        frac, piece_tv, _, overlaps = timing(*candidate[:4], np.ones(M - 1) if shrink is None else shrink, *candidate[4:])
+        frac, piece_tv, _, overlaps = timing(*candidate[:4], np.ones(M - 1) if shrink is None else shrink, *candidate[4:],
+                                             top=False)
         return float(np.sum(frac * piece_tv) + np.sum(Td_np - overlaps) + Td_np)
 
     def schedule(factor, head, tail, full, shrink, others, arc_rel):
@@ -279,7 +288,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         ``[t - T_d, t]``), so the corners whose search window ``centre +- T_d / 2`` ends by then
         have their errors of the full check; their repairs bound the first round's
         (``_fir_repair``: a subset of the violators at the same errors)."""
-        frac, piece_tv, _, overlaps = timing(factor, head, tail, full, shrink, others, arc_rel)
+        frac, piece_tv, _, overlaps = timing(factor, head, tail, full, shrink, others, arc_rel, top=False)
         c = int(table.first_motion[K])  # the pieces of blocks 0 .. K - 1 and their gaps
         gaps = np.concatenate([Td_np - overlaps, np.zeros(Mp - M + 1)])
         starts, _, breaks, coeffs, centre = _fir_profile.profile(tp.start, table.geo[:c], table.block[:c],
@@ -295,14 +304,18 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
 
     def settle(factor, head, tail, full, others, arc_rel, several=False):
         """Verify and repair one candidate plan, one round per step: a generator that yields the
-        ``(predicted time, limit repaired so far)`` after each failed round and returns ``(state,
-        rounds, deviation, limit_repaired)``. The prediction is a lower bound on the final time:
+        ``(predicted time, limit repaired so far, holds its profile)`` after each failed round and
+        returns ``(state, rounds, deviation, limit_repaired)``. Suspended after the vertex errors
+        (its profile kept for the path samples), it releases the profile when sent
+        :data:`_RELEASE` and rebuilds it on resuming. The prediction is a lower bound on the final time:
         repairs only shrink overlaps and lower feeds, and a bisecting corner is predicted at its
         bracket's upper end (:attr:`CornerBisection.bound_scale`), above which it never ends.
         ``several``: other candidates compete (worth a first bound from the first blocks,
         :func:`prefix_bound`, before the whole profile)."""
         factor, shrink = factor.copy(), np.ones(M - 1)
-        bisection, checked, repaired = CornerBisection(M - 1), np.zeros(M, dtype=bool), False
+        # without limits no corner bisects: its multipliers stay 1 (no (M - 1,) arrays per candidate)
+        bisection = CornerBisection(M - 1) if limits is not None else _NO_BISECTION
+        checked, repaired = np.zeros(M, dtype=bool), False
         checks = RoundChecks(tp, tb_np, table.block, Td_np, check_period)  # redone only where the profile changed
         repairs = Repairs(full, tv_np, tb_np, F_np, tp.lengths, Td_np, d_np.size)
 
@@ -321,7 +334,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             # (errors everywhere) falls behind the others for a share of a profile and its check
             bound = prefix_bound(factor, head, tail, full, shrink, others, arc_rel, K, limit_v, repairs)
             if bound is not None:
-                yield bound, repaired
+                yield bound, repaired, False
         state = schedule(factor, head, tail, full, shrink, others, arc_rel)
         rounds, deviation = 0, float("nan")
         if refine or limits is not None:
@@ -366,10 +379,18 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         if M > 1 and np.any(errors > limit_v):
                             # the vertex errors first: a bound from their repairs alone (a lower bound
                             # on the whole round's) can rule the candidate out before its path samples
-                            # (suspended here, it keeps its profile: the samples are taken on it)
+                            # (suspended here, it keeps its profile for the samples unless released)
                             low_f, low_s = repairs.bound(errors > limit_v, errors, rounds > _SCALING_ROUNDS, factor, shrink)
-                            yield predicted_time((low_f, head, tail, full, others, arc_rel),
-                                                 low_s * bisection.bound_scale), repaired
+                            low = predicted_time((low_f, head, tail, full, others, arc_rel), low_s * bisection.bound_scale)
+                            if (yield low, repaired, True) is _RELEASE:
+                                # released while others go on: drop the profile, rebuild it from
+                                # the same inputs (identical arrays) when this one resumes
+                                inputs, state, pos_np = state[6], None, None
+                                checks.swap_profile(None)
+                                yield low, repaired, False
+                                state = schedule(*inputs)
+                                pos_np = state[4]
+                                checks.swap_profile(pos_np)
                         deviation, at_vertex, at_block = checks.samples_check()
                     viol = errors > limit_v
                     if refine:
@@ -389,7 +410,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                 repairs.apply(viol, errors, arc_slow, late, factor, shrink)
                 # suspended in the branch and bound, a candidate keeps no profile and no round's arrays
                 state = pos_np = pulse_np = starts_np = centre_np = durations = at_vertex = at_block = None
-                yield predicted_time((factor, head, tail, full, others, arc_rel), shrink * bisection.bound_scale), repaired
+                yield predicted_time((factor, head, tail, full, others, arc_rel), shrink * bisection.bound_scale), repaired, False
                 state = schedule(factor, head, tail, full, shrink * bisection.scale, others, arc_rel)
         return state, rounds, deviation, repaired
 
@@ -415,10 +436,13 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             for i, c in enumerate(capped(), start=len(candidates)):
                 heapq.heappush(queue, (predicted_time(c), i, settle(*c)))
 
+        held = {}  # index -> (bound, steps) of the candidates suspended with their profiles
         while queue and queue[0][0] < best_time:
             bound, i, steps = heapq.heappop(queue)
+            held.pop(i, None)
+            holds = False
             try:
-                step, repaired = next(steps)
+                step, repaired, holds = next(steps)
                 heapq.heappush(queue, (max(bound, step), i, steps))
             except StopIteration as done:
                 repaired = done.value[3]
@@ -429,6 +453,12 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             if extra and repaired:
                 extra = False
                 add_capped()
+            if holds and queue[0][1] != i:  # suspended with its profile while another goes next:
+                # the _HELD_PROFILES of least bound among such keep theirs (the likeliest to resume)
+                held[i] = (max(bound, step), steps)
+                if len(held) > _HELD_PROFILES:
+                    j = max(held, key=lambda k: (held[k][0], k))
+                    held.pop(j)[1].send(_RELEASE)
         return best
 
     capped = None

@@ -5,7 +5,9 @@ Expected values are the module's claim checked on its definition: for any supers
 violators at errors no smaller (what the path samples add in a full round), the full repairs leave
 every factor and shrink at most the bound's; the bound of the full set itself equals the full
 repairs where no window reaches past a vertex's own two blocks (blocks longer than a window); and
-the plan is the least verified time over the candidates, each verified alone (no bound involved).
+the plan is the least verified time over the candidates, each verified alone (no bound involved);
+a candidate that releases its profile while suspended and rebuilds it ends with the plan of one
+that keeps it (the same arrays, bit for bit).
 """
 
 import numpy as np
@@ -15,6 +17,14 @@ import research.interpolators.fir as fir
 from research.interpolators import plan_fir
 from research.interpolators._fir_repair import Repairs
 from research.paths import Polyline
+
+
+def _closed_curve(seed):
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0.0, 2.0 * np.pi, 600)
+    r = 30.0 + 8.0 * np.sin(3.0 * t) + 3.0 * np.cos(7.0 * t)
+    pts = np.column_stack([r * np.cos(t), r * np.sin(t), 2.0 * np.sin(2.0 * t)]) + rng.normal(0.0, 0.002, (600, 3))
+    return Polyline(np.round(pts, 3))
 
 
 def _case(rng, M, long_blocks=False):
@@ -72,12 +82,7 @@ def test_branch_and_bound_returns_the_least_verified_candidate(seed, monkeypatch
     M / 8 >= 32): the cycle time equals the least over the candidates each planned alone, which
     verifies every one to the end. A bound above a candidate's verified time (tried: the first
     blocks' or a round's first half) drops the winner on these programs."""
-    rng = np.random.default_rng(seed)
-    t = np.linspace(0.0, 2.0 * np.pi, 600)
-    r = 30.0 + 8.0 * np.sin(3.0 * t) + 3.0 * np.cos(7.0 * t)
-    pts = np.column_stack([r * np.cos(t), r * np.sin(t), 2.0 * np.sin(2.0 * t)]) + rng.normal(0.0, 0.002, (600, 3))
-    path = Polyline(np.round(pts, 3))
-    args = (path, 200.0, (0.06, 0.03), 0.05)
+    args = (_closed_curve(seed), 200.0, (0.06, 0.03), 0.05)
     found = []
     look_ahead = fir.look_ahead
 
@@ -93,3 +98,30 @@ def test_branch_and_bound_returns_the_least_verified_candidate(seed, monkeypatch
         monkeypatch.setattr(fir, "look_ahead", lambda *a, c=c: [c])
         alone.append(float(plan_fir(*args).cycle_time))
     assert whole == min(alone)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_released_profiles_rebuild_the_same_plan(seed, monkeypatch):
+    """Every suspended candidate releasing its profile (``_HELD_PROFILES = 0``, rebuilt on resume)
+    gives the plan of none releasing it, bit for bit; and the closed curve does release some."""
+    from research.interpolators._fir_verify import RoundChecks
+
+    args = (_closed_curve(seed), 200.0, (0.06, 0.03), 0.05)
+    released = []
+    swap = RoundChecks.swap_profile
+
+    def counted(self, position):
+        released.append(position is None)
+        return swap(self, position)
+
+    monkeypatch.setattr(RoundChecks, "swap_profile", counted)
+    monkeypatch.setattr(fir, "_HELD_PROFILES", 10**6)
+    keep = plan_fir(*args)
+    assert not released
+    monkeypatch.setattr(fir, "_HELD_PROFILES", 0)
+    rebuilt = plan_fir(*args)
+    assert any(released)
+    for name in ("start_times", "pulse_times", "overlaps", "feeds", "corner_times"):
+        np.testing.assert_array_equal(getattr(rebuilt, name), getattr(keep, name))
+    np.testing.assert_array_equal(rebuilt.position.coeffs, keep.position.coeffs)
+    assert (rebuilt.rounds, rebuilt.path_deviation) == (keep.rounds, keep.path_deviation)
