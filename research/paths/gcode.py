@@ -288,6 +288,18 @@ def _word_column(line_text: str, word: int) -> int:
     return 1
 
 
+def _point(name: str, value) -> tuple[float, float, float]:
+    """``value`` as 3 finite coordinates (x, y, z) within +-MAX_COORDINATE_MM [mm], else a ParameterError."""
+    try:
+        p = np.asarray(value, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        raise ParameterError(f"parse_gcode: {name} must be 3 finite numbers (x, y, z) [mm], got {value!r}") from None
+    if p.shape != (3,) or not np.all(np.abs(p) <= MAX_COORDINATE_MM):
+        raise ParameterError(f"parse_gcode: {name} must be 3 finite numbers (x, y, z) within +-{MAX_COORDINATE_MM:g} "
+                             f"mm, got {value!r}")
+    return tuple(p.tolist())
+
+
 def parse_gcode(
     text: str,
     *,
@@ -377,29 +389,14 @@ def parse_gcode(
     arc_rel = _check_positive("arc_relative_tolerance", arc_relative_tolerance)
     rapid = _check_positive("rapid_feed", rapid_feed) / 60.0
     feed0 = None if initial_feed is None else _check_positive("initial_feed", initial_feed) / 60.0
-    try:
-        st = np.asarray(start, dtype=np.float64).reshape(-1)
-    except (TypeError, ValueError):
-        raise ParameterError(f"parse_gcode: start must be 3 finite numbers (x, y, z) [mm], got {start!r}") from None
-    if st.shape != (3,) or not np.all(np.abs(st) <= MAX_COORDINATE_MM):
-        raise ParameterError(f"parse_gcode: start must be 3 finite numbers (x, y, z) within +-{MAX_COORDINATE_MM:g} "
-                             f"mm, got {start!r}")
-    home_t = None
-    if home is not None:
-        try:
-            h = np.asarray(home, dtype=np.float64).reshape(-1)
-        except (TypeError, ValueError):
-            raise ParameterError(f"parse_gcode: home must be 3 finite numbers (x, y, z) [mm], got {home!r}") from None
-        if h.shape != (3,) or not np.all(np.abs(h) <= MAX_COORDINATE_MM):
-            raise ParameterError(f"parse_gcode: home must be 3 finite numbers (x, y, z) within "
-                                 f"+-{MAX_COORDINATE_MM:g} mm, got {home!r}")
-        home_t = tuple(h.tolist())
+    st = _point("start", start)
+    home_t = None if home is None else _point("home", home)
     if not isinstance(text, str):
         raise GCodeError(f"expected the program as str, got {type(text).__name__}", source=source, line=0, column=0)
     if "\r" in text:
         text = text.replace("\r\n", "\n").replace("\r", "\n")
 
-    it = _Interpreter(tol, rapid, feed0, tuple(st.tolist()), arc_tol, arc_rel, home_t)
+    it = _Interpreter(tol, rapid, feed0, st, arc_tol, arc_rel, home_t)
     line_fn = it.line
     simple_fn = it.simple
     simple_match = _SIMPLE.fullmatch
