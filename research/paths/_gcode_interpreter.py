@@ -383,21 +383,8 @@ class _Interpreter:
             raise _LineError(f"{letter} with G28; expected only X, Y, Z (the intermediate point)", vals[letter][1])
         named = [i for i, letter in enumerate("XYZ") if letter in vals]
         via = self._target(vals)
-        self._rapid_to(via, lineno)
-        self._rapid_to([self.home[i] if (i in named or not named) else via[i] for i in range(3)], lineno)
-
-    def _rapid_to(self, target, lineno):
-        self.pos = tuple(target)
-        last = self.last
-        dx, dy, dz = target[0] - last[0], target[1] - last[1], target[2] - last[2]
-        if dx * dx + dy * dy + dz * dz <= ZERO_LENGTH_MM * ZERO_LENGTH_MM:
-            self.no_motion.append(lineno)
-            return
-        self.points.extend(self.pos)
-        self.last = self.pos
-        self.meta.append((self.rapid_feed, True, lineno, self.path_tol))
-        self.counts.append(1)
-        self.nblocks += 1
+        self._move(via, self.rapid_feed, True, lineno)
+        self._move([self.home[i] if (i in named or not named) else via[i] for i in range(3)], self.rapid_feed, True, lineno)
 
     def _target(self, vals):
         s = self.scale
@@ -425,7 +412,11 @@ class _Interpreter:
     def _linear(self, vals, lineno, where):
         target = self._target(vals)
         rapid = self.motion == 0
-        feed = self._feed_for(rapid, vals, where)
+        self._move(target, self._feed_for(rapid, vals, where), rapid, lineno)
+
+    def _move(self, target, feed, rapid, lineno):
+        """A straight block to ``target`` [mm] at ``feed`` [mm/s]; none (a no-motion line) when it
+        ends within ZERO_LENGTH_MM of the last vertex."""
         self.pos = target
         last = self.last
         dx, dy, dz = target[0] - last[0], target[1] - last[1], target[2] - last[2]
