@@ -464,10 +464,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     capped = None
     if limits is not None and np.any(safe_feed < F_np * base):
         capped = lambda: plans(np.minimum(base, safe_feed / F_np))  # noqa: E731
-    candidates = plans(base)
-    cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])  # shared by the candidates' repairs (settle)
-    limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
-    best = verify(candidates, capped)
+    best = verify(plans(base), capped)
     state, rounds, deviation, _ = best
     if traced:
         feeds, overlaps, pulse, starts, position, centre = traced_plan(*state[6])
