@@ -124,7 +124,8 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
         if cfg.path.gcode is not None:  # one read: chords for the metrics, blocks for the FIR planner
             program = read_program(cfg.path, base)
             path, program_feeds = program.polyline, program.feeds
-            blocks = program.blocks, program.block_feeds, program.block_tolerance
+            blocks = program.blocks, program.block_feeds, program.block_tolerance, program.block_pauses
+            _pauses_planned(cfg, program)
         else:
             (path, program_feeds), blocks = build_path(cfg.path, base), None
         objects["path"] = path
@@ -178,6 +179,28 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
         scalars = {k: v for k, v in scalars.items() if _metric_name(k) in cfg.metrics}
     units = {k: METRIC_UNITS[_metric_name(k)] for k in scalars}
     return Evaluation({"scalars": scalars, "units": units, "details": details}, arrays, objects)
+
+
+def _pauses_planned(cfg: ExperimentConfig, program) -> None:
+    """Refuse a program with ``G4``/``M0``/``M1``/``M60`` pauses for an interpolator that does not
+    plan them (only ``plan_fir`` does: exact stops held for the dwell), rather than drop them.
+
+    Raises:
+        ConfigError: naming the interpolator and the program lines of the pauses.
+    """
+    from research.errors import ConfigError
+
+    at = np.flatnonzero(~np.isnan(program.block_pauses))
+    if at.size == 0:
+        return
+    lines = sorted({int(program.block_lines[max(k - 1, 0)]) for k in at})
+    for ic in cfg.interpolators:
+        if ic.kind != "fir" or ic.optimized:
+            name = f"{ic.kind} (optimized)" if ic.kind == "fir" else ic.kind
+            raise ConfigError(f"key 'interpolator' ({ic.label or ic.kind}): the program {cfg.path.gcode} pauses "
+                              f"(G4 / M0 / M1 / M60) next to the moves of lines {lines[:10]}{' ...' if len(lines) > 10 else ''}, and "
+                              f"interpolator kind {name!r} does not plan pauses; expected kind 'fir' (not optimized), "
+                              "or a program without them")
 
 
 def _limits_of(ic, traj: Trajectory):

@@ -62,15 +62,17 @@ def interpolate(ic, path, program_feeds, blocks=None):
 
         tolerance = ic.tolerance_um * 1e-3
         target = path
+        pauses = None
         if blocks is not None:
-            target, feeds, g64 = blocks
+            target, feeds, g64, pauses = blocks
             feed = ic.feed_mm_per_s if explicit else feeds
             tolerance = np.where(np.isfinite(g64), g64, tolerance)
         limits = None if ic.limits is None else ic.limits.axis_limits(path.dim)
         if ic.optimized:
             plan = _optimized_fir(ic, target, feed, tolerance, limits)
         else:
-            plan = plan_fir(target, feed, np.asarray(ic.delays_ms) * 1e-3, tolerance, refine=ic.refine, limits=limits)
+            plan = plan_fir(target, feed, np.asarray(ic.delays_ms) * 1e-3, tolerance, refine=ic.refine, limits=limits,
+                            pauses=pauses)
         info = {"planner": "optimize_fir" if ic.optimized else "plan_fir", "feeds": np.asarray(plan.feeds).tolist(), "overlap_times": np.asarray(plan.overlaps).tolist(),
                 "corner_errors": np.asarray(plan.corner_errors).tolist()}
         return plan.trajectory(Ts), info, plan

@@ -48,6 +48,8 @@ def eligible(cfg: ExperimentConfig, base_dir=None) -> str | None:
             return "G-code arcs (planned as arcs) need the general path"
         if np.any(np.isfinite(program.block_tolerance)):
             return "the program's G64 P tolerances (per block) need the general path"
+        if np.any(~np.isnan(program.block_pauses)):
+            return "the program's G4 / M0 / M1 pauses need the general path"
     return None
 
 

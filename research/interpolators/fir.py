@@ -16,6 +16,9 @@ Data flow, one block ``k`` at a time (Sencer, Ishizaki, Shamoto, CIRP Annals 64,
 
 CAM programs (beyond the paper, which assumes every block longer than the window ``T_d``):
 
+* **Pauses** (``G4`` dwells, ``M0``/``M1`` stops; ``pauses=``): exact stops held for the dwell; the
+  program is cut there and its parts planned alone (``_fir_pauses``).
+
 * **Arcs** keep their feed below the eq 8 bound on the radial shrink of a filtered circle
   (``_fir_feed.arc_feed_caps``).
 * **Look-ahead** (``refine=True``): corners that eq 13/14 rounds with a dwell keep it when that is
@@ -77,7 +80,7 @@ from research.interpolators._fir_limits import (
     own_span_ratios,
 )
 from research.interpolators._fir_lookahead import look_ahead
-from research.interpolators import _fir_profile
+from research.interpolators import _fir_pauses, _fir_profile
 from research.interpolators._fir_overlap import overlap_time
 from research.interpolators._fir_repair import Repairs
 from research.interpolators._fir_verify import RoundChecks, corner_distances, vertex_distances
@@ -183,7 +186,7 @@ def fir_interpolate(path, feed, delays, tolerance, sample_period: float = 1e-3, 
 
 
 def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: AxisLimits | None = None,
-             check_period: float = CHECK_PERIOD) -> FIRPlan:
+             check_period: float = CHECK_PERIOD, pauses=None) -> FIRPlan:
     """Feeds, overlap times, schedule and exact profile; see :func:`fir_interpolate` for the arguments.
 
     Args:
@@ -192,6 +195,10 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             peaks break them is bisected, down to an exact stop if need be; a plan that holds them
             is returned unchanged.
         check_period: spacing [s] of the trajectory samples whose distance to the path is checked.
+        pauses: ``(M + 1,)`` pause at each vertex [s] (index 0 the start, ``M`` the end; NaN: none),
+            e.g. a G-code program's ``block_pauses`` (``G4 P`` dwells, ``M0``/``M1`` stops as 0 s):
+            the motion stops there (``T_k = 0``) and holds the vertex that long (``_fir_pauses``);
+            the cycle time includes the pauses. ``None``: no pauses.
 
     Differentiable with ``jax.grad`` / ``jax.jacfwd`` with respect to ``feed``, ``delays`` and
     ``tolerance``: the discrete choices (which corners dwell, which feeds a window lowers, which
@@ -205,6 +212,16 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     tp = _as_toolpath(path)
     M = tp.n_blocks
     _check_inputs(delays, feed, tolerance, M)
+    if pauses is not None:
+        pauses = _fir_pauses.checked_pauses(pauses, M)
+        if not np.all(np.isnan(pauses)):
+            ranges = _fir_pauses.parts(pauses)
+            plans = [plan_fir(tp.part(a, b), _fir_pauses.per_block(feed, a, b, M), delays,
+                              _fir_pauses.per_block(tolerance, a, b, M), refine=refine, limits=limits,
+                              check_period=check_period) for a, b in ranges]
+            starts, pulse, overlaps, feeds, position, centre, deviation, rounds = _fir_pauses.join(plans, ranges, pauses)
+            return FIRPlan(starts, pulse, overlaps, feeds, plans[0].delays, position, centre, jnp.asarray(tp.vertices),
+                           deviation, rounds, tp.axes)
     table = _pulse_table(tp)
     Mp = table.m_pad
     # the rounds decide on concrete arrays (``_fir_profile``: NumPy and Numba, no JAX dispatch); the

@@ -34,6 +34,7 @@ _ZERO2 = ZERO_LENGTH_MM * ZERO_LENGTH_MM
 _MOTION = {0: 0, 10: 1, 20: 2, 30: 3, 800: None}
 _G_ACCEPT = {
     **{k: "motion" for k in _MOTION},
+    40: "dwell",
     170: "plane", 180: "plane", 190: "plane",
     200: "units", 210: "units",
     900: "distance", 910: "distance",
@@ -52,7 +53,6 @@ _PLANES = {170: (0, 1, 2), 180: (2, 0, 1), 190: (1, 2, 0)}
 _PLANE_NAME = {170: "G17 (XY)", 180: "G18 (ZX)", 190: "G19 (YZ)"}
 _CUT = "expand the cycle into G0/G1 moves"
 _G_REFUSE = {
-    40: "G4 (dwell) is not supported: the program model has no pauses",
     50: "G5 (cubic spline) is not supported: only lines and circular arcs",
     51: "G5.1 (quadratic spline) is not supported: only lines and circular arcs",
     52: "G5.2 (NURBS) is not supported: only lines and circular arcs",
@@ -80,8 +80,10 @@ _G_REFUSE = {
     980: "G98 (canned cycle return level) is not supported: canned cycles are refused",
     990: "G99 (canned cycle return level) is not supported: canned cycles are refused",
 }
-_M_ACCEPT = {2: "end", 30: "end", 3: "spindle", 4: "spindle", 5: "spindle", 6: "tool_change",
-             7: "coolant", 8: "coolant", 9: "coolant"}
+# M0 M1 M2 M30 M60 are one modal group (RS274/NGC "stopping"); M0 M1 M60 pause, M2 M30 end
+_M_ACCEPT = {0: "stopping", 1: "stopping", 2: "stopping", 30: "stopping", 60: "stopping", 3: "spindle",
+             4: "spindle", 5: "spindle", 6: "tool_change", 7: "coolant", 8: "coolant", 9: "coolant"}
+_M_END, _M_PAUSE = {2, 30}, {0, 1, 60}
 _M_REFUSE = {
     98: "unsupported M-code M98 (subroutine call); expected plain G-code (expand subroutines in the CAM post-processor)",
     99: "unsupported M-code M99 (subroutine return); expected plain G-code (expand subroutines in the CAM post-processor)",
@@ -92,9 +94,9 @@ _LETTER_REFUSE = {
     "L": "L (repeat count / G10 parameter) is not supported",
 }
 _ACCEPTED_LETTERS = frozenset("GMNOFSTXYZIJKRPQH")
-_ACCEPTED_G_TEXT = ("G0 G1 G2 G3 G80 G17 G18 G19 G20 G21 G28 G40 G43 G49 G54-G59 G61 G61.1 G64 G90 G91 "
+_ACCEPTED_G_TEXT = ("G0 G1 G2 G3 G4 G80 G17 G18 G19 G20 G21 G28 G40 G43 G49 G54-G59 G61 G61.1 G64 G90 G91 "
                     "G90.1 G91.1 G94")
-_ACCEPTED_M_TEXT = "M2 M3 M4 M5 M6 M7 M8 M9 M30"
+_ACCEPTED_M_TEXT = "M0 M1 M2 M3 M4 M5 M6 M7 M8 M9 M30 M60"
 # code text: optional '+', leading zeros, 1-4 digits, optionally '.' and one digit (trailing zeros ok)
 _CODE_TEXT = re.compile(r"\+?0*([0-9]{1,4})(?:\.([0-9]?)0*)?")
 _INT_TEXT = re.compile(r"\+?[0-9]{1,15}")
@@ -158,6 +160,7 @@ class _Interpreter:
         self.nblocks = 0
         self.arcs: list[tuple] = []  # (block, centre (3,), normal (3,), sweep)
         self.no_motion: list[int] = []
+        self.pauses: dict[int, float] = {}  # vertex (blocks emitted before it) -> dwell [s]
         self._keys: dict[str, int | None] = {}  # code number text -> _code_key
 
     # -- a plain G0/G1 line (fast path) -------------------------------------------------------
@@ -262,7 +265,7 @@ class _Interpreter:
                 motion_word = k
         if refused is not None:
             raise refused
-        m_end = False
+        m_end = m_pause = False
         m_groups = {}
         for num, k in ms:
             key = _code_key(num)
@@ -274,7 +277,7 @@ class _Interpreter:
             if kind in m_groups:
                 raise _LineError(f"two {kind.replace('_', ' ')} M-codes on one line; expected at most one", k)
             m_groups[kind] = k
-            m_end = m_end or kind == "end"
+            m_end, m_pause = m_end or key // 10 in _M_END, m_pause or key // 10 in _M_PAUSE
 
         if vals:
             for letter, what in (("N", "line number"), ("T", "tool number"), ("O", "program number"),
@@ -334,13 +337,15 @@ class _Interpreter:
         if "motion" in groups:
             self.motion = _MOTION[groups["motion"][0]]
 
+        if "dwell" in groups:
+            self._dwell(vals, groups, g64)
         if "home" in groups:
             self._home(vals, lineno, groups)
             vals = {k: v for k, v in vals.items() if k not in "XYZ"}  # G28's axis words are its own
         moves = not _AXIS_LETTERS.isdisjoint(vals)
-        if "P" in vals and not g64 and not (moves and self.motion in (2, 3)):
-            raise _LineError("P word with no G2/G3 or G64 to use it; expected P only as G64 P<tolerance> or "
-                             "G2/G3 P<turns> (G4 dwell and canned cycles are not supported)", vals["P"][1])
+        if "P" in vals and not g64 and "dwell" not in groups and not (moves and self.motion in (2, 3)):
+            raise _LineError("P word with no G2/G3, G4 or G64 to use it; expected P only as G64 P<tolerance>, "
+                             "G4 P<seconds> or G2/G3 P<turns> (canned cycles are not supported)", vals["P"][1])
         if moves:
             if self.ended:
                 raise _LineError(f"motion after the program end (M2/M30 on line {self.ended}); "
@@ -358,12 +363,36 @@ class _Interpreter:
                                      vals[letter][1])
                 self._linear(vals, lineno, motion_word)
             else:
-                if g64 and "P" in vals:
-                    raise _LineError("P used by both G64 (tolerance) and G2/G3 (turns) on one line; expected "
-                                     "G64 P on a line of its own", vals["P"][1])
+                if (g64 or "dwell" in groups) and "P" in vals:
+                    what = "G64 (tolerance)" if g64 else "G4 (dwell)"
+                    raise _LineError(f"P used by both {what} and G2/G3 (turns) on one line; expected "
+                                     f"{what.split()[0]} P on a line of its own", vals["P"][1])
                 self._arc(vals, lineno, motion_word)
+        if m_pause:  # after the line's motion (RS274/NGC order of execution: stopping codes last)
+            if self.ended:
+                raise _LineError(f"program stop after the program end (M2/M30 on line {self.ended}); expected "
+                                 "nothing to run after it", m_groups["stopping"])
+            self.pauses[self.nblocks] = self.pauses.get(self.nblocks, 0.0)
         if m_end:
             self.ended = lineno
+
+    def _dwell(self, vals, groups, g64):
+        """``G4 P<seconds>`` (LinuxCNC: P in seconds, any units mode): the motion stops at the current
+        vertex and waits; several dwells at one vertex add up."""
+        k = groups["dwell"][1]
+        if "P" not in vals:
+            raise _LineError("G4 (dwell) without P; expected G4 P<seconds>", k)
+        if g64:
+            raise _LineError("P used by both G64 (tolerance) and G4 (dwell) on one line; expected G64 P on a "
+                             "line of its own", vals["P"][1])
+        if self.ended:
+            raise _LineError(f"G4 after the program end (M2/M30 on line {self.ended}); expected nothing to run "
+                             "after it", k)
+        num, kp = vals["P"]
+        p = float(num)
+        if not 0.0 <= p < math.inf:
+            raise _LineError(f"G4 P{_short(num)}: expected a finite dwell >= 0 s (P is in seconds, as in LinuxCNC)", kp)
+        self.pauses[self.nblocks] = self.pauses.get(self.nblocks, 0.0) + p
 
     # -- motion ------------------------------------------------------------------------------
     def _home(self, vals, lineno, groups):

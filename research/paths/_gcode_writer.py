@@ -21,8 +21,9 @@ def to_gcode(polyline, feeds_mm_per_min=None, rapid=None, *, line_numbers: bool 
     Given a :class:`~research.paths.gcode.GCodeProgram` instead (and no feeds or rapid flags),
     writes its blocks: lines as ``G0``/``G1``, arcs as ``G2``/``G3`` in the G17/G18/G19 plane of
     their axis with ``G91.1`` centre offsets and ``P`` for extra turns, ``F`` from ``block_feeds``,
-    and ``G64 P`` / ``G64`` / ``G61`` whenever ``block_tolerance`` changes. Reading it back gives the
-    same block ends (exactly), feeds, rapid flags and tolerances, and centres and sweeps within
+    ``G64 P`` / ``G64`` / ``G61`` whenever ``block_tolerance`` changes, and ``G4 P`` for each of its
+    ``block_pauses`` (an ``M0``/``M1`` stop as ``G4 P0``, the same stop of 0 s). Reading it back gives the
+    same block ends (exactly), feeds, rapid flags, tolerances and pauses, and centres and sweeps within
     float rounding (the centre is written as an offset from the start).
 
     Coordinates are written with the shortest decimal that reads back as the same float, so
@@ -138,7 +139,10 @@ def _blocks_to_gcode(prog, line_numbers: bool) -> str:
     mode = plane = feed = None
     tol = "unset"
     prev = p0
+    pauses = getattr(prog, "block_pauses", None)
     for k in range(b.n_blocks):
+        if pauses is not None and not np.isnan(pauses[k]):
+            out.append(f"G4 P{_num(pauses[k])}")
         e = b.ends[k]
         words = []
         t = prog.block_tolerance[k]
@@ -179,6 +183,8 @@ def _blocks_to_gcode(prog, line_numbers: bool) -> str:
                 feed = f
         prev = e
         out.append(" ".join(words))
+    if pauses is not None and not np.isnan(pauses[-1]):
+        out.append(f"G4 P{_num(pauses[-1])}")
     return _finish(out, line_numbers)
 
 

@@ -31,13 +31,18 @@ Accepted words (anything else is a :class:`~research.errors.GCodeError` naming f
 * ``G28 [X] [Y] [Z]`` (return to home, LinuxCNC: a rapid to the point of the axis words, then a
   rapid of those axes, or of all three when none is given, to the home position) when ``home`` is
   given to the reader; without it an error that asks for it;
-* ``M2 M30`` (program end: motion after them is an error), ``M3 M4 M5`` (spindle), ``M6``
-  (tool change), ``M7 M8 M9`` (coolant);
+* ``G4 P<seconds>`` (dwell; P in seconds whatever the units, as LinuxCNC: Fanuc's milliseconds are
+  not read) and ``M0 M1 M60`` (program stop, optional stop, pallet-change pause: a stop of 0 s, the
+  operator's wait not counted): the motion stops at the vertex and waits (``block_pauses``; the FIR
+  planner takes them as exact stops held that long). G4 runs before the motion of its line, the
+  stops after it (RS274/NGC order of execution);
+* ``M2 M30`` (program end: motion, dwells or stops after them are an error), ``M3 M4 M5``
+  (spindle), ``M6`` (tool change), ``M7 M8 M9`` (coolant);
 * ``N`` (line number), ``O`` (program number; both non-negative integers of at most 15 digits,
   ignored), ``S`` (spindle speed >= 0, ignored), ``T`` (tool number, non-negative integer, ignored),
   ``H`` (tool length offset number, non-negative integer, only with ``G43``, ignored),
   ``F`` (feed > 0, modal), ``X Y Z``, ``I J K R`` (arc centre / radius), ``P`` (``G64`` tolerance,
-  or number of turns of ``G2``/``G3``: an integer >= 1, P1 the plain arc, as LinuxCNC), ``Q`` (with
+  ``G4`` dwell, or number of turns of ``G2``/``G3``: an integer >= 1, P1 the plain arc, as LinuxCNC), ``Q`` (with
   ``G64`` only);
 * comments ``( ... )`` (not nested, closed on the same line) and ``; ...`` to the end of the line,
   ``%`` delimiter lines, blank lines, upper or lower case, words with or without spaces
@@ -53,7 +58,7 @@ Refused with a message naming the feature: O-word subroutines and control flow (
 ``o<name> call``, ``if``, ``while`` ...), ``M98``/``M99``, ``#`` parameters (``#1``, ``#<name>``),
 expressions ``[...]`` and functions (``sin[30]``), ``/`` block delete; ``G17.1 G18.1 G19.1`` (UVW
 planes), ``G41 G42 G41.1 G42.1`` (cutter compensation), ``G43.1 G43.2`` (dynamic / additional tool length
-offsets), ``G4`` (dwell: the program model has no pauses), ``G5 G5.1 G5.2`` (splines),
+offsets), ``G4`` without ``P``, ``G5 G5.1 G5.2`` (splines),
 ``G28`` without ``home``, ``G30 G53 G92`` (machine / coordinate-system moves), ``G73 G76 G81``-``G89 G98 G99`` (canned
 cycles), ``G93 G95`` (inverse-time / per-revolution feed), every other G or M code (a code with more
 than one decimal digit such as ``G1.00000001`` is not read as ``G1``); the letters ``A B C U V W``
@@ -147,6 +152,9 @@ class GCodeProgram:
             0 under ``G61``/``G61.1``, NaN where none was given (``G64`` without ``P``, or no
             path-control word yet).
         segment_block: ``(M,)`` block of every chord of ``polyline``.
+        block_pauses: ``(B + 1,)`` pause at each block vertex [s] (index 0 the start, ``k`` the
+            end of block ``k - 1``, ``B`` the end): the sum of the ``G4 P`` dwells there, 0 for an
+            ``M0``/``M1``/``M60`` stop without a dwell, NaN where the motion does not stop.
 
     ``blocks`` and the ``block_*`` arrays may be left out (``None``) when building a program by hand:
     they are then one line block per polyline segment with NaN tolerance.
@@ -176,6 +184,7 @@ class GCodeProgram:
     block_lines: np.ndarray | None = None
     block_tolerance: np.ndarray | None = None
     segment_block: np.ndarray | None = None
+    block_pauses: np.ndarray | None = None
 
     def __post_init__(self):
         m = self.polyline.n_segments
@@ -204,6 +213,12 @@ class GCodeProgram:
                 raise PathError(f"GCodeProgram.{name} must have shape ({shape},), got {a.shape}")
             a.setflags(write=False)
             object.__setattr__(self, name, a)
+        pauses = np.full(nb + 1, np.nan) if self.block_pauses is None else np.array(self.block_pauses, dtype=np.float64)
+        if pauses.shape != (nb + 1,) or np.any(~np.isnan(pauses) & ~(np.isfinite(pauses) & (pauses >= 0))):
+            raise PathError(f"GCodeProgram.block_pauses must be ({nb + 1},) values, NaN or finite >= 0 s, got shape "
+                            f"{pauses.shape}")
+        pauses.setflags(write=False)
+        object.__setattr__(self, "block_pauses", pauses)
         sb = self.segment_block
         if m and (sb[0] != 0 or sb[-1] != nb - 1 or np.any(np.diff(sb) < 0) or np.any(np.diff(sb) > 1)):
             raise PathError("GCodeProgram.segment_block must run from block 0 to the last block in order")
@@ -472,8 +487,11 @@ def parse_gcode(
         bad = int(m.group(1)) if m else 0
         raise GCodeError(f"block from this line is unusable: {e}", source=source,
                          line=int(b_lines[min(bad, nb - 1)]), column=1) from None
+    pauses = np.full(nb + 1, np.nan)
+    for k, p in it.pauses.items():
+        pauses[k] = p
     return GCodeProgram(poly, feeds, rap, lines, source, tuple(it.no_motion), blocks, b_feeds, b_rapid,
-                        b_lines, b_tols, seg_block)
+                        b_lines, b_tols, seg_block, pauses)
 
 
 def read_gcode(path: str | PathLike, **kwargs) -> GCodeProgram:

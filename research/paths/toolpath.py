@@ -149,6 +149,21 @@ class ToolPath:
                         np.vstack([self.centers, np.asarray(center, float).reshape(1, d)]),
                         np.vstack([self.normals, n[None]]), np.concatenate([self.sweeps, [sweep]]), self.axes)
 
+    def part(self, first: int, stop: int) -> "ToolPath":
+        """Blocks ``first .. stop - 1`` as a path of their own, starting at vertex ``first``.
+
+        Example:
+            >>> p = ToolPath.from_polyline(Polyline([[0, 0], [10, 0], [10, 5], [0, 5]]))
+            >>> q = p.part(1, 3)
+            >>> q.start.tolist(), q.ends.tolist()
+            ([10.0, 0.0], [[10.0, 5.0], [0.0, 5.0]])
+        """
+        if not 0 <= first < stop <= self.n_blocks:
+            raise PathError(f"ToolPath.part: expected 0 <= first < stop <= {self.n_blocks} (blocks), got {first}, {stop}")
+        start = self.start if first == 0 else self.ends[first - 1]
+        return ToolPath(start, self.ends[first:stop], self.centers[first:stop], self.normals[first:stop],
+                        self.sweeps[first:stop], self.axes)
+
     # -- geometry ----------------------------------------------------------------------------
     @property
     def dim(self) -> int:

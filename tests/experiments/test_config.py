@@ -104,6 +104,28 @@ def test_gcode_path_with_g28_needs_home_mm(tmp_path):
         load_config(write(tmp_path, GOOD.replace('name = "corner90"', 'name = "corner90"\nhome_mm = [0, 0, 1]'), "c.toml"))
 
 
+def test_gcode_pauses_are_planned_by_fir_and_refused_elsewhere(tmp_path):
+    """A program with a spindle warm-up ``G4 P1.5`` and an ``M1`` between its two cuts: the FIR run's
+    cycle time is the two cuts planned alone (here, from the same planner without pauses) plus 1.5 s;
+    a corner-blending interpolator, which has no pauses, is refused by name with the program's lines."""
+    from research.interpolators import plan_fir
+    from research.paths import Polyline
+
+    (tmp_path / "part.nc").write_text("G21 G90\nM3 S1000\nG4 P1.5\nG1 X10 F1200\nG1 Y10\nM1\nG1 X0\nM30\n")
+    text = GOOD.replace('name = "corner90"', 'gcode = "part.nc"').replace("feed_mm_per_s = 200.0\n", "")
+    result = run_experiment(write(tmp_path, text), cache_dir=tmp_path / "c", figures_dir=tmp_path / "f", log=lambda s: None)
+    d = (0.05, 0.03)
+    first = plan_fir(Polyline([[0, 0, 0], [10, 0, 0], [10, 10, 0]]), 20.0, d, 0.1)  # tolerance_um = 100
+    second = plan_fir(Polyline([[10, 10, 0], [0, 10, 0]]), 20.0, d, 0.1)
+    expected = float(first.cycle_time) + float(second.cycle_time) + 1.5
+    assert result.record["scalars"]["cycle_time"] == pytest.approx(expected, abs=1e-3)  # sampled at 1 ms
+    blend = text.replace("[interpolator]\n", '[interpolator]\nkind = "blend"\n').replace("delays_ms = [50.0, 30.0]\n", "")
+    with pytest.raises(ConfigError, match=r"part.nc pauses \(G4 / M0 / M1 / M60\) next to the moves of lines \[4, 5\].*kind 'blend' "
+                                          r"does not plan pauses"):
+        run_experiment(write(tmp_path, blend, "s.toml"), cache_dir=tmp_path / "c2", figures_dir=tmp_path / "f",
+                       log=lambda s: None)
+
+
 # -- strict configs (issue: nothing silently wrong) -------------------------------------------------------
 BASE = 'name = "t"\nreproduces = "test"\n'
 PATH = '[path]\nname = "corner90"\n'

@@ -189,7 +189,7 @@ def test_table_6_3_drive_is_one_model_per_axis():
     assert models[0].pole_parameters() != pytest.approx(models[1].pole_parameters(), rel=1e-3)
 
 
-def test_gcode_arcs_and_g64_tolerances_are_not_sent_to_the_fast_path(tmp_path):
+def test_gcode_arcs_g64_tolerances_and_pauses_are_not_sent_to_the_fast_path(tmp_path):
     """The fast path's closed forms take one tolerance on a polyline; ``plan_fir`` keeps arcs as arcs and
     each block's ``G64 P`` tolerance (stages.interpolate), so such programs must go to the general path
     even when the config sets a feed (a sweep over ``tolerance_um`` would otherwise ignore ``G64 P``)."""
@@ -197,7 +197,8 @@ def test_gcode_arcs_and_g64_tolerances_are_not_sent_to_the_fast_path(tmp_path):
 
     programs = {"plain.ngc": "G21 G90\nG1 X0 Y0 F6000\nG1 X40\nG1 Y40\nG1 X0\nM2\n",
                 "g64.ngc": "G21 G90\nG64 P0.1\nG1 X0 Y0 F6000\nG1 X40\nG1 Y40\nG1 X0\nM2\n",
-                "arc.ngc": "G21 G90\nG1 X0 Y0 F6000\nG1 X40\nG3 X60 Y20 I0 J20\nG1 Y60\nM2\n"}
+                "arc.ngc": "G21 G90\nG1 X0 Y0 F6000\nG1 X40\nG3 X60 Y20 I0 J20\nG1 Y60\nM2\n",
+                "dwell.ngc": "G21 G90\nG1 X0 Y0 F6000\nG1 X40\nG4 P0.5\nG1 Y40\nM2\n"}
     reasons = {}
     for name, text in programs.items():
         (tmp_path / name).write_text(text)
@@ -207,6 +208,7 @@ def test_gcode_arcs_and_g64_tolerances_are_not_sent_to_the_fast_path(tmp_path):
     assert reasons["plain.ngc"] is None
     assert "G64 P" in reasons["g64.ngc"]
     assert "arcs" in reasons["arc.ngc"]
+    assert "pauses" in reasons["dwell.ngc"]
 
 
 def test_optimized_fir_from_a_config_holds_eps_and_limits_and_is_no_slower(tmp_path):

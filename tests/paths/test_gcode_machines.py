@@ -192,6 +192,34 @@ def test_mill_post_with_home_and_tool_length_offset():
     check_consistent(prog)
 
 
+def test_dwells_and_program_stops_are_pauses_at_their_vertices():
+    """dwell_stops.ngc, by hand from the file's comments (RS274/NGC order of execution: G4 before the
+    line's motion, M0/M1 after it; dwells at one vertex add up): 2.5 s at the start (before any move),
+    0 + 0.25 s at vertex 3 (M1, then the dwell before Y10), 0 + 1.5 s at vertex 5 (M0 after X0, then
+    G04 P1.5), 0.125 s at the end (after the last move); NaN elsewhere."""
+    prog = read("dwell_stops.ngc")
+    np.testing.assert_array_equal(prog.blocks.ends, [[0, 0, 5], [0, 0, 1], [10, 0, 1], [10, 10, 1], [0, 10, 1],
+                                                     [0, 10, 5]])
+    np.testing.assert_array_equal(prog.block_pauses, [2.5, NAN, NAN, 0.25, NAN, 1.5, 0.125])
+    assert prog.block_lines.tolist() == [7, 8, 9, 11, 12, 14]
+    check_consistent(prog)
+
+
+@pytest.mark.parametrize("text, line, column, match", [
+    ("G1 X1 F60\nG4", 2, 1, r"G4 \(dwell\) without P"),
+    ("G1 X1 F60\nG4 P-0.5", 2, 4, r"G4 P-0.5: expected a finite dwell >= 0 s \(P is in seconds"),
+    ("G1 X1 F60\nG4 G64 P0.01", 2, 8, r"P used by both G64 \(tolerance\) and G4"),
+    ("G1 X1 F60\nG4 P1 G3 X2 Y1 R1", 2, 4, r"P used by both G4 \(dwell\) and G2/G3"),
+    ("G1 X1 F60\nM2\nG4 P1", 3, 1, r"G4 after the program end \(M2/M30 on line 2\)"),
+    ("G1 X1 F60\nM30\nM0", 3, 1, r"program stop after the program end"),
+    ("G1 X1 F60\nM1 M30", 2, 4, r"two stopping M-codes on one line"),
+    ("G1 X1 F60\nG4 X1.5", 2, 1, r"G4 \(dwell\) without P"),  # Fanuc's G4 X<seconds>: not read as a move
+])
+def test_bad_dwells_and_stops_name_line_and_column(text, line, column, match):
+    with pytest.raises(GCodeError, match=rf"<string>:{line}:{column}: {match}"):
+        parse_gcode(text)
+
+
 def test_g28_without_home_asks_for_it():
     """The reader cannot know the machine home: G28 without ``home`` is an error at its line and column
     naming the argument to pass."""
@@ -238,5 +266,6 @@ def test_programs_round_trip_through_to_gcode_with_arcs(name):
     np.testing.assert_allclose(b.centers[b.is_arc], a.centers[a.is_arc], atol=1e-12)
     np.testing.assert_array_equal(b.normals[b.is_arc], a.normals[a.is_arc])
     np.testing.assert_array_equal(again.block_tolerance, prog.block_tolerance)
+    np.testing.assert_array_equal(again.block_pauses, prog.block_pauses)
     np.testing.assert_array_equal(again.block_rapid, prog.block_rapid)
     np.testing.assert_array_equal(again.block_feeds, prog.block_feeds)
