@@ -493,7 +493,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
 
 
 def plan_fir_sweep(path, feed, delays, tolerances, *, limits: AxisLimits | None = None,
-                   check_period: float = CHECK_PERIOD) -> FIRSweep:
+                   check_period: float = CHECK_PERIOD, pauses=None) -> FIRSweep:
     """Verified plans over a tolerance sweep whose cycle time never increases with the tolerance.
 
     Each tolerance is planned by :func:`plan_fir` (``refine=True``); the plan kept at
@@ -503,7 +503,7 @@ def plan_fir_sweep(path, feed, delays, tolerances, *, limits: AxisLimits | None 
     (``_fir_candidates``), exactly, at the cost of planning each tolerance once.
 
     Args:
-        path, feed, delays, limits, check_period: as :func:`plan_fir`.
+        path, feed, delays, limits, check_period, pauses: as :func:`plan_fir`.
         tolerances: ``K >= 1`` cornering tolerances [mm], each a scalar or one per block, any order.
 
     Returns:
@@ -515,7 +515,7 @@ def plan_fir_sweep(path, feed, delays, tolerances, *, limits: AxisLimits | None 
     if not tols:
         raise ParameterError("plan_fir_sweep needs at least one tolerance, got none")
     M = _as_toolpath(path).n_blocks
-    plans = [plan_fir(path, feed, delays, t, limits=limits, check_period=check_period) for t in tols]
+    plans = [plan_fir(path, feed, delays, t, limits=limits, check_period=check_period, pauses=pauses) for t in tols]
     vectors = [np.broadcast_to(np.asarray(_primal(t), dtype=np.float64), (M,)) for t in tols]
     own = tuple(float(_primal(p.cycle_time)) for p in plans)
     pick = envelope(vectors, own)

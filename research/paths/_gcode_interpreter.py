@@ -45,6 +45,7 @@ _G_ACCEPT = {
     **{k: "work_offset" for k in (540, 550, 560, 570, 580, 590)},
     610: "path_mode", 611: "path_mode", 640: "path_mode",
     940: "feed_mode",
+    980: "retract_mode", 990: "retract_mode",
 }
 # plane key -> (first axis, second axis, normal axis) indices into (x, y, z); G3 is counter-clockwise
 # from the first towards the second axis, i.e. about +normal axis (RS274/NGC: G17 XY about +Z,
@@ -77,8 +78,6 @@ _G_REFUSE = {
     920: "G92 (coordinate system offset) is not supported",
     930: "G93 (inverse-time feed) is not supported: only G94 (feed per minute)",
     950: "G95 (feed per revolution) is not supported: only G94 (feed per minute)",
-    980: "G98 (canned cycle return level) is not supported: canned cycles are refused",
-    990: "G99 (canned cycle return level) is not supported: canned cycles are refused",
 }
 # M0 M1 M2 M30 M60 are one modal group (RS274/NGC "stopping"); M0 M1 M60 pause, M2 M30 end
 _M_ACCEPT = {0: "stopping", 1: "stopping", 2: "stopping", 30: "stopping", 60: "stopping", 3: "spindle",
@@ -95,7 +94,7 @@ _LETTER_REFUSE = {
 }
 _ACCEPTED_LETTERS = frozenset("GMNOFSTXYZIJKRPQH")
 _ACCEPTED_G_TEXT = ("G0 G1 G2 G3 G4 G80 G17 G18 G19 G20 G21 G28 G40 G43 G49 G54-G59 G61 G61.1 G64 G90 G91 "
-                    "G90.1 G91.1 G94")
+                    "G90.1 G91.1 G94 G98 G99")
 _ACCEPTED_M_TEXT = "M0 M1 M2 M3 M4 M5 M6 M7 M8 M9 M30 M60"
 # code text: optional '+', leading zeros, 1-4 digits, optionally '.' and one digit (trailing zeros ok)
 _CODE_TEXT = re.compile(r"\+?0*([0-9]{1,4})(?:\.([0-9]?)0*)?")

@@ -27,7 +27,8 @@ Accepted words (anything else is a :class:`~research.errors.GCodeError` naming f
   ``[H<n>]`` / ``G49`` (tool length offset on / off: the program coordinates are taken as tool-tip
   coordinates, so the offset moves only the machine's Z, as the work offsets move its frame),
   ``G54``-``G59`` (work offsets: the program frame is taken as the work frame), ``G94`` (feed per
-  minute, the only feed mode supported);
+  minute, the only feed mode supported), ``G98``/``G99`` (canned-cycle retract mode, written in the
+  safety line of Fanuc-style posts: with the canned cycles refused it changes nothing);
 * ``G28 [X] [Y] [Z]`` (return to home, LinuxCNC: a rapid to the point of the axis words, then a
   rapid of those axes, or of all three when none is given, to the home position) when ``home`` is
   given to the reader; without it an error that asks for it;
@@ -59,7 +60,7 @@ Refused with a message naming the feature: O-word subroutines and control flow (
 expressions ``[...]`` and functions (``sin[30]``), ``/`` block delete; ``G17.1 G18.1 G19.1`` (UVW
 planes), ``G41 G42 G41.1 G42.1`` (cutter compensation), ``G43.1 G43.2`` (dynamic / additional tool length
 offsets), ``G4`` without ``P``, ``G5 G5.1 G5.2`` (splines),
-``G28`` without ``home``, ``G30 G53 G92`` (machine / coordinate-system moves), ``G73 G76 G81``-``G89 G98 G99`` (canned
+``G28`` without ``home``, ``G30 G53 G92`` (machine / coordinate-system moves), ``G73 G76 G81``-``G89`` (canned
 cycles), ``G93 G95`` (inverse-time / per-revolution feed), every other G or M code (a code with more
 than one decimal digit such as ``G1.00000001`` is not read as ``G1``); the letters ``A B C U V W``
 (extra axes), ``D`` (cutter radius offset), ``H`` without ``G43``, ``L``, every other letter; the off-plane centre word (``K`` in

@@ -20,7 +20,8 @@ from research.paths.polyline import Polyline
 PROGRAMS = pathlib.Path(__file__).parent / "programs"
 PI = math.pi
 #: reader arguments a test program needs (mill_post.ngc returns home with G28)
-PROGRAM_ARGS = {"mill_post.ngc": {"home": (0.0, 0.0, 50.0), "start": (0.0, 0.0, 50.0)}}
+PROGRAM_ARGS = {"mill_post.ngc": {"home": (0.0, 0.0, 50.0), "start": (0.0, 0.0, 50.0)},
+                "fanuc_post.ngc": {"home": (0.0, 0.0, 50.8), "start": (0.0, 0.0, 50.8)}}
 NAN = float("nan")
 
 
@@ -218,6 +219,25 @@ def test_dwells_and_program_stops_are_pauses_at_their_vertices():
 def test_bad_dwells_and_stops_name_line_and_column(text, line, column, match):
     with pytest.raises(GCodeError, match=rf"<string>:{line}:{column}: {match}"):
         parse_gcode(text)
+
+
+def test_fanuc_post_with_safety_line_and_incremental_g28():
+    """fanuc_post.ngc (G20), read with home = start = (0, 0, 2 in), by hand in mm (x 25.4): the safety
+    line's G80 / G98 change nothing; G0 to (1, 0) in, G43 Z.1 a rapid to z = 2.54; the cut at F10 in/min
+    (4.2333 mm/s) to z = -1.27, x = 50.8, the G3 about (2, 1) in to (3, 1) in, Y2.; G0 Z.1; ``G91 G28 Z0.``
+    goes via the current point (no move, line 16) to z = 50.8, and ``G28 X0. Y0.``, still under G91,
+    via the current point (line 17) to x = y = 0."""
+    prog = read("fanuc_post.ngc", **PROGRAM_ARGS["fanuc_post.ngc"])
+    b = prog.blocks
+    ends = [[25.4, 0, 50.8], [25.4, 0, 2.54], [25.4, 0, -1.27], [50.8, 0, -1.27], [76.2, 25.4, -1.27],
+            [76.2, 50.8, -1.27], [76.2, 50.8, 2.54], [76.2, 50.8, 50.8], [0, 0, 50.8]]
+    np.testing.assert_allclose(b.ends, ends, atol=1e-12)
+    assert prog.block_lines.tolist() == [6, 7, 9, 10, 11, 12, 13, 16, 17]
+    assert prog.block_rapid.tolist() == [True, True] + [False] * 4 + [True] * 3
+    np.testing.assert_allclose(prog.block_feeds[~prog.block_rapid], 10 * 25.4 / 60, rtol=1e-12)
+    np.testing.assert_allclose(b.centers[b.is_arc], [[50.8, 25.4, -1.27]], atol=1e-12)
+    assert prog.no_motion_lines == (16, 17)
+    check_consistent(prog)
 
 
 def test_g28_without_home_asks_for_it():
