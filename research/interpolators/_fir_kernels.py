@@ -215,52 +215,114 @@ def chain_largest_feeds(s, du, rho, sign, p, norm, prefix, binom, direct, q, hi,
     buf = np.zeros(du.shape[1])
     dbuf = np.zeros(du.shape[1])
     out = np.empty(J)
+    none = np.empty(0)
+    for j in range(J):
+        out[j] = _feed_search(s, du, rho, sign, p, norm, prefix, binom, direct, q[j], hi[j], tol[j], e_hi[j], steps,
+                              close, tiny, buf, dbuf, False, 0.0, 0.0, none)
+    return out
+
+
+@numba.njit(**_OPTIONS)
+def chain_feed_decisions(s, du, rho, sign, p, norm, prefix, binom, direct, q, hi, tol, e_hi, steps, close, tiny,
+                         stretch_cap, Td, costs):
+    """:func:`chain_largest_feeds` run only as far as the look-ahead's dwell decisions need it.
+
+    A nested level of ``_fir_lookahead`` reads its window feed ``f`` only through the decisions
+    ``cost <= slow_cost(f)`` (``_fir_lookahead._slow_cost``: ``min(f T_d, cap) (1 / f - 1 / hi)``,
+    non-increasing in ``f``), one per dwell rule. The search's bracket ``[l, h]`` only shrinks, and
+    the feed it would return lies in ``{l} U [l + w / 2, h - w / 2]`` (``w`` its resolution: every
+    later point is evaluated there). So once the bracket is wider than ``w`` and no cost lies in
+    ``(slow_cost(h), slow_cost(l)]`` (and ``l > 0``: the search may end at 0), every decision at
+    the search's own result is the one at ``h``, and ``h`` is returned: the same decisions, exactly
+    (the two ends are ``>= w / 2 ~ 7e-12`` relative apart, far above the rounding of
+    ``slow_cost``). A query decides at once where every cost is NaN (no decision read).
+
+    Args:
+        As :func:`chain_largest_feeds`; stretch_cap: ``(J,)`` the ``cap`` of ``slow_cost`` [mm];
+        Td: the window ``T_d`` [s]; costs: ``(J, C)`` dwell costs [s] (NaN: not read).
+
+    Returns:
+        ``(J,)`` feeds [mm/s] whose decisions ``cost <= slow_cost(feed)`` are those of the full search.
+    """
+    J = q.size
+    buf = np.zeros(du.shape[1])
+    dbuf = np.zeros(du.shape[1])
+    out = np.empty(J)
+    for j in range(J):
+        out[j] = _feed_search(s, du, rho, sign, p, norm, prefix, binom, direct, q[j], hi[j], tol[j], e_hi[j], steps,
+                              close, tiny, buf, dbuf, True, stretch_cap[j], Td, costs[j])
+    return out
+
+
+@numba.njit(**_OPTIONS)
+def _slow_cost(f, cap, Td, F):
+    """``_fir_lookahead._slow_cost`` of one feed (the same operations, so the same rounding)."""
+    return min(f * Td, cap) * (1.0 / max(f, 1e-300) - 1.0 / F)
+
+
+@numba.njit(**_OPTIONS)
+def _decided(l, h, F, cap, Td, costs):
+    """No cost lies in ``(slow_cost(h), slow_cost(l)]`` (:func:`chain_feed_decisions`); while
+    ``l = 0`` only a query without costs is (the search may still end at 0, whose ``slow_cost``
+    rounds to 0)."""
+    s_h = _slow_cost(h, cap, Td, F)
+    s_l = _slow_cost(l, cap, Td, F)
+    for c in costs:
+        if c == c and (l == 0.0 or s_h < c <= s_l):
+            return False
+    return True
+
+
+@numba.njit(**_OPTIONS)
+def _feed_search(s, du, rho, sign, p, norm, prefix, binom, direct, qj, hj, t, e, steps, close, tiny, buf, dbuf,
+                 decide, cap, Td, costs):
+    """One query of :func:`chain_largest_feeds` (``decide``: stopped as :func:`chain_feed_decisions`)."""
+    h = hj
+    if e <= t:
+        return h
+    if not t > 0:
+        return 0.0
+    if decide and _decided(0.0, h, hj, cap, Td, costs):
+        return h
     resolution = 0.5 ** steps
     target = -0.5 * close
-    for j in range(J):
-        h, t, e = hi[j], tol[j], e_hi[j]
-        if e <= t:
-            out[j] = h
+    g_h = math.log(e / t)
+    x = h * t / e
+    l, g_l, g_low = 0.0, -np.inf, -np.inf  # g_low: the low end's own g (g_l is Illinois-weighted)
+    width = h * resolution
+    side = 0
+    for it in range(2 * steps):
+        gx, slope = _log_error(s, du, rho, sign, p, norm, prefix, binom, direct, qj, x, t, tiny, buf, dbuf)
+        if gx <= 0:
+            if side == -1:
+                g_h = 0.5 * g_h
+            g_l, g_low, l = gx, gx, x
+            side = -1
+        elif it == 0:  # the first point is infeasible: the bracket stays [0, hi], bisected
+            x = 0.5 * h
             continue
-        if not t > 0:
-            out[j] = 0.0
-            continue
-        g_h = math.log(e / t)
-        x = h * t / e
-        l, g_l, g_low = 0.0, -np.inf, -np.inf  # g_low: the low end's own g (g_l is Illinois-weighted)
-        width = h * resolution
-        side = 0
-        for it in range(2 * steps):
-            gx, slope = _log_error(s, du, rho, sign, p, norm, prefix, binom, direct, q[j], x, t, tiny, buf, dbuf)
-            if gx <= 0:
-                if side == -1:
-                    g_h = 0.5 * g_h
-                g_l, g_low, l = gx, gx, x
-                side = -1
-            elif it == 0:  # the first point is infeasible: the bracket stays [0, hi], bisected
-                x = 0.5 * h
-                continue
+        else:
+            if side == 1:
+                g_l = 0.5 * g_l
+            g_h, h = gx, x
+            side = 1
+        if not (h - l > width and g_low < -close):
+            break
+        if decide and _decided(l, h, hj, cap, Td, costs):
+            return h
+        guard = 0.5 * width
+        nxt = math.exp(math.log(x) - (gx - target) / slope) if slope > 0 else np.nan
+        if not (l + guard <= nxt <= h - guard):  # no slope, or a step out of the bracket
+            if l > 0:
+                xl = math.log(l)
+                nxt = math.exp(xl + (math.log(h) - xl) * (-g_l) / (g_h - g_l))
             else:
-                if side == 1:
-                    g_l = 0.5 * g_l
-                g_h, h = gx, x
-                side = 1
-            if not (h - l > width and g_low < -close):
-                break
-            guard = 0.5 * width
-            nxt = math.exp(math.log(x) - (gx - target) / slope) if slope > 0 else np.nan
-            if not (l + guard <= nxt <= h - guard):  # no slope, or a step out of the bracket
-                if l > 0:
-                    xl = math.log(l)
-                    nxt = math.exp(xl + (math.log(h) - xl) * (-g_l) / (g_h - g_l))
-                else:
-                    nxt = 0.5 * h  # no power law through F = 0: bisect
-                if nxt != nxt:
-                    nxt = 0.5 * (l + h)
-                nxt = min(max(nxt, l + guard), h - guard)
-            x = nxt
-        out[j] = l
-    return out
+                nxt = 0.5 * h  # no power law through F = 0: bisect
+            if nxt != nxt:
+                nxt = 0.5 * (l + h)
+            nxt = min(max(nxt, l + guard), h - guard)
+        x = nxt
+    return l
 
 
 @numba.njit(**_OPTIONS)
@@ -537,3 +599,87 @@ def staircase_cuts(r_h, f_h, r_t, f_t, length, cap):
         feeds[b, 1] = min(low[a, c] if xc > xa else cap[b], cap[b])
         feeds[b, 2] = min(low[c, n - 1] if xc < L else cap[b], cap[b])
     return head, tail, feeds
+
+
+@numba.njit(**_OPTIONS)
+def predicted_cycle(lengths, feeds, block, role, fraction, arc_of, arc_rel, factor, head, tail, first_motion,
+                    last_motion, t_in, t_out, full, shrink, others, tol_v, delays, h_full):
+    """Cycle time ``sum_pieces share L / (F f) + sum_corners (T_d - T_k) + T_d`` [s] of a candidate
+    plan, in one pass (``fir.plan_fir``'s ``predicted_time``: ``PulseTable.pieces`` and
+    ``_fir_profile.timing`` without their arrays; the same operations per piece and corner, summed in
+    order rather than pairwise, so equal to ~1e-15 relative). One or two filters (eq 13/14's closed
+    forms, as ``_fir_profile.overlaps``).
+
+    Args:
+        lengths, feeds: ``(M,)`` block lengths [mm] and commanded feeds [mm/s]; block, role,
+            fraction: the table's pieces (role 0 / 1 / 2 a line's head / body / tail, -1 otherwise;
+            pieces of ``block >= M`` are padding); arc_of: ``(P,)`` index of each sub-arc piece in
+            ``arc_rel`` (-1 elsewhere); factor ``(M, 3)``, head, tail ``(M,)``: the candidate's
+            feed factors and shares; first_motion, last_motion: ``(M,)`` pieces; t_in, t_out:
+            ``(M, d)`` tangents; full, shrink, others, tol_v: ``(M - 1,)`` per corner; delays:
+            ``(n,)`` sorted descending, ``n <= 2``; h_full: ``H2(T_d / 2)``.
+    """
+    M = lengths.size
+    P = block.size
+    total = 0.0
+    for i in range(P):
+        b = block[i]
+        if b >= M:
+            continue
+        r = role[i]
+        if r == 0:
+            fr = head[b]
+        elif r == 1:
+            fr = 1.0 - head[b] - tail[b]
+        elif r == 2:
+            fr = tail[b]
+        else:
+            fr = fraction[i]
+        f = factor[b, r if r >= 0 else 1]
+        a = arc_of[i]
+        if a >= 0:
+            f *= arc_rel[a]
+        total += fr * (lengths[b] / (feeds[b] * f))
+    Td = 0.0
+    for k in range(delays.size):
+        Td += delays[k]
+    T1 = delays[0]
+    T2 = delays[1] if delays.size > 1 else 0.0
+    dims = t_in.shape[1]
+    gaps = 0.0
+    for j in range(M - 1):
+        if full[j]:
+            ov = Td
+        else:
+            f_in = feeds[j + 1] * _piece_factor(factor, arc_rel, role, arc_of, block, first_motion[j + 1])
+            f_out = feeds[j] * _piece_factor(factor, arc_rel, role, arc_of, block, last_motion[j])
+            s = 0.0
+            for c in range(dims):
+                x = f_in * t_in[j + 1, c] - f_out * t_out[j, c]
+                s += x * x
+            dF = math.sqrt(s) if s > 0 else 0.0
+            tol = max(tol_v[j] - others[j], 0.0)
+            h = min(tol / (dF if dF > 0 else 1.0), h_full)
+            if dF > 0 and h < h_full:
+                if delays.size == 1:
+                    Tk = math.sqrt(8.0 * T1 * h)
+                elif h <= T2**2 / (6.0 * T1):
+                    Tk = np.cbrt(48.0 * T1 * T2 * h)
+                else:
+                    Tk = T2 + math.sqrt(8.0 * T1 * h - T2**2 / 3.0)
+                ov = min(max(Tk, 0.0), Td)
+            else:
+                ov = Td
+        gaps += Td - ov * shrink[j]
+    return total + gaps + Td
+
+
+@numba.njit(**_OPTIONS)
+def _piece_factor(factor, arc_rel, role, arc_of, block, i):
+    """Feed factor of piece ``i`` (``PulseTable.pieces``)."""
+    r = role[i]
+    f = factor[block[i], r if r >= 0 else 1]
+    a = arc_of[i]
+    if a >= 0:
+        f *= arc_rel[a]
+    return f

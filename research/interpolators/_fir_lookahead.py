@@ -163,9 +163,21 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     Tk = overlaps(both, np.tile(np.pad(dF, (0, pad), constant_values=1.0), (2 * K1, 1)), delays)[:, : M - 1]
     Tk_budget, Tk_whole = Tk[:K1], Tk[K1:]
     f_lv = np.broadcast_to(Fv, levels.shape).copy()
-    k_q, j_q = np.nonzero(need)
-    if k_q.size:  # window feeds on the whole chain, every level in one root search
-        f_lv[k_q, j_q] = every.largest_feed(s_v[j_q], Fv[j_q], levels[k_q, j_q], e_all[j_q])
+    j_q = np.flatnonzero(need[0])
+    if j_q.size:  # window feeds on the whole chain at the tolerance itself: the feeds of the plans
+        f_lv[0, j_q] = every.largest_feed(s_v[j_q], Fv[j_q], levels[0, j_q], e_all[j_q])
+    # the tighter levels read their window feeds only through the dwell decisions of _dwell_sets
+    # (cost <= _slow_cost(f), where a rule can dwell; the deep levels only the "isolated" rule's):
+    # a search stopped once its bracket settles them gives the same decisions (ChainError.feed_decisions)
+    Lj = tp.lengths
+    cap = 0.5 * (Lj[:-1] + Lj[1:])
+    rows = np.arange(K1)[:, None]
+    cost_b = np.where(_can_dwell(need, budget, Tk_budget, Td) & (rows <= NEST_STEPS), Td - Tk_budget, np.nan)
+    cost_w = np.where(_can_dwell(need, levels, Tk_whole, Td), Td - Tk_whole, np.nan)
+    k_q, j_q = np.nonzero((rows >= 1) & ~(np.isnan(cost_b) & np.isnan(cost_w)))
+    if k_q.size:  # every tighter level in one search
+        f_lv[k_q, j_q] = every.feed_decisions(s_v[j_q], Fv[j_q], levels[k_q, j_q], e_all[j_q], cap[j_q], Td,
+                                              np.stack([cost_b[k_q, j_q], cost_w[k_q, j_q]], axis=1))
     reach = Fv * every.rho.max()  # a window at a feed <= Fv sums the turns strictly inside s_v +- reach
     f_w = f_lv[0]
     # the vertices strictly inside each window's reach: indices [w_lo, w_hi)
@@ -270,6 +282,12 @@ def _slow_cost(L, Td, Fv, f):
 _EVERY_CAN = 2  # index of "every vertex that can dwell" among the sets of _dwell_sets
 
 
+def _can_dwell(need, tol, Tk, Td):
+    """Where a vertex can dwell under a rule that leaves it the tolerance ``tol``: it needs a
+    slow-down, ``tol > 0`` and eq 13/14 gives a gap (``T_k < T_d``)."""
+    return need & (tol > 0) & (Tk < Td * (1 - 1e-12))
+
+
 def _dwell_sets(L, Td, Fv, f_w, need, tol, budget, Tk_budget, Tk_whole):
     """The dwell sets of one tolerance ``tol`` ``(M - 1,)``, each ``(rule, mask)`` (rule 0:
     "budget", 1: "isolated"): where the dwell is estimated cheaper than the slow-down (both rules),
@@ -282,7 +300,7 @@ def _dwell_sets(L, Td, Fv, f_w, need, tol, budget, Tk_budget, Tk_whole):
     slow_cost = _slow_cost(L, Td, Fv, f_w)
     out = []
     for rule, b, Tk in ((0, budget, Tk_budget), (1, tol, Tk_whole)):
-        can = need & (b > 0) & (Tk < Td * (1 - 1e-12))
+        can = _can_dwell(need, b, Tk, Td)
         out.append((rule, can & (Td - Tk <= slow_cost)))
         if rule == 1:
             out += [(1, can), (1, np.zeros_like(can))]
