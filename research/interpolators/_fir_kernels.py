@@ -381,6 +381,22 @@ def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, se
 
 
 @numba.njit(**_OPTIONS)
+def _value(breaks, coeffs, t, out, hint):
+    """Row 0 of :func:`_derivatives` (the value, by the same operations) into ``out[0]``."""
+    K, D, A = coeffs.shape[0], coeffs.shape[1], coeffs.shape[2]
+    tc = min(max(t, breaks[0]), breaks[K])
+    found = _right_from(breaks, tc, hint)
+    piece = min(max(found - 1, 0), K - 1)
+    tau = tc - breaks[piece]
+    for a in range(A):
+        v = coeffs[piece, D - 1, a]
+        for m in range(D - 2, -1, -1):
+            v = v * tau + coeffs[piece, m, a]
+        out[0, a] = v
+    return found
+
+
+@numba.njit(**_OPTIONS)
 def _derivatives(breaks, coeffs, t, out, hint):
     """Value, first and second derivative of the profile at ``t`` into ``out`` ``(3, A)``
     (right-searched piece from the index ``hint``, clipped time; derivatives 0 outside the breaks).
@@ -427,7 +443,7 @@ def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton
         hint = first
         for g in range(grid):
             tg = centre[c] + half_window * (-1.0 + 2.0 * g / (grid - 1))
-            hint = _derivatives(breaks, coeffs, tg, buf, hint)
+            hint = _value(breaks, coeffs, tg, buf, hint)  # the grid needs the position only
             if g == 0:
                 first = hint
             d2 = 0.0
@@ -448,7 +464,7 @@ def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton
             if curvature > 0:
                 t = t - slope / curvature
             t = min(max(t, lo), hi)
-        _derivatives(breaks, coeffs, t, buf, hint)
+        _value(breaks, coeffs, t, buf, hint)
         d2 = 0.0
         for a in range(A):
             e = buf[0, a] - vertices[c, a]
@@ -683,3 +699,73 @@ def _piece_factor(factor, arc_rel, role, arc_of, block, i):
     if a >= 0:
         f *= arc_rel[a]
     return f
+
+
+@numba.njit(**_OPTIONS)
+def line_piece_feeds(h_blk, h_reach, h_feed, t_blk, t_reach, t_feed, L, body, F, arc):
+    """``_fir_lookahead.line_pieces`` in one compiled pass (the same operations per line, and the
+    same padded rows for :func:`staircase_cuts`, so bit for bit): returns ``(head, tail, feeds)``."""
+    M = L.size
+    n_h, n_t = np.zeros(M, np.int64), np.zeros(M, np.int64)
+    r_h, f_h, r_t, f_t = np.zeros(M), np.full(M, np.inf), np.zeros(M), np.full(M, np.inf)
+    for i in range(h_blk.size):
+        k = h_blk[i]
+        n_h[k] += 1
+        r_h[k] = max(r_h[k], h_reach[i])
+        f_h[k] = min(f_h[k], h_feed[i])
+    for i in range(t_blk.size):
+        k = t_blk[i]
+        n_t[k] += 1
+        r_t[k] = max(r_t[k], t_reach[i])
+        f_t[k] = min(f_t[k], t_feed[i])
+    head, tail, feeds = np.empty(M), np.empty(M), np.empty((M, 3))
+    b = np.empty(M)
+    slot = np.full(M, -1)
+    B, H, T = 0, 1, 1
+    for k in range(M):
+        b[k] = min(body[k], F[k])
+        # one window at each end (or none): the staircase has at most three steps
+        a_cut = min(r_h[k], L[k] - r_t[k])  # the head piece ends where the tail's reach begins, if earlier
+        b_cut = max(L[k] - r_t[k], r_h[k])
+        over = r_h[k] + r_t[k] > L[k]
+        feeds[k, 0] = min(f_h[k] if a_cut > 0 else b[k], b[k])
+        feeds[k, 1] = min(b[k], min(f_h[k] if over else np.inf, f_t[k] if over else np.inf))
+        feeds[k, 2] = min(f_t[k] if b_cut < L[k] else b[k], b[k])
+        head[k], tail[k] = a_cut / L[k], (L[k] - b_cut) / L[k]
+        if not arc[k] and (n_h[k] > 1 or n_t[k] > 1):
+            slot[k] = B
+            B += 1
+            H, T = max(H, n_h[k]), max(T, n_t[k])
+    if B:
+        rh, fh = np.zeros((B, H)), np.full((B, H), np.inf)
+        rt, ft = np.zeros((B, T)), np.full((B, T), np.inf)
+        fill_h, fill_t = np.zeros(B, np.int64), np.zeros(B, np.int64)
+        for i in range(h_blk.size):  # entries in their order within each line (a stable sort)
+            s = slot[h_blk[i]]
+            if s >= 0:
+                rh[s, fill_h[s]], fh[s, fill_h[s]] = h_reach[i], h_feed[i]
+                fill_h[s] += 1
+        for i in range(t_blk.size):
+            s = slot[t_blk[i]]
+            if s >= 0:
+                rt[s, fill_t[s]], ft[s, fill_t[s]] = t_reach[i], t_feed[i]
+                fill_t[s] += 1
+        rows = np.flatnonzero(slot >= 0)
+        hs, ts, fs = staircase_cuts(rh, fh, rt, ft, L[rows], b[rows])
+        for s in range(B):
+            k = rows[s]
+            head[k], tail[k] = hs[s], ts[s]
+            for c in range(3):
+                feeds[k, c] = fs[s, c]
+    for k in range(M):
+        if arc[k]:
+            for c in range(3):
+                feeds[k, c] = F[k]
+            head[k], tail[k] = 0.0, 0.0
+        # an empty end piece takes the feed of the nearest piece that is not: eq 13/14 reads a
+        # block's entry and exit feeds from its first and last pieces
+        mid = 1.0 - head[k] - tail[k] > 0
+        h, m, t = feeds[k, 0], feeds[k, 1], feeds[k, 2]
+        feeds[k, 0] = h if head[k] > 0 else (m if mid else t)
+        feeds[k, 2] = t if tail[k] > 0 else (m if mid else h)
+    return head, tail, feeds

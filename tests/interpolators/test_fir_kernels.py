@@ -334,3 +334,78 @@ def test_feed_decisions_are_those_of_the_full_search():
             read = ~np.isnan(costs[:, k])
             np.testing.assert_array_equal((costs[:, k] <= sc_got)[read], (costs[:, k] <= sc_full)[read])
         assert np.any(got != full)  # the searches did stop early
+
+
+def numpy_line_pieces(h_blk, h_reach, h_feed, t_blk, t_reach, t_feed, L, body, F, arc):
+    """``_fir_lookahead.line_pieces`` by whole-array NumPy (its form before the compiled pass)."""
+    from research.interpolators._fir_lookahead import staircase_cut
+
+    M = L.size
+    n_h, n_t = np.bincount(h_blk, minlength=M), np.bincount(t_blk, minlength=M)
+    r_h, f_h, r_t, f_t = np.zeros(M), np.full(M, np.inf), np.zeros(M), np.full(M, np.inf)
+    np.maximum.at(r_h, h_blk, h_reach)
+    np.minimum.at(f_h, h_blk, h_feed)
+    np.maximum.at(r_t, t_blk, t_reach)
+    np.minimum.at(f_t, t_blk, t_feed)
+    b = np.minimum(body, F)
+    # one window at each end (or none): the staircase has at most three steps
+    a_cut = np.minimum(r_h, L - r_t)  # the head piece ends where the tail's reach begins, if earlier
+    b_cut = np.maximum(L - r_t, r_h)
+    head_f = np.minimum(np.where(a_cut > 0, f_h, b), b)
+    mid_f = np.minimum(b, np.minimum(np.where(r_h + r_t > L, f_h, np.inf), np.where(r_h + r_t > L, f_t, np.inf)))
+    tail_f = np.minimum(np.where(b_cut < L, f_t, b), b)
+    head, tail = a_cut / L, (L - b_cut) / L
+    feeds = np.stack([head_f, mid_f, tail_f], axis=1)
+    multi = np.flatnonzero(~arc & ((n_h > 1) | (n_t > 1)))
+    if multi.size:
+        slot = np.full(M, -1)
+        slot[multi] = np.arange(multi.size)
+        head[multi], tail[multi], feeds[multi] = staircase_cut(
+            _pad_rows(slot, h_blk, h_reach, 0.0), _pad_rows(slot, h_blk, h_feed, np.inf),
+            _pad_rows(slot, t_blk, t_reach, 0.0), _pad_rows(slot, t_blk, t_feed, np.inf), L[multi], b[multi])
+    feeds[arc] = F[arc, None]
+    head[arc], tail[arc] = 0.0, 0.0
+    # an empty end piece takes the feed of the nearest piece that is not: eq 13/14 reads a block's
+    # entry and exit feeds from its first and last pieces
+    mid = 1.0 - head - tail > 0
+    h, m, t = feeds.T
+    feeds = np.stack([np.where(head > 0, h, np.where(mid, m, t)), m, np.where(tail > 0, t, np.where(mid, m, h))], axis=1)
+    return head, tail, feeds
+
+
+def _pad_rows(slot, blk, values, fill):
+    """``(B, K)`` rows of ``values`` grouped by ``slot[blk]`` (entries whose slot is -1 dropped),
+    padded with ``fill``."""
+    s = slot[blk]
+    keep = s >= 0
+    s, v = s[keep], values[keep]
+    order = np.argsort(s, kind="stable")
+    s, v = s[order], v[order]
+    B = int(slot.max()) + 1
+    count = np.bincount(s, minlength=B)
+    rank = np.arange(s.size) - np.repeat(np.cumsum(count) - count, count)
+    out = np.full((B, max(int(count.max(initial=0)), 1)), fill)
+    out[s, rank] = v
+    return out
+
+
+def test_line_pieces_match_the_numpy_form():
+    """``line_pieces`` (one compiled pass) against its whole-array NumPy form, bit for bit, on random
+    windows: lines reached by none, one or several windows from either end (the staircase cuts),
+    reaches beyond the line, arcs (untouched)."""
+    from research.interpolators._fir_lookahead import line_pieces
+
+    rng = np.random.default_rng(21)
+    for _ in range(30):
+        M = int(rng.integers(1, 40))
+        L = rng.uniform(0.01, 5.0, M)
+        F = rng.uniform(50.0, 300.0, M)
+        arc = rng.random(M) < 0.2
+        body = np.where(rng.random(M) < 0.3, rng.uniform(10.0, 300.0, M), F)
+        nh, nt = int(rng.integers(0, 3 * M)), int(rng.integers(0, 3 * M))
+        h = (rng.integers(0, M, nh), rng.uniform(0.0, 6.0, nh), rng.uniform(5.0, 300.0, nh))
+        t = (rng.integers(0, M, nt), rng.uniform(0.0, 6.0, nt), rng.uniform(5.0, 300.0, nt))
+        got = line_pieces(*h, *t, L, body, F, arc)
+        want = numpy_line_pieces(*h, *t, L, body, F, arc)
+        for g, w in zip(got, want):
+            np.testing.assert_array_equal(g, w)
