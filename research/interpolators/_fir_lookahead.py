@@ -324,9 +324,10 @@ def _candidate(tp, table, F_cmd, F, gap, budget, hold, tol_v, s_v, feeds_without
     lo, hi = s_v[j] - half * f, s_v[j] + half * f
     cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
     # blocks inside a window run at its feed; a window reaching into a block slows its head or tail
-    first, last = np.searchsorted(cum, lo, side="left"), np.searchsorted(cum, hi, side="right") - 2
+    right = np.searchsorted(cum, hi, side="right")
+    first, last = np.searchsorted(cum, lo, side="left"), right - 2
     body = range_min(first, last, f, M, F)
-    k_r = np.clip(np.searchsorted(cum, hi, side="right") - 1, 0, M - 1)  # block holding the window's right end
+    k_r = np.clip(right - 1, 0, M - 1)  # block holding the window's right end
     k_l = np.clip(np.searchsorted(cum, lo, side="right") - 1, 0, M - 1)
     # the window holds its feed for ``half`` of *time* each side of its vertex: through the blocks
     # it covers, which run at their (lower) body feeds, it reaches less far into the end block than f half
