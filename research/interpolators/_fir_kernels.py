@@ -16,6 +16,11 @@ the Newton search takes 3-5 evaluations per vertex where the false-position sear
 (benchmarks/README.md, bench_cam section); ``tests/interpolators/test_fir_kernels.py`` checks the
 kernels against slow independent computations.
 
+:func:`chain_feed_decisions` runs the same search only as far as a dwell decision of the
+look-ahead's tighter levels needs it (exact decisions), :func:`line_piece_feeds` the line pieces
+under the windows' staircase (bit for bit), and :func:`predicted_cycle` a candidate's predicted
+cycle time (a bound of the branch and bound) without its piece arrays.
+
 The verification kernels (:func:`sampled_line_distances`, :func:`corner_distances`) evaluate the
 exact profile on its NumPy arrays with Horner's rule, as :class:`research.piecewise.NumpyPiecewise`,
 and replace per-sample NumPy gathers (path check) and the JAX grid + Newton search
@@ -623,7 +628,8 @@ def predicted_cycle(lengths, feeds, block, role, fraction, arc_of, arc_rel, fact
     """Cycle time ``sum_pieces share L / (F f) + sum_corners (T_d - T_k) + T_d`` [s] of a candidate
     plan, in one pass (``fir.plan_fir``'s ``predicted_time``: ``PulseTable.pieces`` and
     ``_fir_profile.timing`` without their arrays; the same operations per piece and corner, summed in
-    order rather than pairwise, so equal to ~1e-15 relative). One or two filters (eq 13/14's closed
+    order rather than pairwise, and Numba's ``cbrt`` is not NumPy's bit for bit, so equal to ~1e-15
+relative: it is used as a bound only). One or two filters (eq 13/14's closed
     forms, as ``_fir_profile.overlaps``).
 
     Args:
