@@ -16,6 +16,11 @@ the Newton search takes 3-5 evaluations per vertex where the false-position sear
 (benchmarks/README.md, bench_cam section); ``tests/interpolators/test_fir_kernels.py`` checks the
 kernels against slow independent computations.
 
+:func:`chain_feed_decisions` runs the same search only as far as a dwell decision of the
+look-ahead's tighter levels needs it (exact decisions), :func:`line_piece_feeds` the line pieces
+under the windows' staircase (bit for bit), and :func:`predicted_cycle` a candidate's predicted
+cycle time (a bound of the branch and bound) without its piece arrays.
+
 The verification kernels (:func:`sampled_line_distances`, :func:`corner_distances`) evaluate the
 exact profile on its NumPy arrays with Horner's rule, as :class:`research.piecewise.NumpyPiecewise`,
 and replace per-sample NumPy gathers (path check) and the JAX grid + Newton search
@@ -215,52 +220,114 @@ def chain_largest_feeds(s, du, rho, sign, p, norm, prefix, binom, direct, q, hi,
     buf = np.zeros(du.shape[1])
     dbuf = np.zeros(du.shape[1])
     out = np.empty(J)
+    none = np.empty(0)
+    for j in range(J):
+        out[j] = _feed_search(s, du, rho, sign, p, norm, prefix, binom, direct, q[j], hi[j], tol[j], e_hi[j], steps,
+                              close, tiny, buf, dbuf, False, 0.0, 0.0, none)
+    return out
+
+
+@numba.njit(**_OPTIONS)
+def chain_feed_decisions(s, du, rho, sign, p, norm, prefix, binom, direct, q, hi, tol, e_hi, steps, close, tiny,
+                         stretch_cap, Td, costs):
+    """:func:`chain_largest_feeds` run only as far as the look-ahead's dwell decisions need it.
+
+    A nested level of ``_fir_lookahead`` reads its window feed ``f`` only through the decisions
+    ``cost <= slow_cost(f)`` (``_fir_lookahead._slow_cost``: ``min(f T_d, cap) (1 / f - 1 / hi)``,
+    non-increasing in ``f``), one per dwell rule. The search's bracket ``[l, h]`` only shrinks, and
+    the feed it would return lies in ``{l} U [l + w / 2, h - w / 2]`` (``w`` its resolution: every
+    later point is evaluated there). So once the bracket is wider than ``w`` and no cost lies in
+    ``(slow_cost(h), slow_cost(l)]`` (and ``l > 0``: the search may end at 0), every decision at
+    the search's own result is the one at ``h``, and ``h`` is returned: the same decisions, exactly
+    (the two ends are ``>= w / 2 ~ 7e-12`` relative apart, far above the rounding of
+    ``slow_cost``). A query decides at once where every cost is NaN (no decision read).
+
+    Args:
+        As :func:`chain_largest_feeds`; stretch_cap: ``(J,)`` the ``cap`` of ``slow_cost`` [mm];
+        Td: the window ``T_d`` [s]; costs: ``(J, C)`` dwell costs [s] (NaN: not read).
+
+    Returns:
+        ``(J,)`` feeds [mm/s] whose decisions ``cost <= slow_cost(feed)`` are those of the full search.
+    """
+    J = q.size
+    buf = np.zeros(du.shape[1])
+    dbuf = np.zeros(du.shape[1])
+    out = np.empty(J)
+    for j in range(J):
+        out[j] = _feed_search(s, du, rho, sign, p, norm, prefix, binom, direct, q[j], hi[j], tol[j], e_hi[j], steps,
+                              close, tiny, buf, dbuf, True, stretch_cap[j], Td, costs[j])
+    return out
+
+
+@numba.njit(**_OPTIONS)
+def _slow_cost(f, cap, Td, F):
+    """``_fir_lookahead._slow_cost`` of one feed (the same operations, so the same rounding)."""
+    return min(f * Td, cap) * (1.0 / max(f, 1e-300) - 1.0 / F)
+
+
+@numba.njit(**_OPTIONS)
+def _decided(l, h, F, cap, Td, costs):
+    """No cost lies in ``(slow_cost(h), slow_cost(l)]`` (:func:`chain_feed_decisions`); while
+    ``l = 0`` only a query without costs is (the search may still end at 0, whose ``slow_cost``
+    rounds to 0)."""
+    s_h = _slow_cost(h, cap, Td, F)
+    s_l = _slow_cost(l, cap, Td, F)
+    for c in costs:
+        if c == c and (l == 0.0 or s_h < c <= s_l):
+            return False
+    return True
+
+
+@numba.njit(**_OPTIONS)
+def _feed_search(s, du, rho, sign, p, norm, prefix, binom, direct, qj, hj, t, e, steps, close, tiny, buf, dbuf,
+                 decide, cap, Td, costs):
+    """One query of :func:`chain_largest_feeds` (``decide``: stopped as :func:`chain_feed_decisions`)."""
+    h = hj
+    if e <= t:
+        return h
+    if not t > 0:
+        return 0.0
+    if decide and _decided(0.0, h, hj, cap, Td, costs):
+        return h
     resolution = 0.5 ** steps
     target = -0.5 * close
-    for j in range(J):
-        h, t, e = hi[j], tol[j], e_hi[j]
-        if e <= t:
-            out[j] = h
+    g_h = math.log(e / t)
+    x = h * t / e
+    l, g_l, g_low = 0.0, -np.inf, -np.inf  # g_low: the low end's own g (g_l is Illinois-weighted)
+    width = h * resolution
+    side = 0
+    for it in range(2 * steps):
+        gx, slope = _log_error(s, du, rho, sign, p, norm, prefix, binom, direct, qj, x, t, tiny, buf, dbuf)
+        if gx <= 0:
+            if side == -1:
+                g_h = 0.5 * g_h
+            g_l, g_low, l = gx, gx, x
+            side = -1
+        elif it == 0:  # the first point is infeasible: the bracket stays [0, hi], bisected
+            x = 0.5 * h
             continue
-        if not t > 0:
-            out[j] = 0.0
-            continue
-        g_h = math.log(e / t)
-        x = h * t / e
-        l, g_l, g_low = 0.0, -np.inf, -np.inf  # g_low: the low end's own g (g_l is Illinois-weighted)
-        width = h * resolution
-        side = 0
-        for it in range(2 * steps):
-            gx, slope = _log_error(s, du, rho, sign, p, norm, prefix, binom, direct, q[j], x, t, tiny, buf, dbuf)
-            if gx <= 0:
-                if side == -1:
-                    g_h = 0.5 * g_h
-                g_l, g_low, l = gx, gx, x
-                side = -1
-            elif it == 0:  # the first point is infeasible: the bracket stays [0, hi], bisected
-                x = 0.5 * h
-                continue
+        else:
+            if side == 1:
+                g_l = 0.5 * g_l
+            g_h, h = gx, x
+            side = 1
+        if not (h - l > width and g_low < -close):
+            break
+        if decide and _decided(l, h, hj, cap, Td, costs):
+            return h
+        guard = 0.5 * width
+        nxt = math.exp(math.log(x) - (gx - target) / slope) if slope > 0 else np.nan
+        if not (l + guard <= nxt <= h - guard):  # no slope, or a step out of the bracket
+            if l > 0:
+                xl = math.log(l)
+                nxt = math.exp(xl + (math.log(h) - xl) * (-g_l) / (g_h - g_l))
             else:
-                if side == 1:
-                    g_l = 0.5 * g_l
-                g_h, h = gx, x
-                side = 1
-            if not (h - l > width and g_low < -close):
-                break
-            guard = 0.5 * width
-            nxt = math.exp(math.log(x) - (gx - target) / slope) if slope > 0 else np.nan
-            if not (l + guard <= nxt <= h - guard):  # no slope, or a step out of the bracket
-                if l > 0:
-                    xl = math.log(l)
-                    nxt = math.exp(xl + (math.log(h) - xl) * (-g_l) / (g_h - g_l))
-                else:
-                    nxt = 0.5 * h  # no power law through F = 0: bisect
-                if nxt != nxt:
-                    nxt = 0.5 * (l + h)
-                nxt = min(max(nxt, l + guard), h - guard)
-            x = nxt
-        out[j] = l
-    return out
+                nxt = 0.5 * h  # no power law through F = 0: bisect
+            if nxt != nxt:
+                nxt = 0.5 * (l + h)
+            nxt = min(max(nxt, l + guard), h - guard)
+        x = nxt
+    return l
 
 
 @numba.njit(**_OPTIONS)
@@ -319,6 +386,22 @@ def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, se
 
 
 @numba.njit(**_OPTIONS)
+def _value(breaks, coeffs, t, out, hint):
+    """Row 0 of :func:`_derivatives` (the value, by the same operations) into ``out[0]``."""
+    K, D, A = coeffs.shape[0], coeffs.shape[1], coeffs.shape[2]
+    tc = min(max(t, breaks[0]), breaks[K])
+    found = _right_from(breaks, tc, hint)
+    piece = min(max(found - 1, 0), K - 1)
+    tau = tc - breaks[piece]
+    for a in range(A):
+        v = coeffs[piece, D - 1, a]
+        for m in range(D - 2, -1, -1):
+            v = v * tau + coeffs[piece, m, a]
+        out[0, a] = v
+    return found
+
+
+@numba.njit(**_OPTIONS)
 def _derivatives(breaks, coeffs, t, out, hint):
     """Value, first and second derivative of the profile at ``t`` into ``out`` ``(3, A)``
     (right-searched piece from the index ``hint``, clipped time; derivatives 0 outside the breaks).
@@ -365,7 +448,7 @@ def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton
         hint = first
         for g in range(grid):
             tg = centre[c] + half_window * (-1.0 + 2.0 * g / (grid - 1))
-            hint = _derivatives(breaks, coeffs, tg, buf, hint)
+            hint = _value(breaks, coeffs, tg, buf, hint)  # the grid needs the position only
             if g == 0:
                 first = hint
             d2 = 0.0
@@ -386,7 +469,7 @@ def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton
             if curvature > 0:
                 t = t - slope / curvature
             t = min(max(t, lo), hi)
-        _derivatives(breaks, coeffs, t, buf, hint)
+        _value(breaks, coeffs, t, buf, hint)
         d2 = 0.0
         for a in range(A):
             e = buf[0, a] - vertices[c, a]
@@ -536,4 +619,159 @@ def staircase_cuts(r_h, f_h, r_t, f_t, length, cap):
         feeds[b, 0] = min(low[0, a] if xa > 0 else cap[b], cap[b])
         feeds[b, 1] = min(low[a, c] if xc > xa else cap[b], cap[b])
         feeds[b, 2] = min(low[c, n - 1] if xc < L else cap[b], cap[b])
+    return head, tail, feeds
+
+
+@numba.njit(**_OPTIONS)
+def predicted_cycle(lengths, feeds, block, role, fraction, arc_of, arc_rel, factor, head, tail, first_motion,
+                    last_motion, t_in, t_out, full, shrink, others, tol_v, delays, h_full):
+    """Cycle time ``sum_pieces share L / (F f) + sum_corners (T_d - T_k) + T_d`` [s] of a candidate
+    plan, in one pass (``fir.plan_fir``'s ``predicted_time``: ``PulseTable.pieces`` and
+    ``_fir_profile.timing`` without their arrays; the same operations per piece and corner, summed in
+    order rather than pairwise, and Numba's ``cbrt`` is not NumPy's bit for bit, so equal to ~1e-15
+relative: it is used as a bound only). One or two filters (eq 13/14's closed
+    forms, as ``_fir_profile.overlaps``).
+
+    Args:
+        lengths, feeds: ``(M,)`` block lengths [mm] and commanded feeds [mm/s]; block, role,
+            fraction: the table's pieces (role 0 / 1 / 2 a line's head / body / tail, -1 otherwise;
+            pieces of ``block >= M`` are padding); arc_of: ``(P,)`` index of each sub-arc piece in
+            ``arc_rel`` (-1 elsewhere); factor ``(M, 3)``, head, tail ``(M,)``: the candidate's
+            feed factors and shares; first_motion, last_motion: ``(M,)`` pieces; t_in, t_out:
+            ``(M, d)`` tangents; full, shrink, others, tol_v: ``(M - 1,)`` per corner; delays:
+            ``(n,)`` sorted descending, ``n <= 2``; h_full: ``H2(T_d / 2)``.
+    """
+    M = lengths.size
+    P = block.size
+    total = 0.0
+    for i in range(P):
+        b = block[i]
+        if b >= M:
+            continue
+        r = role[i]
+        if r == 0:
+            fr = head[b]
+        elif r == 1:
+            fr = 1.0 - head[b] - tail[b]
+        elif r == 2:
+            fr = tail[b]
+        else:
+            fr = fraction[i]
+        f = factor[b, r if r >= 0 else 1]
+        a = arc_of[i]
+        if a >= 0:
+            f *= arc_rel[a]
+        total += fr * (lengths[b] / (feeds[b] * f))
+    Td = 0.0
+    for k in range(delays.size):
+        Td += delays[k]
+    T1 = delays[0]
+    T2 = delays[1] if delays.size > 1 else 0.0
+    dims = t_in.shape[1]
+    gaps = 0.0
+    for j in range(M - 1):
+        if full[j]:
+            ov = Td
+        else:
+            f_in = feeds[j + 1] * _piece_factor(factor, arc_rel, role, arc_of, block, first_motion[j + 1])
+            f_out = feeds[j] * _piece_factor(factor, arc_rel, role, arc_of, block, last_motion[j])
+            s = 0.0
+            for c in range(dims):
+                x = f_in * t_in[j + 1, c] - f_out * t_out[j, c]
+                s += x * x
+            dF = math.sqrt(s) if s > 0 else 0.0
+            tol = max(tol_v[j] - others[j], 0.0)
+            h = min(tol / (dF if dF > 0 else 1.0), h_full)
+            if dF > 0 and h < h_full:
+                if delays.size == 1:
+                    Tk = math.sqrt(8.0 * T1 * h)
+                elif h <= T2**2 / (6.0 * T1):
+                    Tk = np.cbrt(48.0 * T1 * T2 * h)
+                else:
+                    Tk = T2 + math.sqrt(8.0 * T1 * h - T2**2 / 3.0)
+                ov = min(max(Tk, 0.0), Td)
+            else:
+                ov = Td
+        gaps += Td - ov * shrink[j]
+    return total + gaps + Td
+
+
+@numba.njit(**_OPTIONS)
+def _piece_factor(factor, arc_rel, role, arc_of, block, i):
+    """Feed factor of piece ``i`` (``PulseTable.pieces``)."""
+    r = role[i]
+    f = factor[block[i], r if r >= 0 else 1]
+    a = arc_of[i]
+    if a >= 0:
+        f *= arc_rel[a]
+    return f
+
+
+@numba.njit(**_OPTIONS)
+def line_piece_feeds(h_blk, h_reach, h_feed, t_blk, t_reach, t_feed, L, body, F, arc):
+    """``_fir_lookahead.line_pieces`` in one compiled pass (the same operations per line, and the
+    same padded rows for :func:`staircase_cuts`, so bit for bit): returns ``(head, tail, feeds)``."""
+    M = L.size
+    n_h, n_t = np.zeros(M, np.int64), np.zeros(M, np.int64)
+    r_h, f_h, r_t, f_t = np.zeros(M), np.full(M, np.inf), np.zeros(M), np.full(M, np.inf)
+    for i in range(h_blk.size):
+        k = h_blk[i]
+        n_h[k] += 1
+        r_h[k] = max(r_h[k], h_reach[i])
+        f_h[k] = min(f_h[k], h_feed[i])
+    for i in range(t_blk.size):
+        k = t_blk[i]
+        n_t[k] += 1
+        r_t[k] = max(r_t[k], t_reach[i])
+        f_t[k] = min(f_t[k], t_feed[i])
+    head, tail, feeds = np.empty(M), np.empty(M), np.empty((M, 3))
+    b = np.empty(M)
+    slot = np.full(M, -1)
+    B, H, T = 0, 1, 1
+    for k in range(M):
+        b[k] = min(body[k], F[k])
+        # one window at each end (or none): the staircase has at most three steps
+        a_cut = min(r_h[k], L[k] - r_t[k])  # the head piece ends where the tail's reach begins, if earlier
+        b_cut = max(L[k] - r_t[k], r_h[k])
+        over = r_h[k] + r_t[k] > L[k]
+        feeds[k, 0] = min(f_h[k] if a_cut > 0 else b[k], b[k])
+        feeds[k, 1] = min(b[k], min(f_h[k] if over else np.inf, f_t[k] if over else np.inf))
+        feeds[k, 2] = min(f_t[k] if b_cut < L[k] else b[k], b[k])
+        head[k], tail[k] = a_cut / L[k], (L[k] - b_cut) / L[k]
+        if not arc[k] and (n_h[k] > 1 or n_t[k] > 1):
+            slot[k] = B
+            B += 1
+            H, T = max(H, n_h[k]), max(T, n_t[k])
+    if B:
+        rh, fh = np.zeros((B, H)), np.full((B, H), np.inf)
+        rt, ft = np.zeros((B, T)), np.full((B, T), np.inf)
+        fill_h, fill_t = np.zeros(B, np.int64), np.zeros(B, np.int64)
+        for i in range(h_blk.size):  # entries in their order within each line (a stable sort)
+            s = slot[h_blk[i]]
+            if s >= 0:
+                rh[s, fill_h[s]], fh[s, fill_h[s]] = h_reach[i], h_feed[i]
+                fill_h[s] += 1
+        for i in range(t_blk.size):
+            s = slot[t_blk[i]]
+            if s >= 0:
+                rt[s, fill_t[s]], ft[s, fill_t[s]] = t_reach[i], t_feed[i]
+                fill_t[s] += 1
+        rows = np.flatnonzero(slot >= 0)
+        hs, ts, fs = staircase_cuts(rh, fh, rt, ft, L[rows], b[rows])
+        for s in range(B):
+            k = rows[s]
+            head[k], tail[k] = hs[s], ts[s]
+            for c in range(3):
+                feeds[k, c] = fs[s, c]
+    for k in range(M):
+        if arc[k]:
+            for c in range(3):
+                feeds[k, c] = F[k]
+            head[k], tail[k] = 0.0, 0.0
+        # an empty end piece takes the feed of the nearest piece that is not: eq 13/14 reads a
+        # block's entry and exit feeds from its first and last pieces
+        mid = 1.0 - head[k] - tail[k] > 0
+        h, m, t = feeds[k, 0], feeds[k, 1], feeds[k, 2]
+        feeds[k, 0] = h if head[k] > 0 else (m if mid else t)
+        feeds[k, 2] = t if tail[k] > 0 else (m if mid else h)
     return head, tail, feeds

@@ -90,7 +90,7 @@ import numpy as np
 
 from research.interpolators._fir_blocks import PulseTable
 from research.interpolators._fir_feed import ChainError, range_min
-from research.interpolators._fir_kernels import staircase_cuts
+from research.interpolators._fir_kernels import line_piece_feeds, staircase_cuts
 from research.interpolators._fir_profile import kernel_second_integral, overlaps
 from research.paths.toolpath import ToolPath
 from research.piecewise import bucket_size
@@ -163,9 +163,21 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     Tk = overlaps(both, np.tile(np.pad(dF, (0, pad), constant_values=1.0), (2 * K1, 1)), delays)[:, : M - 1]
     Tk_budget, Tk_whole = Tk[:K1], Tk[K1:]
     f_lv = np.broadcast_to(Fv, levels.shape).copy()
-    k_q, j_q = np.nonzero(need)
-    if k_q.size:  # window feeds on the whole chain, every level in one root search
-        f_lv[k_q, j_q] = every.largest_feed(s_v[j_q], Fv[j_q], levels[k_q, j_q], e_all[j_q])
+    j_q = np.flatnonzero(need[0])
+    if j_q.size:  # window feeds on the whole chain at the tolerance itself: the feeds of the plans
+        f_lv[0, j_q] = every.largest_feed(s_v[j_q], Fv[j_q], levels[0, j_q], e_all[j_q])
+    # the tighter levels read their window feeds only through the dwell decisions of _dwell_sets
+    # (cost <= _slow_cost(f), where a rule can dwell; the deep levels only the "isolated" rule's):
+    # a search stopped once its bracket settles them gives the same decisions (ChainError.feed_decisions)
+    Lj = tp.lengths
+    cap = 0.5 * (Lj[:-1] + Lj[1:])
+    rows = np.arange(K1)[:, None]
+    cost_b = np.where(_can_dwell(need, budget, Tk_budget, Td) & (rows <= NEST_STEPS), Td - Tk_budget, np.nan)
+    cost_w = np.where(_can_dwell(need, levels, Tk_whole, Td), Td - Tk_whole, np.nan)
+    k_q, j_q = np.nonzero((rows >= 1) & ~(np.isnan(cost_b) & np.isnan(cost_w)))
+    if k_q.size:  # every tighter level in one search
+        f_lv[k_q, j_q] = every.feed_decisions(s_v[j_q], Fv[j_q], levels[k_q, j_q], e_all[j_q], cap[j_q], Td,
+                                              np.stack([cost_b[k_q, j_q], cost_w[k_q, j_q]], axis=1))
     reach = Fv * every.rho.max()  # a window at a feed <= Fv sums the turns strictly inside s_v +- reach
     f_w = f_lv[0]
     # the vertices strictly inside each window's reach: indices [w_lo, w_hi)
@@ -270,6 +282,12 @@ def _slow_cost(L, Td, Fv, f):
 _EVERY_CAN = 2  # index of "every vertex that can dwell" among the sets of _dwell_sets
 
 
+def _can_dwell(need, tol, Tk, Td):
+    """Where a vertex can dwell under a rule that leaves it the tolerance ``tol``: it needs a
+    slow-down, ``tol > 0`` and eq 13/14 gives a gap (``T_k < T_d``)."""
+    return need & (tol > 0) & (Tk < Td * (1 - 1e-12))
+
+
 def _dwell_sets(L, Td, Fv, f_w, need, tol, budget, Tk_budget, Tk_whole):
     """The dwell sets of one tolerance ``tol`` ``(M - 1,)``, each ``(rule, mask)`` (rule 0:
     "budget", 1: "isolated"): where the dwell is estimated cheaper than the slow-down (both rules),
@@ -282,7 +300,7 @@ def _dwell_sets(L, Td, Fv, f_w, need, tol, budget, Tk_budget, Tk_whole):
     slow_cost = _slow_cost(L, Td, Fv, f_w)
     out = []
     for rule, b, Tk in ((0, budget, Tk_budget), (1, tol, Tk_whole)):
-        can = need & (b > 0) & (Tk < Td * (1 - 1e-12))
+        can = _can_dwell(need, b, Tk, Td)
         out.append((rule, can & (Td - Tk <= slow_cost)))
         if rule == 1:
             out += [(1, can), (1, np.zeros_like(can))]
@@ -306,9 +324,10 @@ def _candidate(tp, table, F_cmd, F, gap, budget, hold, tol_v, s_v, feeds_without
     lo, hi = s_v[j] - half * f, s_v[j] + half * f
     cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
     # blocks inside a window run at its feed; a window reaching into a block slows its head or tail
-    first, last = np.searchsorted(cum, lo, side="left"), np.searchsorted(cum, hi, side="right") - 2
+    right = np.searchsorted(cum, hi, side="right")
+    first, last = np.searchsorted(cum, lo, side="left"), right - 2
     body = range_min(first, last, f, M, F)
-    k_r = np.clip(np.searchsorted(cum, hi, side="right") - 1, 0, M - 1)  # block holding the window's right end
+    k_r = np.clip(right - 1, 0, M - 1)  # block holding the window's right end
     k_l = np.clip(np.searchsorted(cum, lo, side="right") - 1, 0, M - 1)
     # the window holds its feed for ``half`` of *time* each side of its vertex: through the blocks
     # it covers, which run at their (lower) body feeds, it reaches less far into the end block than f half
@@ -346,54 +365,11 @@ def line_pieces(h_blk, h_reach, h_feed, t_blk, t_reach, t_feed, L, body, F, arc)
     Returns:
         ``(head, tail, feeds)``: head and tail shares ``(M,)`` of the block length and the feeds
         ``(M, 3)`` [mm/s] of head, body and tail (``F`` and shares 0 on arcs and untouched lines).
+        One compiled pass (``_fir_kernels.line_piece_feeds``).
     """
-    M = L.size
-    n_h, n_t = np.bincount(h_blk, minlength=M), np.bincount(t_blk, minlength=M)
-    r_h, f_h, r_t, f_t = np.zeros(M), np.full(M, np.inf), np.zeros(M), np.full(M, np.inf)
-    np.maximum.at(r_h, h_blk, h_reach)
-    np.minimum.at(f_h, h_blk, h_feed)
-    np.maximum.at(r_t, t_blk, t_reach)
-    np.minimum.at(f_t, t_blk, t_feed)
-    b = np.minimum(body, F)
-    # one window at each end (or none): the staircase has at most three steps
-    a_cut = np.minimum(r_h, L - r_t)  # the head piece ends where the tail's reach begins, if earlier
-    b_cut = np.maximum(L - r_t, r_h)
-    head_f = np.minimum(np.where(a_cut > 0, f_h, b), b)
-    mid_f = np.minimum(b, np.minimum(np.where(r_h + r_t > L, f_h, np.inf), np.where(r_h + r_t > L, f_t, np.inf)))
-    tail_f = np.minimum(np.where(b_cut < L, f_t, b), b)
-    head, tail = a_cut / L, (L - b_cut) / L
-    feeds = np.stack([head_f, mid_f, tail_f], axis=1)
-    multi = np.flatnonzero(~arc & ((n_h > 1) | (n_t > 1)))
-    if multi.size:
-        slot = np.full(M, -1)
-        slot[multi] = np.arange(multi.size)
-        head[multi], tail[multi], feeds[multi] = staircase_cut(
-            _pad_rows(slot, h_blk, h_reach, 0.0), _pad_rows(slot, h_blk, h_feed, np.inf),
-            _pad_rows(slot, t_blk, t_reach, 0.0), _pad_rows(slot, t_blk, t_feed, np.inf), L[multi], b[multi])
-    feeds[arc] = F[arc, None]
-    head[arc], tail[arc] = 0.0, 0.0
-    # an empty end piece takes the feed of the nearest piece that is not: eq 13/14 reads a block's
-    # entry and exit feeds from its first and last pieces
-    mid = 1.0 - head - tail > 0
-    h, m, t = feeds.T
-    feeds = np.stack([np.where(head > 0, h, np.where(mid, m, t)), m, np.where(tail > 0, t, np.where(mid, m, h))], axis=1)
-    return head, tail, feeds
-
-
-def _pad_rows(slot, blk, values, fill):
-    """``(B, K)`` rows of ``values`` grouped by ``slot[blk]`` (entries whose slot is -1 dropped),
-    padded with ``fill``."""
-    s = slot[blk]
-    keep = s >= 0
-    s, v = s[keep], values[keep]
-    order = np.argsort(s, kind="stable")
-    s, v = s[order], v[order]
-    B = int(slot.max()) + 1
-    count = np.bincount(s, minlength=B)
-    rank = np.arange(s.size) - np.repeat(np.cumsum(count) - count, count)
-    out = np.full((B, max(int(count.max(initial=0)), 1)), fill)
-    out[s, rank] = v
-    return out
+    return line_piece_feeds(*(np.ascontiguousarray(a) for a in (h_blk, h_reach, h_feed, t_blk, t_reach, t_feed)),
+                            np.ascontiguousarray(L), np.ascontiguousarray(body), np.ascontiguousarray(F),
+                            np.ascontiguousarray(arc))
 
 
 def staircase_cut(r_h, f_h, r_t, f_t, length, cap):

@@ -67,6 +67,7 @@ from research.interpolators._fir_candidates import FIRSweep, envelope
 from research.interpolators._fir_chain import check_delays
 from research.interpolators._fir_convolution import fir_by_convolution  # noqa: F401 (re-exported)
 from research.interpolators._fir_feed import arc_feed_caps
+from research.interpolators._fir_kernels import predicted_cycle
 from research.interpolators._fir_limits import (
     BISECTION_STEPS,
     LIMIT_RTOL,
@@ -262,13 +263,26 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                                                  tangents_np, full, shrink, others, tv_np, d_np)
         return frac, piece_tv, cruise, overlaps
 
+    d_sorted = np.sort(d_np)[::-1]
+    h_full = float(_fir_profile._h_full(tuple(d_sorted.tolist()))) if d_np.size <= 2 else 0.0
+    no_arc = np.full(table.block.size, -1, dtype=np.int64)  # sub-arc index of every piece (-1: none)
+    arc_of = no_arc.copy()
+    arc_of[table.arc_pieces] = np.arange(table.arc_pieces.size)
+    no_rel = np.zeros(0)
+
     def predicted_time(candidate, shrink=None) -> float:
         """Cycle time of a candidate (or of a repaired one, with its overlap ``shrink``) before
         verification: a lower bound on its verified time, because repairs only shrink overlaps and
-        lower feeds."""
-        frac, piece_tv, _, overlaps = timing(*candidate[:4], np.ones(M - 1) if shrink is None else shrink, *candidate[4:],
-                                             top=False)
-        return float(np.sum(frac * piece_tv) + np.sum(Td_np - overlaps) + Td_np)
+        lower feeds (one compiled pass for one or two filters, ``_fir_kernels.predicted_cycle``)."""
+        shrink = np.ones(M - 1) if shrink is None else shrink
+        if d_np.size > 2:
+            frac, piece_tv, _, overlaps = timing(*candidate[:4], shrink, *candidate[4:], top=False)
+            return float(np.sum(frac * piece_tv) + np.sum(Td_np - overlaps) + Td_np)
+        factor, head, tail, full, others, arc_rel = candidate
+        arcs, rel = (no_arc, no_rel) if arc_rel is None else (arc_of, arc_rel)
+        return float(predicted_cycle(tp.lengths, F_np, table.block, table.role, table.fraction, arcs, rel, factor,
+                                     head, tail, table.first_motion,
+                                     table.last_motion, t_in, t_out, full, shrink, others, tv_np, d_sorted, h_full))
 
     def schedule(factor, head, tail, full, shrink, others, arc_rel):
         """``(feeds, overlaps, pulse lengths, pulse starts, position, corner instants, inputs)`` on

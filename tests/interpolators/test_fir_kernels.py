@@ -251,3 +251,161 @@ def test_staircase_kernel_is_the_numpy_form_bit_for_bit():
         want = numpy_staircase_cut(r_h, f_h, r_t, f_t, length, cap)
         for g, w in zip(got, want):
             np.testing.assert_array_equal(g, w)
+
+
+def _lookahead_candidates(seed, arcs, delays):
+    """The look-ahead's candidates of a seeded random program, with what ``plan_fir`` times them by."""
+    from research.interpolators._fir_lookahead import look_ahead
+    from research.interpolators.fir import _as_toolpath, _pulse_table
+    from research.paths.library import random_program
+
+    rng = np.random.default_rng(seed)
+    tp = _as_toolpath(random_program(rng, arcs=arcs))
+    eps, feed = float(np.exp(rng.uniform(np.log(0.005), np.log(0.5)))), float(rng.uniform(20.0, 300.0))
+    M = tp.n_blocks
+    t_in, t_out = tp.tangents()
+    table = _pulse_table(tp)
+    d = np.asarray(delays)
+    cands = look_ahead(tp, table, np.full(M, feed), np.ones(M), d, np.full(M - 1, eps), t_in, t_out)
+    return tp, table, feed, eps, d, t_in, t_out, cands
+
+
+@pytest.mark.parametrize("delays", [(0.06, 0.03), (0.08,)])
+@pytest.mark.parametrize("arcs", [False, True])
+def test_predicted_cycle_matches_the_piece_arrays(delays, arcs):
+    """``predicted_cycle`` (one pass) against the cycle time summed from the arrays of
+    ``PulseTable.pieces`` and ``_fir_profile.timing`` (eq 5 pulses, eq 13/14 overlaps), on the
+    look-ahead's candidates of random programs with random overlap shrinks."""
+    from research.interpolators import _fir_profile
+    from research.interpolators._fir_kernels import predicted_cycle
+
+    rng = np.random.default_rng(3)
+    for seed in range(6):
+        tp, table, feed, eps, d, t_in, t_out, cands = _lookahead_candidates(seed, arcs, delays)
+        M, Mp = tp.n_blocks, table.m_pad
+        lengths = np.concatenate([tp.lengths, np.ones(Mp - M + 1)])
+        feeds = np.concatenate([np.full(M, feed), np.ones(Mp - M + 1)])
+        ends = np.stack([np.pad(table.first_motion, (0, Mp - M)), np.pad(table.last_motion, (0, Mp - M))])
+        tangents = np.stack([np.pad(t_in, ((0, Mp - M), (0, 0))), np.pad(t_out, ((0, Mp - M), (0, 0)))])
+        tol_v = np.full(M - 1, eps)
+        arc_of = np.full(table.block.size, -1)
+        arc_of[table.arc_pieces] = np.arange(table.arc_pieces.size)
+        ds = np.sort(d)[::-1]
+        h_full = float(kernel_second_integral(np.array(0.5 * d.sum()), ds))
+        for factor, head, tail, full, others, arc_rel in cands:
+            shrink = np.where(rng.random(M - 1) < 0.3, rng.random(M - 1), 1.0)
+            frac, pf = table.pieces(head, tail, factor, arc_rel)
+            tv, ov = _fir_profile.timing(lengths, feeds, table.block, pf, ends, tangents, full, shrink, others, tol_v, d)
+            want = float(np.sum(frac * tv) + np.sum(d.sum() - ov) + d.sum())
+            got = predicted_cycle(tp.lengths, np.full(M, feed), table.block, table.role, table.fraction, arc_of,
+                                  arc_rel, factor, head, tail, table.first_motion, table.last_motion, t_in, t_out, full,
+                                  shrink, others, tol_v, ds, h_full)
+            assert abs(got - want) <= 1e-12 * want, (seed, got, want)
+
+
+def test_feed_decisions_are_those_of_the_full_search():
+    """``ChainError.feed_decisions`` stops the root search once its bracket settles every decision
+    ``cost <= slow_cost(f)``; the decisions at its feeds equal those at ``largest_feed``'s, for costs
+    drawn anywhere and costs within 1e-9 relative of the full search's own ``slow_cost`` (the hard
+    cases), and NaN costs (no decision)."""
+    from research.interpolators._fir_lookahead import _slow_cost
+
+    rng = np.random.default_rng(11)
+    T, delays = 600, np.array([0.06, 0.03])
+    Td = float(delays.sum())
+    for span in (2000.0, 200.0):
+        s = np.sort(rng.uniform(0.0, span, T))
+        du = rng.normal(0.0, 0.05, (T, 2))
+        chain = ChainError(s, du, delays)
+        J = 400
+        sq, hi = rng.uniform(0.0, span, J), rng.uniform(20.0, 300.0, J)
+        tol = np.exp(rng.uniform(np.log(1e-4), np.log(0.05), J))
+        e = chain(sq, hi)
+        cap = rng.uniform(0.01, 5.0, J)
+        full = chain.largest_feed(sq, hi, tol, e)
+        sc_full = np.asarray([_slow_cost(np.array([c, c]), Td, np.array([h]), np.array([f]))[0]
+                              for c, h, f in zip(cap, hi, full)])
+        near = sc_full * (1.0 + rng.choice([-1e-9, 0.0, 1e-9], J))
+        costs = np.stack([np.where(rng.random(J) < 0.2, np.nan, rng.uniform(0.0, 0.1, J)), near], axis=1)
+        got = chain.feed_decisions(sq, hi, tol, e, cap, Td, costs)
+        sc_got = np.asarray([_slow_cost(np.array([c, c]), Td, np.array([h]), np.array([f]))[0]
+                             for c, h, f in zip(cap, hi, got)])
+        for k in range(2):
+            read = ~np.isnan(costs[:, k])
+            np.testing.assert_array_equal((costs[:, k] <= sc_got)[read], (costs[:, k] <= sc_full)[read])
+        assert np.any(got != full)  # the searches did stop early
+
+
+def numpy_line_pieces(h_blk, h_reach, h_feed, t_blk, t_reach, t_feed, L, body, F, arc):
+    """``_fir_lookahead.line_pieces`` by whole-array NumPy (its form before the compiled pass)."""
+    from research.interpolators._fir_lookahead import staircase_cut
+
+    M = L.size
+    n_h, n_t = np.bincount(h_blk, minlength=M), np.bincount(t_blk, minlength=M)
+    r_h, f_h, r_t, f_t = np.zeros(M), np.full(M, np.inf), np.zeros(M), np.full(M, np.inf)
+    np.maximum.at(r_h, h_blk, h_reach)
+    np.minimum.at(f_h, h_blk, h_feed)
+    np.maximum.at(r_t, t_blk, t_reach)
+    np.minimum.at(f_t, t_blk, t_feed)
+    b = np.minimum(body, F)
+    # one window at each end (or none): the staircase has at most three steps
+    a_cut = np.minimum(r_h, L - r_t)  # the head piece ends where the tail's reach begins, if earlier
+    b_cut = np.maximum(L - r_t, r_h)
+    head_f = np.minimum(np.where(a_cut > 0, f_h, b), b)
+    mid_f = np.minimum(b, np.minimum(np.where(r_h + r_t > L, f_h, np.inf), np.where(r_h + r_t > L, f_t, np.inf)))
+    tail_f = np.minimum(np.where(b_cut < L, f_t, b), b)
+    head, tail = a_cut / L, (L - b_cut) / L
+    feeds = np.stack([head_f, mid_f, tail_f], axis=1)
+    multi = np.flatnonzero(~arc & ((n_h > 1) | (n_t > 1)))
+    if multi.size:
+        slot = np.full(M, -1)
+        slot[multi] = np.arange(multi.size)
+        head[multi], tail[multi], feeds[multi] = staircase_cut(
+            _pad_rows(slot, h_blk, h_reach, 0.0), _pad_rows(slot, h_blk, h_feed, np.inf),
+            _pad_rows(slot, t_blk, t_reach, 0.0), _pad_rows(slot, t_blk, t_feed, np.inf), L[multi], b[multi])
+    feeds[arc] = F[arc, None]
+    head[arc], tail[arc] = 0.0, 0.0
+    # an empty end piece takes the feed of the nearest piece that is not: eq 13/14 reads a block's
+    # entry and exit feeds from its first and last pieces
+    mid = 1.0 - head - tail > 0
+    h, m, t = feeds.T
+    feeds = np.stack([np.where(head > 0, h, np.where(mid, m, t)), m, np.where(tail > 0, t, np.where(mid, m, h))], axis=1)
+    return head, tail, feeds
+
+
+def _pad_rows(slot, blk, values, fill):
+    """``(B, K)`` rows of ``values`` grouped by ``slot[blk]`` (entries whose slot is -1 dropped),
+    padded with ``fill``."""
+    s = slot[blk]
+    keep = s >= 0
+    s, v = s[keep], values[keep]
+    order = np.argsort(s, kind="stable")
+    s, v = s[order], v[order]
+    B = int(slot.max()) + 1
+    count = np.bincount(s, minlength=B)
+    rank = np.arange(s.size) - np.repeat(np.cumsum(count) - count, count)
+    out = np.full((B, max(int(count.max(initial=0)), 1)), fill)
+    out[s, rank] = v
+    return out
+
+
+def test_line_pieces_match_the_numpy_form():
+    """``line_pieces`` (one compiled pass) against its whole-array NumPy form, bit for bit, on random
+    windows: lines reached by none, one or several windows from either end (the staircase cuts),
+    reaches beyond the line, arcs (untouched)."""
+    from research.interpolators._fir_lookahead import line_pieces
+
+    rng = np.random.default_rng(21)
+    for _ in range(30):
+        M = int(rng.integers(1, 40))
+        L = rng.uniform(0.01, 5.0, M)
+        F = rng.uniform(50.0, 300.0, M)
+        arc = rng.random(M) < 0.2
+        body = np.where(rng.random(M) < 0.3, rng.uniform(10.0, 300.0, M), F)
+        nh, nt = int(rng.integers(0, 3 * M)), int(rng.integers(0, 3 * M))
+        h = (rng.integers(0, M, nh), rng.uniform(0.0, 6.0, nh), rng.uniform(5.0, 300.0, nh))
+        t = (rng.integers(0, M, nt), rng.uniform(0.0, 6.0, nt), rng.uniform(5.0, 300.0, nt))
+        got = line_pieces(*h, *t, L, body, F, arc)
+        want = numpy_line_pieces(*h, *t, L, body, F, arc)
+        for g, w in zip(got, want):
+            np.testing.assert_array_equal(g, w)
