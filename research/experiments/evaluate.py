@@ -125,9 +125,9 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
             program = read_program(cfg.path, base)
             path, program_feeds = program.polyline, program.feeds
             blocks = program.blocks, program.block_feeds, program.block_tolerance, program.block_pauses
-            _pauses_planned(cfg, program)
+            pauses = _pauses_planned(cfg, program)
         else:
-            (path, program_feeds), blocks = build_path(cfg.path, base), None
+            (path, program_feeds), blocks, pauses = build_path(cfg.path, base), None, None
         objects["path"] = path
         cam = path if cfg.path.bspline is None else cfg.path.bspline.curve()  # errors against the curve itself
         several = len(cfg.interpolators) > 1
@@ -137,7 +137,7 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
             log(f"interpolator {label}: {path.n_segments} segments")
             if getattr(ic, "limits_from", None) is not None:  # the peaks of an earlier interpolator as the limits
                 ic = _limits_of(ic, next(tr for lb, _, tr, _ in objects["runs"] if lb == ic.limits_from))
-            traj, info, plan = interpolate(ic, path, program_feeds, blocks)
+            traj, info, plan = interpolate(ic, path, program_feeds, blocks, pauses)
             metrics = summarize(traj, path)
             objects.setdefault("runs", []).append((label, plan, traj, metrics))
             details[label] = info | {"metrics": metrics.as_dict(), "turning_angle_deg": np.degrees(path.turning_angles).tolist()}
@@ -181,9 +181,11 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
     return Evaluation({"scalars": scalars, "units": units, "details": details}, arrays, objects)
 
 
-def _pauses_planned(cfg: ExperimentConfig, program) -> None:
-    """Refuse a program with ``G4``/``M0``/``M1``/``M60`` pauses for an interpolator that does not
-    plan them (only ``plan_fir`` does: exact stops held for the dwell), rather than drop them.
+def _pauses_planned(cfg: ExperimentConfig, program):
+    """The program's ``G4``/``M0``/``M1``/``M60`` pauses on its chords' vertices (``(M + 1,)`` [s], or
+    None without any), refused for an interpolator that cannot plan them rather than dropped:
+    ``plan_fir`` makes them exact stops held for the dwell, the S-curve and sigmoid moves stop at
+    every vertex anyway and hold it; corner blending and the OCP have no pauses.
 
     Raises:
         ConfigError: naming the interpolator and the program lines of the pauses.
@@ -192,15 +194,16 @@ def _pauses_planned(cfg: ExperimentConfig, program) -> None:
 
     at = np.flatnonzero(~np.isnan(program.block_pauses))
     if at.size == 0:
-        return
+        return None
     lines = sorted({int(program.block_lines[max(k - 1, 0)]) for k in at})
     for ic in cfg.interpolators:
-        if ic.kind != "fir" or ic.optimized:
+        if ic.kind not in ("fir", "scurve", "sigmoid") or (ic.kind == "fir" and ic.optimized):
             name = f"{ic.kind} (optimized)" if ic.kind == "fir" else ic.kind
             raise ConfigError(f"key 'interpolator' ({ic.label or ic.kind}): the program {cfg.path.gcode} pauses "
                               f"(G4 / M0 / M1 / M60) next to the moves of lines {lines[:10]}{' ...' if len(lines) > 10 else ''}, and "
                               f"interpolator kind {name!r} does not plan pauses; expected kind 'fir' (not optimized), "
-                              "or a program without them")
+                              "'scurve' or 'sigmoid', or a program without them")
+    return program.pauses
 
 
 def _limits_of(ic, traj: Trajectory):

@@ -48,12 +48,14 @@ def _optimized_fir(ic, target, feed, tolerance, limits):
     return optimize_fir(target, float(feeds[0]), np.asarray(ic.delays_ms) * 1e-3, float(tolerances[0]), limits)
 
 
-def interpolate(ic, path, program_feeds, blocks=None):
+def interpolate(ic, path, program_feeds, blocks=None, pauses=None):
     """``(trajectory, details, plan or None)`` of one interpolator config.
 
     The FIR planner gets a G-code program's blocks (arcs as arcs), its F words unless the config
-    sets a feed, and its ``G64 P`` tolerances where the program gives them (the config's
-    ``tolerance_um`` elsewhere); metrics are taken against the chords (``chord_tolerance_um``)."""
+    sets a feed, its ``G64 P`` tolerances where the program gives them (the config's
+    ``tolerance_um`` elsewhere) and its pauses (``G4``/``M0``/``M1``); the S-curve and sigmoid
+    moves, which stop at every vertex, hold ``pauses`` ``(M + 1,)`` [s] on the chords' vertices;
+    metrics are taken against the chords (``chord_tolerance_um``)."""
     Ts = ic.sample_period_ms * 1e-3
     explicit = "feed_mm_per_s" in ic.model_fields_set
     feed = program_feeds if (program_feeds is not None and not explicit) else ic.feed_mm_per_s
@@ -80,14 +82,14 @@ def interpolate(ic, path, program_feeds, blocks=None):
         from research.interpolators import scurve_interpolate
 
         limits = envelope(ic, path.dim)
-        return scurve_interpolate(path, feed, limits, Ts), {"limits": _limits_dict(limits)}, None
+        return scurve_interpolate(path, feed, limits, Ts, pauses=pauses), {"limits": _limits_dict(limits)}, None
     if ic.kind == "blend":
         from research.interpolators import blend_interpolate
 
         limits = envelope(ic, path.dim)
         return blend_interpolate(path, feed, ic.tolerance_um * 1e-3, limits, Ts), {"limits": _limits_dict(limits)}, None
     if ic.kind == "sigmoid":
-        return _sigmoid_moves(ic, path)
+        return _sigmoid_moves(ic, path, pauses)
     from research.limits import AxisLimits
     from research.optimal import time_optimal
 
@@ -103,24 +105,27 @@ def _limits_dict(limits) -> dict:
     return {k: getattr(limits, k).tolist() for k in ("velocity", "acceleration", "jerk")}
 
 
-def _sigmoid_moves(ic, path):
+def _sigmoid_moves(ic, path, pauses=None):
     """Each segment a rest-to-rest DiMarco move (:func:`~research.interpolators.mtp_motion`), one after
     the other, sampled on one grid ``k Ts``: ``q = P_k + u_k s_k(t - t_k)``. A move ends once inside
-    its settle band (``settle_tol`` = 0.1 um of mtp_motion), so consecutive moves join within 0.1 um."""
+    its settle band (``settle_tol`` = 0.1 um of mtp_motion), so consecutive moves join within 0.1 um.
+    ``pauses`` ``(M + 1,)`` [s] (NaN: none) delay the moves after each vertex (the samples hold it)."""
     from research.interpolators import mtp_motion
 
     moves = [mtp_motion(float(L), ic.feed_mm_per_s, ic.amplitude_mm, ic.frequency_hz,
                         acceleration=ic.acceleration_mm_per_s2, jerk=ic.jerk_mm_per_s3, order=ic.order)
              for L in path.lengths]
     durations = np.array([m.duration for m in moves])
-    starts = np.concatenate([[0.0], np.cumsum(durations)])
+    dwell = np.zeros(path.n_segments + 1) if pauses is None else np.nan_to_num(np.asarray(pauses, dtype=np.float64), nan=0.0)
+    # move i starts after the moves and dwells before it; starts[M] is the end of the motion (and last dwell)
+    starts = np.concatenate([[dwell[0]], dwell[0] + np.cumsum(durations + dwell[1:])])
     Ts = ic.sample_period_ms * 1e-3
     t = np.arange(int(np.ceil(starts[-1] / Ts - 1e-9)) + 1) * Ts
     k = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(moves) - 1)
     out = np.zeros((4, t.size, path.dim))
     for i, m in enumerate(moves):
         on = k == i
-        d = m.derivatives(np.minimum(t[on] - starts[i], durations[i]))
+        d = m.derivatives(np.clip(t[on] - starts[i], 0.0, durations[i]))  # held at rest before and after
         for nu in range(4):
             out[nu, on] = (path.points[i] if nu == 0 else 0.0) + d[nu][:, None] * path.directions[i]
     traj = Trajectory(t, out[0], out[1], out[2], out[3], np.float64(starts[-1]), None, path.axes, float(Ts))

@@ -59,11 +59,13 @@ def scurve_profile(length: float, velocity: float, acceleration: float, jerk: fl
         (0.21025, 10.0)
     """
     _check_positive(length=length, velocity=velocity, acceleration=acceleration, jerk=jerk)
-    return _profiles(np.atleast_1d(float(length)), np.atleast_1d(float(velocity)),
-                     np.atleast_1d(float(acceleration)), np.atleast_1d(float(jerk)))
+    pp = _profiles(np.atleast_1d(float(length)), np.atleast_1d(float(velocity)),
+                   np.atleast_1d(float(acceleration)), np.atleast_1d(float(jerk)), np.zeros(2))
+    return PiecewisePolynomial(pp.breaks[1:-1], pp.coeffs[1:-1])  # the seven phases (no holds)
 
 
-def scurve_interpolate(path: Polyline, feed, limits: AxisLimits, sample_period: float = 1e-3) -> Trajectory:
+def scurve_interpolate(path: Polyline, feed, limits: AxisLimits, sample_period: float = 1e-3, *,
+                       pauses=None) -> Trajectory:
     """Traverse ``path`` block by block with S-curves, stopping exactly at every vertex.
 
     Args:
@@ -71,9 +73,13 @@ def scurve_interpolate(path: Polyline, feed, limits: AxisLimits, sample_period: 
         feed: commanded feed ``F`` [mm/s], scalar or one per segment.
         limits: per-axis velocity, acceleration and jerk limits (jerk must be finite).
         sample_period: interpolation period ``Ts`` [s].
+        pauses: ``(M + 1,)`` dwell at each vertex [s] (index 0 the start; NaN or 0: none), e.g. a
+            G-code program's ``pauses`` (``G4 P``): the motion already stops at every vertex, so
+            a dwell is a constant piece there.
 
     Returns:
-        A :class:`Trajectory` with its exact profile; ``duration`` is the sum of the block times.
+        A :class:`Trajectory` with its exact profile; ``duration`` is the sum of the block times
+        and the dwells.
     """
     if limits.n_axes != path.dim:
         raise ParameterError(f"limits have {limits.n_axes} axes but the path has {path.dim}")
@@ -81,10 +87,15 @@ def scurve_interpolate(path: Polyline, feed, limits: AxisLimits, sample_period: 
         raise ParameterError("the S-curve needs finite jerk limits on every axis")
     feeds = np.broadcast_to(np.asarray(feed, dtype=np.float64), (path.n_segments,))
     _check_positive(feed=feeds)
+    dwell = np.zeros(path.n_segments + 1)
+    if pauses is not None:
+        from research.interpolators._fir_pauses import checked_pauses
+
+        dwell = np.nan_to_num(checked_pauses(pauses, path.n_segments), nan=0.0)
     along = np.array([limits.along(u) for u in path.directions])  # (M, 3): v, a, j along each block
-    s = _profiles(path.lengths, np.minimum(feeds, along[:, 0]), along[:, 1], along[:, 2])
-    # map arc length to the axes block by block: q = P_k + u_k (s - S_k)
-    block = np.repeat(np.arange(path.n_segments), 7)
+    s = _profiles(path.lengths, np.minimum(feeds, along[:, 0]), along[:, 1], along[:, 2], dwell)
+    # map arc length to the axes block by block: q = P_k + u_k (s - S_k); the start dwell holds P_0
+    block = np.concatenate([[0], np.repeat(np.arange(path.n_segments), 8)])
     u = path.directions[block]  # (7M, d)
     c = np.asarray(s.coeffs)[:, :, 0]  # (7M, 4)
     offset = path.points[block] - u * path.arc_length[block][:, None]
@@ -93,25 +104,29 @@ def scurve_interpolate(path: Polyline, feed, limits: AxisLimits, sample_period: 
     return Trajectory.from_piecewise(PiecewisePolynomial(s.breaks, coeffs), sample_period, path.axes)
 
 
-def _profiles(L, V, A, J) -> PiecewisePolynomial:
-    """Consecutive rest-to-rest S-curves (one per move), as one scalar arc-length profile.
+def _profiles(L, V, A, J, dwell) -> PiecewisePolynomial:
+    """Consecutive rest-to-rest S-curves (one per move), as one scalar arc-length profile: a first
+    piece holding the start for ``dwell[0]`` [s], then each move's seven phases and an eighth
+    holding its end for ``dwell[k + 1]`` (pieces of zero length where there is no dwell).
 
     Each phase is a cubic in local time with coefficients ``[s, v, a / 2, j / 6]`` at its start,
     integrated exactly within each move from rest, so nothing drifts over many moves.
     """
     Tj, Ta, Tv = scurve_phases(L, V, A, J)
-    durations = np.stack([Tj, Ta - 2 * Tj, Tj, Tv, Tj, Ta - 2 * Tj, Tj], axis=1)  # (M, 7)
-    jerks = np.array([1.0, 0.0, -1.0, 0.0, -1.0, 0.0, 1.0])[None, :] * J[:, None]
+    durations = np.stack([Tj, Ta - 2 * Tj, Tj, Tv, Tj, Ta - 2 * Tj, Tj, dwell[1:]], axis=1)  # (M, 8)
+    jerks = np.array([1.0, 0.0, -1.0, 0.0, -1.0, 0.0, 1.0, 0.0])[None, :] * J[:, None]
     M = durations.shape[0]
-    coeffs = np.zeros((M, 7, 4))
+    coeffs = np.zeros((M, 8, 4))
     s = np.concatenate([[0.0], np.cumsum(L)[:-1]])  # arc length at the start of each move
     v = a = np.zeros(M)
-    for k in range(7):
+    for k in range(8):
         h, jk = durations[:, k], jerks[:, k]
         coeffs[:, k] = np.stack([s, v, a / 2, jk / 6], axis=1)
         s, v, a = s + v * h + a * h**2 / 2 + jk * h**3 / 6, v + a * h + jk * h**2 / 2, a + jk * h
-    breaks = np.concatenate([[0.0], np.cumsum(durations.ravel())])
-    return PiecewisePolynomial(breaks, coeffs.reshape(-1, 4, 1))
+    coeffs[:, 7, 1:] = 0.0  # the dwell: at rest on the move's end (its v, a are rounding residues of 0)
+    coeffs[:, 7, 0] = np.cumsum(L)
+    breaks = np.concatenate([[0.0], dwell[0] + np.concatenate([[0.0], np.cumsum(durations.ravel())])])
+    return PiecewisePolynomial(breaks, np.concatenate([np.zeros((1, 4)), coeffs.reshape(-1, 4)])[:, :, None])
 
 
 def _check_positive(**values) -> None:

@@ -235,6 +235,20 @@ class GCodeProgram:
         return self.blocks.n_blocks
 
     @property
+    def pauses(self) -> np.ndarray:
+        """``(M + 1,)`` :attr:`block_pauses` on the polyline's vertices [s] (NaN inside arcs and
+        wherever the motion does not stop).
+
+        Example:
+            >>> parse_gcode("G1 X10 F600\\nG4 P2\\nG1 Y5").pauses.tolist()
+            [nan, 2.0, nan]
+        """
+        out = np.full(self.n_segments + 1, np.nan)
+        ends = np.concatenate([[0], np.flatnonzero(np.diff(self.segment_block)) + 1, [self.n_segments]])
+        out[ends] = self.block_pauses
+        return out
+
+    @property
     def nominal_durations(self) -> np.ndarray:
         """Time of each segment at its programmed feed [s], ``lengths / feeds``, shape ``(M,)``.
 

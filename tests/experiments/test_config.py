@@ -107,7 +107,8 @@ def test_gcode_path_with_g28_needs_home_mm(tmp_path):
 def test_gcode_pauses_are_planned_by_fir_and_refused_elsewhere(tmp_path):
     """A program with a spindle warm-up ``G4 P1.5`` and an ``M1`` between its two cuts: the FIR run's
     cycle time is the two cuts planned alone (here, from the same planner without pauses) plus 1.5 s;
-    a corner-blending interpolator, which has no pauses, is refused by name with the program's lines."""
+    the S-curve's is the same program's without the pauses plus 1.5 s; a corner-blending interpolator,
+    which has no pauses, is refused by name with the program's lines."""
     from research.interpolators import plan_fir
     from research.paths import Polyline
 
@@ -119,6 +120,14 @@ def test_gcode_pauses_are_planned_by_fir_and_refused_elsewhere(tmp_path):
     second = plan_fir(Polyline([[10, 10, 0], [0, 10, 0]]), 20.0, d, 0.1)
     expected = float(first.cycle_time) + float(second.cycle_time) + 1.5
     assert result.record["scalars"]["cycle_time"] == pytest.approx(expected, abs=1e-3)  # sampled at 1 ms
+    # the S-curve stops at every vertex anyway: the pauses add their 1.5 s to the same moves
+    scurve = text.replace("[interpolator]\n", '[interpolator]\nkind = "scurve"\n').replace("delays_ms = [50.0, 30.0]\n", "")
+    scurve = scurve.replace("tolerance_um = 100.0\n", "")
+    (tmp_path / "plain.nc").write_text("G21 G90\nM3 S1000\nG1 X10 F1200\nG1 Y10\nG1 X0\nM30\n")
+    times = [run_experiment(write(tmp_path, scurve.replace("part.nc", name), f"{name}.toml"), cache_dir=tmp_path / f"c_{name}",
+                            figures_dir=tmp_path / "f", log=lambda s: None).record["scalars"]["cycle_time"]
+             for name in ("part.nc", "plain.nc")]
+    assert times[0] - times[1] == pytest.approx(1.5, abs=1e-3)  # sampled at 1 ms
     blend = text.replace("[interpolator]\n", '[interpolator]\nkind = "blend"\n').replace("delays_ms = [50.0, 30.0]\n", "")
     with pytest.raises(ConfigError, match=r"part.nc pauses \(G4 / M0 / M1 / M60\) next to the moves of lines \[4, 5\].*kind 'blend' "
                                           r"does not plan pauses"):

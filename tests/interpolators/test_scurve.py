@@ -66,3 +66,27 @@ def test_bad_input():
         scurve_interpolate(named_path("corner90"), 100.0, AxisLimits.uniform(3, 100.0, 1000.0, 1e4))
     with pytest.raises(ParameterError, match="feed must be finite"):
         scurve_interpolate(Polyline([[0.0, 0.0], [1.0, 0.0]]), -1.0, AxisLimits.uniform(2, 100.0, 1000.0, 1e4))
+
+
+def test_pauses_hold_the_vertices_and_add_their_dwell():
+    """Dwells of 0.5 s at the start, 0.25 s at vertex 2 and 1 s at the end: the motion is the same
+    rest-to-rest moves (it already stops at every vertex), held still on each paused vertex, so the
+    duration is the one without pauses plus 1.75 s and the samples in each hold sit on its vertex at
+    rest. A negative dwell is refused by name."""
+    path = Polyline([[0, 0], [10, 0], [10, 10], [0, 10]])
+    limits = AxisLimits.uniform(2, 200.0, 2000.0, 1e5)
+    base = scurve_interpolate(path, 100.0, limits)
+    pauses = np.array([0.5, np.nan, 0.25, 1.0])
+    tr = scurve_interpolate(path, 100.0, limits, pauses=pauses)
+    assert float(tr.duration) == pytest.approx(float(base.duration) + 1.75, rel=1e-12)
+    t, q, v = np.asarray(tr.t), np.asarray(tr.q), np.asarray(tr.v)
+    first = t < 0.5 - 1e-9
+    np.testing.assert_allclose(q[first], 0.0, atol=1e-12)
+    # the second move ends at the base's second-move end, shifted by the start dwell
+    t2 = 0.5 + float(base.t[np.argmin(np.linalg.norm(np.asarray(base.q) - [10, 10], axis=1))])
+    hold = (t > t2 + 2e-3) & (t < t2 + 0.25 - 2e-3)
+    assert hold.sum() >= 240
+    np.testing.assert_allclose(q[hold], np.broadcast_to([10.0, 10.0], q[hold].shape), atol=1e-9)
+    assert np.max(np.abs(v[hold])) <= 1e-9
+    with pytest.raises(ParameterError, match=r"pauses\[1\] = -1.0"):
+        scurve_interpolate(path, 100.0, limits, pauses=[np.nan, -1.0, np.nan, np.nan])
