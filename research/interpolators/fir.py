@@ -117,7 +117,9 @@ class FIRPlan(eqx.Module):
         feeds: ``(M,)`` planned feed per block [mm/s] (the commanded feed, or less where arcs,
             windows of short blocks or axis limits need it).
         delays: ``(n,)`` filter delays ``T_i`` [s].
-        position: exact position profile [mm].
+        profile: the exact position profile [mm] (:attr:`position`) as a ``PiecewisePolynomial``, or
+            the ``_fir_profile.ProfileInputs`` that build it on first use (a concrete plan: its
+            timing and the path's pieces, ~8 % of the profile's floats).
         corner_times: ``(M - 1,)`` time [s] at which the averaging window is centred on each
             corner's gap (the bisector point of eq 13/14).
         vertices: ``(M - 1, d)`` corner vertices [mm].
@@ -132,7 +134,7 @@ class FIRPlan(eqx.Module):
     overlaps: Array
     feeds: Array
     delays: Array
-    position: object
+    profile: object
     corner_times: Array
     vertices: Array
     path_deviation: float = eqx.field(static=True)
@@ -140,9 +142,16 @@ class FIRPlan(eqx.Module):
     axes: tuple[str, ...] = eqx.field(static=True)
 
     @property
+    def position(self) -> PiecewisePolynomial:
+        """The exact position profile [mm] (built and kept on first use for a concrete plan)."""
+        p = self.profile
+        return p if isinstance(p, PiecewisePolynomial) else p.position()
+
+    @property
     def cycle_time(self) -> Array:
         """Total motion time [s]: ``sum T_v + T_d + sum (T_d - T_k)``."""
-        return self.position.end - self.position.start
+        p = self.profile
+        return p.end - p.start if isinstance(p, PiecewisePolynomial) else p.span[1] - p.span[0]
 
     @property
     def corner_errors(self) -> Array:
@@ -253,16 +262,20 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                                              top=False)
         return float(np.sum(frac * piece_tv) + np.sum(Td_np - overlaps) + Td_np)
 
+    def timing_gaps(*candidate):
+        """:func:`timing` and the dwell after each block (0 after the last and on padding)."""
+        frac, piece_tv, cruise, overlaps = timing(*candidate)
+        return frac, piece_tv, cruise, overlaps, np.concatenate([Td_np - overlaps, np.zeros(Mp - M + 1)])
+
     def schedule(factor, head, tail, full, shrink, others, arc_rel):
         """``(feeds, overlaps, pulse lengths, pulse starts, position, corner instants, inputs)`` on
         concrete arrays (the position a :class:`NumpyPiecewise`)."""
-        frac, piece_tv, cruise, overlaps = timing(factor, head, tail, full, shrink, others, arc_rel)
-        gaps = np.concatenate([Td_np - overlaps, np.zeros(Mp - M + 1)])
+        frac, piece_tv, cruise, overlaps, gaps = timing_gaps(factor, head, tail, full, shrink, others, arc_rel)
         starts, ends, breaks, coeffs, centre = _fir_profile.profile(tp.start, table.geo, table.block, table.gap, frac,
                                                                     piece_tv, gaps, d_np)
         durations = np.where(table.gap, np.append(gaps, 0.0)[table.block], frac * piece_tv)  # of the input pieces
         return (F_np * cruise, overlaps, ends[:M] - starts[:M], starts[:M], NumpyPiecewise(breaks, coeffs),
-                centre[: M - 1], (factor.copy(), head, tail, full, shrink.copy(), others, arc_rel), durations)
+                centre[: M - 1], (factor, head, tail, full, shrink, others, arc_rel), durations)
 
     def traced_plan(factor, head, tail, full, shrink, others, arc_rel):
         """The JAX form of :func:`schedule` (differentiable through ``feed``, ``delays``, ``tolerance``)."""
@@ -357,7 +370,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                     if own_bad.any() and not near.any():  # checked alone before, above a limit again
                         g = np.where(own_bad, 0.98 / np.maximum(own, 1.0), g)
                     if np.any(g < 1.0):  # slowed blocks: check the corners again before bisecting
-                        factor *= np.reshape(g, (-1, 1))
+                        factor = factor * np.reshape(g, (-1, 1))  # new array: the state's inputs are the old
                         too_fast = slowed = True
                     else:
                         too_fast = bisection.update(ratios)
@@ -382,6 +395,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                             # (suspended here, it keeps its profile for the samples unless released)
                             low_f, low_s = repairs.bound(errors > limit_v, errors, rounds > _SCALING_ROUNDS, factor, shrink)
                             low = predicted_time((low_f, head, tail, full, others, arc_rel), low_s * bisection.bound_scale)
+                            low_f = low_s = None  # not held while suspended
                             if (yield low, repaired, True) is _RELEASE:
                                 # released while others go on: drop the profile, rebuild it from
                                 # the same inputs (identical arrays) when this one resumes
@@ -407,9 +421,11 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         f"tolerance{' (or corners a limit)' if too_fast else ''} after {max_rounds} rounds",
                         residual=float(np.max(errors - limit_v, initial=0.0)), steps=rounds)
                 late = rounds > _SCALING_ROUNDS
+                # suspended in the branch and bound, a candidate keeps no profile and no round's
+                # arrays; dropped before the repairs, which change ``factor`` and ``shrink`` in place
+                # (the state's inputs are those arrays, not copies)
+                state = inputs = pos_np = pulse_np = starts_np = centre_np = durations = at_vertex = at_block = None
                 repairs.apply(viol, errors, arc_slow, late, factor, shrink)
-                # suspended in the branch and bound, a candidate keeps no profile and no round's arrays
-                state = pos_np = pulse_np = starts_np = centre_np = durations = at_vertex = at_block = None
                 yield predicted_time((factor, head, tail, full, others, arc_rel), shrink * bisection.bound_scale), repaired, False
                 state = schedule(factor, head, tail, full, shrink * bisection.scale, others, arc_rel)
         return state, rounds, deviation, repaired
@@ -425,15 +441,18 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         whose repairs push its bound past the best verified plan is dropped without rebuilding its
         profile. Once a candidate needs a limit repair, the candidates ``capped()`` (every block at
         its closed-form safe feed up front: slower blocks whose corners keep their overlap can beat
-        exact stops) join the same queue. Returns the best settled ``(state, rounds, deviation, _)``."""
+        exact stops) join the same queue. Returns the best settled ``(state, rounds, deviation)``, the
+        state without its profile (its first and last break in its place)."""
         best, best_time = None, np.inf
         several = len(candidates) > 1
         queue = [(predicted_time(c) if several else 0.0, i, settle(*c, several=several)) for i, c in enumerate(candidates)]
         heapq.heapify(queue)
-        extra = capped is not None
+        extra, n_first = capped is not None, len(candidates)
+        # the generators hold the candidates: a started one copies its feed factors and frees these
+        candidates = None
 
         def add_capped():
-            for i, c in enumerate(capped(), start=len(candidates)):
+            for i, c in enumerate(capped(), start=n_first):
                 heapq.heappush(queue, (predicted_time(c), i, settle(*c)))
 
         held = {}  # index -> (bound, steps) of the candidates suspended with their profiles
@@ -445,11 +464,12 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                 step, repaired, holds = next(steps)
                 heapq.heappush(queue, (max(bound, step), i, steps))
             except StopIteration as done:
-                repaired = done.value[3]
-                breaks = done.value[0][4].breaks
+                state, rounds, deviation, repaired = done.value
+                breaks = state[4].breaks
                 t = float(breaks[-1] - breaks[0])
-                if t < best_time:
-                    best, best_time = done.value, t
+                if t < best_time:  # kept without its profile (rebuilt from the inputs when used)
+                    best, best_time = (state[:4] + ((breaks[0], breaks[-1]), state[5], state[6]), rounds, deviation), t
+                state = breaks = done = None
             if extra and repaired:
                 extra = False
                 add_capped()
@@ -464,13 +484,14 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     capped = None
     if limits is not None and np.any(safe_feed < F_np * base):
         capped = lambda: plans(np.minimum(base, safe_feed / F_np))  # noqa: E731
-    best = verify(plans(base), capped)
-    state, rounds, deviation, _ = best
+    state, rounds, deviation = verify(plans(base), capped)
     if traced:
         feeds, overlaps, pulse, starts, position, centre = traced_plan(*state[6])
     else:
         feeds, overlaps, pulse, starts, centre = (jnp.asarray(state[i]) for i in (0, 1, 2, 3, 5))
-        position = PiecewisePolynomial(jnp.asarray(state[4].breaks), jnp.asarray(state[4].coeffs))
+        # the profile's inputs, not its coefficients (the same arrays when rebuilt: ``settle``'s release)
+        frac, piece_tv, _, _, gaps = timing_gaps(*state[6])
+        position = _fir_profile.ProfileInputs(table, frac, piece_tv, gaps, d_np, tp.start, np.array(state[4]))
     return FIRPlan(starts, pulse, overlaps, feeds, jnp.asarray(delays), position, centre, jnp.asarray(tp.vertices),
                    float(deviation), int(rounds), tp.axes)
 
