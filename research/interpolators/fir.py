@@ -100,9 +100,11 @@ _PREFIX_SHARE = 8
 _PREFIX_MIN_BLOCKS = 32
 #: sent to a candidate suspended with its profile (``plan_fir``'s ``settle``) to release it; of
 #: the candidates suspended with their profiles while another goes on, the ``_HELD_PROFILES`` of
-#: least bound keep them (each rebuild costs a profile; each profile held ~0.5 kB/segment)
+#: least bound keep them. Swept (benchmarks/README.md, branch fir-mem2): each profile held costs
+#: 0.7-1.0 kB/segment of peak memory, each rebuild a profile build (0 against 1: 1-3 more builds
+#: a plan on bench_fir's and bench_cam's paths, ~2 % of the planning time)
 _RELEASE = object()
-_HELD_PROFILES = 1
+_HELD_PROFILES = 0
 _NO_BISECTION = SimpleNamespace(scale=1.0, bound_scale=1.0)  # plan_fir's CornerBisection without limits
 CHECK_PERIOD = 1e-3  # default spacing [s] of the path-deviation check: the usual interpolation period
 
@@ -241,6 +243,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     others = np.zeros(M - 1)  # tolerance taken by the other direction changes of a dwell corner's window
     lengths_np = np.concatenate([tp.lengths, np.ones(Mp - M + 1)])
     feeds_np = np.concatenate([F_np, np.ones(Mp - M + 1)])
+    cum_np = np.concatenate([[0.0], np.cumsum(tp.lengths)])  # arc length at each block start (Repairs)
     pad_b = Mp - M  # per-block inputs padded to the bucketed block count (one compiled JAX kernel)
     motion_ends_np = np.stack([np.pad(table.first_motion, (0, pad_b)), np.pad(table.last_motion, (0, pad_b))])
     tangents_np = np.stack([np.pad(t_in, ((0, pad_b), (0, 0))), np.pad(t_out, ((0, pad_b), (0, 0)))])
@@ -330,7 +333,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         bisection = CornerBisection(M - 1) if limits is not None else _NO_BISECTION
         checked, repaired = np.zeros(M, dtype=bool), False
         checks = RoundChecks(tp, tb_np, table.block, Td_np, check_period)  # redone only where the profile changed
-        repairs = Repairs(full, tv_np, tb_np, F_np, tp.lengths, Td_np, d_np.size)
+        repairs = Repairs(full, tv_np, tb_np, F_np, tp.lengths, Td_np, d_np.size, cum_np)
 
         def alone(g):  # ``_fir_limits`` phase 1: each block's own peaks (every corner an exact stop)
             _, _, pulse, starts, position, *_ = schedule(factor * g[:, None], head, tail, full, np.zeros(M - 1), others,
@@ -426,6 +429,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                 # (the state's inputs are those arrays, not copies)
                 state = inputs = pos_np = pulse_np = starts_np = centre_np = durations = at_vertex = at_block = None
                 repairs.apply(viol, errors, arc_slow, late, factor, shrink)
+                viol = errors = arc_slow = None
                 yield predicted_time((factor, head, tail, full, others, arc_rel), shrink * bisection.bound_scale), repaired, False
                 state = schedule(factor, head, tail, full, shrink * bisection.scale, others, arc_rel)
         return state, rounds, deviation, repaired
