@@ -228,6 +228,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     tol_vertex = xp.minimum(tol_block[:-1], tol_block[1:])
     d_np, F_np, tb_np = (np.asarray(_primal(x), dtype=np.float64) for x in (delays, feeds_cmd, tol_block))
     tv_np = np.minimum(tb_np[:-1], tb_np[1:])
+    limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # the verification's bound on vertex errors: 1 pm slack for rounding
     Td_np = float(d_np.sum())
     t_in, t_out = tp.tangents()
 
@@ -343,7 +344,6 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         if limits is not None and M == 1:
             g = hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), np.ones(1, dtype=bool))
             factor, repaired = factor * g[:, None], bool(g[0] < 1.0)
-        limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
         K = M // _PREFIX_SHARE
         if refine and limits is None and several and K >= _PREFIX_MIN_BLOCKS:
             # the vertex errors of the first blocks alone, on the profile of their input: a loser
@@ -402,12 +402,13 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                             if (yield low, repaired, True) is _RELEASE:
                                 # released while others go on: drop the profile, rebuild it from
                                 # the same inputs (identical arrays) when this one resumes
-                                inputs, state, pos_np = state[6], None, None
+                                inputs, state = state[6], None
+                                pos_np = pulse_np = starts_np = centre_np = durations = None
                                 checks.swap_profile(None)
                                 yield low, repaired, False
                                 state = schedule(*inputs)
-                                pos_np = state[4]
-                                checks.swap_profile(pos_np)
+                                pos_np, starts_np, centre_np = state[4], state[3], state[5]
+                                checks.swap_profile(pos_np, starts_np, centre_np)
                         deviation, at_vertex, at_block = checks.samples_check()
                     viol = errors > limit_v
                     if refine:
