@@ -100,11 +100,11 @@ _PREFIX_SHARE = 8
 _PREFIX_MIN_BLOCKS = 32
 #: sent to a candidate suspended with its profile (``plan_fir``'s ``settle``) to release it; of
 #: the candidates suspended with their profiles while another goes on, the ``_HELD_PROFILES`` of
-#: least bound keep them. Swept (benchmarks/README.md, branch fir-mem2): each profile held costs
-#: 0.7-1.0 kB/segment of peak memory, each rebuild a profile build (0 against 1: 1-3 more builds
-#: a plan on bench_fir's and bench_cam's paths, ~2 % of the planning time)
+#: least bound keep them. Swept (benchmarks/README.md, branch fir-mem2): 0 instead of 1 lowers the
+#: peak by 0.7-1.0 kB/segment (one profile) for 1-3 more profile builds a plan on bench_fir's and
+#: bench_cam's paths, 4-9 % slower at 10^4 segments
 _RELEASE = object()
-_HELD_PROFILES = 0
+_HELD_PROFILES = 1
 _NO_BISECTION = SimpleNamespace(scale=1.0, bound_scale=1.0)  # plan_fir's CornerBisection without limits
 CHECK_PERIOD = 1e-3  # default spacing [s] of the path-deviation check: the usual interpolation period
 
@@ -121,7 +121,7 @@ class FIRPlan(eqx.Module):
         delays: ``(n,)`` filter delays ``T_i`` [s].
         profile: the exact position profile [mm] (:attr:`position`) as a ``PiecewisePolynomial``, or
             the ``_fir_profile.ProfileInputs`` that build it on first use (a concrete plan: its
-            timing and the path's pieces, ~8 % of the profile's floats).
+            timing and the path's pieces, a tenth or less of the profile's floats).
         corner_times: ``(M - 1,)`` time [s] at which the averaging window is centred on each
             corner's gap (the bisector point of eq 13/14).
         vertices: ``(M - 1, d)`` corner vertices [mm].
@@ -491,13 +491,13 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         capped = lambda: plans(np.minimum(base, safe_feed / F_np))  # noqa: E731
     state, rounds, deviation = verify(plans(base), capped)
     if traced:
-        feeds, overlaps, pulse, starts, position, centre = traced_plan(*state[6])
+        feeds, overlaps, pulse, starts, profile, centre = traced_plan(*state[6])
     else:
         feeds, overlaps, pulse, starts, centre = (jnp.asarray(state[i]) for i in (0, 1, 2, 3, 5))
         # the profile's inputs, not its coefficients (the same arrays when rebuilt: ``settle``'s release)
         frac, piece_tv, _, _, gaps = timing_gaps(*state[6])
-        position = _fir_profile.ProfileInputs(table, frac, piece_tv, gaps, d_np, tp.start, np.array(state[4]))
-    return FIRPlan(starts, pulse, overlaps, feeds, jnp.asarray(delays), position, centre, jnp.asarray(tp.vertices),
+        profile = _fir_profile.ProfileInputs(table, frac, piece_tv, gaps, d_np, tp.start, np.array(state[4]))
+    return FIRPlan(starts, pulse, overlaps, feeds, jnp.asarray(delays), profile, centre, jnp.asarray(tp.vertices),
                    float(deviation), int(rounds), tp.axes)
 
 
