@@ -7,7 +7,7 @@ Usage::
 Paths: ``q`` bench_cam's quick CAM file (``cam_program(0, LEVELS_QUICK)``, its scenario), ``3`` /
 ``4`` bench_fir's path of 10^3 / 10^4 segments (its scenario). For each: the peak of one warm call
 as ``bench_fir.peak_memory`` measures it (``tracemalloc``, above what was allocated before), the
-bytes of the returned plan's arrays, and for the planner's stages (functions wrapped while a second
+bytes of the returned plan's arrays (and of its position's, built on first use), and for the planner's stages (functions wrapped while a second
 call runs) the largest peak inside each, split into what was held at its entry and what it added.
 The wrappers reset ``tracemalloc``'s peak at each entry and keep the running maximum themselves, so
 the total is the same peak. ``--snapshot STAGE`` (a label as printed) also lists the
@@ -111,8 +111,10 @@ def main() -> None:
         plan = plan_fir(path, feeds, delays, eps)  # warm: compiled kernels, path caches
         peak = bench_fir.peak_memory(plan_fir, path, feeds, delays, eps)
         plan_bytes = sum(np.asarray(x).nbytes for x in jax.tree_util.tree_leaves(plan))
+        built = sum(np.asarray(x).nbytes for x in (plan.position.breaks, plan.position.coeffs))
         print(f"{name}: {M} segments, peak {peak / M / 1e3:.2f} kB/segment (bench_fir.peak_memory); returned plan's "
-              f"arrays {plan_bytes / M / 1e3:.2f} kB/segment; cycle time {float(plan.cycle_time):.6f} s")
+              f"arrays {plan_bytes / M / 1e3:.2f} kB/segment (+ {built / M / 1e3:.2f} once its position is built); "
+              f"cycle time {float(plan.cycle_time):.6f} s")
         rec = Recorder(args.snapshot)
         originals = [(owner, attr, rec.wrap(owner, attr, label)) for owner, attr, label in STAGES]
         try:

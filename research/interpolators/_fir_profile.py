@@ -21,15 +21,65 @@ from __future__ import annotations
 import functools
 import math
 
+import equinox as eqx
 import jax
+import jax.numpy as jnp
 import numba
 import numpy as np
 
 from research.interpolators._fir_overlap import overlap_time
-from research.piecewise import bucket_size
+from research.piecewise import PiecewisePolynomial, bucket_size
 
 _OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
 _overlap_jit = jax.jit(overlap_time)  # three or more filters: the optimistix inversion of H2
+
+
+class _PathPieces:
+    """The path's piece table (shared with its cache, not copied) and the position once built: a
+    plain object, hashed by identity, so that it can be a static field."""
+
+    __slots__ = ("table", "built")
+
+    def __init__(self, table):
+        self.table, self.built = table, None
+
+
+class ProfileInputs(eqx.Module):
+    """What rebuilds a plan's exact position profile (:func:`profile`), in place of its
+    coefficients: the per-piece timing, the corner gaps and the delays; the pieces' geometry is the
+    path's own ``_fir_blocks.PulseTable``: ``2 P + M_pad`` floats against the profile's
+    ``K ((D + n + 1) d + 1) + 1`` (``K <= 2^n (P + 1)`` pieces: each filter merges the breaks ``b``
+    and ``b + T``, the last closes with a rest piece; ``D`` coefficient rows of the input pieces).
+
+    Attributes:
+        fraction: ``(P,)`` share of its block's pulse time taken by each piece.
+        piece_tv: ``(P,)`` pulse length [s] of each piece's block at the piece's feed (eq 5).
+        gaps: ``(M_pad,)`` dwell ``T_d - T_k`` [s] after each block (0 after the last and padding).
+        delays: ``(n,)`` filter delays [s]; start: ``(d,)`` start point [mm].
+        span: ``(2,)`` first and last break of the profile [s] (its cycle time without a rebuild).
+    """
+
+    fraction: np.ndarray
+    piece_tv: np.ndarray
+    gaps: np.ndarray
+    delays: np.ndarray
+    start: np.ndarray
+    span: jax.Array
+    pieces: _PathPieces = eqx.field(static=True)
+
+    def __init__(self, table, fraction, piece_tv, gaps, delays, start, span):
+        self.fraction, self.piece_tv, self.gaps, self.delays, self.start = fraction, piece_tv, gaps, delays, start
+        self.span, self.pieces = jnp.asarray(span), _PathPieces(table)
+
+    def position(self) -> PiecewisePolynomial:
+        """The exact position profile [mm], built on the first call (the same arrays as the
+        planner's, which built it from the same inputs) and kept."""
+        if self.pieces.built is None:
+            t = self.pieces.table
+            _, _, breaks, coeffs, _ = profile(self.start, t.geo, t.block, t.gap, self.fraction, self.piece_tv, self.gaps,
+                                              self.delays)
+            self.pieces.built = PiecewisePolynomial(jnp.asarray(breaks), jnp.asarray(coeffs))
+        return self.pieces.built
 
 
 def kernel_second_integral(r: np.ndarray, delays: np.ndarray) -> np.ndarray:

@@ -35,11 +35,13 @@ class Repairs:
         tol_vertex: ``(M - 1,)`` tolerance per vertex [mm]; tol_block: ``(M,)`` per block [mm].
         feeds: ``(M,)`` commanded feeds [mm/s]; lengths: ``(M,)`` block lengths [mm].
         Td: total filter delay [s]; n_filters: the number of filters ``n``.
+        cum: ``(M + 1,)`` arc length at each block start [mm] if already computed (the candidates
+            of one plan share it); else from ``lengths``.
     """
 
-    def __init__(self, full, tol_vertex, tol_block, feeds, lengths, Td: float, n_filters: int):
+    def __init__(self, full, tol_vertex, tol_block, feeds, lengths, Td: float, n_filters: int, cum=None):
         self.full, self.tv, self.tb, self.F = full, tol_vertex, tol_block, feeds
-        self.cum = np.concatenate([[0.0], np.cumsum(lengths)])
+        self.cum = np.concatenate([[0.0], np.cumsum(lengths)]) if cum is None else cum
         self.Td, self.n = float(Td), int(n_filters)
         self.M = feeds.size
 

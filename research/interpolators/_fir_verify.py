@@ -241,12 +241,7 @@ class RoundChecks:
         self._pending = (position, starts, centre)
         if M == 1:
             return np.zeros(0)
-        t0, t1 = float(position.breaks[0]), float(position.breaks[-1])
-        lo_v = np.minimum(starts[:-1] + half, centre - half)
-        hi_v = centre + half
-        lo_v[0], hi_v[-1] = t0, t1
-        lo_b = starts + half
-        hi_b = np.append(starts[1:] + half, t1)
+        lo_v, hi_v, lo_b, hi_b = self._spans(position, starts, centre)
         if self.durations is None:
             err_v, redo_v, redo_b = np.ones(M - 1, bool), np.ones(M - 1, bool), np.ones(M, bool)
             self.errors, self.worst = np.zeros(M - 1), np.full(2 * M - 1, -np.inf)
@@ -261,14 +256,25 @@ class RoundChecks:
         self.durations = durations  # kept, not copied: the planner builds a new array every round
         if vertex_errors and err_v.any():
             self.errors[err_v] = vertex_distances(position, path.vertices[err_v], centre[err_v], half)
-        self._pending = (position, starts, centre, lo_v, hi_v, lo_b, hi_b, redo_v, redo_b)
+        self._pending = (position, starts, centre, redo_v, redo_b)
         return self.errors.copy() if vertex_errors else np.zeros(M - 1)
 
-    def swap_profile(self, position) -> None:
+    def _spans(self, position: NumpyPiecewise, starts: np.ndarray, centre: np.ndarray):
+        """``(lo_v, hi_v, lo_b, hi_b)``: the times each vertex ``(M - 1,)`` and block ``(M,)``
+        charge key collects samples from (class docstring), clipped to the profile."""
+        half = 0.5 * self.Td
+        t0, t1 = float(position.breaks[0]), float(position.breaks[-1])
+        lo_v = np.minimum(starts[:-1] + half, centre - half)
+        hi_v = centre + half
+        lo_v[0], hi_v[-1] = t0, t1
+        return lo_v, hi_v, starts + half, np.append(starts[1:] + half, t1)
+
+    def swap_profile(self, position, starts=None, centre=None) -> None:
         """Hand the check pending between :meth:`vertices` and :meth:`samples_check` another
-        profile: ``None`` to release it while the planner suspends the candidate, the same profile
-        rebuilt (identical arrays) to resume it."""
-        self._pending = (position,) + self._pending[1:]
+        profile: ``None`` to release it (with its block starts and corner instants) while the
+        planner suspends the candidate, the same profile rebuilt (identical arrays) with its
+        ``starts`` and ``centre`` to resume it."""
+        self._pending = (position, starts, centre) + self._pending[3:]
 
     def samples_check(self):
         """Second half of a check (after :meth:`vertices`, on its profile): the path samples of
@@ -278,9 +284,10 @@ class RoundChecks:
         if M == 1:
             position, starts, centre = self._pending
             return path_deviations(position, path, starts, centre, self.Td, self.tol, self.period)
-        position, starts, centre, lo_v, hi_v, lo_b, hi_b, redo_v, redo_b = self._pending
+        position, starts, centre, redo_v, redo_b = self._pending
         self._pending = None
         t0, t1 = float(position.breaks[0]), float(position.breaks[-1])
+        lo_v, hi_v, lo_b, hi_b = self._spans(position, starts, centre)
         redo = np.concatenate([redo_v, redo_b])
         self.samples = 0  # path samples taken by this check
         if redo.any():

@@ -104,7 +104,9 @@ _PREFIX_SHARE = 8
 _PREFIX_MIN_BLOCKS = 32
 #: sent to a candidate suspended with its profile (``plan_fir``'s ``settle``) to release it; of
 #: the candidates suspended with their profiles while another goes on, the ``_HELD_PROFILES`` of
-#: least bound keep them (each rebuild costs a profile; each profile held ~0.5 kB/segment)
+#: least bound keep them. Swept (benchmarks/README.md, branch fir-mem2): 0 instead of 1 lowers the
+#: peak by 0.7-1.0 kB/segment (one profile) for 1-3 more profile builds a plan on bench_fir's and
+#: bench_cam's paths, 4-9 % slower at 10^4 segments
 _RELEASE = object()
 _HELD_PROFILES = 1
 _NO_BISECTION = SimpleNamespace(scale=1.0, bound_scale=1.0)  # plan_fir's CornerBisection without limits
@@ -121,7 +123,9 @@ class FIRPlan(eqx.Module):
         feeds: ``(M,)`` planned feed per block [mm/s] (the commanded feed, or less where arcs,
             windows of short blocks or axis limits need it).
         delays: ``(n,)`` filter delays ``T_i`` [s].
-        position: exact position profile [mm].
+        profile: the exact position profile [mm] (:attr:`position`) as a ``PiecewisePolynomial``, or
+            the ``_fir_profile.ProfileInputs`` that build it on first use (a concrete plan: its
+            timing and the path's pieces, a tenth or less of the profile's floats).
         corner_times: ``(M - 1,)`` time [s] at which the averaging window is centred on each
             corner's gap (the bisector point of eq 13/14).
         vertices: ``(M - 1, d)`` corner vertices [mm].
@@ -136,7 +140,7 @@ class FIRPlan(eqx.Module):
     overlaps: Array
     feeds: Array
     delays: Array
-    position: object
+    profile: object
     corner_times: Array
     vertices: Array
     path_deviation: float = eqx.field(static=True)
@@ -144,9 +148,16 @@ class FIRPlan(eqx.Module):
     axes: tuple[str, ...] = eqx.field(static=True)
 
     @property
+    def position(self) -> PiecewisePolynomial:
+        """The exact position profile [mm] (built and kept on first use for a concrete plan)."""
+        p = self.profile
+        return p if isinstance(p, PiecewisePolynomial) else p.position()
+
+    @property
     def cycle_time(self) -> Array:
         """Total motion time [s]: ``sum T_v + T_d + sum (T_d - T_k)``."""
-        return self.position.end - self.position.start
+        p = self.profile
+        return p.end - p.start if isinstance(p, PiecewisePolynomial) else p.span[1] - p.span[0]
 
     @property
     def corner_errors(self) -> Array:
@@ -235,6 +246,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     tol_vertex = xp.minimum(tol_block[:-1], tol_block[1:])
     d_np, F_np, tb_np = (np.asarray(_primal(x), dtype=np.float64) for x in (delays, feeds_cmd, tol_block))
     tv_np = np.minimum(tb_np[:-1], tb_np[1:])
+    limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # the verification's bound on vertex errors: 1 pm slack for rounding
     Td_np = float(d_np.sum())
     t_in, t_out = tp.tangents()
 
@@ -250,6 +262,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     others = np.zeros(M - 1)  # tolerance taken by the other direction changes of a dwell corner's window
     lengths_np = np.concatenate([tp.lengths, np.ones(Mp - M + 1)])
     feeds_np = np.concatenate([F_np, np.ones(Mp - M + 1)])
+    cum_np = np.concatenate([[0.0], np.cumsum(tp.lengths)])  # arc length at each block start (Repairs)
     pad_b = Mp - M  # per-block inputs padded to the bucketed block count (one compiled JAX kernel)
     motion_ends_np = np.stack([np.pad(table.first_motion, (0, pad_b)), np.pad(table.last_motion, (0, pad_b))])
     tangents_np = np.stack([np.pad(t_in, ((0, pad_b), (0, 0))), np.pad(t_out, ((0, pad_b), (0, 0)))])
@@ -284,16 +297,20 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                                      head, tail, table.first_motion,
                                      table.last_motion, t_in, t_out, full, shrink, others, tv_np, d_sorted, h_full))
 
+    def timing_gaps(*candidate):
+        """:func:`timing` and the dwell after each block (0 after the last and on padding)."""
+        frac, piece_tv, cruise, overlaps = timing(*candidate)
+        return frac, piece_tv, cruise, overlaps, np.concatenate([Td_np - overlaps, np.zeros(Mp - M + 1)])
+
     def schedule(factor, head, tail, full, shrink, others, arc_rel):
         """``(feeds, overlaps, pulse lengths, pulse starts, position, corner instants, inputs)`` on
         concrete arrays (the position a :class:`NumpyPiecewise`)."""
-        frac, piece_tv, cruise, overlaps = timing(factor, head, tail, full, shrink, others, arc_rel)
-        gaps = np.concatenate([Td_np - overlaps, np.zeros(Mp - M + 1)])
+        frac, piece_tv, cruise, overlaps, gaps = timing_gaps(factor, head, tail, full, shrink, others, arc_rel)
         starts, ends, breaks, coeffs, centre = _fir_profile.profile(tp.start, table.geo, table.block, table.gap, frac,
                                                                     piece_tv, gaps, d_np)
         durations = np.where(table.gap, np.append(gaps, 0.0)[table.block], frac * piece_tv)  # of the input pieces
         return (F_np * cruise, overlaps, ends[:M] - starts[:M], starts[:M], NumpyPiecewise(breaks, coeffs),
-                centre[: M - 1], (factor.copy(), head, tail, full, shrink.copy(), others, arc_rel), durations)
+                centre[: M - 1], (factor, head, tail, full, shrink, others, arc_rel), durations)
 
     def traced_plan(factor, head, tail, full, shrink, others, arc_rel):
         """The JAX form of :func:`schedule` (differentiable through ``feed``, ``delays``, ``tolerance``)."""
@@ -348,7 +365,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         bisection = CornerBisection(M - 1) if limits is not None else _NO_BISECTION
         checked, repaired = np.zeros(M, dtype=bool), False
         checks = RoundChecks(tp, tb_np, table.block, Td_np, check_period)  # redone only where the profile changed
-        repairs = Repairs(full, tv_np, tb_np, F_np, tp.lengths, Td_np, d_np.size)
+        repairs = Repairs(full, tv_np, tb_np, F_np, tp.lengths, Td_np, d_np.size, cum_np)
 
         def alone(g):  # ``_fir_limits`` phase 1: each block's own peaks (every corner an exact stop)
             _, _, pulse, starts, position, *_ = schedule(factor * g[:, None], head, tail, full, np.zeros(M - 1), others,
@@ -358,7 +375,6 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         if limits is not None and M == 1:
             g = hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), np.ones(1, dtype=bool))
             factor, repaired = factor * g[:, None], bool(g[0] < 1.0)
-        limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # 1 pm absolute slack for rounding
         K = M // _PREFIX_SHARE
         if refine and limits is None and several and K >= _PREFIX_MIN_BLOCKS:
             # the vertex errors of the first blocks alone, on the profile of their input: a loser
@@ -388,7 +404,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                     if own_bad.any() and not near.any():  # checked alone before, above a limit again
                         g = np.where(own_bad, 0.98 / np.maximum(own, 1.0), g)
                     if np.any(g < 1.0):  # slowed blocks: check the corners again before bisecting
-                        factor *= np.reshape(g, (-1, 1))
+                        factor = factor * np.reshape(g, (-1, 1))  # new array: the state's inputs are the old
                         too_fast = slowed = True
                     else:
                         too_fast = bisection.update(ratios)
@@ -413,15 +429,17 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                             # (suspended here, it keeps its profile for the samples unless released)
                             low_f, low_s = repairs.bound(errors > limit_v, errors, rounds > _SCALING_ROUNDS, factor, shrink)
                             low = predicted_time((low_f, head, tail, full, others, arc_rel), low_s * bisection.bound_scale)
+                            low_f = low_s = None  # not held while suspended
                             if (yield low, repaired, True) is _RELEASE:
                                 # released while others go on: drop the profile, rebuild it from
                                 # the same inputs (identical arrays) when this one resumes
-                                inputs, state, pos_np = state[6], None, None
+                                inputs, state = state[6], None
+                                pos_np = pulse_np = starts_np = centre_np = durations = None
                                 checks.swap_profile(None)
                                 yield low, repaired, False
                                 state = schedule(*inputs)
-                                pos_np = state[4]
-                                checks.swap_profile(pos_np)
+                                pos_np, starts_np, centre_np = state[4], state[3], state[5]
+                                checks.swap_profile(pos_np, starts_np, centre_np)
                         deviation, at_vertex, at_block = checks.samples_check()
                     viol = errors > limit_v
                     if refine:
@@ -438,9 +456,12 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         f"tolerance{' (or corners a limit)' if too_fast else ''} after {max_rounds} rounds",
                         residual=float(np.max(errors - limit_v, initial=0.0)), steps=rounds)
                 late = rounds > _SCALING_ROUNDS
+                # suspended in the branch and bound, a candidate keeps no profile and no round's
+                # arrays; dropped before the repairs, which change ``factor`` and ``shrink`` in place
+                # (the state's inputs are those arrays, not copies)
+                state = inputs = pos_np = pulse_np = starts_np = centre_np = durations = at_vertex = at_block = None
                 repairs.apply(viol, errors, arc_slow, late, factor, shrink)
-                # suspended in the branch and bound, a candidate keeps no profile and no round's arrays
-                state = pos_np = pulse_np = starts_np = centre_np = durations = at_vertex = at_block = None
+                viol = errors = arc_slow = None
                 yield predicted_time((factor, head, tail, full, others, arc_rel), shrink * bisection.bound_scale), repaired, False
                 state = schedule(factor, head, tail, full, shrink * bisection.scale, others, arc_rel)
         return state, rounds, deviation, repaired
@@ -456,15 +477,18 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         whose repairs push its bound past the best verified plan is dropped without rebuilding its
         profile. Once a candidate needs a limit repair, the candidates ``capped()`` (every block at
         its closed-form safe feed up front: slower blocks whose corners keep their overlap can beat
-        exact stops) join the same queue. Returns the best settled ``(state, rounds, deviation, _)``."""
+        exact stops) join the same queue. Returns the best settled ``(state, rounds, deviation)``, the
+        state without its profile (its first and last break in its place)."""
         best, best_time = None, np.inf
         several = len(candidates) > 1
         queue = [(predicted_time(c) if several else 0.0, i, settle(*c, several=several)) for i, c in enumerate(candidates)]
         heapq.heapify(queue)
-        extra = capped is not None
+        extra, n_first = capped is not None, len(candidates)
+        # the generators hold the candidates: a started one copies its feed factors and frees these
+        candidates = None
 
         def add_capped():
-            for i, c in enumerate(capped(), start=len(candidates)):
+            for i, c in enumerate(capped(), start=n_first):
                 heapq.heappush(queue, (predicted_time(c), i, settle(*c)))
 
         held = {}  # index -> (bound, steps) of the candidates suspended with their profiles
@@ -476,11 +500,12 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                 step, repaired, holds = next(steps)
                 heapq.heappush(queue, (max(bound, step), i, steps))
             except StopIteration as done:
-                repaired = done.value[3]
-                breaks = done.value[0][4].breaks
+                state, rounds, deviation, repaired = done.value
+                breaks = state[4].breaks
                 t = float(breaks[-1] - breaks[0])
-                if t < best_time:
-                    best, best_time = done.value, t
+                if t < best_time:  # kept without its profile (rebuilt from the inputs when used)
+                    best, best_time = (state[:4] + ((breaks[0], breaks[-1]), state[5], state[6]), rounds, deviation), t
+                state = breaks = done = None
             if extra and repaired:
                 extra = False
                 add_capped()
@@ -495,14 +520,15 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     capped = None
     if limits is not None and np.any(safe_feed < F_np * base):
         capped = lambda: plans(np.minimum(base, safe_feed / F_np))  # noqa: E731
-    best = verify(plans(base), capped)
-    state, rounds, deviation, _ = best
+    state, rounds, deviation = verify(plans(base), capped)
     if traced:
-        feeds, overlaps, pulse, starts, position, centre = traced_plan(*state[6])
+        feeds, overlaps, pulse, starts, profile, centre = traced_plan(*state[6])
     else:
         feeds, overlaps, pulse, starts, centre = (jnp.asarray(state[i]) for i in (0, 1, 2, 3, 5))
-        position = PiecewisePolynomial(jnp.asarray(state[4].breaks), jnp.asarray(state[4].coeffs))
-    return FIRPlan(starts, pulse, overlaps, feeds, jnp.asarray(delays), position, centre, jnp.asarray(tp.vertices),
+        # the profile's inputs, not its coefficients (the same arrays when rebuilt: ``settle``'s release)
+        frac, piece_tv, _, _, gaps = timing_gaps(*state[6])
+        profile = _fir_profile.ProfileInputs(table, frac, piece_tv, gaps, d_np, tp.start, np.array(state[4]))
+    return FIRPlan(starts, pulse, overlaps, feeds, jnp.asarray(delays), profile, centre, jnp.asarray(tp.vertices),
                    float(deviation), int(rounds), tp.axes)
 
 

@@ -179,3 +179,44 @@ def test_profile_of_the_first_blocks_is_the_plan_until_their_input_ends():
     assert j.size > 3
     np.testing.assert_array_equal(vertex_distances(part, tp.vertices[j], centre[j], 0.5 * Td),
                                   vertex_distances(whole, tp.vertices[j], centre[j], 0.5 * Td))
+
+
+@pytest.mark.parametrize("arcs", [False, True])
+def test_plan_holds_its_profile_inputs_within_their_float_count(arcs):
+    """The returned plan's arrays stay within the floats its representation needs: ``3 M + 2 (M - 1)
+    + (M - 1) d + n`` for the schedule (starts, pulses, feeds; overlaps, corner instants; vertices;
+    delays) and ``2 P + M_pad + n + d + 2`` for the profile's inputs (piece shares and pulse
+    lengths, gaps, delays, start point, first and last break), the pieces' geometry being the
+    path's own table (not copied). The coefficients that ``position`` builds are more than that
+    whole bound (so a plan holding them fails), and the built profile agrees with the plan: its
+    span is the cycle time, bit for bit, it ends on the path's end point, at rest, and matches the
+    JAX build of the same inputs."""
+    import jax
+
+    from research.interpolators import fir
+
+    if arcs:
+        tp = random_program(np.random.default_rng(2), arcs=True)
+        assert tp.is_arc.any()
+    else:  # a random walk of 200 short lines
+        steps = np.random.default_rng(7).uniform(-1.0, 1.0, (200, 2))
+        tp = ToolPath.from_polyline(Polyline(np.cumsum(np.vstack([[0.0, 0.0], steps]), axis=0)))
+    delays = (0.06, 0.03)
+    plan = fir.plan_fir(tp, 150.0, delays, 0.05)
+    table = fir._pulse_table(tp)
+    M, d, n, P, Mp = tp.n_blocks, tp.dim, len(delays), table.block.size, table.m_pad
+    bound = 8 * (3 * M + 2 * (M - 1) + (M - 1) * d + n + 2 * P + Mp + n + d + 2)
+    held = sum(np.asarray(x).nbytes for x in jax.tree_util.tree_leaves(plan))
+    assert held <= bound
+    assert plan.profile.pieces.table is table
+    pos = plan.position
+    assert plan.position is pos  # built once, kept
+    assert np.asarray(pos.coeffs).nbytes > bound
+    assert float(pos.end - pos.start) == float(plan.cycle_time)
+    np.testing.assert_allclose(pos.evaluate_numpy(np.array([float(pos.end)]))[0], tp.ends[-1], atol=1e-9)
+    assert np.max(np.abs(pos.evaluate_numpy(np.array([float(pos.end)]), nu=1))) <= 1e-9
+    p = plan.profile
+    _, _, pos_j, _ = build_profile(*(jnp.asarray(a) for a in (tp.start, table.geo, table.block, table.gap, p.fraction,
+                                                                p.piece_tv, p.gaps, p.delays)))
+    t = np.linspace(float(pos.start), float(pos.end), 500)
+    np.testing.assert_allclose(pos.evaluate_numpy(t), np.asarray(pos_j(jnp.asarray(t))), atol=1e-9)

@@ -110,9 +110,9 @@ def test_released_profiles_rebuild_the_same_plan(seed, monkeypatch):
     released = []
     swap = RoundChecks.swap_profile
 
-    def counted(self, position):
+    def counted(self, position, *resumed):
         released.append(position is None)
-        return swap(self, position)
+        return swap(self, position, *resumed)
 
     monkeypatch.setattr(RoundChecks, "swap_profile", counted)
     monkeypatch.setattr(fir, "_HELD_PROFILES", 10**6)
