@@ -155,7 +155,7 @@ class FIRPlan(eqx.Module):
 
     @property
     def cycle_time(self) -> Array:
-        """Total motion time [s]: ``sum T_v + T_d + sum (T_d - T_k)``."""
+        """Total motion time [s]: ``sum T_v + T_d + sum (T_d - T_k)``, plus the pauses of a paused plan."""
         p = self.profile
         return p.end - p.start if isinstance(p, PiecewisePolynomial) else p.span[1] - p.span[0]
 
