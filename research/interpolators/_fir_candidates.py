@@ -14,7 +14,7 @@ the errors of a window of short blocks are not monotone in its feeds).
 The construction here does not ask that of the planner. It rests on one fact of the verification:
 
     a plan verified at tolerance ``eps`` has every checked error (vertex distances, sampled path
-    deviation) ``<= eps (1 + 1e-9) + 1e-9`` and holds the limits, so it passes the same checks at
+    deviation) ``<= eps (1 + 1e-9) + 1e-9`` (``_fir_kernels.verified_bound``) and holds the limits, so it passes the same checks at
     every ``eps' >= eps`` (the checks compare the same, tolerance-free distances with a larger
     bound) -- it is a feasible plan for ``eps'``.
 

@@ -39,6 +39,16 @@ import numpy as np
 
 _OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
 
+#: rounding slack of every tolerance check of the planner: an error [mm] passes a tolerance ``eps``
+#: when ``<= eps (1 + VERIFY_RTOL) + VERIFY_ATOL`` (1e-9 relative and 1 pm absolute, for the rounding
+#: of the exact profile's evaluation; far below any machine's resolution)
+VERIFY_RTOL, VERIFY_ATOL = 1e-9, 1e-9
+
+
+def verified_bound(tolerance):
+    """The largest error [mm] that passes ``tolerance`` [mm] (scalar or array), rounding slack included."""
+    return tolerance * (1.0 + VERIFY_RTOL) + VERIFY_ATOL
+
 
 @numba.njit(**_OPTIONS)
 def _left(a, v):
@@ -546,7 +556,7 @@ def sample_charges(t, centre, block, dist, tol_block, is_arc, half_window):
                 near = j
                 lim = min(lim, min(tol_block[j], tol_block[j + 1]))
         limit[i] = lim
-        bad[i] = dist[i] > lim * (1.0 + 1e-9) + 1e-9
+        bad[i] = dist[i] > lim * (1.0 + VERIFY_RTOL) + VERIFY_ATOL
         if near >= 0:
             key[i] = near
         elif not is_arc[b]:

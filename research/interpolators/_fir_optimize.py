@@ -57,6 +57,7 @@ from scipy.optimize import minimize
 from research.errors import ParameterError, PathError
 from research.interpolators._fir_blocks import build_profile
 from research.interpolators._fir_chain import check_delays
+from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_limits import DEGENERATE_PIECE, LIMIT_RTOL, corner_peak_ratios, feed_caps
 from research.interpolators._fir_polish import polish
 from research.interpolators._fir_reorder import mode_tuples, profile_residuals, smooth_search
@@ -321,7 +322,7 @@ class _Problem:
     def feasible(self, x, check_period: float) -> bool:
         """Every vertex and every checked sample within ``eps`` and every exact peak within the limits."""
         plan = self.plan(x, check_period)
-        slack = self.eps * (1.0 + 1e-9) + 1e-9  # as plan_fir's verification
+        slack = verified_bound(self.eps)  # as plan_fir's verification
         if self.M > 1 and float(np.max(np.asarray(plan.corner_errors))) > slack:
             return False
         if plan.path_deviation > slack:

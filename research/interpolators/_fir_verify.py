@@ -18,7 +18,7 @@ from jax import Array
 
 from research.paths.toolpath import ToolPath
 from research.interpolators._fir_kernels import corner_distances as _corner_kernel
-from research.interpolators._fir_kernels import sample_charges, sampled_line_distances, scatter_max
+from research.interpolators._fir_kernels import sample_charges, sampled_line_distances, scatter_max, verified_bound
 from research.piecewise import NumpyPiecewise, PiecewisePolynomial, bucket_size
 
 _GRID = 9  # grid points per corner window for the corner-error search
@@ -169,7 +169,7 @@ def _bound_waiting(path: ToolPath, waiting, worst, bad) -> float:
     q, block, dist, limit, key, keep = (np.concatenate(parts) for parts in zip(*waiting))
     dist = np.minimum(dist, path.distance_bound(q, near=block))
     scatter_max(worst, key[keep], dist[keep])
-    keep &= dist > limit * (1.0 + 1e-9) + 1e-9
+    keep &= dist > verified_bound(limit)
     scatter_max(bad, key[keep], dist[keep])
     return float(dist.max())
 
@@ -186,7 +186,7 @@ def _charged_samples(position: NumpyPiecewise, path: ToolPath, t: np.ndarray, st
     q, block, dist = _three_block_distance(path, position, t, starts, Td)
     limit, key, over = sample_charges(np.ascontiguousarray(t), np.ascontiguousarray(centre, dtype=np.float64), block,
                                       dist, np.ascontiguousarray(tol_block, dtype=np.float64), path.is_arc, 0.5 * Td)
-    late = ~over & (dist > limit * (1.0 + 1e-9) + 1e-9)
+    late = ~over & (dist > verified_bound(limit))
     rows = (q[over], block[over], dist[over], limit[over], key[over]) if over.any() else None
     return dist, key, over, late, rows
 

@@ -67,7 +67,7 @@ from research.interpolators._fir_candidates import FIRSweep, envelope
 from research.interpolators._fir_chain import check_delays
 from research.interpolators._fir_convolution import fir_by_convolution  # noqa: F401 (re-exported)
 from research.interpolators._fir_feed import arc_feed_caps
-from research.interpolators._fir_kernels import predicted_cycle
+from research.interpolators._fir_kernels import predicted_cycle, verified_bound
 from research.interpolators._fir_limits import (
     BISECTION_STEPS,
     LIMIT_RTOL,
@@ -246,7 +246,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     tol_vertex = xp.minimum(tol_block[:-1], tol_block[1:])
     d_np, F_np, tb_np = (np.asarray(_primal(x), dtype=np.float64) for x in (delays, feeds_cmd, tol_block))
     tv_np = np.minimum(tb_np[:-1], tb_np[1:])
-    limit_v = tv_np * (1.0 + 1e-9) + 1e-9  # the verification's bound on vertex errors: 1 pm slack for rounding
+    limit_v = verified_bound(tv_np)  # the verification's bound on vertex errors
     Td_np = float(d_np.sum())
     t_in, t_out = tp.tangents()
 
