@@ -359,24 +359,15 @@ def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, se
     Returns:
         ``(q (N, A), block (N,), d2 (N, 3))``.
     """
-    N, K, D, A = t.size, coeffs.shape[0], coeffs.shape[1], coeffs.shape[2]
+    N, A = t.size, coeffs.shape[2]
     M = starts.size
     q = np.empty((N, A))
     block = np.empty(N, dtype=np.int64)
     d2 = np.empty((N, 3))
-    b0, bK = breaks[0], breaks[K]
     w = np.empty(A)
     at_break, at_start = 0, 0  # search hints: the samples run forward (grid, then corner instants)
     for i in range(N):
-        tc = min(max(t[i], b0), bK)
-        at_break = _right_from(breaks, tc, at_break)
-        piece = min(max(at_break - 1, 0), K - 1)
-        tau = tc - breaks[piece]
-        for a in range(A):
-            v = coeffs[piece, D - 1, a]
-            for m in range(D - 2, -1, -1):
-                v = v * tau + coeffs[piece, m, a]
-            q[i, a] = v
+        at_break = _value(breaks, coeffs, t[i], q[i:i + 1], at_break)
         at_start = _right_from(starts, t[i] - half_window, at_start)
         k = min(max(at_start - 1, 0), M - 1)
         block[i] = k
