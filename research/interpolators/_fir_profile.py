@@ -230,6 +230,10 @@ def _moving_average(breaks, coeffs, delay):
 
 @numba.njit(**_OPTIONS)
 def _filter(breaks, coeffs, delay, initial, integrate):
+    """:func:`_filter_rows` with its ``D`` (coefficient rows of ``coeffs``) a compile-time constant
+    for the row counts the planner meets (lines 1, arcs ``DEGREE + 1`` = 6, each filter one more):
+    its loops over rows then unroll and its small arrays stay in registers (2-2.5x faster, the same
+    operations in the same order); any other count runs the generic compilation."""
     D = coeffs.shape[1]
     if D == 1:
         return _filter_rows(breaks, coeffs, delay, initial, integrate, 1)
