@@ -250,6 +250,15 @@ def _filter(breaks, coeffs, delay, initial, integrate):
     return _filter_rows(breaks, coeffs, delay, initial, integrate, D)
 
 
+@numba.njit(inline="always", **_OPTIONS)
+def _merge_step(breaks, delay, i, j, K):
+    """One step of the merge of the breaks of ``C(t)`` (``i`` taken) and ``C(t - T)`` (``j`` taken,
+    at ``b + T``), ties to ``C(t)``: ``(next break, i, j)``."""
+    if j > K or (i <= K and breaks[i] <= breaks[j] + delay):
+        return breaks[i], i + 1, j
+    return breaks[j] + delay, i, j + 1
+
+
 @numba.njit(**_OPTIONS)
 def _filter_rows(breaks, coeffs, delay, initial, integrate, D):
     """:func:`_moving_average`, or with ``integrate`` its integral from the first break plus
@@ -271,12 +280,7 @@ def _filter_rows(breaks, coeffs, delay, initial, integrate, D):
     i, j = 0, 0  # breaks of C(t) taken, breaks of C(t - T) taken (ties: C(t) first)
     left = 0.0
     for p in range(2 * (K + 1)):
-        if j > K or (i <= K and breaks[i] <= breaks[j] + delay):
-            b = breaks[i]
-            i += 1
-        else:
-            b = breaks[j] + delay
-            j += 1
+        b, i, j = _merge_step(breaks, delay, i, j, K)
         if p > 0 and b > left:
             count += 1
         left = b
@@ -288,12 +292,7 @@ def _filter_rows(breaks, coeffs, delay, initial, integrate, D):
     i, j, q = 0, 0, 0  # as above; pieces kept
     left, now, before = 0.0, -1, -1
     for p in range(2 * (K + 1)):
-        if j > K or (i <= K and breaks[i] <= breaks[j] + delay):
-            b = breaks[i]
-            i += 1
-        else:
-            b = breaks[j] + delay
-            j += 1
+        b, i, j = _merge_step(breaks, delay, i, j, K)
         if p == 0:
             out_breaks[0] = b
         elif b > left or (keep_first and p == 1):
