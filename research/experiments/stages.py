@@ -64,9 +64,9 @@ def interpolate(ic, path, program_feeds, blocks=None, pauses=None):
 
         tolerance = ic.tolerance_um * 1e-3
         target = path
-        pauses = None
+        block_pauses = None  # the FIR plans blocks: the pauses on their vertices
         if blocks is not None:
-            target, feeds, g64, pauses = blocks
+            target, feeds, g64, block_pauses = blocks
             feed = ic.feed_mm_per_s if explicit else feeds
             tolerance = np.where(np.isfinite(g64), g64, tolerance)
         limits = None if ic.limits is None else ic.limits.axis_limits(path.dim)
@@ -74,7 +74,7 @@ def interpolate(ic, path, program_feeds, blocks=None, pauses=None):
             plan = _optimized_fir(ic, target, feed, tolerance, limits)
         else:
             plan = plan_fir(target, feed, np.asarray(ic.delays_ms) * 1e-3, tolerance, refine=ic.refine, limits=limits,
-                            pauses=pauses)
+                            pauses=block_pauses)
         info = {"planner": "optimize_fir" if ic.optimized else "plan_fir", "feeds": np.asarray(plan.feeds).tolist(), "overlap_times": np.asarray(plan.overlaps).tolist(),
                 "corner_errors": np.asarray(plan.corner_errors).tolist()}
         return plan.trajectory(Ts), info, plan

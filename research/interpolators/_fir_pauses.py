@@ -17,26 +17,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-from research.errors import ParameterError
 from research.piecewise import PiecewisePolynomial
-
-
-def checked_pauses(pauses, n_blocks: int) -> np.ndarray:
-    """``pauses`` as a float array ``(M + 1,)`` [s]: NaN where the motion does not pause, else a
-    dwell ``>= 0`` (0: a stop without a dwell, e.g. ``M0``).
-
-    Raises:
-        ParameterError: a wrong shape, or a value neither NaN nor finite ``>= 0`` (naming its vertex).
-    """
-    p = np.asarray(pauses, dtype=np.float64)
-    if p.shape != (n_blocks + 1,):
-        raise ParameterError(f"pauses must have shape (M + 1,) = ({n_blocks + 1},) (one per vertex, start and end "
-                             f"included), got {p.shape}")
-    bad = ~np.isnan(p) & ~(np.isfinite(p) & (p >= 0.0))
-    if bad.any():
-        k = int(np.flatnonzero(bad)[0])
-        raise ParameterError(f"pauses[{k}] = {float(p[k])!r}: expected NaN (no pause) or a finite dwell >= 0 s")
-    return p
 
 
 def parts(pauses: np.ndarray) -> list[tuple[int, int]]:
@@ -60,7 +41,7 @@ def join(plans, ranges, pauses: np.ndarray):
     Args:
         plans: the :class:`~research.interpolators.fir.FIRPlan` of each part, in order.
         ranges: their block ranges (:func:`parts`).
-        pauses: ``(M + 1,)`` [s] (:func:`checked_pauses`).
+        pauses: ``(M + 1,)`` [s] (``research.paths.gcode.checked_pauses``).
 
     Returns:
         ``(start_times, pulse_times, overlaps, feeds, position, corner_times, path_deviation,

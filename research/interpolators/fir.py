@@ -86,6 +86,7 @@ from research.interpolators._fir_overlap import overlap_time
 from research.interpolators._fir_repair import Repairs
 from research.interpolators._fir_verify import RoundChecks, corner_distances, vertex_distances
 from research.limits import AxisLimits
+from research.paths.gcode import checked_pauses
 from research.paths.polyline import Polyline
 from research.paths.toolpath import ToolPath
 from research.piecewise import NumpyPiecewise, PiecewisePolynomial
@@ -225,7 +226,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     M = tp.n_blocks
     _check_inputs(delays, feed, tolerance, M)
     if pauses is not None:
-        pauses = _fir_pauses.checked_pauses(pauses, M)
+        pauses = checked_pauses(pauses, M)
         if not np.all(np.isnan(pauses)):
             ranges = _fir_pauses.parts(pauses)
             plans = [plan_fir(tp.part(a, b), _fir_pauses.per_block(feed, a, b, M), delays,
@@ -297,9 +298,9 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                                      head, tail, table.first_motion,
                                      table.last_motion, t_in, t_out, full, shrink, others, tv_np, d_sorted, h_full))
 
-    def timing_gaps(*candidate):
+    def timing_gaps(*candidate, top=True):
         """:func:`timing` and the dwell after each block (0 after the last and on padding)."""
-        frac, piece_tv, cruise, overlaps = timing(*candidate)
+        frac, piece_tv, cruise, overlaps = timing(*candidate, top=top)
         return frac, piece_tv, cruise, overlaps, np.concatenate([Td_np - overlaps, np.zeros(Mp - M + 1)])
 
     def schedule(factor, head, tail, full, shrink, others, arc_rel):
@@ -336,9 +337,8 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         ``[t - T_d, t]``), so the corners whose search window ``centre +- T_d / 2`` ends by then
         have their errors of the full check; their repairs bound the first round's
         (``_fir_repair``: a subset of the violators at the same errors)."""
-        frac, piece_tv, _, overlaps = timing(factor, head, tail, full, shrink, others, arc_rel, top=False)
+        frac, piece_tv, _, _, gaps = timing_gaps(factor, head, tail, full, shrink, others, arc_rel, top=False)
         c = int(table.first_motion[K])  # the pieces of blocks 0 .. K - 1 and their gaps
-        gaps = np.concatenate([Td_np - overlaps, np.zeros(Mp - M + 1)])
         starts, _, breaks, coeffs, centre = _fir_profile.profile(tp.start, table.geo[:c], table.block[:c],
                                                                  table.gap[:c], frac[:c], piece_tv[:c], gaps, d_np)
         j = np.flatnonzero(centre[: K - 1] + 0.5 * Td_np <= starts[K])

@@ -14,6 +14,7 @@ import numpy as np
 
 from research.errors import ParameterError
 from research.limits import AxisLimits
+from research.paths.gcode import checked_pauses
 from research.paths.polyline import Polyline
 from research.piecewise import PiecewisePolynomial
 from research.trajectory import Trajectory
@@ -89,8 +90,6 @@ def scurve_interpolate(path: Polyline, feed, limits: AxisLimits, sample_period: 
     _check_positive(feed=feeds)
     dwell = np.zeros(path.n_segments + 1)
     if pauses is not None:
-        from research.interpolators._fir_pauses import checked_pauses
-
         dwell = np.nan_to_num(checked_pauses(pauses, path.n_segments), nan=0.0)
     along = np.array([limits.along(u) for u in path.directions])  # (M, 3): v, a, j along each block
     s = _profiles(path.lengths, np.minimum(feeds, along[:, 0]), along[:, 1], along[:, 2], dwell)

@@ -214,10 +214,8 @@ class GCodeProgram:
                 raise PathError(f"GCodeProgram.{name} must have shape ({shape},), got {a.shape}")
             a.setflags(write=False)
             object.__setattr__(self, name, a)
-        pauses = np.full(nb + 1, np.nan) if self.block_pauses is None else np.array(self.block_pauses, dtype=np.float64)
-        if pauses.shape != (nb + 1,) or np.any(~np.isnan(pauses) & ~(np.isfinite(pauses) & (pauses >= 0))):
-            raise PathError(f"GCodeProgram.block_pauses must be ({nb + 1},) values, NaN or finite >= 0 s, got shape "
-                            f"{pauses.shape}")
+        pauses = np.full(nb + 1, np.nan) if self.block_pauses is None else \
+            checked_pauses(self.block_pauses, nb, "GCodeProgram.block_pauses", PathError).copy()
         pauses.setflags(write=False)
         object.__setattr__(self, "block_pauses", pauses)
         sb = self.segment_block
@@ -316,6 +314,26 @@ def _word_column(line_text: str, word: int) -> int:
                 return m.start(1) + 1
             k += 1
     return 1
+
+
+def checked_pauses(pauses, n_blocks: int, name: str = "pauses", error=ParameterError) -> np.ndarray:
+    """``pauses`` as a float array ``(M + 1,)`` [s], one per vertex of ``n_blocks`` blocks (start and
+    end included): NaN where the motion does not pause, else a dwell ``>= 0`` (0: a stop without a
+    dwell, e.g. ``M0``), as :attr:`GCodeProgram.block_pauses` and the planners' ``pauses`` take them.
+
+    Raises:
+        ``error`` (ParameterError by default): a wrong shape, or a value neither NaN nor finite
+        ``>= 0``, naming ``name`` and the vertex.
+    """
+    p = np.asarray(pauses, dtype=np.float64)
+    if p.shape != (n_blocks + 1,):
+        raise error(f"{name} must have shape (M + 1,) = ({n_blocks + 1},) (one per vertex, start and end "
+                    f"included), got {p.shape}")
+    bad = ~np.isnan(p) & ~(np.isfinite(p) & (p >= 0.0))
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        raise error(f"{name}[{k}] = {float(p[k])!r}: expected NaN (no pause) or a finite dwell >= 0 s")
+    return p
 
 
 def _point(name: str, value) -> tuple[float, float, float]:
