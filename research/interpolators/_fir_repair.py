@@ -3,10 +3,14 @@
 A round checks a candidate plan on its exact profile (vertex errors, then the sampled path
 deviation, ``_fir_verify.RoundChecks``) and repairs every violator (``fir`` module docstring): a
 full-overlap vertex slows the blocks of its window by ``sqrt(eps / error)`` (the error of a chain
-is quadratic in feed), a dwell corner shrinks its overlap by ``(eps / error)^(1/(n+1))`` (the
+is quadratic in feed) -- of a line the window reaches only in part, the line piece on the window's
+side (its tail from the left, its head from the right, ``_fir_lookahead.line_pieces``) where that
+piece holds the whole stretch the window covers, else the whole line -- a dwell corner shrinks its overlap by ``(eps / error)^(1/(n+1))`` (the
 small-overlap scaling of ``H2``, Sencer 2015 eq 13/14), an arc whose own deviation breaks its
 tolerance slows by ``sqrt(eps / deviation)``, and after the scaling rounds a violator becomes an
-exact stop.
+exact stop. (The first version scaled every block of the window whole, a long line for a window
+reaching a fraction of a millimetre into it. Growing a piece shorter than the stretch covered, at
+its own lower feed, was tried as well: benchmarks/README.md, "Local window repairs".)
 
 The branch and bound of ``plan_fir`` orders candidates by the predicted time of their repaired
 plans. :meth:`Repairs.bound` gives, from the vertex errors alone (the first half of a round),
@@ -15,8 +19,10 @@ violators are a superset (path samples charged to vertices and arcs add to them)
 smaller (a vertex's error is the larger of its distance and its charged path deviation): each
 factor is ``0.98 sqrt(ratio) < 1`` or ``min(0.98 ratio^(1/(n+1)), 1) <= 1`` with ``ratio = eps /
 error`` no larger in the full round, and a vertex's window always holds its own two blocks (the
-window ``[lo, hi)`` of :meth:`Repairs.apply` has ``lo <= j`` and ``hi >= j + 2``), so the bound
-multiplies a subset of the factors each block gets in the full round. Its predicted time is then
+window ``[lo, hi)`` of :meth:`Repairs.apply` has ``lo <= j`` and ``hi >= j + 2``). Of block ``j``
+the full round slows at least its tail piece (the whole block where it has none), of block
+``j + 1`` at least its head piece; the bound slows exactly those, so it multiplies a subset of
+the factors each piece gets in the full round. Its predicted time is then
 a lower bound on the full round's where the prediction falls as factors and shrinks grow (the
 assumption the branch and bound already rests on: repairs only lower feeds and shrink overlaps).
 """
@@ -32,6 +38,8 @@ class Repairs:
 
     Args:
         full: ``(M - 1,)`` full-overlap flags of the candidate's vertices.
+        head, tail: ``(M,)`` shares of each block's length its head and tail pieces run (0 on
+            arcs and on lines without such a piece).
         tol_vertex: ``(M - 1,)`` tolerance per vertex [mm]; tol_block: ``(M,)`` per block [mm].
         feeds: ``(M,)`` commanded feeds [mm/s]; lengths: ``(M,)`` block lengths [mm].
         Td: total filter delay [s]; n_filters: the number of filters ``n``.
@@ -39,8 +47,9 @@ class Repairs:
             of one plan share it); else from ``lengths``.
     """
 
-    def __init__(self, full, tol_vertex, tol_block, feeds, lengths, Td: float, n_filters: int, cum=None):
+    def __init__(self, full, head, tail, tol_vertex, tol_block, feeds, lengths, Td: float, n_filters: int, cum=None):
         self.full, self.tv, self.tb, self.F = full, tol_vertex, tol_block, feeds
+        self.head_len, self.tail_len = head * lengths, tail * lengths  # [mm]
         self.cum = np.concatenate([[0.0], np.cumsum(lengths)]) if cum is None else cum
         self.Td, self.n = float(Td), int(n_filters)
         self.M = feeds.size
@@ -55,14 +64,16 @@ class Repairs:
         if late:
             shrink[j] = 0.0  # exact stop: the vertex is on the trajectory
         elif j.size:
-            _repair_vertices(j, self.tv[j] / errors[j], self.full, self.F, self.cum, self.Td, self.n, factor, shrink)
+            _repair_vertices(j, self.tv[j] / errors[j], self.full, self.F, self.cum, self.head_len, self.tail_len,
+                             self.Td, self.n, factor, shrink)
         for k in np.flatnonzero(arc_dev):
             factor[k] *= min(0.98 * np.sqrt(self.tb[k] / arc_dev[k]), 0.98)
 
     def bound(self, viol, errors, late: bool, factor, shrink):
         """New ``(factor, shrink)``, each entry ``>=`` what :meth:`apply` leaves for any superset
         of the violators ``viol`` at errors ``>= errors`` (module docstring): the same repairs,
-        each full-overlap vertex slowing only its own two blocks."""
+        each full-overlap vertex ``j`` slowing only the tail piece of block ``j`` and the head
+        piece of block ``j + 1`` (the whole block where it has no such piece)."""
         factor, shrink = factor.copy(), shrink.copy()
         j = np.flatnonzero(viol)
         if late:
@@ -70,29 +81,42 @@ class Repairs:
             return factor, shrink
         ratio = self.tv[j] / errors[j]
         w = self.full[j]
-        g = np.ones(self.M)
-        np.multiply.at(g, np.concatenate([j[w], j[w] + 1]), np.tile(0.98 * np.sqrt(ratio[w]), 2))
+        g = np.ones((self.M, 3))
+        gw, jw = 0.98 * np.sqrt(ratio[w]), j[w]
+        for k, c, piece in ((jw, 2, self.tail_len), (jw + 1, 0, self.head_len)):
+            own = piece[k] > 0.0
+            np.multiply.at(g, (k[own], c), gw[own])
+            for c_all in range(3):
+                np.multiply.at(g, (k[~own], c_all), gw[~own])
         shrink[j[~w]] *= np.minimum(0.98 * ratio[~w] ** (1.0 / (self.n + 1)), 1.0)
-        return factor * g[:, None], shrink
+        return factor * g, shrink
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _repair_vertices(viol, ratio, full, F, cum, Td, n, factor, shrink):
+def _repair_vertices(viol, ratio, full, F, cum, head_len, tail_len, Td, n, factor, shrink):
     """The vertex repairs of :meth:`Repairs.apply` (not late), in place, vertices ``viol`` in path
     order with ``ratio = eps / error``: a full-overlap vertex slows the blocks of its window
     ``[lo, max(hi, j + 2))``, its half-width ``T_d F_j / 2`` at the tail feed its earlier
-    neighbours' repairs left, by ``0.98 sqrt(ratio)``; a dwell corner shrinks its overlap by
+    neighbours' repairs left, by ``0.98 sqrt(ratio)`` -- of an end block the window reaches only in
+    part, the piece on its side (tail of ``lo``, head of ``hi - 1``) where that piece is at least
+    as long as the stretch covered, else the whole block; a dwell corner shrinks its overlap by
     ``min(0.98 ratio^(1/(n+1)), 1)``. A compiled loop: each window depends on the repairs before it."""
     M = F.size
     for q in range(viol.size):
         j = viol[q]
         if full[j]:  # slow the window's blocks: the error of a chain is quadratic in feed
             half = 0.5 * Td * F[j] * factor[j, 2]
-            lo = max(np.searchsorted(cum, cum[j + 1] - half, side="right") - 1, 0)
-            hi = max(min(np.searchsorted(cum, cum[j + 1] + half, side="left"), M), j + 2)
+            a, b = cum[j + 1] - half, cum[j + 1] + half
+            lo = max(np.searchsorted(cum, a, side="right") - 1, 0)
+            hi = max(min(np.searchsorted(cum, b, side="left"), M), j + 2)
             g = 0.98 * np.sqrt(ratio[q])
             for k in range(lo, hi):
-                for c in range(3):
-                    factor[k, c] *= g
+                if k == lo and cum[k] < a and cum[k + 1] - a <= tail_len[k]:
+                    factor[k, 2] *= g  # the window covers only the block's tail piece
+                elif k == hi - 1 and cum[k + 1] > b and b - cum[k] <= head_len[k]:
+                    factor[k, 0] *= g  # ... only its head piece
+                else:
+                    for c in range(3):
+                        factor[k, c] *= g
         else:
             shrink[j] *= min(0.98 * ratio[q] ** (1.0 / (n + 1)), 1.0)

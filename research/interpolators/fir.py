@@ -365,7 +365,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         bisection = CornerBisection(M - 1) if limits is not None else _NO_BISECTION
         checked, repaired = np.zeros(M, dtype=bool), False
         checks = RoundChecks(tp, tb_np, table.block, Td_np, check_period)  # redone only where the profile changed
-        repairs = Repairs(full, tv_np, tb_np, F_np, tp.lengths, Td_np, d_np.size, cum_np)
+        repairs = Repairs(full, head, tail, tv_np, tb_np, F_np, tp.lengths, Td_np, d_np.size, cum_np)
 
         def alone(g):  # ``_fir_limits`` phase 1: each block's own peaks (every corner an exact stop)
             _, _, pulse, starts, position, *_ = schedule(factor * g[:, None], head, tail, full, np.zeros(M - 1), others,

@@ -4,7 +4,8 @@ branch and bound of ``plan_fir`` that uses it.
 Expected values are the module's claim checked on its definition: for any superset of the
 violators at errors no smaller (what the path samples add in a full round), the full repairs leave
 every factor and shrink at most the bound's; the bound of the full set itself equals the full
-repairs where no window reaches past a vertex's own two blocks (blocks longer than a window); and
+repairs where no window reaches past a vertex's own two blocks (blocks longer than a window,
+without head and tail pieces); a window inside its lines' pieces slows those pieces only; and
 the plan is the least verified time over the candidates, each verified alone (no bound involved);
 a candidate that releases its profile while suspended and rebuilds it ends with the plan of one
 that keeps it (the same arrays, bit for bit).
@@ -27,13 +28,16 @@ def _closed_curve(seed):
     return Polyline(np.round(pts, 3))
 
 
-def _case(rng, M, long_blocks=False):
+def _case(rng, M, long_blocks=False, pieces=True):
+    """Random repairs; ``pieces``: lines with head and tail pieces of random shares (some none)."""
     lengths = rng.uniform(20.0, 40.0, M) if long_blocks else rng.uniform(0.1, 3.0, M)
     full = rng.random(M - 1) < 0.6
     tv = rng.uniform(0.01, 0.1, M - 1)
     tb = np.concatenate([tv, tv[-1:]])
     feeds = rng.uniform(50.0, 250.0, M)
-    return Repairs(full, tv, tb, feeds, lengths, 0.09, 2), tv
+    head = np.where(rng.random(M) < 0.6, rng.uniform(0.0, 0.5, M), 0.0) if pieces else np.zeros(M)
+    tail = np.where(rng.random(M) < 0.6, rng.uniform(0.0, 0.5, M), 0.0) if pieces else np.zeros(M)
+    return Repairs(full, head, tail, tv, tb, feeds, lengths, 0.09, 2), tv
 
 
 def test_bound_is_at_least_every_superset_repair():
@@ -65,7 +69,7 @@ def test_bound_is_the_repair_when_windows_hold_only_their_own_blocks():
     rng = np.random.default_rng(7)
     for _ in range(50):
         M = int(rng.integers(3, 30))
-        rep, tv = _case(rng, M, long_blocks=True)
+        rep, tv = _case(rng, M, long_blocks=True, pieces=False)
         factor, shrink = np.ones((M, 3)), np.ones(M - 1)
         viol = rng.random(M - 1) < 0.5
         errors = np.where(viol, tv * rng.uniform(1.0, 5.0, M - 1), 0.0)
@@ -74,6 +78,27 @@ def test_bound_is_the_repair_when_windows_hold_only_their_own_blocks():
         np.testing.assert_allclose(f_b, factor, rtol=1e-14)
         np.testing.assert_allclose(s_b, shrink, rtol=1e-14)
         assert np.any(factor < 1.0) or not np.any(viol & rep.full)
+
+
+def test_a_window_inside_the_pieces_slows_only_the_pieces():
+    """One violating full-overlap vertex between two long lines whose tail and head pieces hold its
+    window ``T_d F / 2`` (at the tail feed): those two pieces slow by ``0.98 sqrt(eps / error)``
+    and nothing else changes; with pieces shorter than the window, both lines slow whole (the
+    window's distances by hand: 0.045 s x 100 mm/s = 4.5 mm each side)."""
+    lengths, feeds = np.array([30.0, 25.0]), np.array([100.0, 100.0])
+    for head1, whole in ((0.2, False), (0.1, True)):  # 5 mm or 2.5 mm of the second line
+        head, tail = np.array([0.0, head1]), np.array([0.2, 0.0])  # 6 mm of the first line
+        rep = Repairs(np.ones(1, bool), head, tail, np.full(1, 0.05), np.full(2, 0.05), feeds, lengths, 0.09, 2)
+        factor, shrink = np.ones((2, 3)), np.ones(1)
+        rep.apply(np.ones(1, bool), np.full(1, 0.2), np.zeros(2), False, factor, shrink)
+        g = 0.98 * np.sqrt(0.25)
+        expected = np.ones((2, 3))
+        expected[0, 2] = g
+        if whole:
+            expected[1] = g
+        else:
+            expected[1, 0] = g
+        np.testing.assert_allclose(factor, expected, rtol=1e-15)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
