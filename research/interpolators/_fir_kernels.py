@@ -490,6 +490,59 @@ def scatter_max(out, index, values):
 
 
 @numba.njit(**_OPTIONS)
+def range_minima(first, last, values, n, initial):
+    """``out[k] = min(initial[k], min{values[r] : first[r] <= k <= last[r]})`` for ``k < n``.
+
+    Each end of a range is clipped to ``[0, n - 1]`` on its own (so a range wholly beyond an end
+    covers that end's cell), then a range with ``first > last`` covers nothing. Each range marks the ``O(log length)`` nodes of an implicit segment tree over the cells
+    (``2 n`` floats, a leaf ``n + k`` per cell, node ``i``'s children ``2 i`` and ``2 i + 1``) that
+    tile it, and one top-down pass hands every node's minimum to its children, so that a leaf holds
+    the minimum over the nodes above it: ``O(R log n + n)`` time, ``O(n)`` memory. ``min`` is exact,
+    and a NaN wins as in ``np.minimum``.
+
+    Args:
+        first, last: ``(R,)`` int64 inclusive cell ranges (any integers; clipped as above).
+        values: ``(R,)`` float64, the value of each range.
+        n: number of cells (``>= 0``).
+        initial: ``(n,)`` float64 starting values (not modified).
+
+    Returns:
+        ``(n,)`` float64 minima.
+    """
+    if n <= 0:
+        return np.empty(0)
+    tree = np.full(2 * n, np.inf)
+    for r in range(first.size):
+        lo, hi = min(max(first[r], 0), n - 1), min(max(last[r], 0), n - 1)
+        if lo > hi:
+            continue
+        v = values[r]
+        lo += n
+        hi += n + 1  # half-open [lo, hi) over the leaves
+        while lo < hi:
+            if lo & 1:
+                if v < tree[lo] or v != v:
+                    tree[lo] = v
+                lo += 1
+            if hi & 1:
+                hi -= 1
+                if v < tree[hi] or v != v:
+                    tree[hi] = v
+            lo >>= 1
+            hi >>= 1
+    for i in range(1, n):  # parents before children: i < 2 i
+        v = tree[i]
+        for c in (2 * i, 2 * i + 1):
+            if v < tree[c] or v != v:
+                tree[c] = v
+    out = np.empty(n)
+    for k in range(n):
+        a, b = initial[k], tree[n + k]
+        out[k] = b if (b < a or b != b) else a
+    return out
+
+
+@numba.njit(**_OPTIONS)
 def _left_from(a, v, hint):
     """``np.searchsorted(a, v, side="left")`` (the count of entries ``< v``) by a galloping search
     from ``hint``, as :func:`_right_from`."""
