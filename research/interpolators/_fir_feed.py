@@ -37,7 +37,8 @@ import math
 
 import numpy as np
 
-from research.interpolators._fir_kernels import chain_displacements, chain_feed_decisions, chain_largest_feeds
+from research.interpolators._fir_kernels import (chain_displacements, chain_feed_decisions, chain_largest_feeds,
+                                                range_minima)
 
 
 _ARC_STEPS = 60  # arc feeds to machine precision (cheap: one evaluation per arc and step)
@@ -202,22 +203,9 @@ class ChainError:
 
 def range_min(first: np.ndarray, last: np.ndarray, values: np.ndarray, n: int, initial: np.ndarray) -> np.ndarray:
     """``out[k] = min(initial[k], min{values[r] : first[r] <= k <= last[r]})`` for ``k < n``, in
-    ``O((n + R) log n)``: each range is covered by two power-of-two blocks that are pushed down."""
-    out = np.array(initial, dtype=np.float64)
-    first, last = np.clip(first, 0, n - 1), np.clip(last, 0, n - 1)
-    keep = first <= last  # empty ranges cover nothing
-    first, last, values = first[keep], last[keep], np.asarray(values)[keep]
-    if values.size == 0:
-        return out
-    length = last - first + 1
-    level = np.floor(np.log2(np.maximum(length, 1))).astype(np.int64)
-    top = int(level.max())
-    table = np.full((top + 1, n), np.inf)
-    np.minimum.at(table, (level, first), values)
-    np.minimum.at(table, (level, last - (1 << level) + 1), values)
-    for lv in range(top, 0, -1):
-        half = 1 << (lv - 1)
-        row = table[lv]
-        np.minimum(table[lv - 1], row, out=table[lv - 1])
-        table[lv - 1, half:] = np.minimum(table[lv - 1, half:], row[: n - half])
-    return np.minimum(out, table[0])
+    ``O(R log n + n)`` time and ``2 n`` floats of memory (compiled segment tree,
+    :func:`~research.interpolators._fir_kernels.range_minima`); each end of a range is clipped to
+    ``[0, n - 1]`` on its own, then a range with ``first > last`` covers nothing."""
+    return range_minima(np.ascontiguousarray(first, dtype=np.int64), np.ascontiguousarray(last, dtype=np.int64),
+                        np.ascontiguousarray(values, dtype=np.float64), int(n),
+                        np.ascontiguousarray(initial, dtype=np.float64))

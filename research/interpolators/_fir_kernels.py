@@ -490,6 +490,62 @@ def scatter_max(out, index, values):
 
 
 @numba.njit(**_OPTIONS)
+def _nan_min(a, b):
+    """``np.minimum(a, b)`` of two floats (a NaN wins), written as a select, not a branch."""
+    return b if (b < a or b != b) else a
+
+
+@numba.njit(**_OPTIONS)
+def range_minima(first, last, values, n, initial):
+    """``out[k] = min(initial[k], min{values[r] : first[r] <= k <= last[r]})`` for ``k < n``.
+
+    Each end of a range is clipped to ``[0, n - 1]`` on its own (so a range wholly beyond an end
+    covers that end's cell), then a range with ``first > last`` covers nothing. Each range marks the
+    ``O(log length)`` nodes of an implicit segment tree over the cells (``2 n`` floats, a leaf
+    ``n + k`` per cell, node ``i``'s children ``2 i`` and ``2 i + 1``) that tile it, and one top-down
+    pass hands every node's minimum to its children, so that a leaf holds the minimum over the nodes
+    above it: ``O(R log n + n)`` time, ``O(n)`` memory. ``min`` is exact, so the result is that of
+    any other correct order; a NaN wins as in ``np.minimum``. The marking step updates both sides
+    of a level unconditionally (with ``inf`` where a side takes no node): branch-free, which is
+    about 4x faster than the branching form on the planner's ranges (benchmarks/README.md).
+
+    Args:
+        first, last: ``(R,)`` int64 inclusive cell ranges (any integers; clipped as above).
+        values: ``(R,)`` float64, the value of each range.
+        n: number of cells (``>= 0``).
+        initial: ``(n,)`` float64 starting values (not modified).
+
+    Returns:
+        ``(n,)`` float64 minima.
+    """
+    if n <= 0:
+        return np.empty(0)
+    tree = np.full(2 * n, np.inf)
+    for r in range(first.size):
+        lo, hi = min(max(first[r], 0), n - 1), min(max(last[r], 0), n - 1)
+        if lo > hi:
+            continue
+        v = values[r]
+        lo += n
+        hi += n + 1  # half-open [lo, hi) over the leaves
+        while lo < hi:
+            tree[lo] = _nan_min(tree[lo], v if lo & 1 else np.inf)  # a right child: its own node
+            lo += lo & 1
+            odd = hi & 1
+            hi -= odd
+            tree[hi] = _nan_min(tree[hi], v if odd else np.inf)  # left of an odd end: its own node
+            lo >>= 1
+            hi >>= 1
+    for i in range(1, n):  # parents before children: i < 2 i
+        tree[2 * i] = _nan_min(tree[2 * i], tree[i])
+        tree[2 * i + 1] = _nan_min(tree[2 * i + 1], tree[i])
+    out = np.empty(n)
+    for k in range(n):
+        out[k] = _nan_min(initial[k], tree[n + k])
+    return out
+
+
+@numba.njit(**_OPTIONS)
 def _left_from(a, v, hint):
     """``np.searchsorted(a, v, side="left")`` (the count of entries ``< v``) by a galloping search
     from ``hint``, as :func:`_right_from`."""

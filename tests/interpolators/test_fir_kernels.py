@@ -180,6 +180,45 @@ def test_scatter_max_is_numpys_maximum_at():
     np.testing.assert_array_equal(got, want)
 
 
+def test_range_min_matches_brute_force():
+    """``range_min`` against a double loop over ranges and cells, on seeded random ranges: empty
+    (``first > last``), clipped at either end (and wholly outside: each end is clipped to the cells
+    on its own, so such a range covers the end cell), single-cell, whole-path and ordinary ones,
+    over cell counts that are and are not powers of two."""
+    from research.interpolators._fir_feed import range_min
+
+    def brute(first, last, values, n, initial):
+        out = np.array(initial, dtype=np.float64)
+        for r in range(first.size):
+            a, b = min(max(first[r], 0), n - 1), min(max(last[r], 0), n - 1)
+            for k in range(n):
+                if a <= k <= b and values[r] < out[k]:
+                    out[k] = values[r]
+        return out
+
+    rng = np.random.default_rng(11)
+    for n in (1, 2, 7, 16, 33, 100, 257):
+        R = 60
+        first = rng.integers(0, n, R)
+        last = first + rng.integers(0, n, R)  # ordinary, some clipped at the right end
+        kind = rng.integers(0, 6, R)
+        first[kind == 1], last[kind == 1] = 0, n - 1  # whole path
+        last[kind == 2] = first[kind == 2]  # single cell
+        last[kind == 3] = first[kind == 3] - rng.integers(1, 4, np.sum(kind == 3))  # empty
+        first[kind == 4] -= rng.integers(1, n + 3, np.sum(kind == 4))  # clipped at the left end
+        out_of = kind == 5  # wholly outside the cells, left or right (empty once clipped)
+        shift = np.where(rng.random(np.sum(out_of)) < 0.5, -(n + 5), n + 5)
+        first[out_of] += shift
+        last[out_of] = first[out_of] + rng.integers(0, 3, np.sum(out_of))
+        values = rng.normal(size=R)
+        initial = np.where(rng.random(n) < 0.3, np.inf, rng.normal(size=n) + 1.0)
+        want = brute(first, last, values, n, initial)
+        got = range_min(first, last, values, n, initial)
+        np.testing.assert_array_equal(got, want)
+        np.testing.assert_array_equal(range_min(first[:0], last[:0], values[:0], n, initial), initial)
+    assert range_min(np.array([0]), np.array([3]), np.array([1.0]), 0, np.zeros(0)).shape == (0,)
+
+
 def test_sample_charges_match_the_vectorised_rule():
     """Near corner, tolerance, violation and key of path samples against the NumPy statement of
     the rule (nearest corner instant within T_d / 2; lines charge their vertex, arcs their block)."""
