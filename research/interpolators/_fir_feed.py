@@ -204,8 +204,8 @@ class ChainError:
 def range_min(first: np.ndarray, last: np.ndarray, values: np.ndarray, n: int, initial: np.ndarray) -> np.ndarray:
     """``out[k] = min(initial[k], min{values[r] : first[r] <= k <= last[r]})`` for ``k < n``, in
     ``O(R log n + n)`` time and ``2 n`` floats of memory (compiled segment tree,
-    :func:`~research.interpolators._fir_kernels.range_minima`); each end of a range is clipped to
-    ``[0, n - 1]`` on its own, then a range with ``first > last`` covers nothing."""
+    :func:`~research.interpolators._fir_kernels.range_minima`); a range is intersected with
+    ``[0, n - 1]``, and one with ``first > last`` then (wholly beyond an end) covers nothing."""
     return range_minima(np.ascontiguousarray(first, dtype=np.int64), np.ascontiguousarray(last, dtype=np.int64),
                         np.ascontiguousarray(values, dtype=np.float64), int(n),
                         np.ascontiguousarray(initial, dtype=np.float64))

@@ -182,17 +182,16 @@ def test_scatter_max_is_numpys_maximum_at():
 
 def test_range_min_matches_brute_force():
     """``range_min`` against a double loop over ranges and cells, on seeded random ranges: empty
-    (``first > last``), clipped at either end (and wholly outside: each end is clipped to the cells
-    on its own, so such a range covers the end cell), single-cell, whole-path and ordinary ones,
-    over cell counts that are and are not powers of two."""
+    (``first > last``), clipped at either end, wholly outside the cells (covering nothing: a range
+    is intersected with the cells), single-cell, whole-path and ordinary ones, over cell counts
+    that are and are not powers of two."""
     from research.interpolators._fir_feed import range_min
 
     def brute(first, last, values, n, initial):
         out = np.array(initial, dtype=np.float64)
         for r in range(first.size):
-            a, b = min(max(first[r], 0), n - 1), min(max(last[r], 0), n - 1)
             for k in range(n):
-                if a <= k <= b and values[r] < out[k]:
+                if first[r] <= k <= last[r] and values[r] < out[k]:
                     out[k] = values[r]
         return out
 
