@@ -86,6 +86,8 @@ tolerance.
 
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 
 from research.interpolators._fir_blocks import PulseTable
@@ -111,11 +113,12 @@ DEEP_STEPS = 2
 _DEEP_SET = 1  # index of the "isolated" cost set among the sets of _dwell_sets
 
 
-def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in, t_out):
-    """Candidate plans, each ``(factor, head, tail, full, others, arc_rel)``: feed factors ``(M, 3)``
-    (head, body, tail), head and tail shares ``(M,)``, full-overlap flags ``(M - 1,)``, the
-    tolerance other turns take at dwell corners ``(M - 1,)`` and the slow-down of every sub-arc
-    ``(A,)`` (a window reaching into an arc slows only the sub-arcs it covers).
+def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in, t_out, measure=None):
+    """Candidate plans, each kept as a :class:`Candidate` whose call builds its arrays
+    ``(factor, head, tail, full, others, arc_rel)``: feed factors ``(M, 3)`` (head, body, tail),
+    head and tail shares ``(M,)``, full-overlap flags ``(M - 1,)``, the tolerance other turns take
+    at dwell corners ``(M - 1,)`` and the slow-down of every sub-arc ``(A,)`` (a window reaching
+    into an arc slows only the sub-arcs it covers).
 
     A candidate is a set of dwell vertices (the rest run at full overlap) and the dwell corners'
     tolerance rule; its feeds and overlaps are then those of ``tol_v`` (eq 13/14 at the dwell
@@ -127,7 +130,20 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     zigzags whose neighbours dwell too). The dwell sets: where the dwell is estimated cheaper than
     the slow-down (both rules), every vertex that can dwell, none (:func:`_dwell_sets`) -- decided
     at ``tol_v`` and at each tighter tolerance ``tol_v * NEST_RATIO^k`` (module docstring: why).
-    All are verified; the fastest verified plan is kept."""
+    All are verified; the fastest verified plan is kept.
+
+    Args:
+        tp, table: the path and its pulse table; F_cmd, base: ``(M,)`` commanded feeds [mm/s] and
+            their factors (arcs, limits); delays: ``(n,)`` filter delays [s]; tol_v: ``(M - 1,)``
+            vertex tolerances [mm]; t_in, t_out: ``(M, d)`` block tangents at start and end.
+        measure: called on each candidate's arrays while they are built (once, for the duplicate
+            check), or None.
+
+    Returns:
+        ``[(candidate, measure(its arrays) or None)]``, the candidates in order, none equal to
+        another (flags, tolerances of other turns, feed factors and shares). Held so, the
+        candidates cost their dwell sets and window feeds (:class:`Candidate`), not their arrays:
+        the planner builds those again when it starts one (its branch and bound starts few)."""
     M = tp.n_blocks
     Td = float(delays.sum())
     F = F_cmd * base
@@ -161,6 +177,7 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     K1, pad = levels.shape[0], bucket_size(M - 1, 16) - (M - 1)
     both = np.pad(np.concatenate([np.maximum(budget, 0.0), levels]), ((0, 0), (0, pad)), constant_values=1.0)
     Tk = overlaps(both, np.tile(np.pad(dF, (0, pad), constant_values=1.0), (2 * K1, 1)), delays)[:, : M - 1]
+    both = None
     Tk_budget, Tk_whole = Tk[:K1], Tk[K1:]
     f_lv = np.broadcast_to(Fv, levels.shape).copy()
     j_q = np.flatnonzero(need[0])
@@ -178,8 +195,9 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     if k_q.size:  # every tighter level in one search
         f_lv[k_q, j_q] = every.feed_decisions(s_v[j_q], Fv[j_q], levels[k_q, j_q], e_all[j_q], cap[j_q], Td,
                                               np.stack([cost_b[k_q, j_q], cost_w[k_q, j_q]], axis=1))
+    cost_b = cost_w = k_q = j_q = None
     reach = Fv * every.rho.max()  # a window at a feed <= Fv sums the turns strictly inside s_v +- reach
-    f_w = f_lv[0]
+    f_w = f_lv[0].copy()
     # the vertices strictly inside each window's reach: indices [w_lo, w_hi)
     w_lo, w_hi = np.searchsorted(s_v, s_v - reach, side="right"), np.searchsorted(s_v, s_v + reach, side="left")
     memo, solved = {}, []
@@ -223,20 +241,65 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
             if key not in seen:
                 seen.add(key)
                 sets.append((rule, gap, i == _EVERY_CAN, k > NEST_STEPS))
+    budget_0 = budget[0].copy()
+    levels = need = budget = Tk = Tk_budget = Tk_whole = f_lv = None  # the levels are decided
     # every set with its feeds held over the whole support T_d / 2, and over the reach of
     # window_half_width as well (module docstring, "Window reach": neither is faster on every
     # program), but "every vertex that can dwell", which few windows hold a feed in
     support = np.full(M - 1, 0.5 * Td)
-    out, shared = [], {}
+    context = (tp, table, F_cmd, F, s_v, np.concatenate([[0.0], np.cumsum(tp.lengths)]))
+    out, shared, kept = [], {}, {}
     for rule, gap, every_can, deep in sets:
         reaches = (hold,) if deep else (hold, support) if not every_can else (support,)
+        full = shared.setdefault(("full", gap.tobytes()), ~gap)
+        f = feeds_without(gap)
+        dwell_tol = np.clip(tol_v - (budget_0, tol_v)[rule], 0.0, tol_v)[gap]
         for h in reaches if np.any(hold < support) else (support,):
-            c = _candidate(tp, table, F_cmd, F, gap, (budget[0], tol_v)[rule], h, tol_v, s_v, feeds_without)
-            if not any(all(np.array_equal(c[i], o[i]) for i in (3, 4, 0, 1, 2)) for o in out):
-                # equal full-overlap flags, tolerances of other turns and arc slow-downs are one
-                # array (the verification reads them only): the search holds each once
-                out.append(tuple(shared.setdefault((i, x.tobytes()), x) if i >= 3 else x for i, x in enumerate(c)))
+            c = Candidate(context, full, f, h, dwell_tol)
+            arrays = c()
+            key = _digest(arrays[:5])
+            # a duplicate of a kept candidate (equal flags, tolerances of other turns, feed factors
+            # and shares) is not offered again: an equal digest is confirmed on the rebuilt arrays
+            if not any(all(np.array_equal(a, b) for a, b in zip(arrays[:5], o()[:5])) for o in kept.get(key, ())):
+                kept.setdefault(key, []).append(c)
+                out.append((c, None if measure is None else measure(arrays)))
+            arrays = None
     return out
+
+
+class Candidate:
+    """A candidate of :func:`look_ahead`, kept as what builds its arrays: its full-overlap flags
+    ``full`` ``(M - 1,)`` (bool; shared between the candidates of one dwell set), the window feeds
+    ``feeds`` [mm/s] of its full-overlap vertices, the time [s] ``hold`` ``(M - 1,)`` each holds
+    them (shared), and ``dwell_tol`` [mm], the tolerance the other turns take at each dwell vertex
+    (``others`` there, 0 elsewhere). Held so, a candidate costs about 9 bytes per vertex where
+    its arrays cost 49 (and ``8 A`` for the sub-arcs).
+
+    Calling it builds ``(factor, head, tail, full, others, arc_rel)`` (:func:`look_ahead`): new
+    ``factor``, ``head``, ``tail``, ``others`` and ``arc_rel`` arrays on every call (the planner
+    repairs ``factor`` in place), the same ones every time (the same operations on the same inputs).
+    """
+
+    __slots__ = ("_context", "full", "_feeds", "_hold", "_dwell_tol")
+
+    def __init__(self, context, full, feeds, hold, dwell_tol):
+        self._context, self.full, self._feeds, self._hold, self._dwell_tol = context, full, feeds, hold, dwell_tol
+
+    def __call__(self):
+        factor, head, tail, arc_rel = _candidate(*self._context, self.full, self._feeds, self._hold)
+        others = np.zeros(self.full.size)
+        others[~self.full] = self._dwell_tol
+        return factor, head, tail, self.full, others, arc_rel
+
+
+def _digest(arrays) -> bytes:
+    """A digest of the values of ``arrays`` (``-0.0`` read as ``0.0``, so arrays equal by
+    ``np.array_equal`` have equal digests; the converse is confirmed by the caller)."""
+    h = hashlib.blake2b(digest_size=16)
+    for x in arrays:
+        h.update(f"{x.dtype.str}{x.shape}".encode())
+        h.update((x + 0.0 if x.dtype.kind == "f" else x).tobytes())
+    return h.digest()
 
 
 def deep_levels(tol):
@@ -307,22 +370,21 @@ def _dwell_sets(L, Td, Fv, f_w, need, tol, budget, Tk_budget, Tk_whole):
     return out
 
 
-def _candidate(tp, table, F_cmd, F, gap, budget, hold, tol_v, s_v, feeds_without):
-    """The candidate of :func:`look_ahead` whose vertices ``gap`` dwell, each with the tolerance
-    ``budget`` [mm] (what other turns take of ``tol_v`` is handed on as ``others``); the other
-    vertices at full overlap with their window feeds on the chain without the dwell turns, each
-    feed held ``hold`` [s] ``(M - 1,)`` each side of its vertex (:func:`window_half_width`)."""
+def _candidate(tp, table, F_cmd, F, s_v, cum, full, f, hold):
+    """Feed factors ``(M, 3)``, head and tail shares ``(M,)`` and sub-arc slow-downs ``(A,)`` of the
+    candidate of :func:`look_ahead` whose vertices ``full`` ``(M - 1,)`` run at full overlap with
+    their window feeds ``f`` [mm/s] (on the chain without the dwell turns), each held ``hold`` [s]
+    ``(M - 1,)`` each side of its vertex (:func:`window_half_width`); ``cum`` ``(M + 1,)``: the
+    arc length [mm] at each block start and the path's end."""
     M = tp.n_blocks
     L = tp.lengths
-    query = np.flatnonzero(~gap)
-    f = feeds_without(gap)
+    query = np.flatnonzero(full)
     # the estimate holds a constant feed through the window: a vertex between blocks of different
     # feeds (a line entering a slower arc) gets the lower one on both sides of it
     slow = f < np.maximum(F[:-1], F[1:])[query] * (1 - 1e-12)
     j, f = query[slow], f[slow]
     half = hold[j]
     lo, hi = s_v[j] - half * f, s_v[j] + half * f
-    cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
     # blocks inside a window run at its feed; a window reaching into a block slows its head or tail
     right = np.searchsorted(cum, hi, side="right")
     first, last = np.searchsorted(cum, lo, side="left"), right - 2
@@ -347,7 +409,7 @@ def _candidate(tp, table, F_cmd, F, gap, budget, hold, tol_v, s_v, feeds_without
     A = span.shape[0]
     arc_f = range_min(a_first, a_last, f, A, np.full(A, np.inf)) if A else np.zeros(0)
     arc_rel = np.minimum(arc_f / F[table.block[table.arc_pieces]], 1.0) if A else np.zeros(0)
-    return factor, head, tail, ~gap, np.where(gap, np.clip(tol_v - budget, 0.0, tol_v), 0.0), arc_rel
+    return factor, head, tail, arc_rel
 
 
 def line_pieces(h_blk, h_reach, h_feed, t_blk, t_reach, t_feed, L, body, F, arc):
