@@ -168,36 +168,8 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     own = Fv * np.linalg.norm(du, axis=1) * h_full
     with np.errstate(invalid="ignore"):
         hold = window_half_width(delays, np.nan_to_num(own / (own + other), nan=1.0))
-    # row 0: the tolerance itself; rows 1 .. NEST_STEPS: the tighter ones whose dwell sets are offered too
-    levels = np.concatenate([tol_v[None, :] * (NEST_RATIO ** np.arange(NEST_STEPS + 1))[:, None],
-                             deep_levels(tol_v * NEST_RATIO**NEST_STEPS)])
-    need = e_all > levels
-    budget = levels - other
-    # eq 13/14 overlaps for the two tolerances a dwell may use, at every level (concrete arrays, _fir_profile)
-    K1, pad = levels.shape[0], bucket_size(M - 1, 16) - (M - 1)
-    both = np.pad(np.concatenate([np.maximum(budget, 0.0), levels]), ((0, 0), (0, pad)), constant_values=1.0)
-    Tk = overlaps(both, np.tile(np.pad(dF, (0, pad), constant_values=1.0), (2 * K1, 1)), delays)[:, : M - 1]
-    both = None
-    Tk_budget, Tk_whole = Tk[:K1], Tk[K1:]
-    f_lv = np.broadcast_to(Fv, levels.shape).copy()
-    j_q = np.flatnonzero(need[0])
-    if j_q.size:  # window feeds on the whole chain at the tolerance itself: the feeds of the plans
-        f_lv[0, j_q] = every.largest_feed(s_v[j_q], Fv[j_q], levels[0, j_q], e_all[j_q])
-    # the tighter levels read their window feeds only through the dwell decisions of _dwell_sets
-    # (cost <= _slow_cost(f), where a rule can dwell; the deep levels only the "isolated" rule's):
-    # a search stopped once its bracket settles them gives the same decisions (ChainError.feed_decisions)
-    Lj = tp.lengths
-    cap = 0.5 * (Lj[:-1] + Lj[1:])
-    rows = np.arange(K1)[:, None]
-    cost_b = np.where(_can_dwell(need, budget, Tk_budget, Td) & (rows <= NEST_STEPS), Td - Tk_budget, np.nan)
-    cost_w = np.where(_can_dwell(need, levels, Tk_whole, Td), Td - Tk_whole, np.nan)
-    k_q, j_q = np.nonzero((rows >= 1) & ~(np.isnan(cost_b) & np.isnan(cost_w)))
-    if k_q.size:  # every tighter level in one search
-        f_lv[k_q, j_q] = every.feed_decisions(s_v[j_q], Fv[j_q], levels[k_q, j_q], e_all[j_q], cap[j_q], Td,
-                                              np.stack([cost_b[k_q, j_q], cost_w[k_q, j_q]], axis=1))
-    cost_b = cost_w = k_q = j_q = None
+    d_all = own = None
     reach = Fv * every.rho.max()  # a window at a feed <= Fv sums the turns strictly inside s_v +- reach
-    f_w = f_lv[0].copy()
     # the vertices strictly inside each window's reach: indices [w_lo, w_hi)
     w_lo, w_hi = np.searchsorted(s_v, s_v - reach, side="right"), np.searchsorted(s_v, s_v + reach, side="left")
     memo, solved = {}, []
@@ -227,22 +199,63 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
             memo[key] = f[~gap]
         return memo[key]
 
+    # level 0: the tolerance itself; levels 1 .. NEST_STEPS: the tighter ones whose dwell sets are
+    # offered too; then the deep levels. Decided one level at a time (no (levels, M - 1) arrays).
+    K1 = NEST_STEPS + 1 + DEEP_STEPS
+    ratios = NEST_RATIO ** np.arange(NEST_STEPS + 1)
+    deep_tol = deep_levels(tol_v * NEST_RATIO**NEST_STEPS)
+
+    def level(k):
+        return tol_v * ratios[k] if k <= NEST_STEPS else deep_tol[k - NEST_STEPS - 1]
+
+    # eq 13/14 overlaps of the two tolerances a dwell may use (concrete arrays, _fir_profile.overlaps):
+    # closed forms for one or two filters, taken level by level (elementwise: the same values);
+    # three or more filters invert in one batch over every level, as the one search it always was
+    Tk = None
+    if delays.size > 2:
+        pad = bucket_size(M - 1, 16) - (M - 1)
+        both = np.stack([np.maximum(level(k) - other, 0.0) for k in range(K1)] + [level(k) for k in range(K1)])
+        both = np.pad(both, ((0, 0), (0, pad)), constant_values=1.0)
+        Tk = overlaps(both, np.tile(np.pad(dF, (0, pad), constant_values=1.0), (2 * K1, 1)), delays)[:, : M - 1]
+        both = None
+    # the tighter levels read their window feeds only through the dwell decisions of _dwell_sets
+    # (cost <= _slow_cost(f), where a rule can dwell; the deep levels only the "isolated" rule's):
+    # a search stopped once its bracket settles them gives the same decisions (ChainError.feed_decisions)
     L = tp.lengths
+    cap = 0.5 * (L[:-1] + L[1:])
     sets, seen = [], set()
     for k in range(K1):
-        for i, (rule, gap) in enumerate(_dwell_sets(L, Td, Fv, f_lv[k], need[k], levels[k], budget[k], Tk_budget[k],
-                                                    Tk_whole[k])):
+        tol_k = level(k)
+        need, budget = e_all > tol_k, tol_k - other
+        if Tk is None:
+            Tk_budget, Tk_whole = overlaps(np.maximum(budget, 0.0), dF, delays), overlaps(tol_k, dF, delays)
+        else:
+            Tk_budget, Tk_whole = Tk[k], Tk[K1 + k]
+        f_k = Fv.copy()
+        if k == 0:  # window feeds on the whole chain at the tolerance itself: the feeds of the plans
+            j_q = np.flatnonzero(need)
+            if j_q.size:
+                f_k[j_q] = every.largest_feed(s_v[j_q], Fv[j_q], tol_k[j_q], e_all[j_q])
+            f_w, need_0, budget_0 = f_k, need, budget
+        else:
+            cost_b = np.where(_can_dwell(need, budget, Tk_budget, Td) & (k <= NEST_STEPS), Td - Tk_budget, np.nan)
+            cost_w = np.where(_can_dwell(need, tol_k, Tk_whole, Td), Td - Tk_whole, np.nan)
+            j_q = np.flatnonzero(~(np.isnan(cost_b) & np.isnan(cost_w)))
+            if j_q.size:
+                f_k[j_q] = every.feed_decisions(s_v[j_q], Fv[j_q], tol_k[j_q], e_all[j_q], cap[j_q], Td,
+                                                np.stack([cost_b[j_q], cost_w[j_q]], axis=1))
+            cost_b = cost_w = None
+        for i, (rule, gap) in enumerate(_dwell_sets(L, Td, Fv, f_k, need, tol_k, budget, Tk_budget, Tk_whole)):
             if k > NEST_STEPS and i != _DEEP_SET:
                 continue
             # the dwell set and rule define the candidate; at tol_v a vertex that needs a slow-down
             # and has no feed (zero tolerance) stops exactly whatever the set
-            gap = gap | (need[0] & ((f_w <= 0) | (tol_v <= 0)))
+            gap = gap | (need_0 & ((f_w <= 0) | (tol_v <= 0)))
             key = (rule if gap.any() else 1, gap.tobytes())
             if key not in seen:
                 seen.add(key)
                 sets.append((rule, gap, i == _EVERY_CAN, k > NEST_STEPS))
-    budget_0 = budget[0].copy()
-    levels = need = budget = Tk = Tk_budget = Tk_whole = f_lv = None  # the levels are decided
+    Tk = Tk_budget = Tk_whole = need = budget = tol_k = f_k = j_q = None
     # every set with its feeds held over the whole support T_d / 2, and over the reach of
     # window_half_width as well (module docstring, "Window reach": neither is faster on every
     # program), but "every vertex that can dwell", which few windows hold a feed in
