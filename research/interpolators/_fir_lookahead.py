@@ -172,7 +172,7 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     reach = Fv * every.rho.max()  # a window at a feed <= Fv sums the turns strictly inside s_v +- reach
     # the vertices strictly inside each window's reach: indices [w_lo, w_hi)
     w_lo, w_hi = np.searchsorted(s_v, s_v - reach, side="right"), np.searchsorted(s_v, s_v + reach, side="left")
-    memo, solved = {}, []
+    memo, solved = {}, []  # gap bytes -> feeds of the vertices that do not dwell; the gaps solved
 
     def feeds_without(gap):
         """Window feeds of the vertices that do not dwell, on the chain without the dwell turns:
@@ -185,17 +185,19 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
             hit = np.searchsorted(removed, s_v + reach, side="left") > np.searchsorted(removed, s_v - reach, side="right")
             f = f_w.copy()
             q = hit & ~gap
-            for g_old, f_old in solved:
+            for g_old in solved:
                 if not q.any():
                     break
                 moved = np.concatenate([[0], np.cumsum(g_old != gap)])
                 same = q & (moved[w_hi] == moved[w_lo])
+                f_old = f_w.copy()  # that set's feeds (f_w at its dwell vertices)
+                f_old[~g_old] = memo[g_old.tobytes()]
                 f[same] = f_old[same]
                 q &= ~same
             q = np.flatnonzero(q)
             if q.size:
                 f[q] = chain(~gap).largest_feed(s_v[q], Fv[q], tol_v[q])
-            solved.append((gap, f))
+            solved.append(gap)
             memo[key] = f[~gap]
         return memo[key]
 
@@ -255,7 +257,7 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
             if key not in seen:
                 seen.add(key)
                 sets.append((rule, gap, i == _EVERY_CAN, k > NEST_STEPS))
-    Tk = Tk_budget = Tk_whole = need = budget = tol_k = f_k = j_q = None
+    Tk = Tk_budget = Tk_whole = need = budget = tol_k = f_k = j_q = every = None  # (and the chain's prefix sums)
     # every set with its feeds held over the whole support T_d / 2, and over the reach of
     # window_half_width as well (module docstring, "Window reach": neither is faster on every
     # program), but "every vertex that can dwell", which few windows hold a feed in
