@@ -91,8 +91,8 @@ import hashlib
 import numpy as np
 
 from research.interpolators._fir_blocks import PulseTable
-from research.interpolators._fir_feed import ChainError, range_min
-from research.interpolators._fir_kernels import line_piece_feeds, staircase_cuts
+from research.interpolators._fir_feed import ChainError
+from research.interpolators._fir_kernels import candidate_pieces, line_piece_feeds, staircase_cuts
 from research.interpolators._fir_profile import kernel_second_integral, overlaps
 from research.paths.toolpath import ToolPath
 from research.piecewise import bucket_size
@@ -262,7 +262,9 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     # window_half_width as well (module docstring, "Window reach": neither is faster on every
     # program), but "every vertex that can dwell", which few windows hold a feed in
     support = np.full(M - 1, 0.5 * Td)
-    context = (tp, table, F_cmd, F, s_v, np.concatenate([[0.0], np.cumsum(tp.lengths)]))
+    span = table.arc_span
+    arcs = (np.ascontiguousarray(span[:, 0]), np.ascontiguousarray(span[:, 1]), F[table.block[table.arc_pieces]])
+    context = (tp, F_cmd, F, s_v, np.concatenate([[0.0], np.cumsum(tp.lengths)]), arcs)
     out, shared, kept = [], {}, {}
     for rule, gap, every_can, deep in sets:
         reaches = (hold,) if deep else (hold, support) if not every_can else (support,)
@@ -385,46 +387,23 @@ def _dwell_sets(L, Td, Fv, f_w, need, tol, budget, Tk_budget, Tk_whole):
     return out
 
 
-def _candidate(tp, table, F_cmd, F, s_v, cum, full, f, hold):
+def _candidate(tp, F_cmd, F, s_v, cum, arcs, full, f, hold):
     """Feed factors ``(M, 3)``, head and tail shares ``(M,)`` and sub-arc slow-downs ``(A,)`` of the
     candidate of :func:`look_ahead` whose vertices ``full`` ``(M - 1,)`` run at full overlap with
     their window feeds ``f`` [mm/s] (on the chain without the dwell turns), each held ``hold`` [s]
-    ``(M - 1,)`` each side of its vertex (:func:`window_half_width`); ``cum`` ``(M + 1,)``: the
-    arc length [mm] at each block start and the path's end."""
-    M = tp.n_blocks
-    L = tp.lengths
-    query = np.flatnonzero(full)
-    # the estimate holds a constant feed through the window: a vertex between blocks of different
-    # feeds (a line entering a slower arc) gets the lower one on both sides of it
-    slow = f < np.maximum(F[:-1], F[1:])[query] * (1 - 1e-12)
-    j, f = query[slow], f[slow]
-    half = hold[j]
-    lo, hi = s_v[j] - half * f, s_v[j] + half * f
-    # blocks inside a window run at its feed; a window reaching into a block slows its head or tail
-    right = np.searchsorted(cum, hi, side="right")
-    first, last = np.searchsorted(cum, lo, side="left"), right - 2
-    body = range_min(first, last, f, M, F)
-    k_r = np.clip(right - 1, 0, M - 1)  # block holding the window's right end
-    k_l = np.clip(np.searchsorted(cum, lo, side="right") - 1, 0, M - 1)
-    # the window holds its feed for ``half`` of *time* each side of its vertex: through the blocks
-    # it covers, which run at their (lower) body feeds, it reaches less far into the end block than f half
-    t_cum = np.concatenate([[0.0], np.cumsum(L / body)])
-    reach_r = np.minimum(hi - cum[k_r], np.maximum(half - (t_cum[k_r] - t_cum[j + 1]), 0.0) * f)
-    reach_l = np.minimum(cum[k_l + 1] - lo, np.maximum(half - (t_cum[j + 1] - t_cum[k_l + 1]), 0.0) * f)
-    inside_r = (hi < cum[k_r + 1]) & (reach_r > 0)
-    inside_l = (lo > cum[k_l]) & (reach_l > 0)
-    arc = tp.is_arc
-    head, tail, piece_f = line_pieces(k_r[inside_r], reach_r[inside_r], f[inside_r], k_l[inside_l], reach_l[inside_l],
-                                       f[inside_l], L, body, F, arc)
-    factor = piece_f / F_cmd[:, None]
-    # sub-arcs a window [lo, hi] overlaps: those ending after lo and starting before hi (path order)
-    span = table.arc_span
-    a_first = np.searchsorted(span[:, 1], lo, side="right")
-    a_last = np.searchsorted(span[:, 0], hi, side="left") - 1
-    A = span.shape[0]
-    arc_f = range_min(a_first, a_last, f, A, np.full(A, np.inf)) if A else np.zeros(0)
-    arc_rel = np.minimum(arc_f / F[table.block[table.arc_pieces]], 1.0) if A else np.zeros(0)
-    return factor, head, tail, arc_rel
+    ``(M - 1,)`` each side of its vertex (:func:`window_half_width`).
+
+    The estimate holds a constant feed through the window: a vertex between blocks of different
+    feeds (a line entering a slower arc) gets the lower one on both sides of it. Blocks inside a
+    window run at its feed; a window reaching into a block slows its head or tail
+    (:func:`line_pieces`); the window holds its feed for ``hold`` of *time* each side of its
+    vertex: through the blocks it covers, which run at their (lower) body feeds, it reaches less
+    far into the end block than ``f hold``; a window ``[lo, hi]`` slows the sub-arcs it overlaps.
+    One compiled pass (``_fir_kernels.candidate_pieces``); ``cum`` ``(M + 1,)``: the arc length [mm]
+    at each block start and the path's end; ``arcs``: the sub-arcs' start and end arc lengths and
+    the feeds of their blocks ``(A,)`` each."""
+    head, tail, feeds, arc_rel = candidate_pieces(cum, tp.lengths, F, s_v, full, f, hold, tp.is_arc, *arcs)
+    return feeds / F_cmd[:, None], head, tail, arc_rel
 
 
 def line_pieces(h_blk, h_reach, h_feed, t_blk, t_reach, t_feed, L, body, F, arc):
