@@ -86,8 +86,6 @@ tolerance.
 
 from __future__ import annotations
 
-import hashlib
-
 import numpy as np
 
 from research.interpolators._fir_blocks import PulseTable
@@ -274,9 +272,9 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
         for h in reaches if np.any(hold < support) else (support,):
             c = Candidate(context, full, f, h, dwell_tol)
             arrays = c()
-            key = _digest(arrays[:5])
+            key = _key(arrays[:5])
             # a duplicate of a kept candidate (equal flags, tolerances of other turns, feed factors
-            # and shares) is not offered again: an equal digest is confirmed on the rebuilt arrays
+            # and shares) is not offered again: an equal key is confirmed on the rebuilt arrays
             if not any(all(np.array_equal(a, b) for a, b in zip(arrays[:5], o()[:5])) for o in kept.get(key, ())):
                 kept.setdefault(key, []).append(c)
                 out.append((c, None if measure is None else measure(arrays)))
@@ -309,14 +307,13 @@ class Candidate:
         return factor, head, tail, self.full, others, arc_rel
 
 
-def _digest(arrays) -> bytes:
-    """A digest of the values of ``arrays`` (``-0.0`` read as ``0.0``, so arrays equal by
-    ``np.array_equal`` have equal digests; the converse is confirmed by the caller)."""
-    h = hashlib.blake2b(digest_size=16)
-    for x in arrays:
-        h.update(f"{x.dtype.str}{x.shape}".encode())
-        h.update((x + 0.0 if x.dtype.kind == "f" else x).tobytes())
-    return h.digest()
+def _key(arrays):
+    """A key of a candidate's ``(factor, head, tail, full, others)``: the flags (one array per dwell
+    set, so by identity) and the sums of the others. Arrays equal by ``np.array_equal`` have equal
+    keys (equal values summed in the same order; a sum of zeros compares equal whatever its sign);
+    the converse is confirmed by the caller."""
+    factor, head, tail, full, others = arrays
+    return (id(full),) + tuple(float(x.sum()) for x in (others, factor, head, tail))
 
 
 def deep_levels(tol):
