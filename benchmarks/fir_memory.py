@@ -9,7 +9,8 @@ Paths: ``q`` bench_cam's quick CAM file (``cam_program(0, LEVELS_QUICK)``, its s
 as ``bench_fir.peak_memory`` measures it (``tracemalloc``, above what was allocated before), the
 bytes of the returned plan's arrays (and of its position's, built on first use), and for the planner's stages (functions wrapped while a second
 call runs) the largest peak inside each, split into what was held at its entry and what it added.
-The wrappers reset ``tracemalloc``'s peak at each entry and keep the running maximum themselves, so
+The wrappers reset ``tracemalloc``'s peak at each entry and keep the running maximum themselves, for
+the whole call and for every stage still open (a stage's peak includes those of the stages it calls), so
 the total is the same peak. ``--snapshot STAGE`` (a label as printed) also lists the
 allocation sites (up to three frames in ``research``) of what was held at the entry of ``STAGE``,
 at the call where that was largest. All figures in kB per segment.
@@ -33,7 +34,7 @@ from research.paths import toolpath  # noqa: E402
 
 STAGES = [  # (owner, attribute, label)
     (fir, "look_ahead", "look-ahead (candidates)"),
-    (_fir_lookahead, "_candidate", "  look-ahead: one candidate"),
+    (_fir_lookahead, "_candidate", "  one candidate's arrays"),
     (_fir_profile, "profile", "exact profile build"),
     (_fir_verify.RoundChecks, "__call__", "round checks"),
     (_fir_verify, "vertex_distances", "  vertex errors"),
@@ -63,6 +64,7 @@ class Recorder:
     def __init__(self, snapshot_at: str | None):
         self.stats: dict[str, list[int]] = {}
         self.outer = self.base = 0
+        self.open: list[list[int]] = []  # running peaks of the stages entered and not left
         self.snapshot_at, self.snapshot, self.snapshot_held = snapshot_at, None, -1
 
     def wrap(self, owner, name: str, label: str):
@@ -72,14 +74,20 @@ class Recorder:
         def staged(*args, **kwargs):
             cur, peak = tracemalloc.get_traced_memory()
             self.outer = max(self.outer, peak)
+            for frame in self.open:  # the peak so far counts in every enclosing stage
+                frame[0] = max(frame[0], peak)
             if label == self.snapshot_at and cur > self.snapshot_held:
                 self.snapshot_held, self.snapshot = cur, tracemalloc.take_snapshot()
+            self.open.append([0])
             tracemalloc.reset_peak()
             try:
                 return f(*args, **kwargs)
             finally:
                 peak = tracemalloc.get_traced_memory()[1]
                 self.outer = max(self.outer, peak)
+                for frame in self.open:
+                    frame[0] = max(frame[0], peak)
+                peak = self.open.pop()[0]
                 s = self.stats.setdefault(label, [0, 0, 0, 0])
                 s[0] += 1
                 if peak > s[1]:

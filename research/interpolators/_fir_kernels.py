@@ -832,3 +832,164 @@ def line_piece_feeds(h_blk, h_reach, h_feed, t_blk, t_reach, t_feed, L, body, F,
         feeds[k, 0] = h if head[k] > 0 else (m if mid else t)
         feeds[k, 2] = t if tail[k] > 0 else (m if mid else h)
     return head, tail, feeds
+
+
+@numba.njit(**_OPTIONS)
+def _range_min_into(out, first, last, values):
+    """``out[k] = min(out[k], min{values[r] : first[r] <= k <= last[r]})``, ranges clipped to
+    ``[0, n - 1]`` and empty ones skipped (``_fir_feed.range_min``'s result, which is exact: a
+    minimum): each range covered by two power-of-two blocks, pushed down one level at a time
+    through two rows of ``n``, ``O((n + R) log n)``."""
+    n, R = out.size, first.size
+    lo, hi, level = np.empty(R, np.int64), np.empty(R, np.int64), np.full(R, -1)
+    top, kept = -1, 0
+    for r in range(R):
+        a, b = min(max(first[r], 0), n - 1), min(max(last[r], 0), n - 1)
+        if a <= b:
+            lv = 0
+            while (2 << lv) <= b - a + 1:
+                lv += 1
+            lo[r], hi[r], level[r] = a, b, lv
+            top = max(top, lv)
+            kept += 1
+    if kept == 0:
+        return
+    count = np.zeros(top + 2, np.int64)  # the ranges by level (a counting sort)
+    for r in range(R):
+        if level[r] >= 0:
+            count[level[r] + 1] += 1
+    for lv in range(top + 1):
+        count[lv + 1] += count[lv]
+    order, fill = np.empty(kept, np.int64), count[:-1].copy()
+    for r in range(R):
+        if level[r] >= 0:
+            order[fill[level[r]]] = r
+            fill[level[r]] += 1
+    cur, nxt = np.full(n, np.inf), np.full(n, np.inf)
+    for lv in range(top, -1, -1):
+        if lv < top:  # the blocks of level lv + 1 into their two halves
+            h = 1 << lv
+            for i in range(n):
+                nxt[i] = np.inf
+            for i in range(n):
+                x = cur[i]
+                if x < nxt[i]:
+                    nxt[i] = x
+                if i + h < n and x < nxt[i + h]:
+                    nxt[i + h] = x
+            cur, nxt = nxt, cur
+        for s in range(count[lv], count[lv + 1]):
+            r = order[s]
+            v = values[r]
+            if v < cur[lo[r]]:
+                cur[lo[r]] = v
+            e = hi[r] - (1 << lv) + 1
+            if v < cur[e]:
+                cur[e] = v
+    for k in range(n):
+        if cur[k] < out[k]:
+            out[k] = cur[k]
+
+
+@numba.njit(**_OPTIONS)
+def _below(x, v, right):
+    """The search of :func:`_search` goes on past an entry ``x``."""
+    return x < v or (right and x == v)
+
+
+@numba.njit(**_OPTIONS)
+def _search(a, v, right, hint):
+    """``np.searchsorted(a, v, side="right" if right else "left")`` for a non-decreasing ``a`` and
+    a number ``v`` (not NaN): the first index whose entry is above ``v`` (right) or not below it.
+    Galloping from ``hint`` (the answer for a nearby ``v``), then bisecting: ``O(log d)`` for an
+    answer ``d`` entries from the hint."""
+    n = a.size
+    if n == 0:
+        return 0
+    i = min(max(hint, 0), n - 1)
+    step = 1
+    if _below(a[i], v, right):  # the answer is in [i + 1, n]
+        lo = i + 1
+        while lo + step - 1 < n and _below(a[lo + step - 1], v, right):
+            lo += step
+            step <<= 1
+        hi = min(lo + step - 1, n)
+    else:  # in [0, i]
+        hi = i
+        while hi - step >= 0 and not _below(a[hi - step], v, right):
+            hi -= step
+            step <<= 1
+        lo = max(hi - step + 1, 0)
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if _below(a[mid], v, right):
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@numba.njit(**_OPTIONS)
+def candidate_pieces(cum, L, F, s_v, full, f_full, hold, arc, span_start, span_end, arc_F):
+    """``_fir_lookahead._candidate``'s windows, block pieces and sub-arc feeds in one compiled pass
+    (the same operations per window, so bit for bit): the windows of the full-overlap vertices
+    ``full`` ``(M - 1,)`` whose feed ``f_full`` (one per such vertex) is below the faster block at
+    the vertex, held ``hold`` [s] each side, slow the blocks they cover (``body``, a minimum) and
+    the head or tail of the blocks they reach into (:func:`line_piece_feeds`), and the sub-arcs
+    ``[span_start, span_end]`` they overlap. Returns ``(head, tail, feeds (M, 3), arc_rel (A,))``,
+    ``arc_rel`` the sub-arcs' feeds over ``arc_F``, at most 1."""
+    M, V = L.size, full.size
+    js, fs = np.empty(V, np.int64), np.empty(V)
+    n, q = 0, 0
+    for v in range(V):
+        if full[v]:
+            fv = f_full[q]
+            q += 1
+            if fv < max(F[v], F[v + 1]) * (1 - 1e-12):
+                js[n], fs[n] = v, fv
+                n += 1
+    lo, hi, half = np.empty(n), np.empty(n), np.empty(n)
+    first, last = np.empty(n, np.int64), np.empty(n, np.int64)
+    k_r, k_l = np.empty(n, np.int64), np.empty(n, np.int64)
+    for w in range(n):
+        j, fw = js[w], fs[w]
+        half[w] = hold[j]
+        lo[w], hi[w] = s_v[j] - half[w] * fw, s_v[j] + half[w] * fw
+        right = _search(cum, hi[w], True, j + 1)
+        first[w], last[w] = _search(cum, lo[w], False, j + 1), right - 2
+        k_r[w] = min(max(right - 1, 0), M - 1)
+        k_l[w] = min(max(_search(cum, lo[w], True, first[w]) - 1, 0), M - 1)
+    body = F.copy()
+    _range_min_into(body, first, last, fs[:n])
+    t_cum = np.empty(M + 1)
+    t_cum[0] = 0.0
+    for k in range(M):
+        t_cum[k + 1] = t_cum[k] + L[k] / body[k]
+    h_blk, h_reach, h_feed = np.empty(n, np.int64), np.empty(n), np.empty(n)
+    t_blk, t_reach, t_feed = np.empty(n, np.int64), np.empty(n), np.empty(n)
+    n_h, n_t = 0, 0
+    for w in range(n):
+        j, fw, kr, kl = js[w], fs[w], k_r[w], k_l[w]
+        reach_r = min(hi[w] - cum[kr], max(half[w] - (t_cum[kr] - t_cum[j + 1]), 0.0) * fw)
+        if hi[w] < cum[kr + 1] and reach_r > 0:
+            h_blk[n_h], h_reach[n_h], h_feed[n_h] = kr, reach_r, fw
+            n_h += 1
+    for w in range(n):
+        j, fw, kl = js[w], fs[w], k_l[w]
+        reach_l = min(cum[kl + 1] - lo[w], max(half[w] - (t_cum[j + 1] - t_cum[kl + 1]), 0.0) * fw)
+        if lo[w] > cum[kl] and reach_l > 0:
+            t_blk[n_t], t_reach[n_t], t_feed[n_t] = kl, reach_l, fw
+            n_t += 1
+    head, tail, feeds = line_piece_feeds(h_blk[:n_h], h_reach[:n_h], h_feed[:n_h], t_blk[:n_t], t_reach[:n_t],
+                                         t_feed[:n_t], L, body, F, arc)
+    A = span_start.size
+    arc_rel = np.full(A, np.inf)
+    if A:
+        a_first, a_last = np.empty(n, np.int64), np.empty(n, np.int64)
+        for w in range(n):  # windows in path order: each search starts from the one before
+            a_first[w] = _search(span_end, lo[w], True, a_first[w - 1] if w else 0)
+            a_last[w] = _search(span_start, hi[w], False, a_last[w - 1] + 1 if w else 0) - 1
+        _range_min_into(arc_rel, a_first, a_last, fs[:n])
+        for a in range(A):
+            arc_rel[a] = min(arc_rel[a] / arc_F[a], 1.0)
+    return head, tail, feeds, arc_rel

@@ -89,8 +89,8 @@ from __future__ import annotations
 import numpy as np
 
 from research.interpolators._fir_blocks import PulseTable
-from research.interpolators._fir_feed import ChainError, range_min
-from research.interpolators._fir_kernels import line_piece_feeds, staircase_cuts
+from research.interpolators._fir_feed import ChainError
+from research.interpolators._fir_kernels import candidate_pieces, line_piece_feeds, staircase_cuts
 from research.interpolators._fir_profile import kernel_second_integral, overlaps
 from research.paths.toolpath import ToolPath
 from research.piecewise import bucket_size
@@ -111,11 +111,12 @@ DEEP_STEPS = 2
 _DEEP_SET = 1  # index of the "isolated" cost set among the sets of _dwell_sets
 
 
-def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in, t_out):
-    """Candidate plans, each ``(factor, head, tail, full, others, arc_rel)``: feed factors ``(M, 3)``
-    (head, body, tail), head and tail shares ``(M,)``, full-overlap flags ``(M - 1,)``, the
-    tolerance other turns take at dwell corners ``(M - 1,)`` and the slow-down of every sub-arc
-    ``(A,)`` (a window reaching into an arc slows only the sub-arcs it covers).
+def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in, t_out, measure=None):
+    """Candidate plans, each kept as a :class:`Candidate` whose call builds its arrays
+    ``(factor, head, tail, full, others, arc_rel)``: feed factors ``(M, 3)`` (head, body, tail),
+    head and tail shares ``(M,)``, full-overlap flags ``(M - 1,)``, the tolerance other turns take
+    at dwell corners ``(M - 1,)`` and the slow-down of every sub-arc ``(A,)`` (a window reaching
+    into an arc slows only the sub-arcs it covers).
 
     A candidate is a set of dwell vertices (the rest run at full overlap) and the dwell corners'
     tolerance rule; its feeds and overlaps are then those of ``tol_v`` (eq 13/14 at the dwell
@@ -127,7 +128,20 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     zigzags whose neighbours dwell too). The dwell sets: where the dwell is estimated cheaper than
     the slow-down (both rules), every vertex that can dwell, none (:func:`_dwell_sets`) -- decided
     at ``tol_v`` and at each tighter tolerance ``tol_v * NEST_RATIO^k`` (module docstring: why).
-    All are verified; the fastest verified plan is kept."""
+    All are verified; the fastest verified plan is kept.
+
+    Args:
+        tp, table: the path and its pulse table; F_cmd, base: ``(M,)`` commanded feeds [mm/s] and
+            their factors (arcs, limits); delays: ``(n,)`` filter delays [s]; tol_v: ``(M - 1,)``
+            vertex tolerances [mm]; t_in, t_out: ``(M, d)`` block tangents at start and end.
+        measure: called on each candidate's arrays while they are built (once, for the duplicate
+            check), or None.
+
+    Returns:
+        ``[(candidate, measure(its arrays) or None)]``, the candidates in order, none equal to
+        another (flags, tolerances of other turns, feed factors and shares). Held so, the
+        candidates cost their dwell sets and window feeds (:class:`Candidate`), not their arrays:
+        the planner builds those again when it starts one (its branch and bound starts few)."""
     M = tp.n_blocks
     Td = float(delays.sum())
     F = F_cmd * base
@@ -152,37 +166,11 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     own = Fv * np.linalg.norm(du, axis=1) * h_full
     with np.errstate(invalid="ignore"):
         hold = window_half_width(delays, np.nan_to_num(own / (own + other), nan=1.0))
-    # row 0: the tolerance itself; rows 1 .. NEST_STEPS: the tighter ones whose dwell sets are offered too
-    levels = np.concatenate([tol_v[None, :] * (NEST_RATIO ** np.arange(NEST_STEPS + 1))[:, None],
-                             deep_levels(tol_v * NEST_RATIO**NEST_STEPS)])
-    need = e_all > levels
-    budget = levels - other
-    # eq 13/14 overlaps for the two tolerances a dwell may use, at every level (concrete arrays, _fir_profile)
-    K1, pad = levels.shape[0], bucket_size(M - 1, 16) - (M - 1)
-    both = np.pad(np.concatenate([np.maximum(budget, 0.0), levels]), ((0, 0), (0, pad)), constant_values=1.0)
-    Tk = overlaps(both, np.tile(np.pad(dF, (0, pad), constant_values=1.0), (2 * K1, 1)), delays)[:, : M - 1]
-    Tk_budget, Tk_whole = Tk[:K1], Tk[K1:]
-    f_lv = np.broadcast_to(Fv, levels.shape).copy()
-    j_q = np.flatnonzero(need[0])
-    if j_q.size:  # window feeds on the whole chain at the tolerance itself: the feeds of the plans
-        f_lv[0, j_q] = every.largest_feed(s_v[j_q], Fv[j_q], levels[0, j_q], e_all[j_q])
-    # the tighter levels read their window feeds only through the dwell decisions of _dwell_sets
-    # (cost <= _slow_cost(f), where a rule can dwell; the deep levels only the "isolated" rule's):
-    # a search stopped once its bracket settles them gives the same decisions (ChainError.feed_decisions)
-    Lj = tp.lengths
-    cap = 0.5 * (Lj[:-1] + Lj[1:])
-    rows = np.arange(K1)[:, None]
-    cost_b = np.where(_can_dwell(need, budget, Tk_budget, Td) & (rows <= NEST_STEPS), Td - Tk_budget, np.nan)
-    cost_w = np.where(_can_dwell(need, levels, Tk_whole, Td), Td - Tk_whole, np.nan)
-    k_q, j_q = np.nonzero((rows >= 1) & ~(np.isnan(cost_b) & np.isnan(cost_w)))
-    if k_q.size:  # every tighter level in one search
-        f_lv[k_q, j_q] = every.feed_decisions(s_v[j_q], Fv[j_q], levels[k_q, j_q], e_all[j_q], cap[j_q], Td,
-                                              np.stack([cost_b[k_q, j_q], cost_w[k_q, j_q]], axis=1))
+    d_all = own = None
     reach = Fv * every.rho.max()  # a window at a feed <= Fv sums the turns strictly inside s_v +- reach
-    f_w = f_lv[0]
     # the vertices strictly inside each window's reach: indices [w_lo, w_hi)
     w_lo, w_hi = np.searchsorted(s_v, s_v - reach, side="right"), np.searchsorted(s_v, s_v + reach, side="left")
-    memo, solved = {}, []
+    memo, solved = {}, []  # gap bytes -> feeds of the vertices that do not dwell; the gaps solved
 
     def feeds_without(gap):
         """Window feeds of the vertices that do not dwell, on the chain without the dwell turns:
@@ -195,48 +183,137 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
             hit = np.searchsorted(removed, s_v + reach, side="left") > np.searchsorted(removed, s_v - reach, side="right")
             f = f_w.copy()
             q = hit & ~gap
-            for g_old, f_old in solved:
+            for g_old in solved:
                 if not q.any():
                     break
                 moved = np.concatenate([[0], np.cumsum(g_old != gap)])
                 same = q & (moved[w_hi] == moved[w_lo])
+                f_old = f_w.copy()  # that set's feeds (f_w at its dwell vertices)
+                f_old[~g_old] = memo[g_old.tobytes()]
                 f[same] = f_old[same]
                 q &= ~same
             q = np.flatnonzero(q)
             if q.size:
                 f[q] = chain(~gap).largest_feed(s_v[q], Fv[q], tol_v[q])
-            solved.append((gap, f))
+            solved.append(gap)
             memo[key] = f[~gap]
         return memo[key]
 
+    # level 0: the tolerance itself; levels 1 .. NEST_STEPS: the tighter ones whose dwell sets are
+    # offered too; then the deep levels. Decided one level at a time (no (levels, M - 1) arrays).
+    K1 = NEST_STEPS + 1 + DEEP_STEPS
+    ratios = NEST_RATIO ** np.arange(NEST_STEPS + 1)
+    deep_tol = deep_levels(tol_v * NEST_RATIO**NEST_STEPS)
+
+    def level(k):
+        return tol_v * ratios[k] if k <= NEST_STEPS else deep_tol[k - NEST_STEPS - 1]
+
+    # eq 13/14 overlaps of the two tolerances a dwell may use (concrete arrays, _fir_profile.overlaps):
+    # closed forms for one or two filters, taken level by level (elementwise: the same values);
+    # three or more filters invert in one batch over every level, as the one search it always was
+    Tk = None
+    if delays.size > 2:
+        pad = bucket_size(M - 1, 16) - (M - 1)
+        both = np.stack([np.maximum(level(k) - other, 0.0) for k in range(K1)] + [level(k) for k in range(K1)])
+        both = np.pad(both, ((0, 0), (0, pad)), constant_values=1.0)
+        Tk = overlaps(both, np.tile(np.pad(dF, (0, pad), constant_values=1.0), (2 * K1, 1)), delays)[:, : M - 1]
+        both = None
+    # the tighter levels read their window feeds only through the dwell decisions of _dwell_sets
+    # (cost <= _slow_cost(f), where a rule can dwell; the deep levels only the "isolated" rule's):
+    # a search stopped once its bracket settles them gives the same decisions (ChainError.feed_decisions)
     L = tp.lengths
+    cap = 0.5 * (L[:-1] + L[1:])
     sets, seen = [], set()
     for k in range(K1):
-        for i, (rule, gap) in enumerate(_dwell_sets(L, Td, Fv, f_lv[k], need[k], levels[k], budget[k], Tk_budget[k],
-                                                    Tk_whole[k])):
+        tol_k = level(k)
+        need, budget = e_all > tol_k, tol_k - other
+        if Tk is None:
+            Tk_budget, Tk_whole = overlaps(np.maximum(budget, 0.0), dF, delays), overlaps(tol_k, dF, delays)
+        else:
+            Tk_budget, Tk_whole = Tk[k], Tk[K1 + k]
+        f_k = Fv.copy()
+        if k == 0:  # window feeds on the whole chain at the tolerance itself: the feeds of the plans
+            j_q = np.flatnonzero(need)
+            if j_q.size:
+                f_k[j_q] = every.largest_feed(s_v[j_q], Fv[j_q], tol_k[j_q], e_all[j_q])
+            f_w, need_0, budget_0 = f_k, need, budget
+        else:
+            cost_b = np.where(_can_dwell(need, budget, Tk_budget, Td) & (k <= NEST_STEPS), Td - Tk_budget, np.nan)
+            cost_w = np.where(_can_dwell(need, tol_k, Tk_whole, Td), Td - Tk_whole, np.nan)
+            j_q = np.flatnonzero(~(np.isnan(cost_b) & np.isnan(cost_w)))
+            if j_q.size:
+                f_k[j_q] = every.feed_decisions(s_v[j_q], Fv[j_q], tol_k[j_q], e_all[j_q], cap[j_q], Td,
+                                                np.stack([cost_b[j_q], cost_w[j_q]], axis=1))
+            cost_b = cost_w = None
+        for i, (rule, gap) in enumerate(_dwell_sets(L, Td, Fv, f_k, need, tol_k, budget, Tk_budget, Tk_whole)):
             if k > NEST_STEPS and i != _DEEP_SET:
                 continue
             # the dwell set and rule define the candidate; at tol_v a vertex that needs a slow-down
             # and has no feed (zero tolerance) stops exactly whatever the set
-            gap = gap | (need[0] & ((f_w <= 0) | (tol_v <= 0)))
+            gap = gap | (need_0 & ((f_w <= 0) | (tol_v <= 0)))
             key = (rule if gap.any() else 1, gap.tobytes())
             if key not in seen:
                 seen.add(key)
                 sets.append((rule, gap, i == _EVERY_CAN, k > NEST_STEPS))
+    Tk = Tk_budget = Tk_whole = need = budget = tol_k = f_k = j_q = every = None  # (and the chain's prefix sums)
     # every set with its feeds held over the whole support T_d / 2, and over the reach of
     # window_half_width as well (module docstring, "Window reach": neither is faster on every
     # program), but "every vertex that can dwell", which few windows hold a feed in
     support = np.full(M - 1, 0.5 * Td)
-    out, shared = [], {}
+    span = table.arc_span
+    arcs = (np.ascontiguousarray(span[:, 0]), np.ascontiguousarray(span[:, 1]), F[table.block[table.arc_pieces]])
+    context = (tp, F_cmd, F, s_v, np.concatenate([[0.0], np.cumsum(tp.lengths)]), arcs)
+    out, shared, kept = [], {}, {}
     for rule, gap, every_can, deep in sets:
         reaches = (hold,) if deep else (hold, support) if not every_can else (support,)
+        full = shared.setdefault(("full", gap.tobytes()), ~gap)
+        f = feeds_without(gap)
+        dwell_tol = np.clip(tol_v - (budget_0, tol_v)[rule], 0.0, tol_v)[gap]
         for h in reaches if np.any(hold < support) else (support,):
-            c = _candidate(tp, table, F_cmd, F, gap, (budget[0], tol_v)[rule], h, tol_v, s_v, feeds_without)
-            if not any(all(np.array_equal(c[i], o[i]) for i in (3, 4, 0, 1, 2)) for o in out):
-                # equal full-overlap flags, tolerances of other turns and arc slow-downs are one
-                # array (the verification reads them only): the search holds each once
-                out.append(tuple(shared.setdefault((i, x.tobytes()), x) if i >= 3 else x for i, x in enumerate(c)))
+            c = Candidate(context, full, f, h, dwell_tol)
+            arrays = c()
+            key = _key(arrays[:5])
+            # a duplicate of a kept candidate (equal flags, tolerances of other turns, feed factors
+            # and shares) is not offered again: an equal key is confirmed on the rebuilt arrays
+            if not any(all(np.array_equal(a, b) for a, b in zip(arrays[:5], o()[:5])) for o in kept.get(key, ())):
+                kept.setdefault(key, []).append(c)
+                out.append((c, None if measure is None else measure(arrays)))
+            arrays = None
     return out
+
+
+class Candidate:
+    """A candidate of :func:`look_ahead`, kept as what builds its arrays: its full-overlap flags
+    ``full`` ``(M - 1,)`` (bool; shared between the candidates of one dwell set), the window feeds
+    ``feeds`` [mm/s] of its full-overlap vertices, the time [s] ``hold`` ``(M - 1,)`` each holds
+    them (shared), and ``dwell_tol`` [mm], the tolerance the other turns take at each dwell vertex
+    (``others`` there, 0 elsewhere). Held so, a candidate costs about 9 bytes per vertex where
+    its arrays cost 49 (and ``8 A`` for the sub-arcs).
+
+    Calling it builds ``(factor, head, tail, full, others, arc_rel)`` (:func:`look_ahead`): new
+    ``factor``, ``head``, ``tail``, ``others`` and ``arc_rel`` arrays on every call (the planner
+    repairs ``factor`` in place), the same ones every time (the same operations on the same inputs).
+    """
+
+    __slots__ = ("_context", "full", "_feeds", "_hold", "_dwell_tol")
+
+    def __init__(self, context, full, feeds, hold, dwell_tol):
+        self._context, self.full, self._feeds, self._hold, self._dwell_tol = context, full, feeds, hold, dwell_tol
+
+    def __call__(self):
+        factor, head, tail, arc_rel = _candidate(*self._context, self.full, self._feeds, self._hold)
+        others = np.zeros(self.full.size)
+        others[~self.full] = self._dwell_tol
+        return factor, head, tail, self.full, others, arc_rel
+
+
+def _key(arrays):
+    """A key of a candidate's ``(factor, head, tail, full, others)``: the flags (one array per dwell
+    set, so by identity) and the sums of the others. Arrays equal by ``np.array_equal`` have equal
+    keys (equal values summed in the same order; a sum of zeros compares equal whatever its sign);
+    the converse is confirmed by the caller."""
+    factor, head, tail, full, others = arrays
+    return (id(full),) + tuple(float(x.sum()) for x in (others, factor, head, tail))
 
 
 def deep_levels(tol):
@@ -307,47 +384,23 @@ def _dwell_sets(L, Td, Fv, f_w, need, tol, budget, Tk_budget, Tk_whole):
     return out
 
 
-def _candidate(tp, table, F_cmd, F, gap, budget, hold, tol_v, s_v, feeds_without):
-    """The candidate of :func:`look_ahead` whose vertices ``gap`` dwell, each with the tolerance
-    ``budget`` [mm] (what other turns take of ``tol_v`` is handed on as ``others``); the other
-    vertices at full overlap with their window feeds on the chain without the dwell turns, each
-    feed held ``hold`` [s] ``(M - 1,)`` each side of its vertex (:func:`window_half_width`)."""
-    M = tp.n_blocks
-    L = tp.lengths
-    query = np.flatnonzero(~gap)
-    f = feeds_without(gap)
-    # the estimate holds a constant feed through the window: a vertex between blocks of different
-    # feeds (a line entering a slower arc) gets the lower one on both sides of it
-    slow = f < np.maximum(F[:-1], F[1:])[query] * (1 - 1e-12)
-    j, f = query[slow], f[slow]
-    half = hold[j]
-    lo, hi = s_v[j] - half * f, s_v[j] + half * f
-    cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
-    # blocks inside a window run at its feed; a window reaching into a block slows its head or tail
-    right = np.searchsorted(cum, hi, side="right")
-    first, last = np.searchsorted(cum, lo, side="left"), right - 2
-    body = range_min(first, last, f, M, F)
-    k_r = np.clip(right - 1, 0, M - 1)  # block holding the window's right end
-    k_l = np.clip(np.searchsorted(cum, lo, side="right") - 1, 0, M - 1)
-    # the window holds its feed for ``half`` of *time* each side of its vertex: through the blocks
-    # it covers, which run at their (lower) body feeds, it reaches less far into the end block than f half
-    t_cum = np.concatenate([[0.0], np.cumsum(L / body)])
-    reach_r = np.minimum(hi - cum[k_r], np.maximum(half - (t_cum[k_r] - t_cum[j + 1]), 0.0) * f)
-    reach_l = np.minimum(cum[k_l + 1] - lo, np.maximum(half - (t_cum[j + 1] - t_cum[k_l + 1]), 0.0) * f)
-    inside_r = (hi < cum[k_r + 1]) & (reach_r > 0)
-    inside_l = (lo > cum[k_l]) & (reach_l > 0)
-    arc = tp.is_arc
-    head, tail, piece_f = line_pieces(k_r[inside_r], reach_r[inside_r], f[inside_r], k_l[inside_l], reach_l[inside_l],
-                                       f[inside_l], L, body, F, arc)
-    factor = piece_f / F_cmd[:, None]
-    # sub-arcs a window [lo, hi] overlaps: those ending after lo and starting before hi (path order)
-    span = table.arc_span
-    a_first = np.searchsorted(span[:, 1], lo, side="right")
-    a_last = np.searchsorted(span[:, 0], hi, side="left") - 1
-    A = span.shape[0]
-    arc_f = range_min(a_first, a_last, f, A, np.full(A, np.inf)) if A else np.zeros(0)
-    arc_rel = np.minimum(arc_f / F[table.block[table.arc_pieces]], 1.0) if A else np.zeros(0)
-    return factor, head, tail, ~gap, np.where(gap, np.clip(tol_v - budget, 0.0, tol_v), 0.0), arc_rel
+def _candidate(tp, F_cmd, F, s_v, cum, arcs, full, f, hold):
+    """Feed factors ``(M, 3)``, head and tail shares ``(M,)`` and sub-arc slow-downs ``(A,)`` of the
+    candidate of :func:`look_ahead` whose vertices ``full`` ``(M - 1,)`` run at full overlap with
+    their window feeds ``f`` [mm/s] (on the chain without the dwell turns), each held ``hold`` [s]
+    ``(M - 1,)`` each side of its vertex (:func:`window_half_width`).
+
+    The estimate holds a constant feed through the window: a vertex between blocks of different
+    feeds (a line entering a slower arc) gets the lower one on both sides of it. Blocks inside a
+    window run at its feed; a window reaching into a block slows its head or tail
+    (:func:`line_pieces`); the window holds its feed for ``hold`` of *time* each side of its
+    vertex: through the blocks it covers, which run at their (lower) body feeds, it reaches less
+    far into the end block than ``f hold``; a window ``[lo, hi]`` slows the sub-arcs it overlaps.
+    One compiled pass (``_fir_kernels.candidate_pieces``); ``cum`` ``(M + 1,)``: the arc length [mm]
+    at each block start and the path's end; ``arcs``: the sub-arcs' start and end arc lengths and
+    the feeds of their blocks ``(A,)`` each."""
+    head, tail, feeds, arc_rel = candidate_pieces(cum, tp.lengths, F, s_v, full, f, hold, tp.is_arc, *arcs)
+    return feeds / F_cmd[:, None], head, tail, arc_rel
 
 
 def line_pieces(h_blk, h_reach, h_feed, t_blk, t_reach, t_feed, L, body, F, arc):

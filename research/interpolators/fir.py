@@ -350,8 +350,9 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         f, sh = repairs.bound(viol, errors, False, factor, shrink)
         return predicted_time((f, head, tail, full, others, arc_rel), sh)
 
-    def settle(factor, head, tail, full, others, arc_rel, several=False):
-        """Verify and repair one candidate plan, one round per step: a generator that yields the
+    def settle(candidate, several=False):
+        """Verify and repair one candidate plan (``candidate()`` builds its new arrays ``(factor,
+        head, tail, full, others, arc_rel)`` when it starts), one round per step: a generator that yields the
         ``(predicted time, limit repaired so far, holds its profile)`` after each failed round and
         returns ``(state, rounds, deviation, limit_repaired)``. Suspended after the vertex errors
         (its profile kept for the path samples), it releases the profile when sent
@@ -360,7 +361,8 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         bracket's upper end (:attr:`CornerBisection.bound_scale`), above which it never ends.
         ``several``: other candidates compete (worth a first bound from the first blocks,
         :func:`prefix_bound`, before the whole profile)."""
-        factor, shrink = factor.copy(), np.ones(M - 1)
+        factor, head, tail, full, others, arc_rel = candidate()  # ``factor``: its own, repaired in place
+        candidate, shrink = None, np.ones(M - 1)
         # without limits no corner bisects: its multipliers stay 1 (no (M - 1,) arrays per candidate)
         bisection = CornerBisection(M - 1) if limits is not None else _NO_BISECTION
         checked, repaired = np.zeros(M, dtype=bool), False
@@ -467,9 +469,11 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         return state, rounds, deviation, repaired
 
     def plans(base):
+        """The candidates at feed factors ``base``, each ``(build, bound)``: ``build()`` makes its
+        arrays (new ones on every call), ``bound`` its :func:`predicted_time` (None: not computed)."""
         if refine and M > 1:
-            return look_ahead(tp, table, F_np, base, d_np, tv_np, t_in, t_out)
-        return [(np.repeat(base[:, None], 3, axis=1), head, tail, full, others, None)]
+            return look_ahead(tp, table, F_np, base, d_np, tv_np, t_in, t_out, measure=predicted_time)
+        return [(lambda: (np.repeat(base[:, None], 3, axis=1), head, tail, full, others, None), None)]
 
     def verify(candidates, capped):
         """Branch and bound, one verification round at a time: the candidate (or repaired candidate)
@@ -481,15 +485,14 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         state without its profile (its first and last break in its place)."""
         best, best_time = None, np.inf
         several = len(candidates) > 1
-        queue = [(predicted_time(c) if several else 0.0, i, settle(*c, several=several)) for i, c in enumerate(candidates)]
+        queue = [(bound if several else 0.0, i, settle(c, several=several)) for i, (c, bound) in enumerate(candidates)]
         heapq.heapify(queue)
         extra, n_first = capped is not None, len(candidates)
-        # the generators hold the candidates: a started one copies its feed factors and frees these
-        candidates = None
+        candidates = None  # the generators hold the candidates (their arrays are built when started)
 
         def add_capped():
-            for i, c in enumerate(capped(), start=n_first):
-                heapq.heappush(queue, (predicted_time(c), i, settle(*c)))
+            for i, (c, bound) in enumerate(capped(), start=n_first):
+                heapq.heappush(queue, (predicted_time(c()) if bound is None else bound, i, settle(c)))
 
         held = {}  # index -> (bound, steps) of the candidates suspended with their profiles
         while queue and queue[0][0] < best_time:

@@ -304,7 +304,7 @@ def _lookahead_candidates(seed, arcs, delays):
     t_in, t_out = tp.tangents()
     table = _pulse_table(tp)
     d = np.asarray(delays)
-    cands = look_ahead(tp, table, np.full(M, feed), np.ones(M), d, np.full(M - 1, eps), t_in, t_out)
+    cands = [c() for c, _ in look_ahead(tp, table, np.full(M, feed), np.ones(M), d, np.full(M - 1, eps), t_in, t_out)]
     return tp, table, feed, eps, d, t_in, t_out, cands
 
 

@@ -93,8 +93,8 @@ def _look_ahead(tp, feed, tol):
     """``look_ahead``'s candidates for a line program at one scalar tolerance (no arcs: base 1)."""
     t_in, t_out = tp.tangents()
     M = tp.n_blocks
-    return lookahead.look_ahead(tp, _pulse_table(tp), np.full(M, feed), np.ones(M), np.asarray(DELAYS),
-                                np.full(M - 1, tol), t_in, t_out)
+    return [c() for c, _ in lookahead.look_ahead(tp, _pulse_table(tp), np.full(M, feed), np.ones(M), np.asarray(DELAYS),
+                                                 np.full(M - 1, tol), t_in, t_out)]
 
 
 def test_dwell_sets_of_tighter_tolerances_are_offered(monkeypatch):

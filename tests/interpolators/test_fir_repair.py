@@ -111,8 +111,8 @@ def test_branch_and_bound_returns_the_least_verified_candidate(seed, monkeypatch
     found = []
     look_ahead = fir.look_ahead
 
-    def grab(*a):
-        found.extend(look_ahead(*a))
+    def grab(*a, **k):
+        found.extend(look_ahead(*a, **k))
         return found
 
     monkeypatch.setattr(fir, "look_ahead", grab)
@@ -120,7 +120,7 @@ def test_branch_and_bound_returns_the_least_verified_candidate(seed, monkeypatch
     assert len(found) > 5
     alone = []
     for c in list(found):
-        monkeypatch.setattr(fir, "look_ahead", lambda *a, c=c: [c])
+        monkeypatch.setattr(fir, "look_ahead", lambda *a, c=c, **k: [c])
         alone.append(float(plan_fir(*args).cycle_time))
     assert whole == min(alone)
 

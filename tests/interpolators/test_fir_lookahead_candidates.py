@@ -1,0 +1,199 @@
+"""Look-ahead candidates kept as what builds them (``_fir_lookahead.Candidate``; issue 19 item 4,
+planning memory) against the forms they replace: their arrays built once and held (as the planner
+held them before), the duplicate check comparing every pair, and eq 13/14 overlaps of all levels in
+one batch. The programs are ``research.paths.library.random_program`` with eps and F drawn after
+them from the same seeded generator (as in ``test_fir_monotone``)."""
+
+import numpy as np
+import pytest
+
+import research.interpolators._fir_lookahead as lookahead
+from research.interpolators import fir, plan_fir
+from research.interpolators._fir_profile import overlaps
+from research.interpolators.fir import _as_toolpath, _pulse_table
+from research.paths.library import random_program
+
+DELAYS = (0.06, 0.03)
+
+
+def _program(seed: int, arcs: bool):
+    rng = np.random.default_rng(seed)
+    tp = _as_toolpath(random_program(rng, arcs=arcs))
+    eps, feed = float(np.exp(rng.uniform(np.log(0.005), np.log(0.5)))), float(rng.uniform(20.0, 300.0))
+    return tp, eps, feed
+
+
+def _candidates(seed: int, arcs: bool, delays=DELAYS):
+    tp, eps, feed = _program(seed, arcs)
+    M = tp.n_blocks
+    t_in, t_out = tp.tangents()
+    return lookahead.look_ahead(tp, _pulse_table(tp), np.full(M, feed), np.ones(M), np.asarray(delays),
+                                np.full(M - 1, eps), t_in, t_out)
+
+
+@pytest.mark.parametrize("arcs", [False, True])
+def test_a_candidate_builds_new_equal_arrays(arcs):
+    """Each call builds the same arrays, new ones (the planner repairs ``factor`` in place, so a
+    later build must not see it), with boolean flags and the other turns' tolerance 0 at full
+    overlap (seeds 0-5)."""
+    for seed in range(6):
+        cands = _candidates(seed, arcs)
+        assert len(cands) > 1
+        for c, measured in cands:
+            assert measured is None
+            a = c()
+            a[0][...] = -1.0  # a repair in place
+            b = c()
+            assert not np.shares_memory(a[0], b[0])
+            for x, y in zip(c(), b):
+                np.testing.assert_array_equal(x, y)
+            full, others = b[3], b[4]
+            assert full.dtype == bool and np.all(others[full] == 0.0) and np.all(b[0] > 0)
+
+
+@pytest.mark.parametrize("arcs", [False, True])
+def test_duplicate_check_is_the_pairwise_comparison(arcs, monkeypatch):
+    """The key only picks which kept candidates a new one is compared with: with every key equal
+    (each new candidate compared with every kept one by ``np.array_equal`` on flags, other turns'
+    tolerances, feed factors and shares, the check before the key) the same candidates come out,
+    and no two of them are equal (seeds 0-5)."""
+    for seed in range(6):
+        got = [c() for c, _ in _candidates(seed, arcs)]
+        with monkeypatch.context() as m:
+            m.setattr(lookahead, "_key", lambda arrays: 0)
+            want = [c() for c, _ in _candidates(seed, arcs)]
+        assert len(got) == len(want)
+        for g, w in zip(got, want):
+            for x, y in zip(g, w):
+                np.testing.assert_array_equal(x, y)
+        for i in range(len(got)):
+            for j in range(i):
+                assert not all(np.array_equal(got[i][k], got[j][k]) for k in range(5)), (seed, i, j)
+
+
+@pytest.mark.parametrize("arcs", [False, True])
+@pytest.mark.parametrize("delays", [DELAYS, (0.05, 0.03, 0.012)])
+def test_plans_equal_those_of_candidates_built_once(arcs, delays, monkeypatch):
+    """``plan_fir`` with the candidates built when started equals, bit for bit, ``plan_fir`` with
+    every candidate's arrays built once by the look-ahead and held to the end (each start given
+    its own copy of the feed factors), on seeds 0-3 (two and three filters)."""
+    look = fir.look_ahead
+
+    def held(*args, **kwargs):
+        out = []
+        for c, bound in look(*args, **kwargs):
+            arrays = c()
+            out.append((lambda arrays=arrays: (arrays[0].copy(),) + arrays[1:], bound))
+        return out
+
+    for seed in range(4):
+        tp, eps, feed = _program(seed, arcs)
+        lazy = plan_fir(tp, feed, delays, eps)
+        with monkeypatch.context() as m:
+            m.setattr(fir, "look_ahead", held)
+            once = plan_fir(tp, feed, delays, eps)
+        assert lazy.rounds == once.rounds and lazy.path_deviation == once.path_deviation
+        for name in ("start_times", "pulse_times", "overlaps", "feeds", "corner_times"):
+            np.testing.assert_array_equal(getattr(lazy, name), getattr(once, name))
+        np.testing.assert_array_equal(lazy.position.breaks, once.position.breaks)
+        np.testing.assert_array_equal(lazy.position.coeffs, once.position.coeffs)
+
+
+@pytest.mark.parametrize("delays", [(0.08,), DELAYS])
+def test_closed_form_overlaps_are_elementwise(delays):
+    """What deciding the levels one at a time rests on: eq 13/14's closed forms (one and two
+    filters) give each element the value it has in a batch of rows, bit for bit (zero speed
+    changes and zero tolerances included)."""
+    rng = np.random.default_rng(0)
+    tol = np.exp(rng.uniform(np.log(1e-5), np.log(1.0), (7, 1001)))
+    tol[:, :4] = 0.0
+    dF = rng.uniform(0.0, 400.0, 1001)
+    dF[::97] = 0.0
+    d = np.asarray(delays)
+    batch = overlaps(tol, np.tile(dF, (7, 1)), d)
+    for k in range(7):
+        np.testing.assert_array_equal(overlaps(tol[k], dF, d), batch[k])
+
+
+def numpy_candidate(tp, table, F_cmd, F, s_v, full, f, hold):
+    """``_fir_lookahead._candidate`` by whole-array NumPy (its form before the compiled pass):
+    ``(factor, head, tail, arc_rel)``."""
+    from research.interpolators._fir_feed import range_min
+    from research.interpolators._fir_lookahead import line_pieces
+
+    M, L = tp.n_blocks, tp.lengths
+    query = np.flatnonzero(full)
+    slow = f < np.maximum(F[:-1], F[1:])[query] * (1 - 1e-12)
+    j, f = query[slow], f[slow]
+    half = hold[j]
+    lo, hi = s_v[j] - half * f, s_v[j] + half * f
+    cum = np.concatenate([[0.0], np.cumsum(L)])
+    right = np.searchsorted(cum, hi, side="right")
+    first, last = np.searchsorted(cum, lo, side="left"), right - 2
+    body = range_min(first, last, f, M, F)
+    k_r = np.clip(right - 1, 0, M - 1)
+    k_l = np.clip(np.searchsorted(cum, lo, side="right") - 1, 0, M - 1)
+    t_cum = np.concatenate([[0.0], np.cumsum(L / body)])
+    reach_r = np.minimum(hi - cum[k_r], np.maximum(half - (t_cum[k_r] - t_cum[j + 1]), 0.0) * f)
+    reach_l = np.minimum(cum[k_l + 1] - lo, np.maximum(half - (t_cum[j + 1] - t_cum[k_l + 1]), 0.0) * f)
+    inside_r = (hi < cum[k_r + 1]) & (reach_r > 0)
+    inside_l = (lo > cum[k_l]) & (reach_l > 0)
+    head, tail, piece_f = line_pieces(k_r[inside_r], reach_r[inside_r], f[inside_r], k_l[inside_l], reach_l[inside_l],
+                                      f[inside_l], L, body, F, tp.is_arc)
+    span = table.arc_span
+    a_first = np.searchsorted(span[:, 1], lo, side="right")
+    a_last = np.searchsorted(span[:, 0], hi, side="left") - 1
+    A = span.shape[0]
+    arc_f = range_min(a_first, a_last, f, A, np.full(A, np.inf)) if A else np.zeros(0)
+    arc_rel = np.minimum(arc_f / F[table.block[table.arc_pieces]], 1.0) if A else np.zeros(0)
+    return piece_f / F_cmd[:, None], head, tail, arc_rel
+
+
+@pytest.mark.parametrize("arcs", [False, True])
+def test_compiled_candidate_matches_the_numpy_form(arcs):
+    """``_candidate`` (``_fir_kernels.candidate_pieces``: galloping searches, ranges pushed down
+    level by level) against its whole-array NumPy form, bit for bit: on every candidate of seeded
+    random programs, and on the same programs with random feeds and reaches (windows from none
+    to many blocks, feeds above and below the blocks')."""
+    rng = np.random.default_rng(7)
+    n_arcs = 0
+    for seed in range(8):
+        tp, eps, feed = _program(seed, arcs)
+        table = _pulse_table(tp)
+        n_arcs += table.arc_span.shape[0]
+        M = tp.n_blocks
+        F_cmd, s_v = np.full(M, feed), np.cumsum(tp.lengths)[:-1]
+        cases = []
+        for c, _ in _candidates(seed, arcs):
+            a = c()
+            cases.append((F_cmd * np.ones(M), a[3], c._feeds, c._hold))
+        for _ in range(3):
+            F = feed * rng.uniform(0.3, 1.0, M)
+            full = rng.random(M - 1) < rng.uniform(0.2, 1.0)
+            f = feed * rng.uniform(0.01, 1.2, int(full.sum()))
+            hold = rng.uniform(0.0, 0.2, M - 1) * rng.choice([0.01, 1.0, 20.0], M - 1)
+            cases.append((F, full, f, hold))
+        for F, full, f, hold in cases:
+            got = lookahead._candidate(tp, F_cmd, F, s_v, np.concatenate([[0.0], np.cumsum(tp.lengths)]),
+                                       (np.ascontiguousarray(table.arc_span[:, 0]),
+                                        np.ascontiguousarray(table.arc_span[:, 1]),
+                                        F[table.block[table.arc_pieces]]), full, f, hold)
+            want = numpy_candidate(tp, table, F_cmd, F, s_v, full, f, hold)
+            for g, w in zip(got, want):
+                np.testing.assert_array_equal(g, w)
+    assert n_arcs > 0 or not arcs
+
+
+def test_galloping_search_is_searchsorted():
+    """``_fir_kernels._search`` from any hint equals ``np.searchsorted`` on both sides, on sorted
+    arrays with repeated entries (and empty and one-entry arrays)."""
+    from research.interpolators._fir_kernels import _search
+
+    rng = np.random.default_rng(11)
+    for n in (0, 1, 2, 7, 100, 1000):
+        a = np.sort(np.round(rng.uniform(0.0, 10.0, n), 1))
+        for v in np.concatenate([rng.uniform(-1.0, 11.0, 40), a[:: max(n // 10, 1)]]):
+            for right in (False, True):
+                want = np.searchsorted(a, v, side="right" if right else "left")
+                for hint in (-5, 0, n // 2, n - 1, n + 3, int(want)):
+                    assert _search(a, v, right, hint) == want, (n, v, right, hint)
