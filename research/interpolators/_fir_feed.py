@@ -37,8 +37,7 @@ import math
 
 import numpy as np
 
-from research.interpolators._fir_kernels import (chain_displacements, chain_feed_decisions, chain_largest_feeds,
-                                                range_minima)
+from research.interpolators._fir_kernels import chain_displacements, chain_feed_decisions, chain_largest_feeds
 
 
 _ARC_STEPS = 60  # arc feeds to machine precision (cheap: one evaluation per arc and step)
@@ -199,13 +198,3 @@ class ChainError:
         return chain_feed_decisions(*self._args(q, hi), q, hi, tol, e, _BISECTION_STEPS, _CLOSE, _TINY,
                                     np.ascontiguousarray(stretch_cap, dtype=np.float64), float(Td),
                                     np.ascontiguousarray(costs, dtype=np.float64).reshape(hi.size, -1))
-
-
-def range_min(first: np.ndarray, last: np.ndarray, values: np.ndarray, n: int, initial: np.ndarray) -> np.ndarray:
-    """``out[k] = min(initial[k], min{values[r] : first[r] <= k <= last[r]})`` for ``k < n``, in
-    ``O(R log n + n)`` time and ``2 n`` floats of memory (compiled segment tree,
-    :func:`~research.interpolators._fir_kernels.range_minima`); a range is intersected with
-    ``[0, n - 1]``, and one with ``first > last`` then (wholly beyond an end) covers nothing."""
-    return range_minima(np.ascontiguousarray(first, dtype=np.int64), np.ascontiguousarray(last, dtype=np.int64),
-                        np.ascontiguousarray(values, dtype=np.float64), int(n),
-                        np.ascontiguousarray(initial, dtype=np.float64))

@@ -496,8 +496,9 @@ def _nan_min(a, b):
 
 
 @numba.njit(**_OPTIONS)
-def range_minima(first, last, values, n, initial):
-    """``out[k] = min(initial[k], min{values[r] : first[r] <= k <= last[r]})`` for ``k < n``.
+def _range_min_into(out, first, last, values):
+    """``out[k] = min(out[k], min{values[r] : first[r] <= k <= last[r]})`` in place, for the
+    ``n = out.size`` cells.
 
     A range is intersected with the cells ``[0, n - 1]`` (``first`` raised to 0, ``last`` lowered to
     ``n - 1``); one with ``first > last`` after that, e.g. wholly beyond an end, covers nothing. Each range marks the
@@ -510,16 +511,13 @@ def range_minima(first, last, values, n, initial):
     about 4x faster than the branching form on the planner's ranges (benchmarks/README.md).
 
     Args:
+        out: ``(n,)`` float64, the starting values, lowered in place.
         first, last: ``(R,)`` int64 inclusive cell ranges (any integers; intersected as above).
         values: ``(R,)`` float64, the value of each range.
-        n: number of cells (``>= 0``).
-        initial: ``(n,)`` float64 starting values (not modified).
-
-    Returns:
-        ``(n,)`` float64 minima.
     """
-    if n <= 0:
-        return np.empty(0)
+    n = out.size
+    if n == 0:
+        return
     tree = np.full(2 * n, np.inf)
     for r in range(first.size):
         lo, hi = max(first[r], 0), min(last[r], n - 1)
@@ -539,10 +537,8 @@ def range_minima(first, last, values, n, initial):
     for i in range(1, n):  # parents before children: i < 2 i
         tree[2 * i] = _nan_min(tree[2 * i], tree[i])
         tree[2 * i + 1] = _nan_min(tree[2 * i + 1], tree[i])
-    out = np.empty(n)
     for k in range(n):
-        out[k] = _nan_min(initial[k], tree[n + k])
-    return out
+        out[k] = _nan_min(out[k], tree[n + k])
 
 
 @numba.njit(**_OPTIONS)
@@ -832,63 +828,6 @@ def line_piece_feeds(h_blk, h_reach, h_feed, t_blk, t_reach, t_feed, L, body, F,
         feeds[k, 0] = h if head[k] > 0 else (m if mid else t)
         feeds[k, 2] = t if tail[k] > 0 else (m if mid else h)
     return head, tail, feeds
-
-
-@numba.njit(**_OPTIONS)
-def _range_min_into(out, first, last, values):
-    """``out[k] = min(out[k], min{values[r] : first[r] <= k <= last[r]})``, ranges clipped to
-    ``[0, n - 1]`` and empty ones skipped (``_fir_feed.range_min``'s result, which is exact: a
-    minimum): each range covered by two power-of-two blocks, pushed down one level at a time
-    through two rows of ``n``, ``O((n + R) log n)``."""
-    n, R = out.size, first.size
-    lo, hi, level = np.empty(R, np.int64), np.empty(R, np.int64), np.full(R, -1)
-    top, kept = -1, 0
-    for r in range(R):
-        a, b = min(max(first[r], 0), n - 1), min(max(last[r], 0), n - 1)
-        if a <= b:
-            lv = 0
-            while (2 << lv) <= b - a + 1:
-                lv += 1
-            lo[r], hi[r], level[r] = a, b, lv
-            top = max(top, lv)
-            kept += 1
-    if kept == 0:
-        return
-    count = np.zeros(top + 2, np.int64)  # the ranges by level (a counting sort)
-    for r in range(R):
-        if level[r] >= 0:
-            count[level[r] + 1] += 1
-    for lv in range(top + 1):
-        count[lv + 1] += count[lv]
-    order, fill = np.empty(kept, np.int64), count[:-1].copy()
-    for r in range(R):
-        if level[r] >= 0:
-            order[fill[level[r]]] = r
-            fill[level[r]] += 1
-    cur, nxt = np.full(n, np.inf), np.full(n, np.inf)
-    for lv in range(top, -1, -1):
-        if lv < top:  # the blocks of level lv + 1 into their two halves
-            h = 1 << lv
-            for i in range(n):
-                nxt[i] = np.inf
-            for i in range(n):
-                x = cur[i]
-                if x < nxt[i]:
-                    nxt[i] = x
-                if i + h < n and x < nxt[i + h]:
-                    nxt[i + h] = x
-            cur, nxt = nxt, cur
-        for s in range(count[lv], count[lv + 1]):
-            r = order[s]
-            v = values[r]
-            if v < cur[lo[r]]:
-                cur[lo[r]] = v
-            e = hi[r] - (1 << lv) + 1
-            if v < cur[e]:
-                cur[e] = v
-    for k in range(n):
-        if cur[k] < out[k]:
-            out[k] = cur[k]
 
 
 @numba.njit(**_OPTIONS)

@@ -181,11 +181,16 @@ def test_scatter_max_is_numpys_maximum_at():
 
 
 def test_range_min_matches_brute_force():
-    """``range_min`` against a double loop over ranges and cells, on seeded random ranges: empty
+    """``_range_min_into`` (the look-ahead's range minima) against a double loop over ranges and cells, on seeded random ranges: empty
     (``first > last``), clipped at either end, wholly outside the cells (covering nothing: a range
     is intersected with the cells), single-cell, whole-path and ordinary ones, over cell counts
     that are and are not powers of two."""
-    from research.interpolators._fir_feed import range_min
+    from research.interpolators._fir_kernels import _range_min_into
+
+    def range_min(first, last, values, n, initial):
+        out = np.array(initial, dtype=np.float64)
+        _range_min_into(out, first.astype(np.int64), last.astype(np.int64), values.astype(np.float64))
+        return out
 
     def brute(first, last, values, n, initial):
         out = np.array(initial, dtype=np.float64)

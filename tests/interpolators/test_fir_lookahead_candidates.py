@@ -115,10 +115,20 @@ def test_closed_form_overlaps_are_elementwise(delays):
         np.testing.assert_array_equal(overlaps(tol[k], dF, d), batch[k])
 
 
+def range_min(first, last, values, n, initial):
+    """``min(initial[k], min{values[r] : first[r] <= k <= last[r]})`` cell by cell (ranges outside
+    ``[0, n - 1]`` cover only the cells they hold)."""
+    out = np.array(initial, dtype=np.float64)
+    for a, b, v in zip(first, last, values):
+        a, b = max(int(a), 0), min(int(b), n - 1)
+        if a <= b:
+            out[a:b + 1] = np.minimum(out[a:b + 1], v)
+    return out
+
+
 def numpy_candidate(tp, table, F_cmd, F, s_v, full, f, hold):
-    """``_fir_lookahead._candidate`` by whole-array NumPy (its form before the compiled pass):
-    ``(factor, head, tail, arc_rel)``."""
-    from research.interpolators._fir_feed import range_min
+    """``_fir_lookahead._candidate`` by whole-array NumPy (its form before the compiled pass, the
+    range minima cell by cell): ``(factor, head, tail, arc_rel)``."""
     from research.interpolators._fir_lookahead import line_pieces
 
     M, L = tp.n_blocks, tp.lengths
