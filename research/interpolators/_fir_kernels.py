@@ -357,8 +357,9 @@ def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, se
     1`` (clipped to the path; an arc's entry is its chord here and is replaced by the caller). Both
     searches step on from the previous sample's (:func:`_right_next`: the samples run forward, a grid
     then the corner instants), and any order of ``t`` gives the same result. Compiled with the row
-    count ``D`` and axis count ``A`` of ``coeffs`` as constants for line profiles (``D`` = 3, 4, 5:
-    1-3 filters; ``A`` = 2 or 3; about 2x faster), any other pair (arcs) generically.
+    count ``D`` and axis count ``A`` of ``coeffs`` as constants for the profiles of two and three
+    filters (``D`` = 4, 5 on lines, 9, 10 with arcs; ``A`` = 2 or 3; about 2x faster), any other
+    pair generically.
 
     Args:
         breaks, coeffs: ``(K + 1,)`` and ``(K, D, A)`` of the position profile.
@@ -371,19 +372,23 @@ def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, se
     """
     D, A = coeffs.shape[1], coeffs.shape[2]
     if A == 3:
-        if D == 3:
-            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 3, 3)
         if D == 4:
             return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 4, 3)
         if D == 5:
             return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 5, 3)
+        if D == 9:
+            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 9, 3)
+        if D == 10:
+            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 10, 3)
     if A == 2:
-        if D == 3:
-            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 3, 2)
         if D == 4:
             return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 4, 2)
         if D == 5:
             return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 5, 2)
+        if D == 9:
+            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 9, 2)
+        if D == 10:
+            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 10, 2)
     return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, D, A)
 
 
@@ -452,24 +457,27 @@ def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton
     The profile is evaluated as :class:`research.piecewise.NumpyPiecewise` (clipped time, piece
     ``searchsorted(breaks, t, "right") - 1``, Horner's rule; derivatives 0 outside the breaks), each
     piece found from a nearby index (:func:`_right_next`): a grid point's from the same grid point
-    of the last corner, a Newton step's from the last point evaluated. Compiled for the row and
-    axis counts of line profiles (``D`` = 3, 4, 5 rows for 1-3 filters, ``A`` = 2 or 3 axes) as
-    constants, any other pair generically (:func:`sampled_line_distances`)."""
+    of the last corner, a Newton step's from the last point evaluated. Compiled for the same row
+    and axis counts as constants as :func:`sampled_line_distances`."""
     D, A = coeffs.shape[1], coeffs.shape[2]
     if A == 3:
-        if D == 3:
-            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 3, 3)
         if D == 4:
             return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 4, 3)
         if D == 5:
             return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 5, 3)
+        if D == 9:
+            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 9, 3)
+        if D == 10:
+            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 10, 3)
     if A == 2:
-        if D == 3:
-            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 3, 2)
         if D == 4:
             return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 4, 2)
         if D == 5:
             return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 5, 2)
+        if D == 9:
+            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 9, 2)
+        if D == 10:
+            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 10, 2)
     return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, D, A)
 
 
