@@ -24,7 +24,8 @@ cycle time (a bound of the branch and bound) without its piece arrays.
 The verification kernels (:func:`sampled_line_distances`, :func:`corner_distances`) evaluate the
 exact profile on its NumPy arrays with Horner's rule, as :class:`research.piecewise.NumpyPiecewise`,
 and replace per-sample NumPy gathers (path check) and the JAX grid + Newton search
-(``_fir_verify``) inside the planner's rounds.
+(``_fir_verify``) inside the planner's rounds. Each finds its piece from the last one's index and
+is compiled with the profile's row and axis counts as constants for two filters.
 
 Compiled on first use and cached on disk (``cache=True``): the first call of a fresh checkout pays
 the compilation (about 16 s for all of them, measured at load 4), later processes load it (0.7 s).
@@ -357,9 +358,9 @@ def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, se
     1`` (clipped to the path; an arc's entry is its chord here and is replaced by the caller). Both
     searches step on from the previous sample's (:func:`_right_next`: the samples run forward, a grid
     then the corner instants), and any order of ``t`` gives the same result. Compiled with the row
-    count ``D`` and axis count ``A`` of ``coeffs`` as constants for the profiles of two and three
-    filters (``D`` = 4, 5 on lines, 9, 10 with arcs; ``A`` = 2 or 3; about 2x faster), any other
-    pair generically.
+    count ``D`` and axis count ``A`` of ``coeffs`` as constants for the profiles of two filters
+    (``D`` = 4 on lines, 9 with arcs; ``A`` = 2 or 3; about 2x faster), any other pair generically
+    (each pair costs about 1.2 s of compilation, once per cache).
 
     Args:
         breaks, coeffs: ``(K + 1,)`` and ``(K, D, A)`` of the position profile.
@@ -374,21 +375,13 @@ def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, se
     if A == 3:
         if D == 4:
             return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 4, 3)
-        if D == 5:
-            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 5, 3)
         if D == 9:
             return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 9, 3)
-        if D == 10:
-            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 10, 3)
     if A == 2:
         if D == 4:
             return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 4, 2)
-        if D == 5:
-            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 5, 2)
         if D == 9:
             return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 9, 2)
-        if D == 10:
-            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 10, 2)
     return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, D, A)
 
 
@@ -463,21 +456,13 @@ def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton
     if A == 3:
         if D == 4:
             return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 4, 3)
-        if D == 5:
-            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 5, 3)
         if D == 9:
             return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 9, 3)
-        if D == 10:
-            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 10, 3)
     if A == 2:
         if D == 4:
             return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 4, 2)
-        if D == 5:
-            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 5, 2)
         if D == 9:
             return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 9, 2)
-        if D == 10:
-            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 10, 2)
     return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, D, A)
 
 
