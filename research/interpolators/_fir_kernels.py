@@ -28,7 +28,8 @@ and replace per-sample NumPy gathers (path check) and the JAX grid + Newton sear
 is compiled with the profile's row and axis counts as constants for two filters.
 
 Compiled on first use and cached on disk (``cache=True``): the first call of a fresh checkout pays
-the compilation (about 16 s for all of them, measured at load 4), later processes load it (0.7 s).
+the compilation (about 16 s for all of them, measured at load 4; the verification kernels'
+specialisations add about 8 s, at load 2), later processes load it (0.7 s).
 """
 
 from __future__ import annotations
@@ -450,8 +451,9 @@ def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton
     The profile is evaluated as :class:`research.piecewise.NumpyPiecewise` (clipped time, piece
     ``searchsorted(breaks, t, "right") - 1``, Horner's rule; derivatives 0 outside the breaks), each
     piece found from a nearby index (:func:`_right_next`): a grid point's from the same grid point
-    of the last corner, a Newton step's from the last point evaluated. Compiled for the same row
-    and axis counts as constants as :func:`sampled_line_distances`."""
+    of the last corner, the first Newton step's from the best grid point, the others' from the
+    last step. Compiled for the same row and axis counts as constants as
+    :func:`sampled_line_distances`."""
     D, A = coeffs.shape[1], coeffs.shape[2]
     if A == 3:
         if D == 4:
