@@ -24,10 +24,12 @@ cycle time (a bound of the branch and bound) without its piece arrays.
 The verification kernels (:func:`sampled_line_distances`, :func:`corner_distances`) evaluate the
 exact profile on its NumPy arrays with Horner's rule, as :class:`research.piecewise.NumpyPiecewise`,
 and replace per-sample NumPy gathers (path check) and the JAX grid + Newton search
-(``_fir_verify``) inside the planner's rounds.
+(``_fir_verify``) inside the planner's rounds. Each finds its piece from the last one's index and
+is compiled with the profile's row and axis counts as constants for two filters.
 
 Compiled on first use and cached on disk (``cache=True``): the first call of a fresh checkout pays
-the compilation (about 16 s for all of them, measured at load 4), later processes load it (0.7 s).
+the compilation (about 16 s for all of them, measured at load 4; the verification kernels'
+specialisations add about 8 s, at load 2), later processes load it (0.7 s).
 """
 
 from __future__ import annotations
@@ -100,7 +102,13 @@ def _right_from(a, v, hint):
             step *= 2
             hi = lo + step
         hi = min(hi, n)
-    return lo + _right(a[lo:hi], v)  # binary search inside the bracket
+    while lo < hi:  # binary search inside the bracket
+        mid = (lo + hi) >> 1
+        if a[mid] <= v:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
 
 
 @numba.njit(**_OPTIONS)
@@ -345,10 +353,15 @@ def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, se
     """Trajectory samples and their squared distances to the three blocks around each (lines).
 
     The exact profile is evaluated at ``t`` (clipped to its breaks; Horner's rule on the piece
-    found by a right search, as :class:`research.piecewise.NumpyPiecewise`), the block whose input
-    the averaging window is centred on is ``searchsorted(starts, t - T_d / 2, "right") - 1``
-    (clipped), and each sample is projected on the segments of blocks ``k - 1 .. k + 1`` (clipped
-    to the path; an arc's entry is its chord here and is replaced by the caller).
+    ``searchsorted(breaks, t, "right") - 1``, clipped, as :class:`research.piecewise.NumpyPiecewise`),
+    the block whose input the averaging window is centred on is ``searchsorted(starts, t - T_d / 2,
+    "right") - 1`` (clipped), and each sample is projected on the segments of blocks ``k - 1 .. k +
+    1`` (clipped to the path; an arc's entry is its chord here and is replaced by the caller). Both
+    searches step on from the previous sample's (:func:`_right_next`: the samples run forward, a grid
+    then the corner instants), and any order of ``t`` gives the same result. Compiled with the row
+    count ``D`` and axis count ``A`` of ``coeffs`` as constants for the profiles of two filters
+    (``D`` = 4 on lines, 9 with arcs; ``A`` = 2 or 3; about 2x faster), any other pair generically
+    (each pair costs about 1.2 s of compilation, once per cache).
 
     Args:
         breaks, coeffs: ``(K + 1,)`` and ``(K, D, A)`` of the position profile.
@@ -359,78 +372,73 @@ def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, se
     Returns:
         ``(q (N, A), block (N,), d2 (N, 3))``.
     """
-    N, A = t.size, coeffs.shape[2]
+    D, A = coeffs.shape[1], coeffs.shape[2]
+    if A == 3:
+        if D == 4:
+            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 4, 3)
+        if D == 9:
+            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 9, 3)
+    if A == 2:
+        if D == 4:
+            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 4, 2)
+        if D == 9:
+            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 9, 2)
+    return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, D, A)
+
+
+@numba.njit(**_OPTIONS)
+def _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, D, A):
+    """:func:`sampled_line_distances` with the coefficient rows ``D`` and axes ``A`` of ``coeffs``
+    passed apart: compiled for a constant pair (the loops over rows and axes unroll and the
+    Horner sums stay in registers; the same operations in the same order) or for any pair."""
+    N = t.size
+    K = coeffs.shape[0]
     M = starts.size
     q = np.empty((N, A))
     block = np.empty(N, dtype=np.int64)
     d2 = np.empty((N, 3))
-    w = np.empty(A)
-    at_break, at_start = 0, 0  # search hints: the samples run forward (grid, then corner instants)
+    t_lo, t_hi = breaks[0], breaks[K]
+    found, at = 0, 0  # searchsorted(breaks, ., "right") and searchsorted(starts, ., "right") of the last sample
     for i in range(N):
-        at_break = _value(breaks, coeffs, t[i], q[i:i + 1], at_break)
-        at_start = _right_from(starts, t[i] - half_window, at_start)
-        k = min(max(at_start - 1, 0), M - 1)
+        tc = min(max(t[i], t_lo), t_hi)
+        found = _right_next(breaks, tc, found)
+        piece = min(max(found - 1, 0), K - 1)
+        tau = tc - breaks[piece]
+        for a in range(A):
+            v = coeffs[piece, D - 1, a]
+            for m in range(D - 2, -1, -1):
+                v = v * tau + coeffs[piece, m, a]
+            q[i, a] = v
+        at = _right_next(starts, t[i] - half_window, at)
+        k = min(max(at - 1, 0), M - 1)
         block[i] = k
         for c in range(3):
             kb = min(max(k - 1 + c, 0), M - 1)
             dot = 0.0
             for a in range(A):
-                w[a] = q[i, a] - seg_start[kb, a]
-                dot += w[a] * seg_vec[kb, a]
+                dot += (q[i, a] - seg_start[kb, a]) * seg_vec[kb, a]
             u = min(max(dot * seg_inv[kb], 0.0), 1.0)
             acc = 0.0
             for a in range(A):
-                r = w[a] - u * seg_vec[kb, a]
+                r = (q[i, a] - seg_start[kb, a]) - u * seg_vec[kb, a]
                 acc += r * r
             d2[i, c] = acc
     return q, block, d2
 
 
 @numba.njit(**_OPTIONS)
-def _value(breaks, coeffs, t, out, hint):
-    """Row 0 of :func:`_derivatives` (the value, by the same operations) into ``out[0]``."""
-    K, D, A = coeffs.shape[0], coeffs.shape[1], coeffs.shape[2]
-    tc = min(max(t, breaks[0]), breaks[K])
-    found = _right_from(breaks, tc, hint)
-    piece = min(max(found - 1, 0), K - 1)
-    tau = tc - breaks[piece]
-    for a in range(A):
-        v = coeffs[piece, D - 1, a]
-        for m in range(D - 2, -1, -1):
-            v = v * tau + coeffs[piece, m, a]
-        out[0, a] = v
-    return found
-
-
-@numba.njit(**_OPTIONS)
-def _derivatives(breaks, coeffs, t, out, hint):
-    """Value, first and second derivative of the profile at ``t`` into ``out`` ``(3, A)``
-    (right-searched piece from the index ``hint``, clipped time; derivatives 0 outside the breaks).
-    Returns the search's index, the hint for a nearby next time."""
-    K, D, A = coeffs.shape[0], coeffs.shape[1], coeffs.shape[2]
-    tc = min(max(t, breaks[0]), breaks[K])
-    found = _right_from(breaks, tc, hint)
-    piece = min(max(found - 1, 0), K - 1)
-    tau = tc - breaks[piece]
-    inside = breaks[0] <= t <= breaks[K]
-    for a in range(A):
-        v = coeffs[piece, D - 1, a]
-        for m in range(D - 2, -1, -1):
-            v = v * tau + coeffs[piece, m, a]
-        out[0, a] = v
-        v1 = 0.0
-        if D > 1:
-            v1 = coeffs[piece, D - 1, a] * (D - 1)
-            for m in range(D - 2, 0, -1):
-                v1 = v1 * tau + coeffs[piece, m, a] * m
-        v2 = 0.0
-        if D > 2:
-            v2 = coeffs[piece, D - 1, a] * (D - 1) * (D - 2)
-            for m in range(D - 2, 1, -1):
-                v2 = v2 * tau + coeffs[piece, m, a] * m * (m - 1)
-        out[1, a] = v1 if inside else 0.0
-        out[2, a] = v2 if inside else 0.0
-    return found
+def _right_next(a, v, i):
+    """``np.searchsorted(a, v, side="right")`` from ``0 <= i <= a.size``, the count of a previous
+    query: ``i`` or ``i + 1`` when ``v`` moved on by at most one entry (two comparisons, the common
+    case of samples that run forward), else the galloping search of :func:`_right_from` (a jump, or
+    a ``v`` that went back). Exact for any ``i``; fast for a nearby one."""
+    n = a.size
+    if i == 0 or a[i - 1] <= v:
+        if i == n or a[i] > v:
+            return i
+        if i + 1 == n or a[i + 1] > v:
+            return i + 1
+    return _right_from(a, v, i)
 
 
 @numba.njit(**_OPTIONS)
@@ -438,42 +446,98 @@ def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton
     """Distance [mm] from each vertex ``(C, A)`` to the profile near ``centre`` ``(C,)`` [s]: the best
     of ``grid`` points evenly spread over ``centre +- half_window``, refined by ``newton_steps``
     safeguarded Newton steps on ``|p(t) - V|^2`` kept within one grid step (the compiled form of
-    ``_fir_verify._corner_distances``; never above the best grid point's distance)."""
-    C, A = vertices.shape[0], vertices.shape[1]
+    ``_fir_verify._corner_distances``; never above the best grid point's distance).
+
+    The profile is evaluated as :class:`research.piecewise.NumpyPiecewise` (clipped time, piece
+    ``searchsorted(breaks, t, "right") - 1``, Horner's rule; derivatives 0 outside the breaks), each
+    piece found from a nearby index (:func:`_right_next`): a grid point's from the same grid point
+    of the last corner, the first Newton step's from the best grid point, the others' from the
+    last step. Compiled for the same row and axis counts as constants as
+    :func:`sampled_line_distances`."""
+    D, A = coeffs.shape[1], coeffs.shape[2]
+    if A == 3:
+        if D == 4:
+            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 4, 3)
+        if D == 9:
+            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 9, 3)
+    if A == 2:
+        if D == 4:
+            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 4, 2)
+        if D == 9:
+            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 9, 2)
+    return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, D, A)
+
+
+@numba.njit(**_OPTIONS)
+def _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, D, A):
+    """:func:`corner_distances` with the coefficient rows ``D`` and axes ``A`` of ``coeffs`` passed
+    apart, as :func:`_line_distances`."""
+    C = vertices.shape[0]
+    K = coeffs.shape[0]
+    t_lo, t_hi = breaks[0], breaks[K]
     out = np.empty(C)
-    buf = np.empty((3, A))
     step = half_window * (2.0 / (grid - 1))
-    first = 0  # search hint of each corner's first grid point (the corner instants run forward)
+    # search index of each grid point at the last corner: the corner instants run forward, a few
+    # pieces apart, while the grid spans many pieces
+    at_grid = np.zeros(grid, np.int64)
     for c in range(C):
-        best, best_d2 = 0.0, np.inf
-        hint = first
+        best, best_d2, found = 0.0, np.inf, 0
         for g in range(grid):
             tg = centre[c] + half_window * (-1.0 + 2.0 * g / (grid - 1))
-            hint = _value(breaks, coeffs, tg, buf, hint)  # the grid needs the position only
-            if g == 0:
-                first = hint
+            tc = min(max(tg, t_lo), t_hi)
+            at_grid[g] = _right_next(breaks, tc, at_grid[g])
+            piece = min(max(at_grid[g] - 1, 0), K - 1)
+            tau = tc - breaks[piece]
             d2 = 0.0
             for a in range(A):
-                e = buf[0, a] - vertices[c, a]
+                v = coeffs[piece, D - 1, a]
+                for m in range(D - 2, -1, -1):
+                    v = v * tau + coeffs[piece, m, a]
+                e = v - vertices[c, a]
                 d2 += e * e
             if d2 < best_d2:
-                best, best_d2 = tg, d2
+                best, best_d2, found = tg, d2, at_grid[g]
         lo, hi = best - step, best + step
         t = best
         for _ in range(newton_steps):
-            hint = _derivatives(breaks, coeffs, t, buf, hint)
+            tc = min(max(t, t_lo), t_hi)
+            found = _right_next(breaks, tc, found)
+            piece = min(max(found - 1, 0), K - 1)
+            tau = tc - breaks[piece]
+            inside = t_lo <= t <= t_hi
             slope, curvature = 0.0, 0.0
             for a in range(A):
-                e = buf[0, a] - vertices[c, a]
-                slope += e * buf[1, a]
-                curvature += buf[1, a] * buf[1, a] + e * buf[2, a]
+                v = coeffs[piece, D - 1, a]
+                for m in range(D - 2, -1, -1):
+                    v = v * tau + coeffs[piece, m, a]
+                v1 = 0.0
+                if D > 1:
+                    v1 = coeffs[piece, D - 1, a] * (D - 1)
+                    for m in range(D - 2, 0, -1):
+                        v1 = v1 * tau + coeffs[piece, m, a] * m
+                v2 = 0.0
+                if D > 2:
+                    v2 = coeffs[piece, D - 1, a] * (D - 1) * (D - 2)
+                    for m in range(D - 2, 1, -1):
+                        v2 = v2 * tau + coeffs[piece, m, a] * m * (m - 1)
+                if not inside:
+                    v1, v2 = 0.0, 0.0
+                e = v - vertices[c, a]
+                slope += e * v1
+                curvature += v1 * v1 + e * v2
             if curvature > 0:
                 t = t - slope / curvature
             t = min(max(t, lo), hi)
-        _value(breaks, coeffs, t, buf, hint)
+        tc = min(max(t, t_lo), t_hi)
+        found = _right_next(breaks, tc, found)
+        piece = min(max(found - 1, 0), K - 1)
+        tau = tc - breaks[piece]
         d2 = 0.0
         for a in range(A):
-            e = buf[0, a] - vertices[c, a]
+            v = coeffs[piece, D - 1, a]
+            for m in range(D - 2, -1, -1):
+                v = v * tau + coeffs[piece, m, a]
+            e = v - vertices[c, a]
             d2 += e * e
         out[c] = math.sqrt(min(d2, best_d2))
     return out

@@ -154,6 +154,84 @@ def test_sampled_line_distances_match_projection_on_each_segment():
         np.testing.assert_allclose(d2[:, c], np.sum((q - a[k] - u[:, None] * ab[k]) ** 2, axis=1), rtol=1e-9, atol=1e-16)  # rounding of coordinates ~100 mm
 
 
+def random_profile(rng, K, D, A):
+    """A random piecewise polynomial: ``K`` pieces of 1-20 ms (every fifth of zero length, so
+    repeated breaks), ``D`` coefficient rows, ``A`` axes."""
+    durations = rng.uniform(1e-3, 2e-2, K)
+    durations[rng.random(K) < 0.2] = 0.0
+    breaks = 0.3 + np.concatenate([[0.0], np.cumsum(durations)])
+    return NumpyPiecewise(breaks, rng.normal(0.0, 1.0, (K, D, A)) * 10.0 ** -np.arange(D)[None, :, None])
+
+
+def awkward_times(rng, breaks, n):
+    """Sample times that run forward in a grid beyond both ends of the breaks, then repeat a few
+    times, jump back by a third of the span and run on, hit every break (repeated ones included),
+    and end with random times in no order."""
+    lo, hi = float(breaks[0]), float(breaks[-1])
+    grid = np.linspace(lo - 0.05, hi + 0.05, n)
+    back = grid[n // 2] - (hi - lo) / 3.0 + np.arange(n // 10) * (grid[1] - grid[0]) * 0.7
+    return np.concatenate([grid, np.repeat(grid[n // 3: n // 3 + 5], 3), back, breaks,
+                           rng.uniform(lo - 0.1, hi + 0.1, n // 10)])
+
+
+@pytest.mark.parametrize("D, A", [(4, 3), (4, 2), (9, 2), (9, 3), (5, 3), (2, 4)])  # compiled constants, then generic
+def test_sampled_line_distances_match_numpy_on_random_profiles(D, A):
+    """The kernel against NumPy on random profiles: the position as ``NumpyPiecewise`` (bit for bit,
+    the same Horner sums), the block by ``np.searchsorted`` and the distances by projecting on each
+    segment, for times outside the breaks, repeated, going backwards and at the breaks."""
+    rng = np.random.default_rng(11 + 7 * D + A)
+    pos = random_profile(rng, 300, D, A)
+    t = awkward_times(rng, pos.breaks, 1500)
+    M, half = 60, 0.03
+    starts = np.sort(rng.uniform(float(pos.breaks[0]) - 0.1, float(pos.breaks[-1]), M))
+    starts[7] = starts[6]  # a zero-duration block
+    a = rng.normal(0.0, 1.0, (M, A))
+    ab = rng.normal(0.0, 1.0, (M, A))
+    ab[3] = 0.0  # a zero-length block
+    ab2 = np.sum(ab * ab, axis=1)
+    inv = np.where(ab2 > 0, 1.0 / np.where(ab2 > 0, ab2, 1.0), 0.0)
+    q, block, d2 = sampled_line_distances(pos.breaks, pos.coeffs, t, starts, half, a, ab, inv)
+    np.testing.assert_array_equal(q, pos(t))
+    want_block = np.clip(np.searchsorted(starts, t - half, side="right") - 1, 0, M - 1)
+    np.testing.assert_array_equal(block, want_block)
+    want = pos(t)
+    for c in range(3):
+        k = np.clip(want_block - 1 + c, 0, M - 1)
+        u = np.clip(np.sum((want - a[k]) * ab[k], axis=1) / np.where(ab2[k] > 0, ab2[k], np.inf), 0.0, 1.0)
+        np.testing.assert_allclose(d2[:, c], np.sum((want - a[k] - u[:, None] * ab[k]) ** 2, axis=1), rtol=1e-12, atol=1e-14)
+    assert (np.diff(t) < 0).any() and (np.diff(t) == 0).any() and (t < pos.breaks[0]).any() and (t > pos.breaks[-1]).any()
+
+
+def numpy_corner_distances(pos, vertices, centre, half, grid=9, steps=4):
+    """The corner search of ``_fir_verify.corner_distances`` in NumPy on ``NumpyPiecewise``: the
+    best of ``grid`` points over ``centre +- half``, then ``steps`` Newton steps on ``|p(t) - V|^2``
+    clipped to one grid step around it; the smaller of that point's and the grid's distance."""
+    tg = centre[:, None] + half * np.linspace(-1.0, 1.0, grid)[None, :]
+    d2 = np.sum((pos(tg) - vertices[:, None, :]) ** 2, axis=-1)
+    t = tg[np.arange(centre.size), np.argmin(d2, axis=1)]
+    lo, hi = t - 2.0 * half / (grid - 1), t + 2.0 * half / (grid - 1)
+    for _ in range(steps):
+        e, v, acc = pos(t) - vertices, pos(t, 1), pos(t, 2)
+        slope, curvature = np.sum(e * v, axis=1), np.sum(v * v + e * acc, axis=1)
+        t = np.clip(np.where(curvature > 0, t - slope / np.where(curvature > 0, curvature, 1.0), t), lo, hi)
+    return np.sqrt(np.minimum(np.sum((pos(t) - vertices) ** 2, axis=1), d2.min(axis=1)))
+
+
+@pytest.mark.parametrize("D, A", [(4, 3), (4, 2), (9, 2), (9, 3), (10, 2), (2, 4)])  # compiled constants, then generic
+def test_corner_distances_match_a_numpy_search_on_random_profiles(D, A):
+    """``_fir_kernels.corner_distances`` (compiled per row and axis count) against the same search
+    in NumPy, with windows reaching beyond the breaks and corner instants not in order."""
+    from research.interpolators._fir_kernels import corner_distances as kernel
+
+    rng = np.random.default_rng(3 + 5 * D + A)
+    pos = random_profile(rng, 200, D, A)
+    lo, hi = float(pos.breaks[0]), float(pos.breaks[-1])
+    centre = np.concatenate([np.sort(rng.uniform(lo - 0.02, hi + 0.02, 150)), rng.uniform(lo, hi, 20)])
+    vertices = pos(centre + rng.normal(0.0, 0.01, centre.size)) + rng.normal(0.0, 0.05, (centre.size, A))
+    got = kernel(pos.breaks, pos.coeffs, vertices, centre, 0.04, 9, 4)
+    np.testing.assert_allclose(got, numpy_corner_distances(pos, vertices, centre, 0.04), rtol=1e-9, atol=1e-12)
+
+
 def test_hinted_search_is_searchsorted_right():
     """The kernels' galloping search from a hint gives ``np.searchsorted(a, v, "right")`` for any
     hint, including repeated entries (zero-length pieces) and values outside the array."""
