@@ -128,31 +128,57 @@ def corner_peak_ratios(position, lo: np.ndarray, hi: np.ndarray, limits: AxisLim
     ``[lo_c, hi_c]`` [s]; exact (roots of the next derivative) for pieces of any degree.
 
     ``position``: a :class:`PiecewisePolynomial` or its NumPy evaluator. Pieces shorter than
-    :data:`DEGENERATE_PIECE` are skipped (their continuous derivatives are the neighbours' end values)."""
-    breaks = np.asarray(position.breaks)
-    coeffs = np.asarray(position.coeffs)  # (K, d + 1, A) ascending local
-    K, degree = coeffs.shape[0], coeffs.shape[1] - 1
-    # derivative coefficients of orders 1..4 at every piece
-    derivs = [coeffs]
-    for _ in range(4):
-        c = derivs[-1]
-        derivs.append(c[:, 1:, :] * np.arange(1, c.shape[1])[None, :, None] if c.shape[1] > 1 else np.zeros_like(c))
-    h = np.diff(breaks)
-    limit = np.stack([limits.velocity, limits.acceleration, limits.jerk])  # (3, A)
-    # candidate local times per piece: both ends, and where the next derivative vanishes
-    ratio = np.zeros((K, 3, coeffs.shape[2]))
-    for order in (1, 2, 3):
-        c = derivs[order]
-        values = [_horner(c, np.zeros(K)), _horner(c, h)]
-        if order < degree:
-            for tau in _real_roots(derivs[order + 1], h):
-                values.append(_horner(c, tau))
-        peak = np.max(np.abs(np.stack(values)), axis=0)  # (K, A)
-        ratio[:, order - 1, :] = peak / limit[order - 1][None, :]
-    per_piece = np.where(h > DEGENERATE_PIECE, ratio.reshape(K, -1).max(axis=1), 0.0)
-    first = np.clip(np.searchsorted(breaks, lo, side="right") - 1, 0, K - 1)
-    last = np.clip(np.searchsorted(breaks, hi, side="left"), first + 1, K)
-    return _range_max(per_piece, first, last)
+    :data:`DEGENERATE_PIECE` are skipped (their continuous derivatives are the neighbours' end values).
+    Several window sets on one profile: :class:`PiecePeaks` once, then :meth:`PiecePeaks.over`."""
+    return PiecePeaks(position, limits).over(lo, hi)
+
+
+class PiecePeaks:
+    """Largest ``peak / limit`` of every piece of a profile (over axes and over velocity,
+    acceleration, jerk), computed once, for the windows of :meth:`over`.
+
+    Each derivative of order 1-3 peaks, on a piece, at one of its ends or where the next
+    derivative vanishes (its real roots in ``[0, h]``: closed form up to degree 2, companion
+    eigenvalues above); each axis is evaluated at its own roots.
+
+    Args:
+        position: a :class:`PiecewisePolynomial` or its NumPy evaluator (``breaks``, ``coeffs``
+            ``(K, d + 1, A)`` ascending local).
+        limits: the per-axis limits.
+
+    Example:
+        >>> peaks = PiecePeaks(position, limits)  # doctest: +SKIP
+        >>> corners, spans = peaks.over(lo_c, hi_c), peaks.over(lo_s, hi_s)  # doctest: +SKIP
+    """
+
+    def __init__(self, position, limits: AxisLimits):
+        breaks = np.asarray(position.breaks)
+        coeffs = np.asarray(position.coeffs)
+        K, degree = coeffs.shape[0], coeffs.shape[1] - 1
+        derivs = [coeffs]  # derivative coefficients of orders 1..4 at every piece
+        for _ in range(4):
+            c = derivs[-1]
+            derivs.append(c[:, 1:, :] * np.arange(1, c.shape[1])[None, :, None] if c.shape[1] > 1 else np.zeros_like(c))
+        h = np.diff(breaks)
+        limit = np.stack([limits.velocity, limits.acceleration, limits.jerk])  # (3, A)
+        ratio = np.zeros((K, 3, coeffs.shape[2]))
+        for order in (1, 2, 3):
+            c = derivs[order]
+            peak = np.maximum(np.abs(_horner(c, np.zeros(K))), np.abs(_horner(c, h)))  # (K, A)
+            if order < degree:
+                tau = _real_roots(derivs[order + 1], h)  # (K, A, R): each axis' own roots
+                if tau.shape[2]:
+                    peak = np.maximum(peak, np.max(np.abs(_horner_own(c, tau)), axis=2))
+            ratio[:, order - 1, :] = peak / limit[order - 1][None, :]
+        self.breaks = breaks
+        self.per_piece = np.where(h > DEGENERATE_PIECE, ratio.reshape(K, -1).max(axis=1), 0.0)
+
+    def over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """``(C,)`` largest piece ratio in each window ``[lo_c, hi_c]`` [s] (the pieces it meets)."""
+        K = self.per_piece.size
+        first = np.clip(np.searchsorted(self.breaks, lo, side="right") - 1, 0, K - 1)
+        last = np.clip(np.searchsorted(self.breaks, hi, side="left"), first + 1, K)
+        return _range_max(self.per_piece, first, last)
 
 
 def _range_max(values: np.ndarray, first: np.ndarray, last: np.ndarray) -> np.ndarray:
@@ -172,23 +198,32 @@ def _range_max(values: np.ndarray, first: np.ndarray, last: np.ndarray) -> np.nd
 
 
 def _horner(c: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """``(K, A)`` values of the per-piece polynomials ``c`` ``(K, m + 1, A)`` at ``tau`` ``(K,)``."""
     out = c[:, -1, :]
     for m in range(c.shape[1] - 2, -1, -1):
         out = out * tau[:, None] + c[:, m, :]
     return out
 
 
-def _real_roots(c: np.ndarray, h: np.ndarray) -> list[np.ndarray]:
+def _horner_own(c: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """``(K, A, R)`` values of each axis' polynomial ``c[:, :, a]`` at its own times ``tau[:, a, :]``."""
+    out = np.broadcast_to(c[:, -1, :, None], tau.shape)
+    for m in range(c.shape[1] - 2, -1, -1):
+        out = out * tau + c[:, m, :, None]
+    return out
+
+
+def _real_roots(c: np.ndarray, h: np.ndarray) -> np.ndarray:
     """Real roots in ``[0, h]`` of the per-piece, per-axis polynomials ``c`` (ascending, ``(K, m+1, A)``),
-    as local times ``(K,)`` per candidate (out-of-range or complex candidates are replaced by 0).
-    Degree <= 2 in closed form, higher degrees by the eigenvalues of the companion matrices."""
+    as local times ``(K, A, R)`` (``R`` candidates per axis; out-of-range or complex ones replaced
+    by 0). Degree <= 2 in closed form, higher degrees by the eigenvalues of the companion matrices."""
     deg = c.shape[1] - 1
-    out = []
+    K, A = c.shape[0], c.shape[2]
     if deg == 1:
         a1, a0 = c[:, 1, :], c[:, 0, :]
         with np.errstate(divide="ignore", invalid="ignore"):
             r = np.where(a1 != 0, -a0 / np.where(a1 != 0, a1, 1.0), 0.0)
-        out += [r[:, k] for k in range(c.shape[2])]
+        out = r[:, :, None]
     elif deg == 2:
         a2, a1, a0 = c[:, 2, :], c[:, 1, :], c[:, 0, :]
         disc = a1**2 - 4 * a2 * a0
@@ -197,10 +232,9 @@ def _real_roots(c: np.ndarray, h: np.ndarray) -> list[np.ndarray]:
             safe = np.where(a2 != 0, a2, 1.0)
             roots = [np.where((a2 != 0) & (disc >= 0), (-a1 + s * sq) / (2 * safe), 0.0) for s in (1.0, -1.0)]
             roots.append(np.where((a2 == 0) & (a1 != 0), -a0 / np.where(a1 != 0, a1, 1.0), 0.0))
-        out += [r[:, k] for r in roots for k in range(c.shape[2])]
+        out = np.stack(roots, axis=2)
     elif deg > 2:
         # scale time to the piece length so the companion matrix is well conditioned
-        K, A = c.shape[0], c.shape[2]
         hs = np.where(h > 0, h, 1.0)
         cs = c * hs[:, None, None] ** np.arange(deg + 1)[None, :, None]
         lead = cs[:, -1, :]
@@ -211,39 +245,39 @@ def _real_roots(c: np.ndarray, h: np.ndarray) -> list[np.ndarray]:
             comp[:, :, :, -1] = -np.where(ok[:, None, :], cs[:, :-1, :] / np.where(ok, lead, 1.0)[:, None, :], 0.0).transpose(0, 2, 1)
         eig = np.linalg.eigvals(comp)  # (K, A, deg)
         real = np.abs(eig.imag) <= 1e-9 * np.maximum(1.0, np.abs(eig.real))
-        x = np.where(real & ok[:, :, None] & (eig.real >= 0) & (eig.real <= 1), eig.real, 0.0) * hs[:, None, None]
-        out += [x[:, k, m] for k in range(A) for m in range(deg)]
-    return [np.clip(np.nan_to_num(r), 0.0, h) for r in out]
+        out = np.where(real & ok[:, :, None] & (eig.real >= 0) & (eig.real <= 1), eig.real, 0.0) * hs[:, None, None]
+    else:
+        return np.zeros((K, A, 0))
+    return np.clip(np.nan_to_num(out), 0.0, h[:, None, None])
 
 
-def block_peak_ratios(position, starts: np.ndarray, pulse_times: np.ndarray, total_delay: float,
-                      limits: AxisLimits) -> np.ndarray:
+def block_peak_ratios(peaks: PiecePeaks, starts: np.ndarray, pulse_times: np.ndarray, total_delay: float) -> np.ndarray:
     """``(M,)`` largest ``peak / limit`` over each block's filtered span ``[start, end + T_d]`` [s]
-    (of a plan whose corners are exact stops: each block's own peaks)."""
+    (of a plan whose corners are exact stops: each block's own peaks), from its profile's ``peaks``."""
     starts = np.asarray(starts, dtype=np.float64)
-    return corner_peak_ratios(position, starts, starts + np.asarray(pulse_times) + total_delay, limits)
+    return peaks.over(starts, starts + np.asarray(pulse_times) + total_delay)
 
 
-def corner_limit_ratios(position, starts: np.ndarray, pulse_times: np.ndarray, total_delay: float,
-                        limits: AxisLimits) -> np.ndarray:
+def corner_limit_ratios(peaks: PiecePeaks, starts: np.ndarray, pulse_times: np.ndarray, total_delay: float) -> np.ndarray:
     """``(M - 1,)`` largest ``peak / limit`` in each corner's window ``[end of block k,
-    start of block k+1 + T_d]`` [s]: every instant at which blocks ``k`` and ``k + 1`` overlap."""
+    start of block k+1 + T_d]`` [s]: every instant at which blocks ``k`` and ``k + 1`` overlap
+    (``peaks``: the profile's :class:`PiecePeaks`)."""
     starts = np.asarray(starts, dtype=np.float64)
     if starts.size < 2:
         return np.zeros(0)
     ends = starts + np.asarray(pulse_times)
-    return corner_peak_ratios(position, ends[:-1], starts[1:] + total_delay, limits)
+    return peaks.over(ends[:-1], starts[1:] + total_delay)
 
 
-def own_span_ratios(position, starts: np.ndarray, pulse_times: np.ndarray, total_delay: float,
-                    limits: AxisLimits) -> np.ndarray:
+def own_span_ratios(peaks: PiecePeaks, starts: np.ndarray, pulse_times: np.ndarray, total_delay: float) -> np.ndarray:
     """``(M,)`` largest ``peak / limit`` in the part of each block's filtered span that no corner window
     covers, ``[start_k + T_d, end_k]`` (``[start_1, end_1]`` for the first block, ``[start_M + T_d,
     end_M + T_d]`` for the last, the whole span for a single block) [s]; 0 where that part is empty.
 
     Only block ``k``'s own pulse is filtered there (block ``k - 1``'s output has ended, block ``k + 1``'s
     has not begun), so these are the block-alone peaks that the corner windows do not see: a block
-    slowed in pieces (look-ahead staircase) can break a limit inside its own span."""
+    slowed in pieces (look-ahead staircase) can break a limit inside its own span. ``peaks``: the
+    profile's :class:`PiecePeaks`."""
     starts = np.asarray(starts, dtype=np.float64)
     ends = starts + np.asarray(pulse_times, dtype=np.float64)
     lo, hi = starts + total_delay, ends.copy()
@@ -252,7 +286,7 @@ def own_span_ratios(position, starts: np.ndarray, pulse_times: np.ndarray, total
     out = np.zeros(starts.size)
     some = hi > lo
     if some.any():
-        out[some] = corner_peak_ratios(position, lo[some], hi[some], limits)
+        out[some] = peaks.over(lo[some], hi[some])
     return out
 
 

@@ -72,6 +72,7 @@ from research.interpolators._fir_limits import (
     BISECTION_STEPS,
     LIMIT_RTOL,
     CornerBisection,
+    PiecePeaks,
     arc_limit_caps,
     block_peak_ratios,
     blocks_in_windows,
@@ -372,7 +373,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         def alone(g):  # ``_fir_limits`` phase 1: each block's own peaks (every corner an exact stop)
             _, _, pulse, starts, position, *_ = schedule(factor * g[:, None], head, tail, full, np.zeros(M - 1), others,
                                                          arc_rel)
-            return block_peak_ratios(position, starts, pulse, Td_np, limits)
+            return block_peak_ratios(PiecePeaks(position, limits), starts, pulse, Td_np)
 
         if limits is not None and M == 1:
             g = hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), np.ones(1, dtype=bool))
@@ -393,8 +394,9 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                 (pulse_np, starts_np, pos_np, centre_np), durations = state[2:6], state[7]
                 too_fast, slowed = False, False
                 if limits is not None and M > 1:
-                    ratios = corner_limit_ratios(pos_np, starts_np, pulse_np, Td_np, limits)
-                    own = own_span_ratios(pos_np, starts_np, pulse_np, Td_np, limits)
+                    peaks = PiecePeaks(pos_np, limits)  # one profile: its pieces' peaks once for both
+                    ratios = corner_limit_ratios(peaks, starts_np, pulse_np, Td_np)
+                    own = own_span_ratios(peaks, starts_np, pulse_np, Td_np)
                     bad, own_bad = ratios > 1.0 + LIMIT_RTOL, own > 1.0 + LIMIT_RTOL
                     near = (blocks_in_windows(bad, starts_np, pulse_np, Td_np) | own_bad) & ~checked
                     g = hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), near) if near.any() else 1.0

@@ -135,7 +135,7 @@ def test_block_own_span_is_held_regression():
     no corner window covers, the y jerk reached 1.71x the limit while both corner windows held (0.88,
     0.98). The limits are checked here on the sampled trajectory (``metrics.limit_ratios``, independent
     of the planner's exact peaks), and the own-span peaks the planner now checks match it."""
-    from research.interpolators._fir_limits import own_span_ratios
+    from research.interpolators._fir_limits import PiecePeaks, own_span_ratios
     from research.piecewise import NumpyPiecewise
 
     path = Polyline([[0.0, 0.0], [3.3178550046703728, 3.029993981949344],
@@ -146,6 +146,49 @@ def test_block_own_span_is_held_regression():
     ratios = limit_ratios(plan.trajectory(1e-4), limits)
     assert all(np.all(r <= 1 + 1e-6) for r in ratios.values()), ratios
     pos = NumpyPiecewise(np.asarray(plan.position.breaks), np.asarray(plan.position.coeffs))
-    own = own_span_ratios(pos, np.asarray(plan.start_times), np.asarray(plan.pulse_times), float(np.sum(delays)), limits)
+    own = own_span_ratios(PiecePeaks(pos, limits), np.asarray(plan.start_times), np.asarray(plan.pulse_times),
+                          float(np.sum(delays)))
     assert np.all(own <= 1 + 1e-9)
     assert np.max(np.asarray(plan.corner_errors)) <= 0.1 * (1 + 1e-6)
+
+
+@pytest.mark.parametrize("degree", [3, 5, 8])
+def test_piece_peaks_match_per_piece_polynomial_roots(degree):
+    """``PiecePeaks`` (each axis at its own roots of the next derivative) against an independent
+    computation piece by piece and axis by axis with ``numpy.polynomial.Polynomial`` (the extrema
+    of each derivative at the piece's ends and at the real roots of the next one in ``[0, h]``),
+    on seeded random profiles of three axes; and its windows against the largest piece they meet."""
+    from numpy.polynomial import Polynomial
+
+    from research.interpolators._fir_limits import PiecePeaks
+    from research.piecewise import NumpyPiecewise
+
+    rng = np.random.default_rng(degree)
+    K, A = 40, 3
+    h = rng.uniform(0.005, 0.05, K)
+    h[7] = 1e-14  # a degenerate piece: not counted
+    breaks = np.concatenate([[0.0], np.cumsum(h)])
+    coeffs = rng.normal(size=(K, degree + 1, A)) * (10.0 ** rng.uniform(-1, 4, (K, 1, A)))
+    limits = AxisLimits(velocity=np.array([50.0, 80.0, 30.0]), acceleration=np.array([2e3, 5e3, 1e3]),
+                        jerk=np.array([1e5, 3e5, 5e4]))
+    peaks = PiecePeaks(NumpyPiecewise(breaks, coeffs), limits)
+    lim = [limits.velocity, limits.acceleration, limits.jerk]
+    want = np.zeros(K)
+    for k in range(K):
+        if h[k] <= 1e-12:
+            continue
+        for a in range(A):
+            p = Polynomial(coeffs[k, :, a])
+            for order in (1, 2, 3):
+                d = p.deriv(order)
+                r = d.deriv().roots() if d.degree() > 0 else np.zeros(0)
+                r = r[(np.abs(r.imag) <= 1e-9 * np.maximum(1.0, np.abs(r.real)))].real
+                t = np.concatenate([[0.0, h[k]], r[(r >= 0) & (r <= h[k])]])
+                want[k] = max(want[k], np.max(np.abs(d(t))) / lim[order - 1][a])
+    np.testing.assert_allclose(peaks.per_piece, want, rtol=1e-9)
+    assert peaks.per_piece[7] == 0.0
+    lo = rng.uniform(0.0, breaks[-1], 30)
+    hi = lo + rng.uniform(0.0, 0.2, 30)
+    first = np.searchsorted(breaks, lo, side="right") - 1
+    last = np.maximum(np.searchsorted(breaks, hi, side="left"), first + 1)
+    np.testing.assert_array_equal(peaks.over(lo, hi), [np.max(peaks.per_piece[a:b]) for a, b in zip(first, last)])
