@@ -46,8 +46,10 @@ phase 1, ``hold_block_limits``, is now about 40 % of it).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
+import numba
 import numpy as np
 
 from research.errors import ConvergenceError, ParameterError
@@ -152,26 +154,16 @@ class PiecePeaks:
     """
 
     def __init__(self, position, limits: AxisLimits):
-        breaks = np.asarray(position.breaks)
-        coeffs = np.asarray(position.coeffs)
-        K, degree = coeffs.shape[0], coeffs.shape[1] - 1
-        derivs = [coeffs]  # derivative coefficients of orders 1..4 at every piece
-        for _ in range(4):
-            c = derivs[-1]
-            derivs.append(c[:, 1:, :] * np.arange(1, c.shape[1])[None, :, None] if c.shape[1] > 1 else np.zeros_like(c))
+        breaks = np.asarray(position.breaks, dtype=np.float64)
+        coeffs = np.asarray(position.coeffs, dtype=np.float64)
         h = np.diff(breaks)
-        limit = np.stack([limits.velocity, limits.acceleration, limits.jerk])  # (3, A)
-        ratio = np.zeros((K, 3, coeffs.shape[2]))
-        for order in (1, 2, 3):
-            c = derivs[order]
-            peak = np.maximum(np.abs(_horner(c, np.zeros(K))), np.abs(_horner(c, h)))  # (K, A)
-            if order < degree:
-                tau = _real_roots(derivs[order + 1], h)  # (K, A, R): each axis' own roots
-                if tau.shape[2]:
-                    peak = np.maximum(peak, np.max(np.abs(_horner_own(c, tau)), axis=2))
-            ratio[:, order - 1, :] = peak / limit[order - 1][None, :]
+        limit = np.stack([limits.velocity, limits.acceleration, limits.jerk]).astype(np.float64)  # (3, A)
+        if coeffs.shape[1] - 1 <= CLOSED_FORM_DEGREE:  # roots in closed form: one compiled pass
+            ratio = _closed_form_ratios(np.ascontiguousarray(coeffs), h, np.ascontiguousarray(limit))
+        else:
+            ratio = _piece_ratios(coeffs, h, limit)
         self.breaks = breaks
-        self.per_piece = np.where(h > DEGENERATE_PIECE, ratio.reshape(K, -1).max(axis=1), 0.0)
+        self.per_piece = np.where(h > DEGENERATE_PIECE, ratio, 0.0)
 
     def over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """``(C,)`` largest piece ratio in each window ``[lo_c, hi_c]`` [s] (the pieces it meets)."""
@@ -179,6 +171,94 @@ class PiecePeaks:
         first = np.clip(np.searchsorted(self.breaks, lo, side="right") - 1, 0, K - 1)
         last = np.clip(np.searchsorted(self.breaks, hi, side="left"), first + 1, K)
         return _range_max(self.per_piece, first, last)
+
+
+#: profiles up to this degree (lines under two filters: 3) have the roots of every next derivative
+#: in closed form (degree <= 2) and take the compiled :func:`_closed_form_ratios`
+CLOSED_FORM_DEGREE = 4
+
+
+def _piece_ratios(coeffs: np.ndarray, h: np.ndarray, limit: np.ndarray) -> np.ndarray:
+    """``(K,)`` largest ``peak / limit`` of each piece (:class:`PiecePeaks`), by whole-array NumPy."""
+    K, degree = coeffs.shape[0], coeffs.shape[1] - 1
+    derivs = [coeffs]  # derivative coefficients of orders 1..4 at every piece
+    for _ in range(4):
+        c = derivs[-1]
+        derivs.append(c[:, 1:, :] * np.arange(1, c.shape[1])[None, :, None] if c.shape[1] > 1 else np.zeros_like(c))
+    ratio = np.zeros((K, 3, coeffs.shape[2]))
+    for order in (1, 2, 3):
+        c = derivs[order]
+        peak = np.maximum(np.abs(_horner(c, np.zeros(K))), np.abs(_horner(c, h)))  # (K, A)
+        if order < degree:
+            tau = _real_roots(derivs[order + 1], h)  # (K, A, R): each axis' own roots
+            if tau.shape[2]:
+                peak = np.maximum(peak, np.max(np.abs(_horner_own(c, tau)), axis=2))
+        ratio[:, order - 1, :] = peak / limit[order - 1][None, :]
+    return ratio.reshape(K, -1).max(axis=1)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _closed_form_ratios(coeffs, h, limit):
+    """:func:`_piece_ratios` of a profile of degree <= :data:`CLOSED_FORM_DEGREE` in one compiled
+    pass, by the same operations (Horner's rule, the closed-form roots of :func:`_real_roots`
+    clipped to ``[0, h]``), so the same floats. Peaks are finite here (as in the planner)."""
+    K, D, A = coeffs.shape
+    degree = D - 1
+    out = np.zeros(K)
+    c = np.zeros((5, D))
+    n = np.zeros(5, np.int64)
+    roots = np.zeros(3)
+    for k in range(K):
+        hk = h[k]
+        best = 0.0
+        for a in range(A):
+            n[0] = D
+            for m in range(D):
+                c[0, m] = coeffs[k, m, a]
+            for o in range(1, 5):  # derivative coefficients (a constant's derivative: one 0)
+                if n[o - 1] > 1:
+                    n[o] = n[o - 1] - 1
+                    for m in range(n[o]):
+                        c[o, m] = c[o - 1, m + 1] * (m + 1)
+                else:
+                    n[o] = 1
+                    c[o, 0] = 0.0
+            for order in range(1, 4):
+                no = n[order]
+                v0 = c[order, no - 1]
+                vh = c[order, no - 1]
+                for m in range(no - 2, -1, -1):
+                    v0 = v0 * 0.0 + c[order, m]
+                    vh = vh * hk + c[order, m]
+                peak = max(abs(v0), abs(vh))
+                nr = 0
+                if order < degree:
+                    deg = n[order + 1] - 1
+                    if deg == 1:
+                        a1, a0 = c[order + 1, 1], c[order + 1, 0]
+                        roots[0] = -a0 / a1 if a1 != 0 else 0.0
+                        nr = 1
+                    elif deg == 2:
+                        a2, a1, a0 = c[order + 1, 2], c[order + 1, 1], c[order + 1, 0]
+                        disc = a1 * a1 - 4 * a2 * a0
+                        sq = math.sqrt(max(disc, 0.0))
+                        ok = a2 != 0 and disc >= 0
+                        roots[0] = (-a1 + sq) / (2 * a2) if ok else 0.0
+                        roots[1] = (-a1 + -sq) / (2 * a2) if ok else 0.0
+                        roots[2] = -a0 / a1 if (a2 == 0 and a1 != 0) else 0.0
+                        nr = 3
+                for r in range(nr):
+                    t = roots[r]
+                    if t != t:
+                        t = 0.0
+                    t = min(max(t, 0.0), hk)
+                    v = c[order, no - 1]
+                    for m in range(no - 2, -1, -1):
+                        v = v * t + c[order, m]
+                    peak = max(peak, abs(v))
+                best = max(best, peak / limit[order - 1, a])
+        out[k] = best
+    return out
 
 
 def _range_max(values: np.ndarray, first: np.ndarray, last: np.ndarray) -> np.ndarray:

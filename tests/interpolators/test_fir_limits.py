@@ -192,3 +192,21 @@ def test_piece_peaks_match_per_piece_polynomial_roots(degree):
     first = np.searchsorted(breaks, lo, side="right") - 1
     last = np.maximum(np.searchsorted(breaks, hi, side="left"), first + 1)
     np.testing.assert_array_equal(peaks.over(lo, hi), [np.max(peaks.per_piece[a:b]) for a, b in zip(first, last)])
+
+
+@pytest.mark.parametrize("degree", [1, 2, 3, 4])
+def test_compiled_piece_peaks_equal_the_numpy_form(degree):
+    """The compiled pass of ``PiecePeaks`` (profiles of degree <= 4, closed-form roots) gives the
+    floats of its whole-array NumPy form, bit for bit: random pieces with zero leading
+    coefficients (roots of lower degree), zero derivatives, roots outside the piece and a jerk
+    limit of inf."""
+    from research.interpolators._fir_limits import _closed_form_ratios, _piece_ratios
+
+    rng = np.random.default_rng(40 + degree)
+    K, A = 300, 3
+    h = rng.uniform(1e-4, 0.05, K)
+    coeffs = rng.normal(size=(K, degree + 1, A)) * (10.0 ** rng.uniform(-2, 4, (K, 1, A)))
+    zero = rng.random((K, degree + 1, A)) < 0.2
+    coeffs[zero] = 0.0
+    limit = np.array([[50.0, 80.0, 30.0], [2e3, 5e3, 1e3], [1e5, np.inf, 5e4]])
+    np.testing.assert_array_equal(_closed_form_ratios(coeffs, h, limit), _piece_ratios(coeffs, h, limit))
