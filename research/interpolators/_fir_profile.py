@@ -402,6 +402,7 @@ def _profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
         pos_breaks, position = _filter(breaks, geo, delays[0], start, True, inv, gap, True)
     else:
         vb, vc = _filter(breaks, geo, delays[0], np.zeros(A), False, inv, gap, True)
+        inv = np.zeros(0)  # freed: the later filters read their inputs as they are
         for k in range(1, n - 1):
             vb, vc = _moving_average(vb, vc, delays[k])
         pos_breaks, position = _filter(vb, vc, delays[n - 1], start, True, inv, gap, False)
