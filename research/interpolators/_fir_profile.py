@@ -176,44 +176,16 @@ def _over(x, m, rec):
     return x * r if r != 0.0 else x / m
 
 
-@numba.njit(inline="always", **_OPTIONS)
-def _scales(inv, gap, scaled, k, s, D):
-    """The factors ``s`` ``(D,)`` that make piece ``k``'s stored coefficients its own, and how to
-    apply them: 0 the stored ones as they are (``scaled`` False), 1 times ``s`` (the path's
-    pieces: row ``m`` over ``T_v^(m + 1)``, ``s[m] = inv[k]^(m + 1)`` by products, as the input
-    build always did), 2 zero (a gap piece)."""
-    if not scaled:
-        return 0
-    if gap[k]:
-        return 2
-    r = inv[k]
-    s[0] = r
-    for m in range(1, D):
-        s[m] = s[m - 1] * r
-    return 1
-
-
-@numba.njit(inline="always", **_OPTIONS)
-def _coef(coeffs, k, m, a, mode, s):
-    """Coefficient ``m`` of piece ``k`` on axis ``a`` (:func:`_scales` ``mode`` and ``s``)."""
-    if mode == 0:
-        return coeffs[k, m, a]
-    return coeffs[k, m, a] * s[m] if mode == 1 else 0.0
-
-
 @numba.njit(**_OPTIONS)
-def _constants(breaks, coeffs, rec, D, inv, gap, scaled):
+def _constants(breaks, coeffs, rec, D):
     """Constant terms ``(K + 1, A)`` of ``C``, the integral of the function from ``breaks[0]``
     (``PiecewisePolynomial.antiderivative``; the other coefficients of piece ``i`` are
-    ``coeffs[i, m] / (m + 1)``), and as row ``K`` its end value (Horner on the last piece); the
-    coefficients as :func:`_coef` reads them."""
+    ``coeffs[i, m] / (m + 1)``), and as row ``K`` its end value (Horner on the last piece)."""
     K, _, A = coeffs.shape
     out = np.empty((K + 1, A))
     acc = np.zeros(A)
     hp = np.empty(D)
-    sc = np.empty(D)
     for i in range(K):
-        mode = _scales(inv, gap, scaled, i, sc, D)
         h = breaks[i + 1] - breaks[i]
         hp[0] = h
         for m in range(1, D):
@@ -221,28 +193,27 @@ def _constants(breaks, coeffs, rec, D, inv, gap, scaled):
         for a in range(A):
             s = 0.0
             for m in range(D):
-                s += _over(_coef(coeffs, i, m, a, mode, sc), m + 1, rec) * hp[m]
+                s += _over(coeffs[i, m, a], m + 1, rec) * hp[m]
             acc[a] += s
             out[i, a] = (acc[a] - s) + 0.0
     h = breaks[K] - breaks[K - 1]
-    mode = _scales(inv, gap, scaled, K - 1, sc, D)
     for a in range(A):
-        v = _over(_coef(coeffs, K - 1, D - 1, a, mode, sc), D, rec)
+        v = _over(coeffs[K - 1, D - 1, a], D, rec)
         for m in range(D - 1, 0, -1):
-            v = v * h + _over(_coef(coeffs, K - 1, m - 1, a, mode, sc), m, rec)
+            v = v * h + _over(coeffs[K - 1, m - 1, a], m, rec)
         out[K, a] = v * h + out[K - 1, a]
     return out
 
 
 @numba.njit(inline="always", **_OPTIONS)
-def _shifted_c(coeffs, consts, k, a, delta, rec, c, D, mode, s):
+def _shifted_c(coeffs, consts, k, a, delta, rec, c, D):
     """Piece ``k`` of ``C`` on axis ``a`` (ascending coefficients ``(D + 1,)`` into ``c``; piece ``K``
     the end value held after the last break), re-centred by ``delta``: the Taylor shift of
-    ``research.piecewise._taylor_shift``; the coefficients as :func:`_coef` reads them."""
+    ``research.piecewise._taylor_shift``."""
     K = coeffs.shape[0]
     c[0] = consts[k, a]
     for m in range(D):
-        c[m + 1] = _over(_coef(coeffs, k, m, a, mode, s), m + 1, rec) if k < K else 0.0
+        c[m + 1] = _over(coeffs[k, m, a], m + 1, rec) if k < K else 0.0
     for i in range(D):
         for m in range(D - 1, i - 1, -1):
             c[m] = c[m] + delta * c[m + 1]
@@ -254,33 +225,29 @@ def _moving_average(breaks, coeffs, delay):
     coefficients ``(K', D + 1, A)`` of ``(C(t) - C(t - T)) / T``, ``C`` the antiderivative of a
     function that is zero outside its breaks, on the ``K' <= 2K + 1`` pieces of positive length of
     the merge of ``b`` and ``b + T`` (the JAX form keeps the empty ones too)."""
-    none = np.zeros(0)
-    return _filter(breaks, coeffs, delay, np.zeros(coeffs.shape[2]), False, none, none == 0.0, False)
+    return _filter(breaks, coeffs, delay, np.zeros(coeffs.shape[2]), False)
 
 
 @numba.njit(**_OPTIONS)
-def _filter(breaks, coeffs, delay, initial, integrate, inv, gap, scaled):
+def _filter(breaks, coeffs, delay, initial, integrate):
     """:func:`_filter_rows` with its ``D`` (coefficient rows of ``coeffs``) a compile-time constant
     for the row counts the planner meets (lines 1, arcs ``DEGREE + 1`` = 6, each filter one more):
     its loops over rows then unroll and its small arrays stay in registers (2-2.5x faster, the same
-    operations in the same order); any other count runs the generic compilation. ``scaled``: the
-    input is the path's pieces ``coeffs = PulseTable.geo``, read as their time coefficients with
-    ``inv`` ``(P,)`` the inverse pulse lengths and ``gap`` ``(P,)`` the gap pieces (:func:`_scales`;
-    no ``(P, D, A)`` copy); else ``inv`` and ``gap`` are not read."""
+    operations in the same order); any other count runs the generic compilation."""
     D = coeffs.shape[1]
     if D == 1:
-        return _filter_rows(breaks, coeffs, delay, initial, integrate, 1, inv, gap, scaled)
+        return _filter_rows(breaks, coeffs, delay, initial, integrate, 1)
     if D == 2:
-        return _filter_rows(breaks, coeffs, delay, initial, integrate, 2, inv, gap, scaled)
+        return _filter_rows(breaks, coeffs, delay, initial, integrate, 2)
     if D == 3:
-        return _filter_rows(breaks, coeffs, delay, initial, integrate, 3, inv, gap, scaled)
+        return _filter_rows(breaks, coeffs, delay, initial, integrate, 3)
     if D == 6:
-        return _filter_rows(breaks, coeffs, delay, initial, integrate, 6, inv, gap, scaled)
+        return _filter_rows(breaks, coeffs, delay, initial, integrate, 6)
     if D == 7:
-        return _filter_rows(breaks, coeffs, delay, initial, integrate, 7, inv, gap, scaled)
+        return _filter_rows(breaks, coeffs, delay, initial, integrate, 7)
     if D == 8:
-        return _filter_rows(breaks, coeffs, delay, initial, integrate, 8, inv, gap, scaled)
-    return _filter_rows(breaks, coeffs, delay, initial, integrate, D, inv, gap, scaled)
+        return _filter_rows(breaks, coeffs, delay, initial, integrate, 8)
+    return _filter_rows(breaks, coeffs, delay, initial, integrate, D)
 
 
 @numba.njit(inline="always", **_OPTIONS)
@@ -293,7 +260,7 @@ def _merge_step(breaks, delay, i, j, K):
 
 
 @numba.njit(**_OPTIONS)
-def _filter_rows(breaks, coeffs, delay, initial, integrate, D, inv, gap, scaled):
+def _filter_rows(breaks, coeffs, delay, initial, integrate, D):
     """:func:`_moving_average`, or with ``integrate`` its integral from the first break plus
     ``initial`` ``(A,)`` (``(K' + 1, D + 2, A)`` coefficients on ``K' + 2`` breaks), built piece by
     piece as the average comes (no averaged profile kept), closed by a rest piece of zero length
@@ -303,7 +270,7 @@ def _filter_rows(breaks, coeffs, delay, initial, integrate, D, inv, gap, scaled)
     same order as axis-innermost loops)."""
     K, _, A = coeffs.shape
     rec = _exact_reciprocals(D + 2)
-    consts = _constants(breaks, coeffs, rec, D, inv, gap, scaled)
+    consts = _constants(breaks, coeffs, rec, D)
     # two passes of the same merge (no merged arrays kept): count the new pieces of positive
     # length, then fill them. An empty piece is never evaluated (a right search takes the next
     # piece), integrates to 0, and the next filter's pieces that would take their coefficients
@@ -322,7 +289,6 @@ def _filter_rows(breaks, coeffs, delay, initial, integrate, D, inv, gap, scaled)
     out = np.empty((n_out + 1, R, A)) if integrate else np.empty((n_out, R, A))  # every entry written
     out_breaks = np.empty(n_out + 2) if integrate else np.empty(n_out + 1)
     c, w, hp, acc = np.empty(D + 1), np.empty(D + 1), np.empty(D + 1), np.zeros(A)
-    s_now, s_before = np.empty(D), np.empty(D)  # :func:`_scales` of the two pieces of C in use
     i, j, q = 0, 0, 0  # as above; pieces kept
     left, now, before = 0.0, -1, -1
     for p in range(2 * (K + 1)):
@@ -337,15 +303,12 @@ def _filter_rows(breaks, coeffs, delay, initial, integrate, D, inv, gap, scaled)
             hp[0] = h
             for m in range(1, D + 1):
                 hp[m] = hp[m - 1] * h
-            mode_now = _scales(inv, gap, scaled, now, s_now, D) if now < K else 0
-            mode_before = _scales(inv, gap, scaled, before, s_before, D) if 0 <= before < K else 0
             for a in range(A):
-                _shifted_c(coeffs, consts, now, a, left - breaks[now], rec, c, D, mode_now, s_now)
+                _shifted_c(coeffs, consts, now, a, left - breaks[now], rec, c, D)
                 for m in range(D + 1):
                     w[m] = 0.0 + 1.0 * c[m]
                 if before >= 0:
-                    _shifted_c(coeffs, consts, before, a, (left - delay) - breaks[before], rec, c, D, mode_before,
-                               s_before)
+                    _shifted_c(coeffs, consts, before, a, (left - delay) - breaks[before], rec, c, D)
                     for m in range(D + 1):
                         w[m] += -1.0 * c[m]
                 if not integrate:
@@ -379,7 +342,7 @@ def _profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
     P, D, A = geo.shape
     Mp = gaps.size
     breaks = np.empty(P + 1)
-    inv = np.empty(P)  # d/dt = (1 / T_v) d/du: the input pieces are ``geo``'s rows over T_v^(m + 1)
+    coeffs = np.empty((P, D, A))
     breaks[0] = 0.0
     acc = 0.0
     for i in range(P):
@@ -390,22 +353,20 @@ def _profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
             dur = fraction[i] * piece_tv[i]
         acc += dur
         breaks[i + 1] = max(breaks[i], acc)  # cummax of the running sum
-        inv[i] = 1.0 / piece_tv[i]
-    # the first filter reads the path's pieces through ``inv`` (no (P, D, A) input copy); each
-    # filter's output replaces its input (freed once the next is built).
-    # The last filter integrated as it goes: the position, closed by a rest piece of zero length (as
+        inv = 1.0 / piece_tv[i]
+        s = inv
+        for m in range(D):  # d/dt = (1 / T_v) d/du: the u'^m coefficient over T_v^(m + 1)
+            for a in range(A):
+                coeffs[i, m, a] = 0.0 if gap[i] else geo[i, m, a] * s
+            s *= inv
+    vb, vc = breaks, coeffs
+    for k in range(delays.size - 1):
+        vb, vc = _moving_average(vb, vc, delays[k])
+    # the last filter integrated as it goes: the position, closed by a rest piece of zero length (as
     # the JAX form's trailing empty piece): the right-hand limit at the end time is the machine at
     # rest (v = a = j = 0), not the last decelerating piece's left limit (sampled trajectories end
     # at rest, ``Trajectory.from_piecewise``)
-    n = delays.size
-    if n == 1:
-        pos_breaks, position = _filter(breaks, geo, delays[0], start, True, inv, gap, True)
-    else:
-        vb, vc = _filter(breaks, geo, delays[0], np.zeros(A), False, inv, gap, True)
-        inv = np.zeros(0)  # freed: the later filters read their inputs as they are
-        for k in range(1, n - 1):
-            vb, vc = _moving_average(vb, vc, delays[k])
-        pos_breaks, position = _filter(vb, vc, delays[n - 1], start, True, inv, gap, False)
+    pos_breaks, position = _filter(vb, vc, delays[delays.size - 1], start, True)
     starts, ends, centre = np.empty(Mp), np.empty(Mp), np.empty(Mp)
     Td = 0.0
     for k in range(delays.size):
