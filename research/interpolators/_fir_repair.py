@@ -49,7 +49,9 @@ class Repairs:
 
     def __init__(self, full, head, tail, tol_vertex, tol_block, feeds, lengths, Td: float, n_filters: int, cum=None):
         self.full, self.tv, self.tb, self.F = full, tol_vertex, tol_block, feeds
-        self.head_len, self.tail_len = head * lengths, tail * lengths  # [mm]
+        # the head and tail pieces' lengths [mm] are ``head * lengths`` and ``tail * lengths``, formed
+        # where used (the candidate holds ``head`` and ``tail``, the path ``lengths``: no (M,) arrays here)
+        self.head, self.tail, self.lengths = head, tail, lengths
         self.cum = np.concatenate([[0.0], np.cumsum(lengths)]) if cum is None else cum
         self.Td, self.n = float(Td), int(n_filters)
         self.M = feeds.size
@@ -64,8 +66,8 @@ class Repairs:
         if late:
             shrink[j] = 0.0  # exact stop: the vertex is on the trajectory
         elif j.size:
-            _repair_vertices(j, self.tv[j] / errors[j], self.full, self.F, self.cum, self.head_len, self.tail_len,
-                             self.Td, self.n, factor, shrink)
+            _repair_vertices(j, self.tv[j] / errors[j], self.full, self.F, self.cum, self.head, self.tail,
+                             self.lengths, self.Td, self.n, factor, shrink)
         for k in np.flatnonzero(arc_dev):
             factor[k] *= min(0.98 * np.sqrt(self.tb[k] / arc_dev[k]), 0.98)
 
@@ -83,8 +85,8 @@ class Repairs:
         w = self.full[j]
         g = np.ones((self.M, 3))
         gw, jw = 0.98 * np.sqrt(ratio[w]), j[w]
-        for k, c, piece in ((jw, 2, self.tail_len), (jw + 1, 0, self.head_len)):
-            own = piece[k] > 0.0
+        for k, c, share in ((jw, 2, self.tail), (jw + 1, 0, self.head)):
+            own = share[k] * self.lengths[k] > 0.0  # the piece's length [mm]
             np.multiply.at(g, (k[own], c), gw[own])
             for c_all in range(3):
                 np.multiply.at(g, (k[~own], c_all), gw[~own])
@@ -93,7 +95,7 @@ class Repairs:
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _repair_vertices(viol, ratio, full, F, cum, head_len, tail_len, Td, n, factor, shrink):
+def _repair_vertices(viol, ratio, full, F, cum, head, tail, lengths, Td, n, factor, shrink):
     """The vertex repairs of :meth:`Repairs.apply` (not late), in place, vertices ``viol`` in path
     order with ``ratio = eps / error``: a full-overlap vertex slows the blocks of its window
     ``[lo, max(hi, j + 2))``, its half-width ``T_d F_j / 2`` at the tail feed its earlier
@@ -111,9 +113,9 @@ def _repair_vertices(viol, ratio, full, F, cum, head_len, tail_len, Td, n, facto
             hi = max(min(np.searchsorted(cum, b, side="left"), M), j + 2)
             g = 0.98 * np.sqrt(ratio[q])
             for k in range(lo, hi):
-                if k == lo and cum[k] < a and cum[k + 1] - a <= tail_len[k]:
+                if k == lo and cum[k] < a and cum[k + 1] - a <= tail[k] * lengths[k]:
                     factor[k, 2] *= g  # the window covers only the block's tail piece
-                elif k == hi - 1 and cum[k + 1] > b and b - cum[k] <= head_len[k]:
+                elif k == hi - 1 and cum[k + 1] > b and b - cum[k] <= head[k] * lengths[k]:
                     factor[k, 0] *= g  # ... only its head piece
                 else:
                     for c in range(3):
