@@ -148,9 +148,15 @@ class PiecePeaks:
             ``(K, d + 1, A)`` ascending local).
         limits: the per-axis limits.
 
-    Example:
-        >>> peaks = PiecePeaks(position, limits)  # doctest: +SKIP
-        >>> corners, spans = peaks.over(lo_c, hi_c), peaks.over(lo_s, hi_s)  # doctest: +SKIP
+    Example (``q = 2 t`` on one axis for 1 s: speed 2 against a limit of 4)::
+
+        >>> import numpy as np
+        >>> from research.limits import AxisLimits
+        >>> from research.piecewise import NumpyPiecewise
+        >>> q = NumpyPiecewise(np.array([0.0, 1.0]), np.array([[[0.0], [2.0], [0.0], [0.0]]]))
+        >>> peaks = PiecePeaks(q, AxisLimits.uniform(1, 4.0, 1.0, 1.0))
+        >>> peaks.over(np.array([0.0]), np.array([1.0]))  # one window set of many on one profile
+        array([0.5])
     """
 
     def __init__(self, position, limits: AxisLimits):
