@@ -53,9 +53,8 @@ def verified_bound(tolerance):
 
 
 @numba.njit(**_OPTIONS)
-def _left(a, v):
-    """``np.searchsorted(a, v, side="left")``."""
-    lo, hi = 0, a.size
+def _left_in(a, v, lo, hi):
+    """``np.searchsorted(a, v, side="left")`` where the answer is known to lie in ``[lo, hi]``."""
     while lo < hi:
         mid = (lo + hi) >> 1
         if a[mid] < v:
@@ -66,9 +65,8 @@ def _left(a, v):
 
 
 @numba.njit(**_OPTIONS)
-def _right(a, v):
-    """``np.searchsorted(a, v, side="right")``."""
-    lo, hi = 0, a.size
+def _right_in(a, v, lo, hi):
+    """``np.searchsorted(a, v, side="right")`` where the answer is known to lie in ``[lo, hi]``."""
     while lo < hi:
         mid = (lo + hi) >> 1
         if a[mid] <= v:
@@ -76,6 +74,18 @@ def _right(a, v):
         else:
             hi = mid
     return lo
+
+
+@numba.njit(**_OPTIONS)
+def _left(a, v):
+    """``np.searchsorted(a, v, side="left")``."""
+    return _left_in(a, v, 0, a.size)
+
+
+@numba.njit(**_OPTIONS)
+def _right(a, v):
+    """``np.searchsorted(a, v, side="right")``."""
+    return _right_in(a, v, 0, a.size)
 
 
 @numba.njit(**_OPTIONS)
@@ -102,13 +112,7 @@ def _right_from(a, v, hint):
             step *= 2
             hi = lo + step
         hi = min(hi, n)
-    while lo < hi:  # binary search inside the bracket
-        mid = (lo + hi) >> 1
-        if a[mid] <= v:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
+    return _right_in(a, v, lo, hi)  # binary search inside the bracket
 
 
 @numba.njit(**_OPTIONS)
@@ -627,7 +631,7 @@ def _left_from(a, v, hint):
             step *= 2
             hi = lo + step
         hi = min(hi, n)
-    return lo + _left(a[lo:hi], v)
+    return _left_in(a, v, lo, hi)
 
 
 @numba.njit(**_OPTIONS)
