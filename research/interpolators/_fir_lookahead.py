@@ -90,7 +90,7 @@ import numpy as np
 
 from research.interpolators._fir_blocks import PulseTable
 from research.interpolators._fir_feed import ChainError
-from research.interpolators._fir_kernels import candidate_pieces, line_piece_feeds, staircase_cuts
+from research.interpolators._fir_candidate_kernels import candidate_pieces, line_piece_feeds, staircase_cuts
 from research.interpolators._fir_profile import kernel_second_integral, overlaps
 from research.paths.toolpath import ToolPath
 from research.piecewise import bucket_size
@@ -396,7 +396,7 @@ def _candidate(tp, F_cmd, F, s_v, cum, arcs, full, f, hold):
     (:func:`line_pieces`); the window holds its feed for ``hold`` of *time* each side of its
     vertex: through the blocks it covers, which run at their (lower) body feeds, it reaches less
     far into the end block than ``f hold``; a window ``[lo, hi]`` slows the sub-arcs it overlaps.
-    One compiled pass (``_fir_kernels.candidate_pieces``); ``cum`` ``(M + 1,)``: the arc length [mm]
+    One compiled pass (``_fir_candidate_kernels.candidate_pieces``); ``cum`` ``(M + 1,)``: the arc length [mm]
     at each block start and the path's end; ``arcs``: the sub-arcs' start and end arc lengths and
     the feeds of their blocks ``(A,)`` each."""
     head, tail, feeds, arc_rel = candidate_pieces(cum, tp.lengths, F, s_v, full, f, hold, tp.is_arc, *arcs)
@@ -418,7 +418,7 @@ def line_pieces(h_blk, h_reach, h_feed, t_blk, t_reach, t_feed, L, body, F, arc)
     Returns:
         ``(head, tail, feeds)``: head and tail shares ``(M,)`` of the block length and the feeds
         ``(M, 3)`` [mm/s] of head, body and tail (``F`` and shares 0 on arcs and untouched lines).
-        One compiled pass (``_fir_kernels.line_piece_feeds``).
+        One compiled pass (``_fir_candidate_kernels.line_piece_feeds``).
     """
     return line_piece_feeds(*(np.ascontiguousarray(a) for a in (h_blk, h_reach, h_feed, t_blk, t_reach, t_feed)),
                             np.ascontiguousarray(L), np.ascontiguousarray(body), np.ascontiguousarray(F),

@@ -17,8 +17,9 @@ import numpy as np
 from jax import Array
 
 from research.paths.toolpath import ToolPath
-from research.interpolators._fir_kernels import corner_distances as _corner_kernel
-from research.interpolators._fir_kernels import sample_charges, sampled_line_distances, scatter_max, verified_bound
+from research.interpolators._fir_verify_kernels import corner_distances as _corner_kernel
+from research.interpolators._fir_kernels import verified_bound
+from research.interpolators._fir_verify_kernels import sample_charges, sampled_line_distances, scatter_max
 from research.piecewise import NumpyPiecewise, PiecewisePolynomial, bucket_size
 
 _GRID = 9  # grid points per corner window for the corner-error search
@@ -70,7 +71,7 @@ def _corner_distances(position, vertices, centre, half_window, real):
 
 
 def vertex_distances(position: NumpyPiecewise, vertices: np.ndarray, centre: np.ndarray, half_window: float) -> np.ndarray:
-    """:func:`corner_distances` on concrete arrays, compiled (``_fir_kernels.corner_distances``): the
+    """:func:`corner_distances` on concrete arrays, compiled (``_fir_verify_kernels.corner_distances``): the
     same grid and Newton steps without JAX dispatch, for the planner's checks (the JAX form stays
     the differentiable one). Agrees with it to rounding."""
     if vertices.shape[0] == 0:
@@ -330,7 +331,7 @@ def _three_block_distance(path: ToolPath, position: NumpyPiecewise, t: np.ndarra
     """Trajectory samples at ``t``, the block each one's window is centred on, and the distance [mm]
     from each sample to the nearest of blocks ``block - 1 .. block + 1``.
 
-    Lines by one compiled pass (``_fir_kernels.sampled_line_distances``); arc candidates through
+    Lines by one compiled pass (``_fir_verify_kernels.sampled_line_distances``); arc candidates through
     ``ToolPath._block_distance`` (exact for planar arcs). Returns ``(q (N, d), block (N,), dist (N,))``."""
     M = path.n_blocks
     if "line_segments" not in path._cache:

@@ -67,7 +67,8 @@ from research.interpolators._fir_candidates import FIRSweep, envelope
 from research.interpolators._fir_chain import check_delays
 from research.interpolators._fir_convolution import fir_by_convolution  # noqa: F401 (re-exported)
 from research.interpolators._fir_feed import arc_feed_caps
-from research.interpolators._fir_kernels import predicted_cycle, verified_bound
+from research.interpolators._fir_kernels import verified_bound
+from research.interpolators._fir_candidate_kernels import predicted_cycle
 from research.interpolators._fir_limits import (
     BISECTION_STEPS,
     LIMIT_RTOL,
@@ -288,7 +289,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     def predicted_time(candidate, shrink=None) -> float:
         """Cycle time of a candidate (or of a repaired one, with its overlap ``shrink``) before
         verification: a lower bound on its verified time, because repairs only shrink overlaps and
-        lower feeds (one compiled pass for one or two filters, ``_fir_kernels.predicted_cycle``)."""
+        lower feeds (one compiled pass for one or two filters, ``_fir_candidate_kernels.predicted_cycle``)."""
         shrink = np.ones(M - 1) if shrink is None else shrink
         if d_np.size > 2:
             frac, piece_tv, _, overlaps = timing(*candidate[:4], shrink, *candidate[4:], top=False)

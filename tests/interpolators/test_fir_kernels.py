@@ -11,7 +11,8 @@ import pytest
 from research.interpolators import plan_fir
 from research.interpolators._fir_chain import kernel_second_integral
 from research.interpolators._fir_feed import ChainError
-from research.interpolators._fir_kernels import _displacement, sampled_line_distances
+from research.interpolators._fir_kernels import _displacement
+from research.interpolators._fir_verify_kernels import sampled_line_distances
 from research.interpolators._fir_verify import corner_distances, vertex_distances
 from research.paths import Polyline
 from research.piecewise import NumpyPiecewise
@@ -219,9 +220,9 @@ def numpy_corner_distances(pos, vertices, centre, half, grid=9, steps=4):
 
 @pytest.mark.parametrize("D, A", [(4, 3), (4, 2), (9, 2), (9, 3), (10, 2), (2, 4)])  # compiled constants, then generic
 def test_corner_distances_match_a_numpy_search_on_random_profiles(D, A):
-    """``_fir_kernels.corner_distances`` (compiled per row and axis count) against the same search
+    """``_fir_verify_kernels.corner_distances`` (compiled per row and axis count) against the same search
     in NumPy, with windows reaching beyond the breaks and corner instants not in order."""
-    from research.interpolators._fir_kernels import corner_distances as kernel
+    from research.interpolators._fir_verify_kernels import corner_distances as kernel
 
     rng = np.random.default_rng(3 + 5 * D + A)
     pos = random_profile(rng, 200, D, A)
@@ -247,7 +248,7 @@ def test_hinted_search_is_searchsorted_right():
 
 
 def test_scatter_max_is_numpys_maximum_at():
-    from research.interpolators._fir_kernels import scatter_max
+    from research.interpolators._fir_verify_kernels import scatter_max
 
     rng = np.random.default_rng(1)
     index, values = rng.integers(0, 50, 3000), rng.normal(size=3000)
@@ -263,7 +264,7 @@ def test_range_min_matches_brute_force():
     (``first > last``), clipped at either end, wholly outside the cells (covering nothing: a range
     is intersected with the cells), single-cell, whole-path and ordinary ones, over cell counts
     that are and are not powers of two."""
-    from research.interpolators._fir_kernels import _range_min_into
+    from research.interpolators._fir_candidate_kernels import _range_min_into
 
     def range_min(first, last, values, n, initial):
         out = np.array(initial, dtype=np.float64)
@@ -304,7 +305,7 @@ def test_range_min_matches_brute_force():
 def test_sample_charges_match_the_vectorised_rule():
     """Near corner, tolerance, violation and key of path samples against the NumPy statement of
     the rule (nearest corner instant within T_d / 2; lines charge their vertex, arcs their block)."""
-    from research.interpolators._fir_kernels import sample_charges
+    from research.interpolators._fir_verify_kernels import sample_charges
 
     rng = np.random.default_rng(2)
     M, half = 40, 0.05
@@ -398,7 +399,7 @@ def test_predicted_cycle_matches_the_piece_arrays(delays, arcs):
     ``PulseTable.pieces`` and ``_fir_profile.timing`` (eq 5 pulses, eq 13/14 overlaps), on the
     look-ahead's candidates of random programs with random overlap shrinks."""
     from research.interpolators import _fir_profile
-    from research.interpolators._fir_kernels import predicted_cycle
+    from research.interpolators._fir_candidate_kernels import predicted_cycle
 
     rng = np.random.default_rng(3)
     for seed in range(6):

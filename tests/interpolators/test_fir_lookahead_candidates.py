@@ -161,7 +161,7 @@ def numpy_candidate(tp, table, F_cmd, F, s_v, full, f, hold):
 
 @pytest.mark.parametrize("arcs", [False, True])
 def test_compiled_candidate_matches_the_numpy_form(arcs):
-    """``_candidate`` (``_fir_kernels.candidate_pieces``: galloping searches, ranges pushed down
+    """``_candidate`` (``_fir_candidate_kernels.candidate_pieces``: galloping searches, ranges pushed down
     level by level) against its whole-array NumPy form, bit for bit: on every candidate of seeded
     random programs, and on the same programs with random feeds and reaches (windows from none
     to many blocks, feeds above and below the blocks')."""
@@ -195,9 +195,9 @@ def test_compiled_candidate_matches_the_numpy_form(arcs):
 
 
 def test_galloping_search_is_searchsorted():
-    """``_fir_kernels._search`` from any hint equals ``np.searchsorted`` on both sides, on sorted
+    """``_fir_candidate_kernels._search`` from any hint equals ``np.searchsorted`` on both sides, on sorted
     arrays with repeated entries (and empty and one-entry arrays)."""
-    from research.interpolators._fir_kernels import _search
+    from research.interpolators._fir_candidate_kernels import _search
 
     rng = np.random.default_rng(11)
     for n in (0, 1, 2, 7, 100, 1000):

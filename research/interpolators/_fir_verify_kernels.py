@@ -1,0 +1,295 @@
+"""Compiled (Numba) kernels of the FIR planner's verification rounds (``_fir_verify``).
+
+:func:`sampled_line_distances` (the sampled path check) and :func:`corner_distances` (the
+corner-distance search) evaluate the exact profile on its NumPy arrays with Horner's rule, as
+:class:`research.piecewise.NumpyPiecewise`, and replace per-sample NumPy gathers and the JAX grid +
+Newton search inside the planner's rounds. Each finds its piece from the last one's index and is
+compiled with the profile's row and axis counts as constants for two filters.
+:func:`sample_charges` charges path samples to their corner or arc, :func:`scatter_max` is
+``np.maximum.at`` in one pass. ``tests/interpolators/test_fir_kernels.py`` checks them against
+NumPy computations.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from research.interpolators._fir_kernels import _OPTIONS, VERIFY_ATOL, VERIFY_RTOL, _left_in, _right_from
+
+
+@numba.njit(**_OPTIONS)
+def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv):
+    """Trajectory samples and their squared distances to the three blocks around each (lines).
+
+    The exact profile is evaluated at ``t`` (clipped to its breaks; Horner's rule on the piece
+    ``searchsorted(breaks, t, "right") - 1``, clipped, as :class:`research.piecewise.NumpyPiecewise`),
+    the block whose input the averaging window is centred on is ``searchsorted(starts, t - T_d / 2,
+    "right") - 1`` (clipped), and each sample is projected on the segments of blocks ``k - 1 .. k +
+    1`` (clipped to the path; an arc's entry is its chord here and is replaced by the caller). Both
+    searches step on from the previous sample's (:func:`_right_next`: the samples run forward, a grid
+    then the corner instants), and any order of ``t`` gives the same result. Compiled with the row
+    count ``D`` and axis count ``A`` of ``coeffs`` as constants for the profiles of two filters
+    (``D`` = 4 on lines, 9 with arcs; ``A`` = 2 or 3; about 2x faster), any other pair generically
+    (each pair costs about 1.2 s of compilation, once per cache).
+
+    Args:
+        breaks, coeffs: ``(K + 1,)`` and ``(K, D, A)`` of the position profile.
+        t: ``(N,)`` sample times [s]; starts: ``(M,)`` block pulse starts [s]; half_window: ``T_d / 2``.
+        seg_start, seg_vec: ``(M, A)`` start and end-minus-start of each block [mm];
+            seg_inv: ``(M,)`` ``1 / |seg_vec|^2`` (0 for a zero-length block).
+
+    Returns:
+        ``(q (N, A), block (N,), d2 (N, 3))``.
+    """
+    D, A = coeffs.shape[1], coeffs.shape[2]
+    if A == 3:
+        if D == 4:
+            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 4, 3)
+        if D == 9:
+            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 9, 3)
+    if A == 2:
+        if D == 4:
+            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 4, 2)
+        if D == 9:
+            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 9, 2)
+    return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, D, A)
+
+
+@numba.njit(**_OPTIONS)
+def _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, D, A):
+    """:func:`sampled_line_distances` with the coefficient rows ``D`` and axes ``A`` of ``coeffs``
+    passed apart: compiled for a constant pair (the loops over rows and axes unroll and the
+    Horner sums stay in registers; the same operations in the same order) or for any pair."""
+    N = t.size
+    K = coeffs.shape[0]
+    M = starts.size
+    q = np.empty((N, A))
+    block = np.empty(N, dtype=np.int64)
+    d2 = np.empty((N, 3))
+    t_lo, t_hi = breaks[0], breaks[K]
+    found, at = 0, 0  # searchsorted(breaks, ., "right") and searchsorted(starts, ., "right") of the last sample
+    for i in range(N):
+        tc = min(max(t[i], t_lo), t_hi)
+        found = _right_next(breaks, tc, found)
+        piece = min(max(found - 1, 0), K - 1)
+        tau = tc - breaks[piece]
+        for a in range(A):
+            v = coeffs[piece, D - 1, a]
+            for m in range(D - 2, -1, -1):
+                v = v * tau + coeffs[piece, m, a]
+            q[i, a] = v
+        at = _right_next(starts, t[i] - half_window, at)
+        k = min(max(at - 1, 0), M - 1)
+        block[i] = k
+        for c in range(3):
+            kb = min(max(k - 1 + c, 0), M - 1)
+            dot = 0.0
+            for a in range(A):
+                dot += (q[i, a] - seg_start[kb, a]) * seg_vec[kb, a]
+            u = min(max(dot * seg_inv[kb], 0.0), 1.0)
+            acc = 0.0
+            for a in range(A):
+                r = (q[i, a] - seg_start[kb, a]) - u * seg_vec[kb, a]
+                acc += r * r
+            d2[i, c] = acc
+    return q, block, d2
+
+
+@numba.njit(**_OPTIONS)
+def _right_next(a, v, i):
+    """``np.searchsorted(a, v, side="right")`` from ``0 <= i <= a.size``, the count of a previous
+    query: ``i`` or ``i + 1`` when ``v`` moved on by at most one entry (two comparisons, the common
+    case of samples that run forward), else the galloping search of :func:`_right_from` (a jump, or
+    a ``v`` that went back). Exact for any ``i``; fast for a nearby one."""
+    n = a.size
+    if i == 0 or a[i - 1] <= v:
+        if i == n or a[i] > v:
+            return i
+        if i + 1 == n or a[i + 1] > v:
+            return i + 1
+    return _right_from(a, v, i)
+
+
+@numba.njit(**_OPTIONS)
+def _squared_distance(coeffs, piece, tau, vertices, c, D, A):
+    """``|p(tau) - vertices[c]|^2`` [mm^2] on ``piece`` of the profile, Horner's rule on its ``D`` rows
+    for each of its ``A`` axes (compiled inline into the corner search)."""
+    d2 = 0.0
+    for a in range(A):
+        v = coeffs[piece, D - 1, a]
+        for m in range(D - 2, -1, -1):
+            v = v * tau + coeffs[piece, m, a]
+        e = v - vertices[c, a]
+        d2 += e * e
+    return d2
+
+
+@numba.njit(**_OPTIONS)
+def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
+    """Distance [mm] from each vertex ``(C, A)`` to the profile near ``centre`` ``(C,)`` [s]: the best
+    of ``grid`` points evenly spread over ``centre +- half_window``, refined by ``newton_steps``
+    safeguarded Newton steps on ``|p(t) - V|^2`` kept within one grid step (the compiled form of
+    ``_fir_verify._corner_distances``; never above the best grid point's distance).
+
+    The profile is evaluated as :class:`research.piecewise.NumpyPiecewise` (clipped time, piece
+    ``searchsorted(breaks, t, "right") - 1``, Horner's rule; derivatives 0 outside the breaks), each
+    piece found from a nearby index (:func:`_right_next`): a grid point's from the same grid point
+    of the last corner, the first Newton step's from the best grid point, the others' from the
+    last step. Compiled for the same row and axis counts as constants as
+    :func:`sampled_line_distances`."""
+    D, A = coeffs.shape[1], coeffs.shape[2]
+    if A == 3:
+        if D == 4:
+            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 4, 3)
+        if D == 9:
+            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 9, 3)
+    if A == 2:
+        if D == 4:
+            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 4, 2)
+        if D == 9:
+            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 9, 2)
+    return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, D, A)
+
+
+@numba.njit(**_OPTIONS)
+def _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, D, A):
+    """:func:`corner_distances` with the coefficient rows ``D`` and axes ``A`` of ``coeffs`` passed
+    apart, as :func:`_line_distances`."""
+    C = vertices.shape[0]
+    K = coeffs.shape[0]
+    t_lo, t_hi = breaks[0], breaks[K]
+    out = np.empty(C)
+    step = half_window * (2.0 / (grid - 1))
+    # search index of each grid point at the last corner: the corner instants run forward, a few
+    # pieces apart, while the grid spans many pieces
+    at_grid = np.zeros(grid, np.int64)
+    for c in range(C):
+        best, best_d2, found = 0.0, np.inf, 0
+        for g in range(grid):
+            tg = centre[c] + half_window * (-1.0 + 2.0 * g / (grid - 1))
+            tc = min(max(tg, t_lo), t_hi)
+            at_grid[g] = _right_next(breaks, tc, at_grid[g])
+            piece = min(max(at_grid[g] - 1, 0), K - 1)
+            tau = tc - breaks[piece]
+            d2 = _squared_distance(coeffs, piece, tau, vertices, c, D, A)
+            if d2 < best_d2:
+                best, best_d2, found = tg, d2, at_grid[g]
+        lo, hi = best - step, best + step
+        t = best
+        for _ in range(newton_steps):
+            tc = min(max(t, t_lo), t_hi)
+            found = _right_next(breaks, tc, found)
+            piece = min(max(found - 1, 0), K - 1)
+            tau = tc - breaks[piece]
+            inside = t_lo <= t <= t_hi
+            slope, curvature = 0.0, 0.0
+            for a in range(A):
+                v = coeffs[piece, D - 1, a]
+                for m in range(D - 2, -1, -1):
+                    v = v * tau + coeffs[piece, m, a]
+                v1 = 0.0
+                if D > 1:
+                    v1 = coeffs[piece, D - 1, a] * (D - 1)
+                    for m in range(D - 2, 0, -1):
+                        v1 = v1 * tau + coeffs[piece, m, a] * m
+                v2 = 0.0
+                if D > 2:
+                    v2 = coeffs[piece, D - 1, a] * (D - 1) * (D - 2)
+                    for m in range(D - 2, 1, -1):
+                        v2 = v2 * tau + coeffs[piece, m, a] * m * (m - 1)
+                if not inside:
+                    v1, v2 = 0.0, 0.0
+                e = v - vertices[c, a]
+                slope += e * v1
+                curvature += v1 * v1 + e * v2
+            if curvature > 0:
+                t = t - slope / curvature
+            t = min(max(t, lo), hi)
+        tc = min(max(t, t_lo), t_hi)
+        found = _right_next(breaks, tc, found)
+        piece = min(max(found - 1, 0), K - 1)
+        tau = tc - breaks[piece]
+        d2 = _squared_distance(coeffs, piece, tau, vertices, c, D, A)
+        out[c] = math.sqrt(min(d2, best_d2))
+    return out
+
+
+@numba.njit(**_OPTIONS)
+def scatter_max(out, index, values):
+    """``np.maximum.at(out, index, values)`` in one compiled pass (NumPy's ``ufunc.at`` costs tens
+    of ns an element)."""
+    for i in range(index.size):
+        k = index[i]
+        if values[i] > out[k]:
+            out[k] = values[i]
+
+
+@numba.njit(**_OPTIONS)
+def _left_from(a, v, hint):
+    """``np.searchsorted(a, v, side="left")`` (the count of entries ``< v``) by a galloping search
+    from ``hint``, as :func:`_right_from`."""
+    n = a.size
+    i = min(max(hint, 0), n)
+    if i > 0 and a[i - 1] >= v:
+        hi, step = i, 1
+        lo = hi - step
+        while lo > 0 and a[lo - 1] >= v:
+            hi = lo
+            step *= 2
+            lo = max(hi - step, 0)
+        lo = max(lo, 0)
+    else:
+        lo, step = i, 1
+        hi = lo + step
+        while hi <= n and a[hi - 1] < v:
+            lo = hi
+            step *= 2
+            hi = lo + step
+        hi = min(hi, n)
+    return _left_in(a, v, lo, hi)
+
+
+@numba.njit(**_OPTIONS)
+def sample_charges(t, centre, block, dist, tol_block, is_arc, half_window):
+    """Tolerance, violation and charge key of path samples (``_fir_verify._charged_samples``).
+
+    Sample ``i`` at time ``t[i]``, its window's block ``block[i]`` and distance ``dist[i]``: it is
+    near the corner whose instant (``centre``, ``(M - 1,)``, sorted) is closest, when within
+    ``half_window``; its tolerance is its block's, or the smaller of that and the vertex's (the
+    smaller of the vertex's two blocks) when near. Key: the near vertex; else, on a line, the vertex
+    ``clip(block, 0, M - 2)``; else (inside an arc) ``M - 1 + block``; ``-1`` on a one-block path's
+    line. The same comparisons as the NumPy form it replaces.
+
+    Returns:
+        ``(limit (N,), key (N,), bad (N,))``.
+    """
+    N, C = t.size, centre.size
+    M = C + 1
+    limit = np.empty(N)
+    key = np.empty(N, np.int64)
+    bad = np.empty(N, np.bool_)
+    hint = 0
+    for i in range(N):
+        b = block[i]
+        lim = tol_block[b]
+        near = -1
+        if M > 1:
+            hint = _left_from(centre, t[i], hint)
+            k = min(max(hint, 1), M - 1)
+            k2 = min(k, M - 2)
+            j = k - 1 if abs(centre[k - 1] - t[i]) <= abs(centre[k2] - t[i]) else k2
+            if abs(centre[j] - t[i]) <= half_window:
+                near = j
+                lim = min(lim, min(tol_block[j], tol_block[j + 1]))
+        limit[i] = lim
+        bad[i] = dist[i] > lim * (1.0 + VERIFY_RTOL) + VERIFY_ATOL
+        if near >= 0:
+            key[i] = near
+        elif not is_arc[b]:
+            key[i] = min(max(b, 0), max(M - 2, 0)) if M > 1 else -1
+        else:
+            key[i] = M - 1 + b
+    return limit, key, bad
