@@ -259,7 +259,6 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         if limits.n_axes != tp.dim:
             raise ParameterError(f"limits have {limits.n_axes} axes but the path has {tp.dim}")
         safe_feed = np.where(tp.is_arc, arc_limit_caps(tp.radii, d_np, limits), feed_caps(tp.lengths, t_in, d_np, limits))
-    factor = np.repeat(base[:, None], 3, axis=1)
     head, tail = np.zeros(M), np.zeros(M)
     full = np.zeros(M - 1, dtype=bool)
     others = np.zeros(M - 1)  # tolerance taken by the other direction changes of a dwell corner's window
