@@ -191,14 +191,14 @@ def _piece_ratios(coeffs: np.ndarray, h: np.ndarray, limit: np.ndarray) -> np.nd
     for _ in range(4):
         c = derivs[-1]
         derivs.append(c[:, 1:, :] * np.arange(1, c.shape[1])[None, :, None] if c.shape[1] > 1 else np.zeros_like(c))
-    ratio = np.zeros((K, 3, coeffs.shape[2]))
+    A = coeffs.shape[2]
+    ends = np.broadcast_to(np.stack([np.zeros(K), h], axis=1)[:, None, :], (K, A, 2))  # both ends of each piece
+    ratio = np.zeros((K, 3, A))
     for order in (1, 2, 3):
-        c = derivs[order]
-        peak = np.maximum(np.abs(_horner(c, np.zeros(K))), np.abs(_horner(c, h)))  # (K, A)
+        tau = ends  # (K, A, 2 + R): the ends, then each axis' own roots of the next derivative
         if order < degree:
-            tau = _real_roots(derivs[order + 1], h)  # (K, A, R): each axis' own roots
-            if tau.shape[2]:
-                peak = np.maximum(peak, np.max(np.abs(_horner_own(c, tau)), axis=2))
+            tau = np.concatenate([ends, _real_roots(derivs[order + 1], h)], axis=2)
+        peak = np.max(np.abs(_horner_axes(derivs[order], tau)), axis=2)  # (K, A)
         ratio[:, order - 1, :] = peak / limit[order - 1][None, :]
     return ratio.reshape(K, -1).max(axis=1)
 
@@ -283,15 +283,7 @@ def _range_max(values: np.ndarray, first: np.ndarray, last: np.ndarray) -> np.nd
     return out
 
 
-def _horner(c: np.ndarray, tau: np.ndarray) -> np.ndarray:
-    """``(K, A)`` values of the per-piece polynomials ``c`` ``(K, m + 1, A)`` at ``tau`` ``(K,)``."""
-    out = c[:, -1, :]
-    for m in range(c.shape[1] - 2, -1, -1):
-        out = out * tau[:, None] + c[:, m, :]
-    return out
-
-
-def _horner_own(c: np.ndarray, tau: np.ndarray) -> np.ndarray:
+def _horner_axes(c: np.ndarray, tau: np.ndarray) -> np.ndarray:
     """``(K, A, R)`` values of each axis' polynomial ``c[:, :, a]`` at its own times ``tau[:, a, :]``."""
     out = np.broadcast_to(c[:, -1, :, None], tau.shape)
     for m in range(c.shape[1] - 2, -1, -1):

@@ -17,8 +17,8 @@ import numpy as np
 from jax import Array
 
 from research.paths.toolpath import ToolPath
-from research.interpolators._fir_verify_kernels import corner_distances as _corner_kernel
 from research.interpolators._fir_kernels import verified_bound
+from research.interpolators._fir_verify_kernels import corner_distances as _corner_kernel
 from research.interpolators._fir_verify_kernels import sample_charges, sampled_line_distances, scatter_max
 from research.piecewise import NumpyPiecewise, PiecewisePolynomial, bucket_size
 
