@@ -43,7 +43,6 @@ from research.figures._style import mosaic
 from research.interpolators import blend_interpolate, fir_interpolate
 from research.paths import named_path
 from research.paths.polyline import Polyline
-from research.trajectory import Trajectory
 
 NAME = "sencer2015_fig6_cornering_comparison"
 REPRODUCES = "Sencer 2015 Fig 6 (diamond: FIR vs geometric smoothing, feed, acceleration, beam vibration)"

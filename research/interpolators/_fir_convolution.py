@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from research.errors import ParameterError, PathError
 from research.paths.polyline import Polyline
+
+if TYPE_CHECKING:
+    from research.interpolators.fir import FIRPlan
 
 
 def fir_by_convolution(plan: "FIRPlan", path: Polyline, sample_period: float) -> tuple[np.ndarray, np.ndarray]:

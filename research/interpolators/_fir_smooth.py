@@ -97,7 +97,7 @@ class Layout:
     # -- affine maps of z ----------------------------------------------------------------------
     def starts_matrix(self) -> np.ndarray:
         """``(M P, n_vars)``: ``sigma = S z`` (pieces back to back, gap ``g_k`` after block ``k``)."""
-        n, P, M = self.n_pieces, self.shares.size, self.M
+        n, P = self.n_pieces, self.shares.size
         S = np.zeros((n, self.n_vars))
         for j in range(1, n):
             S[j] = S[j - 1]
@@ -114,7 +114,7 @@ class Layout:
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """Bounds of ``z``: ``s L / F <= tau <= s L / (1e-3 F)``, ``0 <= g <= T_d``, ``c`` free."""
-        P, M = self.shares.size, self.M
+        M = self.M
         tmin = (self.shares[None, :] * self.L[:, None]).ravel() / self.feed
         lo = np.concatenate([tmin, np.zeros(M - 1), np.full(M - 1, -np.inf)])
         hi = np.concatenate([tmin * 1e3, np.full(M - 1, self.Td), np.full(M - 1, np.inf)])
@@ -219,7 +219,6 @@ def build_nlp(layout: Layout, z0: np.ndarray, limits, eps: float, modes=(), resi
         samples_c.append((1 - th) * sorted_const[:-1] + th * sorted_const[1:])
         kind.append(np.full(order.size - 1, 2 if th == 0.5 else 1))
     A_s, c_s, kind = np.vstack(samples_r), np.concatenate(samples_c), np.concatenate(kind)
-    ts_num = A_s @ z0 + c_s
     # an event sample sits at its own break: its position is fixed by the order, so activity of
     # the terms is decided by the sample's rank (events before it are active), interior samples
     # by the interval they lie in

@@ -19,7 +19,7 @@ from research.drives import (
     table_6_1_closed_loop,
     table_6_1_ppi,
 )
-from tests.drives._helpers import make_trajectory, polynomial_trajectory, sine_trajectory
+from tests.drives._helpers import make_trajectory, sine_trajectory
 
 Ts = 1e-3
 

@@ -7,7 +7,6 @@ from scipy.integrate import solve_ivp
 
 from research.drives import (
     ClosedLoopModel,
-    PPICascade,
     RigidBodyAxis,
     simulate,
     table_6_1_closed_loop,
