@@ -10,7 +10,8 @@ Nothing changes where the planned profile keeps the limits (a plan that holds th
 planned). Where a corner's window breaks one:
 
 1. **Blocks alone.** With every corner an exact stop (``T_k = 0``) no two blocks' filtered outputs
-   overlap, so that one profile gives every block's own peaks (:func:`block_peak_ratios`). A block
+   overlap, so a block's own peaks depend on its own pulse only: the exact-stop profile of just
+   the blocks being checked gives them (:func:`alone_block_ratios`). A block
    that a violating window covers (:func:`blocks_in_windows`) and that breaks a limit even alone is
    slowed: its feed is bisected between the closed-form safe feed (:func:`feed_caps`,
    :func:`arc_limit_caps`; a block of ``T_v >= T_1 + T_2`` peaks at ``F |u_i|``, ``F |u_i| / T_1``,
@@ -24,10 +25,10 @@ planned). Where a corner's window breaks one:
    bisected (:class:`CornerBisection`) between 0 (two safe blocks) and its planned value.
 
 Convergence bound: a call of phase 1 builds at most ``2 + BISECTION_STEPS + HALVINGS`` exact-stop
-profiles and costs one round; it runs only in rounds that find a block not checked before, so at
-most ``M`` times (once on the benchmark paths). Phase 2 takes at most ``BISECTION_STEPS + 2`` rounds
-for the bisections, then exact-stop rounds for corners still above a limit, each of which adds at
-least one exact stop (the profile away from a corner set to ``T_k = 0`` is unchanged up to a
+profiles, of the blocks it checks (then of those it bisects), and costs one round; it runs only
+in rounds that find a block not checked before, so at most ``M`` times (once on the benchmark
+paths). Phase 2 takes at most ``BISECTION_STEPS + 2`` rounds for the bisections, then exact-stop
+rounds for corners still above a limit, each of which adds at least one exact stop (the profile away from a corner set to ``T_k = 0`` is unchanged up to a
 shift), so at most ``M - 1`` more (0-1 on the benchmark paths): ``BISECTION_STEPS + 2M + 1`` rounds
 in all. Each bisected corner gives away at most ``2^-BISECTION_STEPS`` of its overlap. Should
 exact stops still break a limit (a block checked alone in an earlier window, seen again in
@@ -40,8 +41,9 @@ corner bounds its candidate's cycle time by its bracket's upper end
 (:attr:`CornerBisection.bound_scale`), so the branch and bound drops a candidate as soon as that
 bound passes the best verified plan; the closed-form capped candidates join the same queue once
 any candidate needs a limit repair. On a seeded 400-segment CAM-like path under the FIR envelope
-this took planning from 2.6-4.3 s to 0.56-0.96 s at the same cycle time (benchmarks/README.md;
-phase 1, ``hold_block_limits``, is now about 40 % of it).
+this took planning from 2.6-4.3 s to 0.56-0.96 s at the same cycle time (benchmarks/README.md);
+phase 1's profiles of only the blocks it checks took ``hold_block_limits`` from about 30 % of a
+limit-holding plan of the quick CAM file to about 6 %.
 """
 
 from __future__ import annotations
