@@ -25,15 +25,15 @@ planned). Where a corner's window breaks one:
    bisected (:class:`CornerBisection`) between 0 (two safe blocks) and its planned value.
 
 Convergence bound: a call of phase 1 builds at most ``2 + BISECTION_STEPS + HALVINGS`` exact-stop
-profiles, of the blocks it checks (then of those it bisects), and costs one round; it runs only
-in rounds that find a block not checked before, so at most ``M`` times (once on the benchmark
-paths). Phase 2 takes at most ``BISECTION_STEPS + 2`` rounds for the bisections, then exact-stop
-rounds for corners still above a limit, each of which adds at least one exact stop (the profile away from a corner set to ``T_k = 0`` is unchanged up to a
-shift), so at most ``M - 1`` more (0-1 on the benchmark paths): ``BISECTION_STEPS + 2M + 1`` rounds
-in all. Each bisected corner gives away at most ``2^-BISECTION_STEPS`` of its overlap. Should
-exact stops still break a limit (a block checked alone in an earlier window, seen again in
-another), ``plan_fir`` slows every block those windows cover by ``0.98 / ratio`` a round, within
-its hard round bound (``ConvergenceError`` beyond it).
+profiles, of the blocks it checks (then of those it bisects), and costs one round; it runs only in
+rounds that find a block not checked before, so at most ``M`` times (once on the benchmark paths).
+Phase 2 takes at most ``BISECTION_STEPS + 2`` rounds for the bisections, then exact-stop rounds for
+corners still above a limit, each of which adds at least one exact stop (the profile away from a
+corner set to ``T_k = 0`` is unchanged up to a shift), so at most ``M - 1`` more (0-1 on the
+benchmark paths): ``BISECTION_STEPS + 2M + 1`` rounds in all. Each bisected corner gives away at
+most ``2^-BISECTION_STEPS`` of its overlap. Should exact stops still break a limit (a block checked
+alone in an earlier window, seen again in another), ``plan_fir`` slows every block those windows
+cover by ``0.98 / ratio`` a round, within its hard round bound (``ConvergenceError`` beyond it).
 
 Cost: a round after a corner bisection step alone whose limits still break is not checked
 against the tolerance (the plan that is returned always is; see ``plan_fir``), and a bisecting
