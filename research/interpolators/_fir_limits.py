@@ -42,8 +42,8 @@ corner bounds its candidate's cycle time by its bracket's upper end
 bound passes the best verified plan; the closed-form capped candidates join the same queue once
 any candidate needs a limit repair. On a seeded 400-segment CAM-like path under the FIR envelope
 this took planning from 2.6-4.3 s to 0.56-0.96 s at the same cycle time (benchmarks/README.md);
-phase 1's profiles of only the blocks it checks took ``hold_block_limits`` from about 30 % of a
-limit-holding plan of the quick CAM file to about 6 %.
+phase 1's profiles of only the blocks it checks took ``hold_block_limits`` from 26-29 % of a
+limit-holding plan of the quick CAM file to 5-6 %.
 """
 
 from __future__ import annotations
