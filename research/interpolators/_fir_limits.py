@@ -349,8 +349,8 @@ def alone_block_ratios(table, blocks: np.ndarray, fraction: np.ndarray, piece_fa
 
     With every corner an exact stop no two blocks' filtered outputs overlap, so a block's own peaks
     depend on its own pulse only: the exact-stop profile is built of the blocks asked for alone, in
-    path order, each followed by its gap piece of ``T_d`` (the path's last block by none), by the
-    planner's own filter (``_fir_profile.profile``), and read over their spans
+    path order, each followed by its gap piece of ``T_d`` (but the path's last block, which has
+    none), by the planner's own filter (``_fir_profile.profile``), and read over their spans
     (:func:`block_peak_ratios`). Its cost is that of those blocks' pieces, not the path's. Asked
     for every block, it is the whole path's exact-stop profile, the same arrays; asked for fewer,
     a block's pieces lie at another time offset (the blocks asked for before it, not all), which
