@@ -10,7 +10,8 @@ Nothing changes where the planned profile keeps the limits (a plan that holds th
 planned). Where a corner's window breaks one:
 
 1. **Blocks alone.** With every corner an exact stop (``T_k = 0``) no two blocks' filtered outputs
-   overlap, so that one profile gives every block's own peaks (:func:`block_peak_ratios`). A block
+   overlap, so a block's own peaks depend on its own pulse only: the exact-stop profile of just
+   the blocks being checked gives them (:func:`alone_block_ratios`). A block
    that a violating window covers (:func:`blocks_in_windows`) and that breaks a limit even alone is
    slowed: its feed is bisected between the closed-form safe feed (:func:`feed_caps`,
    :func:`arc_limit_caps`; a block of ``T_v >= T_1 + T_2`` peaks at ``F |u_i|``, ``F |u_i| / T_1``,
@@ -24,15 +25,15 @@ planned). Where a corner's window breaks one:
    bisected (:class:`CornerBisection`) between 0 (two safe blocks) and its planned value.
 
 Convergence bound: a call of phase 1 builds at most ``2 + BISECTION_STEPS + HALVINGS`` exact-stop
-profiles and costs one round; it runs only in rounds that find a block not checked before, so at
-most ``M`` times (once on the benchmark paths). Phase 2 takes at most ``BISECTION_STEPS + 2`` rounds
-for the bisections, then exact-stop rounds for corners still above a limit, each of which adds at
-least one exact stop (the profile away from a corner set to ``T_k = 0`` is unchanged up to a
-shift), so at most ``M - 1`` more (0-1 on the benchmark paths): ``BISECTION_STEPS + 2M + 1`` rounds
-in all. Each bisected corner gives away at most ``2^-BISECTION_STEPS`` of its overlap. Should
-exact stops still break a limit (a block checked alone in an earlier window, seen again in
-another), ``plan_fir`` slows every block those windows cover by ``0.98 / ratio`` a round, within
-its hard round bound (``ConvergenceError`` beyond it).
+profiles, of the blocks it checks (then of those it bisects), and costs one round; it runs only in
+rounds that find a block not checked before, so at most ``M`` times (once on the benchmark paths).
+Phase 2 takes at most ``BISECTION_STEPS + 2`` rounds for the bisections, then exact-stop rounds for
+corners still above a limit, each of which adds at least one exact stop (the profile away from a
+corner set to ``T_k = 0`` is unchanged up to a shift), so at most ``M - 1`` more (0-1 on the
+benchmark paths): ``BISECTION_STEPS + 2M + 1`` rounds in all. Each bisected corner gives away at
+most ``2^-BISECTION_STEPS`` of its overlap. Should exact stops still break a limit (a block checked
+alone in an earlier window, seen again in another), ``plan_fir`` slows every block those windows
+cover by ``0.98 / ratio`` a round, within its hard round bound (``ConvergenceError`` beyond it).
 
 Cost: a round after a corner bisection step alone whose limits still break is not checked
 against the tolerance (the plan that is returned always is; see ``plan_fir``), and a bisecting
@@ -40,19 +41,22 @@ corner bounds its candidate's cycle time by its bracket's upper end
 (:attr:`CornerBisection.bound_scale`), so the branch and bound drops a candidate as soon as that
 bound passes the best verified plan; the closed-form capped candidates join the same queue once
 any candidate needs a limit repair. On a seeded 400-segment CAM-like path under the FIR envelope
-this took planning from 2.6-4.3 s to 0.56-0.96 s at the same cycle time (benchmarks/README.md;
-phase 1, ``hold_block_limits``, is now about 40 % of it).
+this took planning from 2.6-4.3 s to 0.56-0.96 s at the same cycle time (benchmarks/README.md);
+phase 1's profiles of only the blocks it checks took ``hold_block_limits`` from 26-29 % of a
+limit-holding plan of the quick CAM file to 5-6 %.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from types import SimpleNamespace
 
 import numba
 import numpy as np
 
 from research.errors import ConvergenceError, ParameterError
+from research.interpolators._fir_profile import profile
 from research.limits import AxisLimits
 
 #: bisection steps on a corner's overlap or a block's feed: the overlap (feed) given away is at most
@@ -331,9 +335,54 @@ def _real_roots(c: np.ndarray, h: np.ndarray) -> np.ndarray:
 
 def block_peak_ratios(peaks: PiecePeaks, starts: np.ndarray, pulse_times: np.ndarray, total_delay: float) -> np.ndarray:
     """``(M,)`` largest ``peak / limit`` over each block's filtered span ``[start, end + T_d]`` [s]
-    (of a plan whose corners are exact stops: each block's own peaks), from its profile's ``peaks``."""
+    (of a plan whose corners are exact stops: each block's own peaks), from its profile's ``peaks``.
+    A span ends at the next block's start at the latest: with exact stops the two coincide up to
+    rounding, and a span's end rounded past that start would take the next block's first piece."""
     starts = np.asarray(starts, dtype=np.float64)
-    return peaks.over(starts, starts + np.asarray(pulse_times) + total_delay)
+    ends = np.minimum(starts + np.asarray(pulse_times) + total_delay, np.append(starts[1:], np.inf))
+    return peaks.over(starts, ends)
+
+
+def alone_block_ratios(table, blocks: np.ndarray, fraction: np.ndarray, piece_factor: np.ndarray, lengths: np.ndarray,
+                       feeds: np.ndarray, start: np.ndarray, delays: np.ndarray, limits: AxisLimits) -> np.ndarray:
+    """``(M,)`` largest ``peak / limit`` of each block ``blocks`` alone (phase 1), 0 for the others.
+
+    With every corner an exact stop no two blocks' filtered outputs overlap, so a block's own peaks
+    depend on its own pulse only: the exact-stop profile is built of the blocks asked for alone, in
+    path order, each followed by its gap piece of ``T_d`` (but the path's last block, which has
+    none), by the planner's own filter (``_fir_profile.profile``), and read over their spans
+    (:func:`block_peak_ratios`). Its cost is that of those blocks' pieces, not the path's. Asked
+    for every block, it is the whole path's exact-stop profile, the same arrays; asked for fewer,
+    a block's pieces lie at another time offset (the blocks asked for before it, not all), which
+    moves its peaks by rounding only.
+
+    Args:
+        table: the path's ``_fir_blocks.PulseTable``; ``blocks``: ``(M,)`` bool, the blocks asked for.
+        fraction, piece_factor: ``(P,)`` share of its block and feed factor of every piece
+            (``PulseTable.pieces`` at the plan's feed factors).
+        lengths, feeds: block lengths [mm] and commanded feeds [mm/s], indexed by a piece's block
+            (``(M_pad + 1,)``, as ``_fir_profile.timing``).
+        start: ``(d,)`` start point [mm]; delays: ``(n,)`` filter delays [s]; limits: the per-axis limits.
+    """
+    M = table.n_blocks
+    out = np.zeros(M)
+    ks = np.flatnonzero(blocks)
+    if ks.size == 0:
+        return out
+    # block k's pieces: its motion pieces, then its gap piece (all but the path's last block)
+    first = table.first_motion[ks]
+    counts = table.last_motion[ks] - first + 1 + (ks < M - 1)
+    sub = np.repeat(np.arange(ks.size), counts)
+    idx = first[sub] + np.arange(sub.size) - np.repeat(np.cumsum(counts) - counts, counts)
+    blk = table.block[idx]
+    piece_tv = lengths[blk] / (feeds[blk] * piece_factor[idx])  # eq 5, the operations of _fir_profile.timing
+    total_delay = float(np.sum(delays))
+    gaps = np.where(ks < M - 1, total_delay, 0.0)  # exact stops: T_d - 0 after each block but the last
+    starts, ends, breaks, coeffs, _ = profile(start, table.geo[idx], sub, table.gap[idx], fraction[idx], piece_tv,
+                                              gaps, delays)
+    peaks = PiecePeaks(SimpleNamespace(breaks=breaks, coeffs=coeffs), limits)
+    out[ks] = block_peak_ratios(peaks, starts, ends - starts, total_delay)
+    return out
 
 
 def corner_limit_ratios(peaks: PiecePeaks, starts: np.ndarray, pulse_times: np.ndarray, total_delay: float) -> np.ndarray:
@@ -368,13 +417,15 @@ def own_span_ratios(peaks: PiecePeaks, starts: np.ndarray, pulse_times: np.ndarr
     return out
 
 
-def hold_block_limits(alone_ratios: Callable[[np.ndarray], np.ndarray], safe: np.ndarray,
+def hold_block_limits(alone_ratios: Callable[[np.ndarray, np.ndarray], np.ndarray], safe: np.ndarray,
                       which: np.ndarray) -> np.ndarray:
     """Feed multipliers ``g`` ``(M,)``, ``0 < g <= 1``, under which the blocks ``which`` alone keep the limits.
 
     Args:
-        alone_ratios: ``g -> (M,)`` block peak ratios (:func:`block_peak_ratios`) of the plan with
-            every corner an exact stop and block feeds multiplied by ``g``; blocks are independent.
+        alone_ratios: ``(g, blocks) -> (M,)`` peak ratios of the blocks ``blocks`` (``(M,)`` bool)
+            alone, with every corner an exact stop and block feeds multiplied by ``g``
+            (:func:`alone_block_ratios`; blocks are independent, the others' entries unread).
+            It is asked for ``which``, then for the blocks still being bisected.
         safe: ``(M,)`` multipliers known safe in closed form (:func:`feed_caps` / planned feed).
         which: ``(M,)`` bool, the blocks to check (the others keep 1).
 
@@ -386,20 +437,22 @@ def hold_block_limits(alone_ratios: Callable[[np.ndarray], np.ndarray], safe: np
     Raises:
         ConvergenceError: a block still breaks a limit after the halvings.
     """
-    ratio = alone_ratios(np.ones(safe.size))
-    bad = np.asarray(which, dtype=bool) & (ratio > 1.0 + LIMIT_RTOL)
+    which = np.asarray(which, dtype=bool)
+    ratio = alone_ratios(np.ones(safe.size), which)
+    bad = which & (ratio > 1.0 + LIMIT_RTOL)
     if not bad.any():
         return np.ones(safe.size)
     # the closed-form cap, or the velocity ratio's linear scaling where the cap claims no need
-    lo = np.where(bad, np.where(safe < 1.0, safe, 1.0 / ratio), 1.0)
+    lo = np.where(bad, np.where(safe < 1.0, safe, 1.0 / np.where(bad, ratio, 1.0)), 1.0)
     hi = np.ones(safe.size)
     for _ in range(BISECTION_STEPS):
         mid = np.where(bad, 0.5 * (lo + hi), 1.0)
-        ok = alone_ratios(mid) <= 1.0 + LIMIT_RTOL
+        ok = alone_ratios(mid, bad) <= 1.0 + LIMIT_RTOL
         lo, hi = np.where(bad & ok, mid, lo), np.where(bad & ~ok, mid, hi)
+    still = bad
     for _ in range(HALVINGS + 1):
-        ratio = alone_ratios(lo)
-        still = bad & (ratio > 1.0 + LIMIT_RTOL)
+        ratio = alone_ratios(lo, still)  # a block found safe at its lower end keeps it
+        still = still & (ratio > 1.0 + LIMIT_RTOL)
         if not still.any():
             return lo
         lo = np.where(still, 0.5 * lo, lo)

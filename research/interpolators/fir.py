@@ -74,8 +74,8 @@ from research.interpolators._fir_limits import (
     LIMIT_RTOL,
     CornerBisection,
     PiecePeaks,
+    alone_block_ratios,
     arc_limit_caps,
-    block_peak_ratios,
     blocks_in_windows,
     corner_limit_ratios,
     feed_caps,
@@ -370,10 +370,9 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         checks = RoundChecks(tp, tb_np, table.block, Td_np, check_period)  # redone only where the profile changed
         repairs = Repairs(full, head, tail, tv_np, tb_np, F_np, tp.lengths, Td_np, d_np.size, cum_np)
 
-        def alone(g):  # ``_fir_limits`` phase 1: each block's own peaks (every corner an exact stop)
-            _, _, pulse, starts, position, *_ = schedule(factor * g[:, None], head, tail, full, np.zeros(M - 1), others,
-                                                         arc_rel)
-            return block_peak_ratios(PiecePeaks(position, limits), starts, pulse, Td_np)
+        def alone(g, blocks):  # ``_fir_limits`` phase 1: the own peaks of ``blocks`` (every corner an exact stop)
+            frac, piece_factor = table.pieces(head, tail, factor * g[:, None], arc_rel)
+            return alone_block_ratios(table, blocks, frac, piece_factor, lengths_np, feeds_np, tp.start, d_np, limits)
 
         if limits is not None and M == 1:
             g = hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), np.ones(1, dtype=bool))

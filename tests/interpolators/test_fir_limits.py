@@ -116,8 +116,17 @@ def test_block_feed_bisection():
     safe g within 2^-10 (lower bracket 0.5 / r0 given as 'safe'), the others keep 1."""
     r0 = np.array([2.0, 1.25, 3.0, 0.8])
     which = np.array([True, True, False, True])
-    g = hold_block_limits(lambda g: r0 * g, 0.5 / r0, which)
+    asked = []
+
+    def alone(g, blocks):
+        asked.append(blocks.copy())
+        return np.where(blocks, r0 * g, 0.0)
+
+    g = hold_block_limits(alone, 0.5 / r0, which)
     assert g[2] == 1.0 and g[3] == 1.0
+    # ``which`` first, then only the blocks being bisected (0 and 1)
+    np.testing.assert_array_equal(asked[0], which)
+    assert all(np.array_equal(b, [True, True, False, False]) for b in asked[1:])
     assert np.all(r0[:2] * g[:2] <= 1.0) and np.all(1.0 / r0[:2] - g[:2] <= 2.0**-10)
 
 
@@ -210,3 +219,56 @@ def test_compiled_piece_peaks_equal_the_numpy_form(degree):
     coeffs[zero] = 0.0
     limit = np.array([[50.0, 80.0, 30.0], [2e3, 5e3, 1e3], [1e5, np.inf, 5e4]])
     np.testing.assert_array_equal(_closed_form_ratios(coeffs, h, limit), _piece_ratios(coeffs, h, limit))
+
+
+@pytest.mark.parametrize("delays", [(0.06, 0.03), (0.05, 0.03, 0.01)])
+def test_alone_block_ratios_match_the_whole_exact_stop_profile(delays):
+    """Phase 1's local profile (only the blocks asked for) against an independent whole-path
+    computation: the JAX build of the whole path with every corner an exact stop, each block's
+    peaks over its span ``[start, end + T_d]`` (ended at the next block's start). Seeded random
+    programs of lines and arcs, random head / tail shares, feed factors, sub-arc factors and
+    multipliers ``g``, random block subsets: equal up to rounding; and asked for every block, the
+    arrays of the whole path's exact-stop profile on the planner's NumPy build, bit for bit."""
+    import jax.numpy as jnp
+
+    from research.interpolators import _fir_profile
+    from research.interpolators._fir_blocks import build_profile
+    from research.interpolators._fir_limits import (
+        PiecePeaks,
+        alone_block_ratios,
+        block_peak_ratios,
+        corner_peak_ratios,
+    )
+    from research.interpolators.fir import _pulse_table
+    from research.paths.library import random_program
+    from research.piecewise import NumpyPiecewise
+
+    d = np.array(delays)
+    Td = float(np.sum(d))
+    for seed in range(12):
+        rng = np.random.default_rng(300 + seed)
+        tp = random_program(rng, arcs=bool(seed % 2))
+        table, M = _pulse_table(tp), tp.n_blocks
+        Mp = table.m_pad
+        F = rng.uniform(20.0, 300.0, M)
+        head, tail = rng.uniform(0.0, 0.4, M), rng.uniform(0.0, 0.4, M)
+        factor = rng.uniform(0.3, 1.0, (M, 3)) * rng.uniform(0.2, 1.0, M)[:, None]  # a multiplier g folded in
+        arc_rel = rng.uniform(0.5, 1.0, table.arc_pieces.size) if table.arc_pieces.size else None
+        frac, piece_factor = table.pieces(head, tail, factor, arc_rel)
+        lengths = np.concatenate([tp.lengths, np.ones(Mp - M + 1)])
+        feeds = np.concatenate([F, np.ones(Mp - M + 1)])
+        limits = AxisLimits.uniform(tp.dim, 100.0, 2e3, 6e4)
+        piece_tv = lengths[table.block] / (feeds[table.block] * piece_factor)
+        gaps = np.concatenate([np.full(M - 1, Td), np.zeros(Mp - M + 1)])
+        starts, ends, position, _ = build_profile(jnp.asarray(tp.start), table.geo, table.block, table.gap, frac,
+                                                  piece_tv, gaps, d)
+        s, e = np.asarray(starts)[:M], np.asarray(ends)[:M]
+        want = corner_peak_ratios(position, s, np.minimum(e + Td, np.append(s[1:], np.inf)), limits)
+        for blocks in (rng.random(M) < 0.4, np.eye(M, dtype=bool)[M - 1], np.ones(M, dtype=bool)):
+            got = alone_block_ratios(table, blocks, frac, piece_factor, lengths, feeds, tp.start, d, limits)
+            np.testing.assert_allclose(got[blocks], want[blocks], rtol=1e-11)
+            assert np.all(got[~blocks] == 0.0)
+        s2, e2, breaks, coeffs, _ = _fir_profile.profile(tp.start, table.geo, table.block, table.gap, frac, piece_tv,
+                                                         gaps, d)
+        whole = block_peak_ratios(PiecePeaks(NumpyPiecewise(breaks, coeffs), limits), s2[:M], e2[:M] - s2[:M], Td)
+        np.testing.assert_array_equal(got, whole)
