@@ -50,7 +50,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from types import SimpleNamespace
 
 import numba
 import numpy as np
@@ -58,6 +57,7 @@ import numpy as np
 from research.errors import ConvergenceError, ParameterError
 from research.interpolators._fir_profile import profile
 from research.limits import AxisLimits
+from research.piecewise import NumpyPiecewise
 
 #: bisection steps on a corner's overlap or a block's feed: the overlap (feed) given away is at most
 #: ``2^-10`` of the planned one (0.23 ms of overlap at the paper's T_d = 237 ms)
@@ -380,7 +380,7 @@ def alone_block_ratios(table, blocks: np.ndarray, fraction: np.ndarray, piece_fa
     gaps = np.where(ks < M - 1, total_delay, 0.0)  # exact stops: T_d - 0 after each block but the last
     starts, ends, breaks, coeffs, _ = profile(start, table.geo[idx], sub, table.gap[idx], fraction[idx], piece_tv,
                                               gaps, delays)
-    peaks = PiecePeaks(SimpleNamespace(breaks=breaks, coeffs=coeffs), limits)
+    peaks = PiecePeaks(NumpyPiecewise(breaks, coeffs), limits)
     out[ks] = block_peak_ratios(peaks, starts, ends - starts, total_delay)
     return out
 
