@@ -87,6 +87,60 @@ def test_window_slope_matches_central_differences_of_the_term_by_term_sum(delays
     assert scale > 0 and worst <= 1e-6 * scale
 
 
+def python_direct_sum(chain, sq, F):
+    """``(d_j, d d_j / dF)`` of one query summed turn by turn in Python floats (IEEE doubles), in the
+    order and with the operations the kernel's general loop states: per turn
+    ``x = |s_i - q| / F``, then over the subset terms in order ``r1 = sign (1.0 r ... r)``
+    (``p - 1`` factors), ``h += r1 r``, ``g += r1 (r + p x)`` where ``r = rho - x > 0``, and the
+    sums ``out += (h norm F) du_i``, ``dout += (g norm) du_i`` in turn order."""
+    q = sq - chain.origin
+    R = F * float(np.max(chain.rho))
+    first = int(np.searchsorted(chain.s, q - R, side="right"))
+    last = int(np.searchsorted(chain.s, q + R, side="left"))
+    d = chain.du.shape[1]
+    out, dout = [0.0] * d, [0.0] * d
+    for i in range(first, last):
+        x = abs(float(chain.s[i]) - q) / F
+        h = g = 0.0
+        for rho, sign in zip(chain.rho.tolist(), chain.sign.tolist()):
+            r = rho - x
+            if r > 0.0:
+                power = 1.0
+                for _ in range(chain.p - 1):
+                    power *= r
+                r1 = sign * power
+                h += r1 * r
+                g += r1 * (r + chain.p * x)
+        w, wd = h * chain.norm * F, g * chain.norm
+        for k in range(d):
+            out[k] += w * float(chain.du[i, k])
+            dout[k] += wd * float(chain.du[i, k])
+    return np.array(out), np.array(dout)
+
+
+@pytest.mark.parametrize("delays, dim", [((0.06, 0.03), 3), ((0.06, 0.03), 2), ((0.04, 0.04), 3), ((0.05, 0.02, 0.01), 3)])
+def test_direct_sums_are_the_turn_by_turn_loop_bit_for_bit(delays, dim):
+    """The direct sums (the branch-free weights of three axes and two unequal filters, the general
+    loop otherwise) give the plain Python loop's floats exactly, with and without the slope
+    (``chain_displacements`` does not sum the slope); windows reach the chain's ends too."""
+    rng = np.random.default_rng(17 + dim)
+    T = 300
+    s = np.cumsum(rng.uniform(0.05, 1.5, T))
+    du = rng.normal(0.0, 0.1, (T, dim))
+    chain = ChainError(s, du, np.asarray(delays))
+    sq = np.concatenate([rng.uniform(s[0] - 5.0, s[-1] + 5.0, 60), s[rng.choice(T, 20, replace=False)]])
+    F = rng.uniform(5.0, 300.0, sq.size)
+    got = chain.displacement(sq, F)
+    assert chain._prefix is None  # every window summed directly
+    for j in range(sq.size):
+        want, dwant = python_direct_sum(chain, float(sq[j]), float(F[j]))
+        np.testing.assert_array_equal(got[j], want)
+        out, dout = np.zeros(dim), np.zeros(dim)
+        _displacement(*chain._args(), sq[j] - chain.origin, F[j], out, dout)
+        np.testing.assert_array_equal(out, want)
+        np.testing.assert_array_equal(dout, dwant)
+
+
 def test_largest_feed_is_the_root_of_the_window_error():
     """The feed found keeps ``|d_j| <= eps`` and is within the search's resolution (2^-36 of the
     bracket, here below 1e-7 relative) of a feed that breaks it."""
