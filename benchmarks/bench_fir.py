@@ -56,7 +56,7 @@ import numpy as np
 
 import research  # noqa: F401  (sets jax_enable_x64)
 from research.interpolators import fir as fir_module
-from research.interpolators.fir import fir_by_convolution, fir_interpolate, plan_fir
+from research.interpolators import fir_by_convolution, fir_interpolate, plan_fir
 from research.paths import Polyline
 from research.paths.gcode import parse_gcode, to_gcode
 

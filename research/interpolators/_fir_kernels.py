@@ -208,21 +208,9 @@ def _direct_sum(s, du, rho, sign, p, norm, q, F, first, count, out, dout, slope,
             g += r1 * (r + p * x)
             w[m] = h * norm * F
             wd[m] = g * norm
-        o0 = o1 = o2 = 0.0
-        for m in range(count):
-            i = first + m
-            o0 += w[m] * du[i, 0]
-            o1 += w[m] * du[i, 1]
-            o2 += w[m] * du[i, 2]
-        out[0], out[1], out[2] = o0, o1, o2
+        _weighted_turns3(w, du, first, count, out)
         if slope:
-            o0 = o1 = o2 = 0.0
-            for m in range(count):
-                i = first + m
-                o0 += wd[m] * du[i, 0]
-                o1 += wd[m] * du[i, 1]
-                o2 += wd[m] * du[i, 2]
-            dout[0], dout[1], dout[2] = o0, o1, o2
+            _weighted_turns3(wd, du, first, count, dout)
         return
     for k in range(d):
         out[k] = 0.0
@@ -242,6 +230,18 @@ def _direct_sum(s, du, rho, sign, p, norm, q, F, first, count, out, dout, slope,
         for k in range(d):
             out[k] += wi * du[i, k]
             dout[k] += wdi * du[i, k]
+
+
+@numba.njit(inline="always", **_OPTIONS)
+def _weighted_turns3(w, du, first, count, out):
+    """``out[k] = sum_m w[m] du[first + m, k]`` for the three axes, summed in turn order (:func:`_direct_sum`)."""
+    o0 = o1 = o2 = 0.0
+    for m in range(count):
+        i = first + m
+        o0 += w[m] * du[i, 0]
+        o1 += w[m] * du[i, 1]
+        o2 += w[m] * du[i, 2]
+    out[0], out[1], out[2] = o0, o1, o2
 
 
 @numba.njit(**_OPTIONS)

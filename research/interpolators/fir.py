@@ -65,7 +65,6 @@ from research.errors import ConvergenceError, ParameterError
 from research.interpolators._fir_blocks import PulseTable, build_profile
 from research.interpolators._fir_candidates import FIRSweep, envelope
 from research.interpolators._fir_chain import check_delays
-from research.interpolators._fir_convolution import fir_by_convolution  # noqa: F401 (re-exported)
 from research.interpolators._fir_feed import arc_feed_caps
 from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_candidate_kernels import predicted_cycle
