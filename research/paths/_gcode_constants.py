@@ -27,9 +27,15 @@ MAX_FEED_MM_PER_MIN = 1e8
 CENTER_ARC_RADIUS_TOLERANCE_MM = 2 * 0.01 * math.sqrt(2)
 #: ``CENTER_ARC_RADIUS_TOLERANCE_INCH = 2 * 0.001 * sqrt(2)`` in: the same under G20 (in inches).
 CENTER_ARC_RADIUS_TOLERANCE_INCH = 2 * 0.001 * math.sqrt(2)
-#: ``SPIRAL_RELATIVE_TOLERANCE = 0.001``: the radius difference may also be at most 0.1 % of the
-#: larger radius (both limits must hold).
+#: ``SPIRAL_RELATIVE_TOLERANCE = 0.001``: a radius difference above the absolute tolerance is still
+#: accepted while it is at most 0.1 % of the larger radius (a large spiral arc).
 SPIRAL_RELATIVE_TOLERANCE = 0.001
+#: A radius difference above this multiple of the absolute tolerance is refused whatever the radius.
+#: LinuxCNC's G2/G3 documentation (docs/src/gcode/g-code.adoc, centre format arcs): "It is an error
+#: if ... the distance from the current point to the center differs from the distance from the end
+#: point to the center by more than (.05 inch/.5 mm) OR ((.0005 inch/.005mm) AND .1% of radius)":
+#: the hard limit is 100 times the absolute tolerance of the second clause.
+SPIRAL_HARD_LIMIT_FACTOR = 100.0
 #: ``RADIUS_TOLERANCE_MM = 0.00005 in * 25.4`` = 0.00127 mm: an arc radius below this is a
 #: zero-radius arc, and an ``R`` may be this much shorter than half the chord.
 RADIUS_TOLERANCE_MM = 0.00005 * MM_PER_INCH

@@ -22,6 +22,7 @@ from research.paths._gcode_constants import (
     MAX_FEED_MM_PER_MIN,
     MM_PER_INCH,
     RADIUS_TOLERANCE_MM,
+    SPIRAL_HARD_LIMIT_FACTOR,
     ZERO_LENGTH_MM,
 )
 
@@ -513,11 +514,14 @@ class _Interpreter:
                 allowed = self.arc_tol
             else:
                 allowed = CENTER_ARC_RADIUS_TOLERANCE_INCH * MM_PER_INCH if s != 1.0 else CENTER_ARC_RADIUS_TOLERANCE_MM
-            if err > allowed or err > self.arc_rel * max(r0, r1):
+            # LinuxCNC's rule (SPIRAL_HARD_LIMIT_FACTOR): refused above 100x the absolute tolerance, or
+            # above it and above the relative tolerance of the larger radius; else a spiral
+            hard = SPIRAL_HARD_LIMIT_FACTOR * allowed
+            if err > hard or (err > allowed and err > self.arc_rel * max(r0, r1)):
                 raise _LineError(
                     f"{name} end point is not on the arc: start radius {r0:.6g} mm and end radius {r1:.6g} mm "
-                    f"differ by {err:.3g} mm, more than {allowed:.3g} mm or {100 * self.arc_rel:g} % of the "
-                    f"radius; expected consistent end point and {la}/{lb}", ij_word)
+                    f"differ by {err:.3g} mm, more than {allowed:.3g} mm and {100 * self.arc_rel:g} % of the "
+                    f"radius (or more than {hard:.3g} mm); expected consistent end point and {la}/{lb}", ij_word)
             full = chord <= ZERO_LENGTH_MM
         else:
             rnum, rk = vals["R"]

@@ -49,11 +49,14 @@ Accepted words (anything else is a :class:`~research.errors.GCodeError` naming f
   ``%`` delimiter lines, blank lines, upper or lower case, words with or without spaces
   (``G1X10Y5F600``).
 
-Arc end radius: as LinuxCNC's rs274ngc (``interp_arc.cc`` ``arc_data_ijk`` with the defaults of
-``interp_internal.hh``): start and end radius may differ by at most ``CENTER_ARC_RADIUS_TOLERANCE_MM
-= 2 * 0.01 * sqrt(2) = 0.0283`` mm (G21; under G20 ``2 * 0.001 * sqrt(2)`` in = 0.0718 mm) and at most
-0.1 % (``SPIRAL_RELATIVE_TOLERANCE``) of the larger radius; such arcs become spiral blocks. Radii
-below ``RADIUS_TOLERANCE_MM`` = 0.00127 mm are zero-radius arcs (refused).
+Arc end radius: as LinuxCNC (its G2/G3 documentation, "It is an error if ... [the two radii differ]
+by more than (.05 inch/.5 mm) OR ((.0005 inch/.005mm) AND .1% of radius)", with the absolute
+tolerance of ``interp_internal.hh``): start and end radius may differ by up to
+``CENTER_ARC_RADIUS_TOLERANCE_MM = 2 * 0.01 * sqrt(2) = 0.0283`` mm whatever the radius (G21; under
+G20 ``2 * 0.001 * sqrt(2)`` in = 0.0718 mm), so the small arcs of programs written to 3 decimals of mm
+are read; beyond that by up to 0.1 % (``SPIRAL_RELATIVE_TOLERANCE``) of the larger radius, and never
+by more than 100 times the absolute tolerance (2.83 mm; ``SPIRAL_HARD_LIMIT_FACTOR``). Such arcs
+become spiral blocks. Radii below ``RADIUS_TOLERANCE_MM`` = 0.00127 mm are zero-radius arcs (refused).
 
 Refused with a message naming the feature: O-word subroutines and control flow (``o100 sub``,
 ``o<name> call``, ``if``, ``while`` ...), ``M98``/``M99``, ``#`` parameters (``#1``, ``#<name>``),
@@ -373,16 +376,17 @@ def parse_gcode(
         initial_feed: feed in effect before the first ``F`` word [mm/min]; ``None`` makes a
             ``G1``/``G2``/``G3`` before any ``F`` an error.
         start: start position ``(x, y, z)`` [mm] (first vertex of the polyline).
-        arc_radius_tolerance: largest difference of the start and end radius of a centre-format
-            arc [mm]. ``None`` (default) uses LinuxCNC's default (rs274ngc ``interp_internal.hh``,
-            checked in ``interp_arc.cc`` ``arc_data_ijk``): ``CENTER_ARC_RADIUS_TOLERANCE_MM =
-            2 * 0.01 * sqrt(2) = 0.0283`` mm under G21 and ``CENTER_ARC_RADIUS_TOLERANCE_INCH =
-            2 * 0.001 * sqrt(2) = 0.00283`` in (0.0718 mm) under G20.
-        arc_relative_tolerance: the radius difference must also be at most this fraction of the
-            larger radius (LinuxCNC ``SPIRAL_RELATIVE_TOLERANCE = 0.001``, 0.1 %). An arc beyond
-            either limit is a :class:`GCodeError` naming both radii; within them the radius is
-            blended linearly along the arc (a spiral, as LinuxCNC does), so the arc ends exactly at
-            the programmed point.
+        arc_radius_tolerance: absolute tolerance on the difference of the start and end radius of a
+            centre-format arc [mm]. ``None`` (default) uses LinuxCNC's default (rs274ngc
+            ``interp_internal.hh``): ``CENTER_ARC_RADIUS_TOLERANCE_MM = 2 * 0.01 * sqrt(2) = 0.0283`` mm
+            under G21 and ``CENTER_ARC_RADIUS_TOLERANCE_INCH = 2 * 0.001 * sqrt(2) = 0.00283`` in
+            (0.0718 mm) under G20.
+        arc_relative_tolerance: a difference above ``arc_radius_tolerance`` is still accepted while
+            it is at most this fraction of the larger radius (LinuxCNC ``SPIRAL_RELATIVE_TOLERANCE =
+            0.001``, 0.1 %), up to 100 times ``arc_radius_tolerance`` (LinuxCNC's rule, module
+            docstring). An arc beyond is a :class:`GCodeError` naming both radii; an accepted one
+            has its radius blended linearly along the arc (a spiral, as LinuxCNC does), so it ends
+            exactly at the programmed point. For an absolute limit alone pass a tiny relative one.
         home: the machine home position ``(x, y, z)`` [mm] in the program frame, the target of ``G28``;
             ``None`` (default) makes ``G28`` an error that asks for it (the reader cannot know it).
 

@@ -210,22 +210,50 @@ def test_g90_1_absolute_centre_and_g20_arc():
 
 
 def test_arc_radius_tolerance_is_linuxcnc_default():
-    """Default end-radius rule = LinuxCNC rs274ngc (interp_arc.cc arc_data_ijk): refused when
-    |r1 - r0| > CENTER_ARC_RADIUS_TOLERANCE_MM = 2 * 0.01 * sqrt(2) mm or > 0.1 % of max(r0, r1).
-    At r = 50: 0.02 mm (0.04 %) is accepted and blended to end exactly, 0.03 mm is not (0.0283 mm limit)."""
-    prog = parse_gcode("G0 X50\nG3 X0 Y50.02 I-50 F60")
-    np.testing.assert_array_equal(pts(prog)[-1], [0, 50.02, 0])
-    with pytest.raises(GCodeError, match=r"<string>:2:14: G3 end point is not on the arc: start radius 50 mm and "
-                                         r"end radius 50.03 mm"):
-        parse_gcode("G0 X50\nG3 X0 Y50.03 I-50 F60")
-    parse_gcode("G0 X50\nG3 X0 Y50.03 I-50 F60", arc_radius_tolerance=0.05)
-    # the relative 0.1 % part: r = 5 allows only 0.005 mm
-    with pytest.raises(GCodeError, match="0.1 %"):
-        parse_gcode("G0 X5\nG3 X0 Y5.006 I-5 F60")
-    parse_gcode("G0 X5\nG3 X0 Y5.004 I-5 F60")
-    # an explicit absolute tolerance replaces LinuxCNC's (here stricter)
+    """Default end-radius rule = LinuxCNC's G2/G3 documentation: "It is an error if ... [the radii
+    differ] by more than (.05 inch/.5 mm) OR ((.0005 inch/.005mm) AND .1% of radius)", with
+    interp_internal.hh's absolute tolerance CENTER_ARC_RADIUS_TOLERANCE_MM = 2 * 0.01 * sqrt(2) =
+    0.02828 mm and the hard limit 100 times it (2.828 mm). Cases on either side of each limit:
+    r = 1: 0.02 mm (2 %) accepted (below the absolute tolerance); r = 10: 0.03 mm (0.3 %) refused;
+    r = 50: 0.03 mm (0.06 %) accepted and blended to end exactly; r = 2000: 2.9 mm (0.14 %) refused,
+    r = 3000: 2.9 mm (0.097 %) refused by the hard limit, 2.8 mm accepted."""
+    prog = parse_gcode("G0 X1\nG3 X0 Y1.02 I-1 F60")
+    np.testing.assert_array_equal(pts(prog)[-1], [0, 1.02, 0])
+    with pytest.raises(GCodeError, match=r"<string>:2:14: G3 end point is not on the arc: start radius 10 mm and "
+                                         r"end radius 10.03 mm"):
+        parse_gcode("G0 X10\nG3 X0 Y10.03 I-10 F60")
+    prog = parse_gcode("G0 X50\nG3 X0 Y50.03 I-50 F60")
+    np.testing.assert_array_equal(pts(prog)[-1], [0, 50.03, 0])
+    for text in ("G0 X2000\nG3 X0 Y2002.9 I-2000 F60", "G0 X3000\nG3 X0 Y3002.9 I-3000 F60"):
+        with pytest.raises(GCodeError, match="not on the arc"):
+            parse_gcode(text)
+    parse_gcode("G0 X3000\nG3 X0 Y3002.8 I-3000 F60")
+    # an explicit absolute tolerance replaces LinuxCNC's in the same rule (here looser, then stricter)
+    parse_gcode("G0 X10\nG3 X0 Y10.03 I-10 F60", arc_radius_tolerance=0.05)
     with pytest.raises(GCodeError, match="not on the arc"):
-        parse_gcode("G0 X10\nG3 X0 Y10.002 I-10 F60", arc_radius_tolerance=1e-3)
+        parse_gcode("G0 X1\nG3 X0 Y1.002 I-1 F60", arc_radius_tolerance=1e-3)
+    # an absolute limit alone: a tiny relative tolerance
+    with pytest.raises(GCodeError, match="not on the arc"):
+        parse_gcode("G0 X50\nG3 X0 Y50.03 I-50 F60", arc_relative_tolerance=1e-12)
+
+
+def test_small_arcs_written_to_three_decimals_are_read():
+    """LinuxCNC's G2/G3 documentation: "an error due to rounding can result from using a precision of
+    less than ... 3 decimal places (0.000) for millimeters", so 3 decimals must be read. Arcs of
+    radius 0.3-3 mm with start, end and centre offsets rounded to 3 decimals (radius error up to
+    about 2 * 0.0005 * sqrt(2) = 1.4 um, up to 0.5 % of 0.3 mm): every one is read, and its end is
+    the programmed point."""
+    rng = np.random.default_rng(7)
+    for radius in (0.3, 0.75, 1.5, 3.0):
+        for _ in range(50):
+            c = rng.uniform(-50, 50, 2)
+            a0, a1 = rng.uniform(0, 2 * np.pi, 2)
+            s = np.round(c + radius * np.array([np.cos(a0), np.sin(a0)]), 3)
+            e = np.round(c + radius * np.array([np.cos(a1), np.sin(a1)]), 3)
+            ij = np.round(c - s, 3)
+            prog = parse_gcode(f"G0 X{s[0]:.3f} Y{s[1]:.3f}\nG3 X{e[0]:.3f} Y{e[1]:.3f} I{ij[0]:.3f} "
+                               f"J{ij[1]:.3f} F600")
+            np.testing.assert_allclose(pts(prog)[-1, :2], e, atol=1e-12)
 
 
 def test_arc_feeds_and_lines():

@@ -249,18 +249,19 @@ def test_g28_without_home_asks_for_it():
 
 
 def test_spiral_beyond_tolerance_names_both_radii():
-    """40 um at r = 50 exceeds LinuxCNC's 0.0283 mm: refused, with both radii in the message."""
-    with pytest.raises(GCodeError, match=r"<string>:2:14: G3 end point is not on the arc: start radius 50 mm and "
-                                         r"end radius 50.04 mm"):
-        parse_gcode("G0 X50\nG3 X0 Y50.04 I-50 J0 F60")
+    """40 um at r = 10 exceeds LinuxCNC's 0.0283 mm and 0.1 % of the radius: refused, with both radii
+    in the message."""
+    with pytest.raises(GCodeError, match=r"<string>:2:14: G3 end point is not on the arc: start radius 10 mm and "
+                                         r"end radius 10.04 mm"):
+        parse_gcode("G0 X10\nG3 X0 Y10.04 I-10 J0 F60")
 
 
 def test_g20_arc_tolerance_is_linuxcnc_inch_value():
-    """Under G20 LinuxCNC's absolute limit is 2 * 0.001 * sqrt(2) in = 0.0718 mm: an end radius 0.002 in
-    (0.0508 mm) off at r = 5 in passes (0.04 %), 0.003 in (0.0762 mm) does not."""
-    parse_gcode("G20 G0 X5\nG3 X0 Y5.002 I-5 F10")
+    """Under G20 LinuxCNC's absolute tolerance is 2 * 0.001 * sqrt(2) in = 0.0718 mm: at r = 1 in an
+    end radius 0.002 in (0.0508 mm, 0.2 %) off passes, 0.003 in (0.0762 mm, 0.3 %) does not."""
+    parse_gcode("G20 G0 X1\nG3 X0 Y1.002 I-1 F10")
     with pytest.raises(GCodeError, match="not on the arc"):
-        parse_gcode("G20 G0 X5\nG3 X0 Y5.003 I-5 F10")
+        parse_gcode("G20 G0 X1\nG3 X0 Y1.003 I-1 F10")
 
 
 def test_hand_built_program_gets_line_blocks():
