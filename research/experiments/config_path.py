@@ -6,6 +6,8 @@ a path config describes (:func:`build_path`). Coordinates in mm.
 
 from __future__ import annotations
 
+import logging
+
 from pathlib import Path
 from typing import Annotated, Union
 
@@ -115,5 +117,11 @@ def read_program(cfg: PathConfig, base: Path):
     ``home_mm``)."""
     from research.paths.gcode import read_gcode
 
-    return read_gcode(base / cfg.gcode, chord_tolerance=cfg.chord_tolerance_um * 1e-3, start=tuple(cfg.start_mm),
-                      home=None if cfg.home_mm is None else tuple(cfg.home_mm))
+    program = read_gcode(base / cfg.gcode, chord_tolerance=cfg.chord_tolerance_um * 1e-3, start=tuple(cfg.start_mm),
+                         home=None if cfg.home_mm is None else tuple(cfg.home_mm))
+    if program.unread_lines:
+        logging.getLogger(__name__).warning(
+            "%s: the program ends on line %d (M2/M30 or the closing %%); %d non-blank line(s) after it are not "
+            "read, as LinuxCNC does (first: line %d)", program.source, program.end_line, len(program.unread_lines),
+            program.unread_lines[0])
+    return program

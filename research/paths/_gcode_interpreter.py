@@ -151,7 +151,7 @@ class _Interpreter:
         self.plane = 170
         self.path_tol = _NAN  # G64 P tolerance [mm] in force (NaN: none given, 0 under G61/G61.1)
         self.motion = None  # 0, 1, 2, 3 or None
-        self.ended = 0  # line of M2/M30, 0 while running
+        self.ended = 0  # line of M2/M30, 0 while running (the reader stops after that line)
         # output: the vertices (flat x, y, z), one (feed, rapid, line, tolerance) row and one chord count
         # per block
         self.points = array("d", start)
@@ -178,7 +178,7 @@ class _Interpreter:
             if f is not None:
                 self.feed = fv / 60.0
             return True
-        if self.ended or motion is None or motion > 1:
+        if motion is None or motion > 1:
             return False
         s = self.scale
         px, py, pz = self.pos
@@ -347,9 +347,6 @@ class _Interpreter:
             raise _LineError("P word with no G2/G3, G4 or G64 to use it; expected P only as G64 P<tolerance>, "
                              "G4 P<seconds> or G2/G3 P<turns> (canned cycles are not supported)", vals["P"][1])
         if moves:
-            if self.ended:
-                raise _LineError(f"motion after the program end (M2/M30 on line {self.ended}); "
-                                 "expected no axis words after it", _first_axis(vals))
             if "motion" in groups and groups["motion"][0] == 800:
                 raise _LineError("axis words with G80 (motion cancelled); expected G0/G1/G2/G3", _first_axis(vals))
             if self.motion is None:
@@ -369,9 +366,6 @@ class _Interpreter:
                                      f"{what.split()[0]} P on a line of its own", vals["P"][1])
                 self._arc(vals, lineno, motion_word)
         if m_pause:  # after the line's motion (RS274/NGC order of execution: stopping codes last)
-            if self.ended:
-                raise _LineError(f"program stop after the program end (M2/M30 on line {self.ended}); expected "
-                                 "nothing to run after it", m_groups["stopping"])
             self.pauses[self.nblocks] = self.pauses.get(self.nblocks, 0.0)
         if m_end:
             self.ended = lineno
@@ -385,9 +379,6 @@ class _Interpreter:
         if g64:
             raise _LineError("P used by both G64 (tolerance) and G4 (dwell) on one line; expected G64 P on a "
                              "line of its own", vals["P"][1])
-        if self.ended:
-            raise _LineError(f"G4 after the program end (M2/M30 on line {self.ended}); expected nothing to run "
-                             "after it", k)
         num, kp = vals["P"]
         p = float(num)
         if not 0.0 <= p < math.inf:
@@ -402,8 +393,6 @@ class _Interpreter:
         if self.home is None:
             raise _LineError("G28 (return to home) needs the machine home position; expected home=(x, y, z) "
                              "[mm, program frame] given to parse_gcode / read_gcode", k)
-        if self.ended:
-            raise _LineError(f"motion after the program end (M2/M30 on line {self.ended}); expected no G28 after it", k)
         if "motion" in groups and not _AXIS_LETTERS.isdisjoint(vals):
             raise _LineError(f"G28 and G{_fmt_key(groups['motion'][0])} on one line with axis words; expected "
                              "the motion code on a line of its own (both would use the axis words)", k)

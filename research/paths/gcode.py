@@ -37,7 +37,8 @@ Accepted words (anything else is a :class:`~research.errors.GCodeError` naming f
   operator's wait not counted): the motion stops at the vertex and waits (``block_pauses``; the FIR
   planner takes them as exact stops held that long). G4 runs before the motion of its line, the
   stops after it (RS274/NGC order of execution);
-* ``M2 M30`` (program end: motion, dwells or stops after them are an error), ``M3 M4 M5``
+* ``M2 M30`` (program end: the lines after it are not read, as LinuxCNC, and are listed in
+  ``GCodeProgram.unread_lines``; so are those after a closing ``%``), ``M3 M4 M5``
   (spindle), ``M6`` (tool change), ``M7 M8 M9`` (coolant);
 * ``N`` (line number), ``O`` (program number; both non-negative integers of at most 15 digits,
   ignored), ``S`` (spindle speed >= 0, ignored), ``T`` (tool number, non-negative integer, ignored),
@@ -46,7 +47,8 @@ Accepted words (anything else is a :class:`~research.errors.GCodeError` naming f
   ``G4`` dwell, or number of turns of ``G2``/``G3``: an integer >= 1, P1 the plain arc, as LinuxCNC), ``Q`` (with
   ``G64`` only);
 * comments ``( ... )`` (not nested, closed on the same line) and ``; ...`` to the end of the line,
-  ``%`` delimiter lines, blank lines, upper or lower case, words with or without spaces
+  ``%`` delimiter lines (a file whose first non-blank line is a lone ``%`` ends at the next ``%``
+  line, as LinuxCNC), a UTF-8 byte-order mark, blank lines, upper or lower case, words with or without spaces
   (``G1X10Y5F600``).
 
 Arc end radius: as LinuxCNC (its G2/G3 documentation, "It is an error if ... [the two radii differ]
@@ -159,6 +161,10 @@ class GCodeProgram:
         block_pauses: ``(B + 1,)`` pause at each block vertex [s] (index 0 the start, ``k`` the
             end of block ``k - 1``, ``B`` the end): the sum of the ``G4 P`` dwells there, 0 for an
             ``M0``/``M1``/``M60`` stop without a dwell, NaN where the motion does not stop.
+        end_line: 1-based line where reading stopped: the ``M2``/``M30`` line or the closing ``%``
+            line (LinuxCNC reads nothing after either); 0 when the program ran to the end of the text.
+        unread_lines: 1-based lines after ``end_line`` that hold anything but blanks or a lone
+            ``%`` (not read, as LinuxCNC; listed so that nothing is dropped unseen).
 
     ``blocks`` and the ``block_*`` arrays may be left out (``None``) when building a program by hand:
     they are then one line block per polyline segment with NaN tolerance.
@@ -189,6 +195,8 @@ class GCodeProgram:
     block_tolerance: np.ndarray | None = None
     segment_block: np.ndarray | None = None
     block_pauses: np.ndarray | None = None
+    end_line: int = 0
+    unread_lines: tuple[int, ...] = ()
 
     def __post_init__(self):
         m = self.polyline.n_segments
@@ -445,6 +453,8 @@ def parse_gcode(
     home_t = None if home is None else _point("home", home)
     if not isinstance(text, str):
         raise GCodeError(f"expected the program as str, got {type(text).__name__}", source=source, line=0, column=0)
+    if text.startswith("\ufeff"):  # a byte-order mark written by some Windows editors
+        text = text[1:]
     if "\r" in text:
         text = text.replace("\r\n", "\n").replace("\r", "\n")
 
@@ -454,6 +464,10 @@ def parse_gcode(
     simple_match = _SIMPLE.fullmatch
     tokens = _TOKEN.findall
     all_lines = text.split("\n")
+    # LinuxCNC: a file whose first non-blank line is a lone '%' ends at the next '%' line
+    first = next((k for k, t in enumerate(all_lines, 1) if t.strip()), 0)
+    opening = first if first and all_lines[first - 1].strip() == "%" else 0
+    end_line = 0
 
     def fail(lineno, message, column):
         raise GCodeError(message, source=source, line=lineno, column=column) from None
@@ -480,11 +494,17 @@ def parse_gcode(
             if pct and words:
                 column = next(t.start(3) + 1 for t in _TOKEN.finditer(line_text) if t.group(3))
                 fail(lineno, "'%' program delimiter must be alone on its line; expected no words with it", column)
+            if pct and opening and lineno > opening:
+                end_line = lineno  # the closing '%': nothing after it is read
+                break
             if words:
                 try:
                     line_fn(words, lineno)
                 except _LineError as e:
                     fail(lineno, e.message, _word_column(line_text, e.word))
+                if it.ended:  # M2/M30: LinuxCNC does not read the lines after it
+                    end_line = lineno
+                    break
     finally:
         if gc_enabled:
             gc.enable()
@@ -527,8 +547,10 @@ def parse_gcode(
     pauses = np.full(nb + 1, np.nan)
     for k, p in it.pauses.items():
         pauses[k] = p
+    unread = tuple(k for k in range(end_line + 1, len(all_lines) + 1)
+                   if all_lines[k - 1].strip() not in ("", "%")) if end_line else ()
     return GCodeProgram(poly, feeds, rap, lines, source, tuple(it.no_motion), blocks, b_feeds, b_rapid,
-                        b_lines, b_tols, seg_block, pauses)
+                        b_lines, b_tols, seg_block, pauses, end_line, unread)
 
 
 def read_gcode(path: str | PathLike, **kwargs) -> GCodeProgram:

@@ -85,6 +85,19 @@ def test_gcode_path_uses_program_feeds(tmp_path):
     np.testing.assert_allclose(result.record["details"]["fir"]["feeds"], [20.0, 10.0])  # mm/min -> mm/s
 
 
+def test_gcode_path_after_m30_is_not_run_and_is_reported(tmp_path, caplog):
+    """Text after M30 (here a second, malformed program) is not read, as LinuxCNC does; the run plans
+    the two moves before it and logs a warning naming the file, the end line and the unread lines."""
+    (tmp_path / "part.nc").write_text("G21 G90\nG1 X10 F1200\nG1 Y10 F600\nM30\n\nO0002\nG1 X#1\n")
+    text = GOOD.replace('name = "corner90"', 'gcode = "part.nc"').replace("feed_mm_per_s = 200.0\n", "")
+    with caplog.at_level("WARNING"):
+        result = run_experiment(write(tmp_path, text), cache_dir=tmp_path / "c", figures_dir=tmp_path / "f",
+                                log=lambda s: None)
+    np.testing.assert_allclose(result.record["details"]["fir"]["feeds"], [20.0, 10.0])
+    assert any("part.nc: the program ends on line 4" in r.getMessage() and "2 non-blank line(s)" in r.getMessage()
+               and "first: line 6" in r.getMessage() for r in caplog.records), caplog.text
+
+
 def test_gcode_path_with_g28_needs_home_mm(tmp_path):
     """A post-processor's G28 G91 Z0 retract: with ``home_mm`` the program reads and runs (the retract
     from z = 5 to the home z = 20 is a rapid block of 15 mm, X then home from (10, 0)); without it the

@@ -211,8 +211,6 @@ def test_dwells_and_program_stops_are_pauses_at_their_vertices():
     ("G1 X1 F60\nG4 P-0.5", 2, 4, r"G4 P-0.5: expected a finite dwell >= 0 s \(P is in seconds"),
     ("G1 X1 F60\nG4 G64 P0.01", 2, 8, r"P used by both G64 \(tolerance\) and G4"),
     ("G1 X1 F60\nG4 P1 G3 X2 Y1 R1", 2, 4, r"P used by both G4 \(dwell\) and G2/G3"),
-    ("G1 X1 F60\nM2\nG4 P1", 3, 1, r"G4 after the program end \(M2/M30 on line 2\)"),
-    ("G1 X1 F60\nM30\nM0", 3, 1, r"program stop after the program end"),
     ("G1 X1 F60\nM1 M30", 2, 4, r"two stopping M-codes on one line"),
     ("G1 X1 F60\nG4 X1.5", 2, 1, r"G4 \(dwell\) without P"),  # Fanuc's G4 X<seconds>: not read as a move
 ])
