@@ -120,7 +120,9 @@ class ToolPath:
             a.setflags(write=False)
             object.__setattr__(self, name, a)
         object.__setattr__(self, "axes", axes)
-        self._cache.update(geo=geo, lengths=lengths, starts=starts)
+        arc_row = np.full(starts.shape[0], -1, dtype=np.int64)  # row of each arc block in ``geo``, -1: a line
+        arc_row[geo["index"] if geo else []] = np.arange(geo["index"].size if geo else 0)
+        self._cache.update(geo=geo, lengths=lengths, starts=starts, arc_row=arc_row)
 
     # -- construction ------------------------------------------------------------------------
     @staticmethod
@@ -240,12 +242,10 @@ class ToolPath:
         return _arc_eval(_take(g, np.zeros(phi.size, dtype=np.int64)), phi, order)[:, : self.dim]
 
     def _arc_rows(self, blocks: np.ndarray) -> dict:
-        g = self._cache["geo"]
-        where = {int(k): i for i, k in enumerate(g.get("index", []))}
-        rows = [where.get(int(b), -1) for b in blocks]
-        if min(rows) < 0:
-            raise PathError(f"ToolPath block {int(blocks[rows.index(-1)])} is not an arc")
-        return _take(g, np.asarray(rows))
+        rows = self._cache["arc_row"][blocks]
+        if rows.size and rows.min() < 0:
+            raise PathError(f"ToolPath block {int(blocks[np.argmin(rows)])} is not an arc")
+        return _take(self._cache["geo"], rows)
 
     def to_polyline(self, chord_tolerance: float = 1e-3) -> tuple[Polyline, np.ndarray]:
         """Chords through every block: arcs cut into equal angles with sagitta <= ``chord_tolerance`` [mm].
@@ -255,13 +255,14 @@ class ToolPath:
         """
         pts, owner = [self.start[None]], []
         g = self._cache["geo"]
-        row = {int(k): i for i, k in enumerate(g.get("index", []))}
+        arc_row = self._cache["arc_row"]
         for k in range(self.n_blocks):
-            if k in row:
-                r = max(g["r0"][row[k]], g["r1"][row[k]])
+            i = arc_row[k]
+            if i >= 0:
+                r = max(g["r0"][i], g["r1"][i])
                 step = min(4.0 * np.arcsin(np.sqrt(min(chord_tolerance / (2.0 * r), 1.0))), 0.5 * np.pi)
-                n = max(1, int(np.ceil(g["sweep"][row[k]] / step)))
-                phi = g["sweep"][row[k]] * np.arange(1, n + 1) / n
+                n = max(1, int(np.ceil(g["sweep"][i] / step)))
+                phi = g["sweep"][i] * np.arange(1, n + 1) / n
                 p = self.arc_points(k, phi)
                 p[-1] = self.ends[k]
                 pts.append(p)
@@ -439,21 +440,71 @@ def _arc_eval(g: dict, phi: np.ndarray, order: int) -> np.ndarray:
 
 def _arc_distance(g: dict, q: np.ndarray) -> np.ndarray:
     """Distance from ``q`` (3-D, one per row of ``g``) to the arcs: projection angle, clamped to the
-    sweep, then safeguarded Newton on ``|P(phi) - q|^2`` (exact in one step for planar circles)."""
+    sweep, then safeguarded Newton on ``|P(phi) - q|^2`` (exact in one step for planar circles).
+    The projection angle is NumPy's ``arctan2`` (whose SIMD loop may differ from the C library's by
+    an ulp), the rest one compiled pass (:func:`_nearest_arc`)."""
     rel = q - g["c"]
-    x, y = np.sum(rel * g["e1"], axis=1), np.sum(rel * g["e2"], axis=1)
-    base = np.arctan2(y, x) % (2 * np.pi)
-    sweep = g["sweep"]
-    # candidate angles: every turn of the projection inside the sweep, and both ends
-    turns = int(np.ceil(np.max(sweep) / (2 * np.pi))) + 1
-    cands = [np.zeros_like(base), sweep] + [np.clip(base + 2 * np.pi * k, 0.0, sweep) for k in range(turns)]
-    best = np.full(q.shape[0], np.inf)
-    for phi in cands:
-        for _ in range(3):
-            e = _arc_eval(g, phi, 0) - q
-            d1, d2 = _arc_eval(g, phi, 1), _arc_eval(g, phi, 2)
-            slope = np.sum(e * d1, axis=1)
-            curv = np.sum(d1 * d1, axis=1) + np.sum(e * d2, axis=1)
-            phi = np.clip(np.where(curv > 0, phi - slope / np.where(curv > 0, curv, 1.0), phi), 0.0, sweep)
-        best = np.minimum(best, np.linalg.norm(_arc_eval(g, phi, 0) - q, axis=1))
-    return best
+    base = np.arctan2(np.sum(rel * g["e2"], axis=1), np.sum(rel * g["e1"], axis=1)) % (2 * np.pi)
+    return _nearest_arc(np.ascontiguousarray(q), base, np.ascontiguousarray(g["c"]), np.ascontiguousarray(g["n"]),
+                        np.ascontiguousarray(g["e1"]), np.ascontiguousarray(g["e2"]), g["r0"], g["r1"], g["a0"],
+                        g["a1"], g["sweep"])
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _arc_point(c, n, e1, e2, r0, dr, a0, da, phi, order, out):
+    """``d^order P / d phi^order`` (order 0, 1, 2) of one arc at ``phi`` into ``out`` (3,): the
+    arithmetic of :func:`_arc_eval`, term by term in its order."""
+    co, si = math.cos(phi), math.sin(phi)
+    r = r0 + dr * phi
+    for a in range(3):
+        if order == 0:
+            out[a] = (c[a] + (a0 + da * phi) * n[a]) + r * (co * e1[a] + si * e2[a])
+        elif order == 1:
+            out[a] = (r * (-si * e1[a] + co * e2[a]) + dr * (co * e1[a] + si * e2[a])) + da * n[a]
+        else:
+            out[a] = r * (-co * e1[a] + -si * e2[a]) + (2.0 * dr) * (-si * e1[a] + co * e2[a])
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _nearest_arc(q, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
+    """Distance from ``q[i]`` to arc row ``i``: from each candidate angle (both ends, and every turn
+    of the projection angle ``base[i]`` [rad, in [0, 2 pi)] inside the sweep, clamped), three
+    safeguarded Newton steps on ``|P(phi) - q|^2``, then the least distance over the candidates."""
+    N = q.shape[0]
+    out = np.empty(N)
+    p, d1, d2 = np.empty(3), np.empty(3), np.empty(3)
+    two_pi = 2.0 * np.pi
+    for i in range(N):
+        sw = sweep[i]
+        dr, da = (r1[i] - r0[i]) / sw, (a1[i] - a0[i]) / sw
+        turns = int(np.ceil(sw / two_pi)) + 1
+        best = np.inf
+        for m in range(turns + 2):
+            if m == 0:
+                phi = 0.0
+            elif m == 1:
+                phi = sw
+            else:
+                phi = min(max(base[i] + two_pi * (m - 2), 0.0), sw)
+            for _ in range(3):
+                _arc_point(c[i], n[i], e1[i], e2[i], r0[i], dr, a0[i], da, phi, 0, p)
+                _arc_point(c[i], n[i], e1[i], e2[i], r0[i], dr, a0[i], da, phi, 1, d1)
+                _arc_point(c[i], n[i], e1[i], e2[i], r0[i], dr, a0[i], da, phi, 2, d2)
+                slope, dd, ed = 0.0, 0.0, 0.0
+                for a in range(3):
+                    e = p[a] - q[i, a]
+                    slope += e * d1[a]
+                    dd += d1[a] * d1[a]
+                    ed += e * d2[a]
+                curv = dd + ed
+                if curv > 0:
+                    phi = phi - slope / curv
+                phi = min(max(phi, 0.0), sw)
+            _arc_point(c[i], n[i], e1[i], e2[i], r0[i], dr, a0[i], da, phi, 0, p)
+            acc = 0.0
+            for a in range(3):
+                e = p[a] - q[i, a]
+                acc += e * e
+            best = min(best, math.sqrt(acc))
+        out[i] = best
+    return out
