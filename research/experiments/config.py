@@ -140,7 +140,8 @@ class ExperimentConfig(_Strict):
     """One study: a path, interpolator(s), a drive, identification, metrics, what it reproduces."""
 
     name: str = Field(..., pattern=NAME_PATTERN, description="results and figure file stem (letters, digits, _ - .)")
-    reproduces: str = Field(..., description="the paper result this experiment reproduces")
+    reproduces: str = Field("", description="the paper result this experiment reproduces (empty for a study "
+                            "of one's own program or machine)")
     description: str = ""
     path: PathTable | None = Field(None, description="tool path (required unless the study is identification only); "
                                                     "kind = \"five_axis\": a 5-axis pose path for [feedrate]")

@@ -230,7 +230,7 @@ def _npz(arrays: dict) -> bytes | None:
 def _report(result: RunResult, config_file, files: list[str]) -> str:
     """``report.md``: what was run, the summary table and the figure together (Markdown)."""
     cfg = result.config
-    lines = [f"# {cfg.name}", "", f"Reproduces: {cfg.reproduces}", ""]
+    lines = [f"# {cfg.name}", ""] + ([f"Reproduces: {cfg.reproduces}", ""] if cfg.reproduces else [])
     if cfg.description:
         lines += [cfg.description, ""]
     lines += [f"Config: `{config_file}` (copy: [config.toml](config.toml)); store key `{result.key}`; code "
@@ -265,9 +265,9 @@ def _figure(cfg: ExperimentConfig, ev) -> bytes:
     if cfg.path is None:  # a [control] study without a tool path: the ch 5 error panels
         from research.experiments.control_figure import plot_control
 
-        fig = plot_control(ev.arrays, ev.record["details"]["control"], title=f"{name}\n{cfg.reproduces}")
+        fig = plot_control(ev.arrays, ev.record["details"]["control"], title=name + (f"\n{cfg.reproduces}" if cfg.reproduces else ""))
     else:
-        fig = plot_run(ev.objects["path"], ev.objects["runs"], title=f"{name}\n{cfg.reproduces}")
+        fig = plot_run(ev.objects["path"], ev.objects["runs"], title=name + (f"\n{cfg.reproduces}" if cfg.reproduces else ""))
     buf = io.BytesIO()
     save(fig, buf)
     return buf.getvalue()
@@ -276,8 +276,8 @@ def _figure(cfg: ExperimentConfig, ev) -> bytes:
 def format_summary(result: RunResult) -> str:
     """A plain-text table of the run's results, with units."""
     rec, cfg = result.record, result.config
-    rows = [("experiment", cfg.name), ("reproduces", cfg.reproduces),
-            ("store key", result.key[:16] + (" (cached)" if result.cached else ""))]
+    rows = [("experiment", cfg.name)] + ([("reproduces", cfg.reproduces)] if cfg.reproduces else [])
+    rows.append(("store key", result.key[:16] + (" (cached)" if result.cached else "")))
     if cfg.sweep is not None:
         rows.append(("note", f"base point only: [sweep] over {len(cfg.sweep.parameters)} field(s) not run "
                              "(python -m research sweep CONFIG runs it)"))

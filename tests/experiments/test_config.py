@@ -38,7 +38,7 @@ def write(tmp_path, text, name="exp.toml"):
         (("delays_ms = [50.0, 30.0]", "delays_ms = [50.0, 0.0]"), r"delays_ms\[1\] must be > 0 ms"),
         (('name = "corner90"', 'name = "circle"'), r"key 'path': unknown path name 'circle'"),
         (('name = "corner90"', 'name = "corner90"\ngcode = "x.nc"'), r"exactly one of name, gcode, points_mm"),
-        (('reproduces = "test"', ""), r"key 'reproduces': Field required"),
+        (('reproduces = "test"', 'reproduces = 3'), r"key 'reproduces': Input should be a valid string"),
         (("[interpolator]", "[interpolator"), r"TOML syntax error"),
         # unit plausibility (issue 16: `delays_ms = [0.06, 0.03]` passed and printed a jerk of inf)
         (("delays_ms = [50.0, 30.0]", "delays_ms = [0.06, 0.03]"),
@@ -83,6 +83,13 @@ def test_gcode_path_uses_program_feeds(tmp_path):
     text = GOOD.replace('name = "corner90"', 'gcode = "part.nc"').replace("feed_mm_per_s = 200.0\n", "")
     result = run_experiment(write(tmp_path, text), cache_dir=tmp_path / "c", figures_dir=tmp_path / "f", log=lambda s: None)
     np.testing.assert_allclose(result.record["details"]["fir"]["feeds"], [20.0, 10.0])  # mm/min -> mm/s
+
+
+def test_config_of_ones_own_program_needs_no_paper(tmp_path):
+    """A study of one's own program or machine names no paper result: ``reproduces`` may be left out
+    (empty), and the report then has no "Reproduces" line."""
+    cfg = load_config(write(tmp_path, GOOD.replace('reproduces = "test"\n', "")))[0]
+    assert cfg.reproduces == ""
 
 
 def test_gcode_path_after_m30_is_not_run_and_is_reported(tmp_path, caplog):
