@@ -169,10 +169,21 @@ def _top_local_extrema(x: np.ndarray, count: int) -> np.ndarray:
 
 
 def _golden_min(f, lo: np.ndarray, hi: np.ndarray, steps: int = 60) -> np.ndarray:
-    """Vectorised golden-section minimisation of ``f`` on each bracket ``[lo, hi]``; returns minima."""
+    """Vectorised golden-section minimisation of ``f`` on each bracket ``[lo, hi]``; returns minima.
+
+    Each step keeps one interior point and its value and evaluates ``f`` once, at the new point (the
+    kept one is where the new bracket's golden point lies: ``1 - G = G^2``); ``steps`` shrinks of
+    the bracket by ``G = 0.618`` (60: a bracket of 2 ms ends below 1e-15 s, under the float64
+    resolution of the times)."""
     lo, hi = np.array(lo, dtype=np.float64), np.array(hi, dtype=np.float64)
-    for _ in range(steps):
-        a, b = hi - _GOLDEN * (hi - lo), lo + _GOLDEN * (hi - lo)
-        left = f(a) < f(b)
+    a, b = hi - _GOLDEN * (hi - lo), lo + _GOLDEN * (hi - lo)
+    fa, fb = f(a), f(b)
+    for _ in range(steps - 1):
+        left = fa < fb  # the minimum is in [lo, b]: b moves to a; else in [a, hi]: a moves to b
         lo, hi = np.where(left, lo, a), np.where(left, b, hi)
+        a, b = np.where(left, hi - _GOLDEN * (hi - lo), b), np.where(left, a, lo + _GOLDEN * (hi - lo))
+        fx = f(np.where(left, a, b))
+        fa, fb = np.where(left, fx, fb), np.where(left, fa, fx)
+    left = fa < fb
+    lo, hi = np.where(left, lo, a), np.where(left, b, hi)
     return f(0.5 * (lo + hi))
