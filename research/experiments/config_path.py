@@ -35,6 +35,9 @@ class PathConfig(_Strict):
                                   "(x, y, z) [mm]; with gcode only")
     home_mm: list[float] | None = Field(None, description="machine home (x, y, z) [mm, program frame], the target "
                                         "of G28; a program with G28 needs it; with gcode only")
+    initial_feed_mm_per_s: float | None = Field(None, gt=0, description="feed in effect before the program's first "
+                                                "F word [mm/s] (a controller's default feed); without it a move "
+                                                "before any F word is an error naming its line; with gcode only")
     bspline: BSplinePathConfig | None = Field(None, description="B-spline path ([path.bspline]: control points, knots, degree)")
 
     @model_validator(mode="after")
@@ -44,7 +47,7 @@ class PathConfig(_Strict):
             raise ValueError(f"give exactly one of name, gcode, points_mm, bspline (got {given or 'none'})")
         if self.gcode is None:
             # by value, not by fields set: a dumped config (sweeps, the store) writes every field back
-            extra = [k for k, v in (("home_mm", None), ("start_mm", [0.0, 0.0, 0.0])) if getattr(self, k) != v]
+            extra = [k for k, v in (("home_mm", None), ("start_mm", [0.0, 0.0, 0.0]), ("initial_feed_mm_per_s", None)) if getattr(self, k) != v]
             if extra:
                 raise ValueError(f"{', '.join(extra)} only apply to a G-code path (gcode = ...); remove them or give gcode")
         if self.name is not None and self.name not in PATHS:
@@ -114,11 +117,12 @@ def build_path(cfg: PathConfig, base: Path) -> tuple[Polyline, np.ndarray | None
 def read_program(cfg: PathConfig, base: Path):
     """The :class:`~research.paths.gcode.GCodeProgram` of a G-code path config (read relative to
     ``base``; arcs as chords at ``chord_tolerance_um`` and as blocks; from ``start_mm``, ``G28`` to
-    ``home_mm``)."""
+    ``home_mm``, ``F`` before the first F word from ``initial_feed_mm_per_s``)."""
     from research.paths.gcode import read_gcode
 
     program = read_gcode(base / cfg.gcode, chord_tolerance=cfg.chord_tolerance_um * 1e-3, start=tuple(cfg.start_mm),
-                         home=None if cfg.home_mm is None else tuple(cfg.home_mm))
+                         home=None if cfg.home_mm is None else tuple(cfg.home_mm),
+                         initial_feed=None if cfg.initial_feed_mm_per_s is None else 60.0 * cfg.initial_feed_mm_per_s)
     if program.unread_lines:
         logging.getLogger(__name__).warning(
             "%s: the program ends on line %d (M2/M30 or the closing %%); %d non-blank line(s) after it are not "

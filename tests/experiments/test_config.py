@@ -92,6 +92,22 @@ def test_config_of_ones_own_program_needs_no_paper(tmp_path):
     assert cfg.reproduces == ""
 
 
+def test_gcode_path_without_f_words_runs_from_initial_feed(tmp_path):
+    """A program with no F word reads with ``[path] initial_feed_mm_per_s`` (a controller's default
+    feed: 25 mm/s here, the feed of every block); without it the run stops at the first move's line."""
+    (tmp_path / "part.nc").write_text("G21 G90\nG1 X10\nG1 Y10\n")
+    text = GOOD.replace('name = "corner90"', 'gcode = "part.nc"\ninitial_feed_mm_per_s = 25.0')
+    text = text.replace("feed_mm_per_s = 200.0\n", "")
+    result = run_experiment(write(tmp_path, text), cache_dir=tmp_path / "c", figures_dir=tmp_path / "f", log=lambda s: None)
+    np.testing.assert_allclose(result.record["details"]["fir"]["feeds"], [25.0, 25.0])
+    with pytest.raises(Exception, match=r"part.nc:2:1: G1 motion before any F word"):
+        run_experiment(write(tmp_path, text.replace("initial_feed_mm_per_s = 25.0\n", ""), "b.toml"),
+                       cache_dir=tmp_path / "c2", figures_dir=tmp_path / "f", log=lambda s: None)
+    with pytest.raises(ConfigError, match=r"initial_feed_mm_per_s"):
+        load_config(write(tmp_path, GOOD.replace('name = "corner90"', 'name = "corner90"\ninitial_feed_mm_per_s = 5'),
+                          "c.toml"))
+
+
 def test_gcode_path_after_m30_is_not_run_and_is_reported(tmp_path, caplog):
     """Text after M30 (here a second, malformed program) is not read, as LinuxCNC does; the run plans
     the two moves before it and logs a warning naming the file, the end line and the unread lines."""
