@@ -25,7 +25,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from research.paths.toolpath import ToolPath
+from research.paths.toolpath import ToolPath, _arc_eval
 from research.piecewise import PiecewisePolynomial, bucket_size
 
 #: largest sub-arc angle of one polynomial velocity piece [rad]
@@ -85,9 +85,9 @@ class PulseTable:
         geo = np.zeros((P, deg + 1, d))
         lines = ~arc[block] & ~gap
         geo[lines, 0, :] = (path.ends - path.starts)[block[lines]]  # dP/du = L u for a line (any share)
-        for k in np.flatnonzero(arc):
-            rows = first[k] + np.arange(n_sub[k])
-            geo[rows] = _arc_pieces(path, int(k), int(n_sub[k]))
+        if arc.any():
+            k = np.flatnonzero(arc)
+            geo[np.repeat(first[k], n_sub[k]) + _ranks(n_sub[k])] = _arc_pieces(path, k, n_sub[k])
         arc_pieces = np.flatnonzero(~gap & arc[block])
         cum = np.concatenate([[0.0], np.cumsum(path.lengths)])
         k, i = block[arc_pieces], local[arc_pieces]
@@ -125,24 +125,38 @@ class PulseTable:
         return rows + (blk, np.where(self.role < 0, 1, self.role), self.block < self.n_blocks)
 
 
-def _arc_pieces(path: ToolPath, k: int, n: int) -> np.ndarray:
-    """``(n, DEGREE + 1, d)`` coefficients of ``dP/du`` on the ``n`` equal sub-arcs of arc ``k``,
-    in powers of ``u' = u - u_i`` (block fraction ``u = phi / Phi``)."""
-    sweep = float(path.sweeps[k])
-    h = 1.0 / n
+def _ranks(n: np.ndarray) -> np.ndarray:
+    """``0 .. n_j - 1`` for every entry of ``n`` ``(J,)``, concatenated."""
+    return np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)
+
+
+def _arc_pieces(path: ToolPath, arcs: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """``(sum n, DEGREE + 1, d)`` coefficients of ``dP/du`` on the ``n[j]`` equal sub-arcs of arc
+    block ``arcs[j]``, in powers of ``u' = u - u_i`` (block fraction ``u = phi / Phi``), all arcs at
+    once: ``dP/du`` at the Chebyshev nodes of every sub-arc, one interpolation solve per sub-arc
+    (a batch of the same 6 x 6 system), and the constant term corrected so that each sub-arc
+    integrates exactly to its chord."""
     x = 0.5 * (1.0 - np.cos(np.pi * (np.arange(DEGREE + 1) + 0.5) / (DEGREE + 1)))  # Chebyshev nodes in [0, 1]
     vander = np.vander(x, DEGREE + 1, increasing=True)
-    out = np.empty((n, DEGREE + 1, path.dim))
-    ends = path.arc_points(k, sweep * h * np.arange(n + 1))
-    ends[0], ends[-1] = path.starts[k], path.ends[k]
-    for i in range(n):
-        u = h * (i + x)
-        vel = path.arc_derivatives(k, sweep * u, 1) * sweep  # dP/du
-        b = np.linalg.solve(vander, vel)  # coefficients in x = u' / h
-        # exact chord: integral over the piece = h * sum b_m / (m + 1)
-        b[0] += (ends[i + 1] - ends[i]) / h - np.sum(b / np.arange(1, DEGREE + 2)[:, None], axis=0)
-        out[i] = b / h ** np.arange(DEGREE + 1)[:, None]
-    return out
+    owner = np.repeat(np.arange(arcs.size), n)  # arc of each sub-arc
+    i = _ranks(n)  # index of each sub-arc in its arc
+    sweep = path.sweeps[arcs][owner]
+    h = 1.0 / n[owner]
+    g = path._arc_rows(arcs[owner])
+    u = h[:, None] * (i[:, None] + x[None, :])  # (S, DEGREE + 1)
+    nodes = {key: np.repeat(v, DEGREE + 1, axis=0) for key, v in g.items()}
+    vel = (_arc_eval(nodes, (sweep[:, None] * u).reshape(-1), 1)[:, : path.dim]
+           * np.repeat(sweep, DEGREE + 1)[:, None]).reshape(-1, DEGREE + 1, path.dim)  # dP/du
+    # sub-arc ends: the arc's points at its sub-arc angles, the block's own start and end at the ends
+    ends0 = _arc_eval(g, sweep * h * i, 0)[:, : path.dim]
+    ends1 = _arc_eval(g, sweep * h * (i + 1), 0)[:, : path.dim]
+    first, last = i == 0, i == n[owner] - 1
+    ends0[first] = path.starts[arcs]
+    ends1[last] = path.ends[arcs]
+    b = np.linalg.solve(vander[None], vel)  # coefficients in x = u' / h
+    # exact chord: integral over the piece = h * sum b_m / (m + 1)
+    b[:, 0] += (ends1 - ends0) / h[:, None] - np.sum(b / np.arange(1, DEGREE + 2)[None, :, None], axis=1)
+    return b / h[:, None, None] ** np.arange(DEGREE + 1)[None, :, None]
 
 
 @jax.jit
