@@ -193,15 +193,15 @@ class DriveLog:
             k = int(bad[0]) + 1
             raise DriveLogError(
                 f"{self.source}: column {cols.get('t', 't')!r} is not strictly increasing at sample index {k} "
-                f"(t[{k}] = {self.t[k]!r} <= t[{k - 1}] = {self.t[k - 1]!r})"
+                f"(t[{k}] = {float(self.t[k])!r} <= t[{k - 1}] = {float(self.t[k - 1])!r})"
             )
         Ts = float(np.median(dt))
         dev = np.abs(dt - Ts)
         k = int(np.argmax(dev))
         if dev[k] > self.uniform_rtol * Ts:
             raise DriveLogError(
-                f"{self.source}: column {cols.get('t', 't')!r} is not uniformly sampled: step {dt[k]!r} s at sample "
-                f"index {k + 1} differs from the median period {Ts!r} s by more than {self.uniform_rtol:g} relative; "
+                f"{self.source}: column {cols.get('t', 't')!r} is not uniformly sampled: step {float(dt[k])!r} s at sample "
+                f"index {k + 1} differs from the median period {float(Ts)!r} s by more than {self.uniform_rtol:g} relative; "
                 f"resample explicitly with DriveLog.resample(period, method) (methods {RESAMPLING_METHODS})"
             )
         object.__setattr__(self, "columns", cols)

@@ -91,16 +91,16 @@ def _text_lines(path: Path, what: str) -> list[str]:
     except OSError as e:
         raise DriveLogError(f"{path}: cannot read ({e.strerror or e})") from None
     try:
-        return data.decode("utf-8").splitlines()
+        return data.decode("utf-8-sig").splitlines()  # a byte-order mark (spreadsheet exports) is not text
     except UnicodeDecodeError as e:
         line = data[: e.start].count(b"\n") + 1
         raise DriveLogError(f"{path}:{line}: not UTF-8 text (byte {data[e.start]:#04x}); save the log as UTF-8 "
                             f"{what}") from None
 
 
-def _number(cell: str, path: Path, lineno: int, col: int, name: str) -> float:
+def _number(cell: str, path: Path, lineno: int, col: int, name: str, decimal_comma: bool = False) -> float:
     try:
-        return float(cell)
+        return float(cell.replace(",", ".") if decimal_comma else cell)
     except ValueError:
         raise DriveLogError(f"{path}:{lineno}:{col}: column {name!r}: {cell.strip()!r} is not a number; expected a "
                             "plain decimal number") from None
@@ -108,26 +108,31 @@ def _number(cell: str, path: Path, lineno: int, col: int, name: str) -> float:
 
 def _rows(lines, first_lineno: int, sep: str, names, path: Path, expected: str) -> list[list[float]]:
     """Numbers of the delimited rows ``lines`` (the first is line ``first_lineno`` of the file); blank and
-    ``#`` lines are skipped; a row of another length raises, its message ending with ``expected``."""
+    ``#`` lines are skipped; a row of another length raises, its message ending with ``expected``.
+    With ``;`` or a tab as the separator a decimal comma is read as a point (``0,5`` = 0.5: the CSV of
+    spreadsheets in locales that write decimal commas)."""
     rows = []
+    comma = sep != ","
     for lineno, line in enumerate(lines, start=first_lineno):
         if not line.strip() or line.lstrip().startswith("#"):
             continue
         cells = line.split(sep)
         if len(cells) != len(names):
             raise DriveLogError(f"{path}:{lineno}: row has {len(cells)} values but {expected}")
-        rows.append([_number(c, path, lineno, i, names[i - 1]) for i, c in enumerate(cells, start=1)])
+        rows.append([_number(c, path, lineno, i, names[i - 1], comma) for i, c in enumerate(cells, start=1)])
     return rows
 
 
 def _read_csv(path: Path) -> dict[str, np.ndarray]:
     lines = _text_lines(path, "CSV")
     header = lines[0].strip() if lines else ""
-    names = [h.strip() for h in header.split(",")]
+    # the separator is the one of ',', ';' and tab that the header line uses most (',' if none)
+    sep = max((",", ";", "\t"), key=lambda c: (header.count(c), c == ","))
+    names = [h.strip() for h in header.split(sep)]
     if not header or any(not n for n in names):
         raise DriveLogError(f"{path}:1: a CSV drive log needs a header line naming every column, got {header!r}")
     _unique(names, path, 1)
-    rows = _rows(lines[1:], 2, ",", names, path, f"the header names {len(names)} columns {names}")
+    rows = _rows(lines[1:], 2, sep, names, path, f"the header names {len(names)} columns {names}")
     if not rows:
         raise DriveLogError(f"{path}: the CSV has a header {names} but no data rows")
     data = np.array(rows, dtype=np.float64)

@@ -172,6 +172,28 @@ def test_um_read_as_mm_and_ms_read_as_s_are_refused(tmp_path):  # item 16
     assert load_drive_log(tmp_path / "um.npz", plausibility=None).n_samples == 2000
 
 
+def test_spreadsheet_csv_dialects_read_the_same_log(tmp_path):
+    """Spreadsheet exports: a UTF-8 byte-order mark, ';' or tab separators, and with ';' the decimal
+    comma of locales that write one ("0,5"). Each reads the same samples as the plain CSV (the cells
+    written with repr, so exactly); a comma cell in a ',' file stays an error naming line and column."""
+    t, xr, x = _arrays()
+    rows = list(zip(t, xr, x))
+    dialects = {
+        "plain.csv": ("t,x_ref,x_act\n", lambda r: ",".join(repr(float(v)) for v in r)),
+        "bom.csv": ("\ufefft,x_ref,x_act\n", lambda r: ",".join(repr(float(v)) for v in r)),
+        "semicolon.csv": ("t;x_ref;x_act\n", lambda r: ";".join(repr(float(v)).replace(".", ",") for v in r)),
+        "tab.csv": ("t\tx_ref\tx_act\n", lambda r: "\t".join(repr(float(v)) for v in r)),
+    }
+    for name, (head, line) in dialects.items():
+        (tmp_path / name).write_text(head + "\n".join(line(r) for r in rows) + "\n", encoding="utf-8")
+        log = load_drive_log(tmp_path / name)
+        np.testing.assert_array_equal(log.actual, x)
+        np.testing.assert_array_equal(log.reference, xr)
+    (tmp_path / "bad.csv").write_text("t,x_ref,x_act\n0,0,0\n0,001,0,0\n")
+    with pytest.raises(DriveLogError, match=r"bad.csv:3: row has 4 values"):
+        load_drive_log(tmp_path / "bad.csv")
+
+
 def test_header_only_csv_names_the_real_problem(tmp_path):  # item 17
     (tmp_path / "h.csv").write_text("t,x_ref,x_act\n")
     with pytest.raises(DriveLogError, match=r"no data rows") as e:
