@@ -15,7 +15,7 @@ import time
 import traceback
 from pathlib import Path
 
-from research.errors import ResearchError
+from research.errors import ConfigError, ResearchError
 
 #: ``--help`` text (the module docstring without its reST markup)
 DESCRIPTION = ("Run experiment configs (run, sweep), regenerate the paper figures (figures), check or clean the "
@@ -141,9 +141,18 @@ def _store(args) -> int:
     return 0
 
 
+#: File suffixes of G-code programs, which ``run`` does not take in place of a config.
+GCODE_SUFFIXES = (".nc", ".ngc", ".gcode", ".tap", ".cnc", ".mpf", ".eia")
+
+
 def _run(args) -> int:
     from research.experiments import format_summary, run_experiment
 
+    if Path(args.config).suffix.lower() in GCODE_SUFFIXES:
+        raise ConfigError(
+            f"{args.config}: a G-code program, not an experiment config (TOML); write a config with [path] "
+            f'gcode = "{Path(args.config).name}" and [interpolator] kind = "fir", delays_ms (your machine\'s) and '
+            "tolerance_um (where the program gives no G64 P), as experiments/cam_part_arc.toml, and run that")
     result = run_experiment(args.config, cache_dir=args.cache, figures_dir=args.figures, force=args.force,
                             results_dir=args.results)
     print()

@@ -39,6 +39,18 @@ def test_run_default_experiment(tmp_path):
     assert not (tmp_path / "cache" / "sencer2015_diamond").exists()  # the cache holds only the store
 
 
+def test_run_on_a_gcode_program_says_what_to_write(tmp_path, capsys):
+    """``run part.nc`` (a program where a config is expected) is one error line naming the file and
+    the config keys to write, exit status 2."""
+    from research.cli import main
+
+    (tmp_path / "part.nc").write_text("G1 X10 F600\n")
+    assert main(["run", str(tmp_path / "part.nc")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "part.nc: a G-code program, not an experiment config" in err
+    assert 'gcode = "part.nc"' in err and "experiments/cam_part_arc.toml" in err
+
+
 def test_run_twice_is_served_from_the_store(tmp_path, capsys):
     from research.cli import main
 
