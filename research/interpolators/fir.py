@@ -350,6 +350,8 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         f, sh = repairs.bound(viol, errors, False, factor, shrink)
         return predicted_time((f, head, tail, full, others, arc_rel), sh)
 
+    last_check = [None]  # the last complete check of any candidate (RoundChecks.snapshot)
+
     def settle(candidate, several=False):
         """Verify and repair one candidate plan (``candidate()`` builds its new arrays ``(factor,
         head, tail, full, others, arc_rel)`` when it starts), one round per step: a generator that yields the
@@ -367,6 +369,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         bisection = CornerBisection(M - 1) if limits is not None else _NO_BISECTION
         checked, repaired = np.zeros(M, dtype=bool), False
         checks = RoundChecks(tp, tb_np, table.block, Td_np, check_period)  # redone only where the profile changed
+        checks.adopt(last_check[0])  # from another candidate's last complete check: redone where they differ
         repairs = Repairs(full, head, tail, tv_np, tb_np, F_np, tp.lengths, Td_np, d_np.size, cum_np)
 
         def alone(g, blocks):  # ``_fir_limits`` phase 1: the own peaks of ``blocks`` (every corner an exact stop)
@@ -443,6 +446,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                                 pos_np, starts_np, centre_np = state[4], state[3], state[5]
                                 checks.swap_profile(pos_np, starts_np, centre_np)
                         deviation, at_vertex, at_block = checks.samples_check()
+                        last_check[0] = checks.snapshot()
                     viol = errors > limit_v
                     if refine:
                         for j, e in at_vertex.items():

@@ -132,6 +132,34 @@ def test_round_checks_redo_only_the_changed_stretch_and_agree_with_full_checks()
         assert abs(a - b) <= bound
 
 
+def test_round_checks_adopted_by_another_candidate_act_as_a_next_round():
+    """Another candidate of the same plan (same pulse table) adopting a check's snapshot checks only
+    where its input differs, exactly as a next round of the first candidate would: on the same
+    profile it takes no path samples and returns the same results; on a profile with two blocks
+    slowed it returns what the first candidate's own next round returns, bit for bit, with the
+    same number of samples."""
+    scale = np.ones(80)
+    tp, table, pos, starts, centre, durations, Td = _zigzag_profile(scale)
+    tol = np.full(80, 0.02)
+    first = RoundChecks(tp, tol, table.block, Td, 1e-3)
+    own = first(pos, starts, centre, durations, True)
+    snap = first.snapshot()
+    same = RoundChecks(tp, tol, table.block, Td, 1e-3)
+    same.adopt(snap)
+    again = same(pos, starts, centre, durations, True)
+    assert same.samples == 0
+    np.testing.assert_array_equal(again[0], own[0])
+    assert again[1:] == own[1:]
+    scale[[30, 31]] = 0.5
+    tp, table, pos, starts, centre, durations, Td = _zigzag_profile(scale)
+    other = RoundChecks(tp, tol, table.block, Td, 1e-3)
+    other.adopt(snap)
+    adopted = other(pos, starts, centre, durations, True)
+    next_round = first(pos, starts, centre, durations, True)
+    np.testing.assert_array_equal(adopted[0], next_round[0])
+    assert adopted[1:] == next_round[1:] and other.samples == first.samples > 0
+
+
 def test_profile_of_the_first_blocks_is_the_plan_until_their_input_ends():
     """``plan_fir``'s first bound of a competing candidate (``prefix_bound``) checks vertex errors
     on the profile of the input of its first K blocks alone. The output at ``t`` averages the input
