@@ -132,16 +132,25 @@ def overlaps(tolerance: np.ndarray, speed_change: np.ndarray, delays: np.ndarray
 def timing(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, full, shrink, others, tol_vertex, delays):
     """``fir._timing_kernel`` on the real corners (``M - 1``), NumPy: the pulse length of every
     piece ``(P,)`` [s] (eq 5 at its feed) and the overlap of every corner ``(M - 1,)`` [s] (eq 13/14,
-    or ``T_d`` at full overlap, times its shrink factor)."""
+    or ``T_d`` at full overlap, times its shrink factor). Elementwise for one or two filters: the
+    pieces up to a block's first motion piece and the corners before it (``plan_fir``'s
+    ``prefix_bound``) give the same values as the whole path's."""
     piece_tv = lengths_p[blk] / (feeds_p[blk] * piece_factor)
     M = tol_vertex.size + 1
-    f_in = feeds_p[:M] * piece_factor[motion_ends[0][:M]]
-    f_out = feeds_p[:M] * piece_factor[motion_ends[1][:M]]
-    x = f_in[1:, None] * tangents[0][1:M] - f_out[:-1, None] * tangents[1][: M - 1]
+    f_in = feeds_p[1:M] * piece_factor[motion_ends[0][1:M]]  # entry feed of the block after each corner
+    f_out = feeds_p[: M - 1] * piece_factor[motion_ends[1][: M - 1]]  # exit feed of the block before it
+    x = f_in[:, None] * tangents[0][1:M] - f_out[:, None] * tangents[1][: M - 1]
     s = np.sum(x * x, axis=-1)
     dF = np.where(s > 0, np.sqrt(np.where(s > 0, s, 1.0)), 0.0)
     Td = float(np.sum(delays))
-    ov = np.where(full, Td, overlaps(np.maximum(tol_vertex - others, 0.0), dF, delays)) if M > 1 else np.zeros(0)
+    if M == 1:
+        return piece_tv, np.zeros(0)
+    if delays.size > 2:  # the JAX inversion on the padded shapes of every corner
+        ov = np.where(full, Td, overlaps(np.maximum(tol_vertex - others, 0.0), dF, delays))
+    else:  # closed forms, elementwise: only the dwell corners' (most corners of a CAM program are full)
+        dwell = ~np.asarray(full, dtype=bool)
+        ov = np.full(M - 1, Td)
+        ov[dwell] = overlaps(np.maximum(tol_vertex[dwell] - others[dwell], 0.0), dF[dwell], delays)
     return piece_tv, ov * shrink
 
 
