@@ -132,16 +132,25 @@ def overlaps(tolerance: np.ndarray, speed_change: np.ndarray, delays: np.ndarray
 def timing(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, full, shrink, others, tol_vertex, delays):
     """``fir._timing_kernel`` on the real corners (``M - 1``), NumPy: the pulse length of every
     piece ``(P,)`` [s] (eq 5 at its feed) and the overlap of every corner ``(M - 1,)`` [s] (eq 13/14,
-    or ``T_d`` at full overlap, times its shrink factor)."""
+    or ``T_d`` at full overlap, times its shrink factor). Elementwise for one or two filters: the
+    pieces up to a block's first motion piece and the corners before it (``plan_fir``'s
+    ``prefix_bound``) give the same values as the whole path's."""
     piece_tv = lengths_p[blk] / (feeds_p[blk] * piece_factor)
     M = tol_vertex.size + 1
-    f_in = feeds_p[:M] * piece_factor[motion_ends[0][:M]]
-    f_out = feeds_p[:M] * piece_factor[motion_ends[1][:M]]
-    x = f_in[1:, None] * tangents[0][1:M] - f_out[:-1, None] * tangents[1][: M - 1]
+    f_in = feeds_p[1:M] * piece_factor[motion_ends[0][1:M]]  # entry feed of the block after each corner
+    f_out = feeds_p[: M - 1] * piece_factor[motion_ends[1][: M - 1]]  # exit feed of the block before it
+    x = f_in[:, None] * tangents[0][1:M] - f_out[:, None] * tangents[1][: M - 1]
     s = np.sum(x * x, axis=-1)
     dF = np.where(s > 0, np.sqrt(np.where(s > 0, s, 1.0)), 0.0)
     Td = float(np.sum(delays))
-    ov = np.where(full, Td, overlaps(np.maximum(tol_vertex - others, 0.0), dF, delays)) if M > 1 else np.zeros(0)
+    if M == 1:
+        return piece_tv, np.zeros(0)
+    if delays.size > 2:  # the JAX inversion on the padded shapes of every corner
+        ov = np.where(full, Td, overlaps(np.maximum(tol_vertex - others, 0.0), dF, delays))
+    else:  # closed forms, elementwise: only the dwell corners' (most corners of a CAM program are full)
+        dwell = ~np.asarray(full, dtype=bool)
+        ov = np.full(M - 1, Td)
+        ov[dwell] = overlaps(np.maximum(tol_vertex[dwell] - others[dwell], 0.0), dF[dwell], delays)
     return piece_tv, ov * shrink
 
 
@@ -156,28 +165,19 @@ def profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
         np.ascontiguousarray(delays, dtype=np.float64))
 
 
-@numba.njit(**_OPTIONS)
-def _exact_reciprocals(n):
-    """``(n + 1,)``: ``1 / m`` at the powers of two ``m <= n``, 0 elsewhere. ``x / m`` is then
-    ``x * (1 / m)`` to the bit (``1 / m`` exact, both round the same real number) without a
-    division (:func:`_over`); a division costs several multiplications."""
-    out = np.zeros(n + 1)
-    m = 1
-    while m <= n:
-        out[m] = 1.0 / m
-        m *= 2
-    return out
-
-
 @numba.njit(inline="always", **_OPTIONS)
-def _over(x, m, rec):
-    """``x / m`` (``m >= 1`` an integer, :func:`_exact_reciprocals` ``rec`` up to it)."""
-    r = rec[m]
-    return x * r if r != 0.0 else x / m
+def _over(x, m):
+    """``x / m`` for an integer ``m >= 1``: ``x * (1 / m)`` at a power of two (``1 / m`` exact, both
+    round the same real number, so the same bits) without a division, which costs several
+    multiplications; the test folds away where ``m`` is a compile-time constant (the unrolled row
+    loops of :func:`_filter`)."""
+    if m & (m - 1) == 0:
+        return x * (1.0 / m)
+    return x / m
 
 
 @numba.njit(**_OPTIONS)
-def _constants(breaks, coeffs, rec, D):
+def _constants(breaks, coeffs, D):
     """Constant terms ``(K + 1, A)`` of ``C``, the integral of the function from ``breaks[0]``
     (``PiecewisePolynomial.antiderivative``; the other coefficients of piece ``i`` are
     ``coeffs[i, m] / (m + 1)``), and as row ``K`` its end value (Horner on the last piece)."""
@@ -193,27 +193,27 @@ def _constants(breaks, coeffs, rec, D):
         for a in range(A):
             s = 0.0
             for m in range(D):
-                s += _over(coeffs[i, m, a], m + 1, rec) * hp[m]
+                s += _over(coeffs[i, m, a], m + 1) * hp[m]
             acc[a] += s
             out[i, a] = (acc[a] - s) + 0.0
     h = breaks[K] - breaks[K - 1]
     for a in range(A):
-        v = _over(coeffs[K - 1, D - 1, a], D, rec)
+        v = _over(coeffs[K - 1, D - 1, a], D)
         for m in range(D - 1, 0, -1):
-            v = v * h + _over(coeffs[K - 1, m - 1, a], m, rec)
+            v = v * h + _over(coeffs[K - 1, m - 1, a], m)
         out[K, a] = v * h + out[K - 1, a]
     return out
 
 
 @numba.njit(inline="always", **_OPTIONS)
-def _shifted_c(coeffs, consts, k, a, delta, rec, c, D):
+def _shifted_c(coeffs, consts, k, a, delta, c, D):
     """Piece ``k`` of ``C`` on axis ``a`` (ascending coefficients ``(D + 1,)`` into ``c``; piece ``K``
     the end value held after the last break), re-centred by ``delta``: the Taylor shift of
     ``research.piecewise._taylor_shift``."""
     K = coeffs.shape[0]
     c[0] = consts[k, a]
     for m in range(D):
-        c[m + 1] = _over(coeffs[k, m, a], m + 1, rec) if k < K else 0.0
+        c[m + 1] = _over(coeffs[k, m, a], m + 1) if k < K else 0.0
     for i in range(D):
         for m in range(D - 1, i - 1, -1):
             c[m] = c[m] + delta * c[m + 1]
@@ -269,27 +269,20 @@ def _filter_rows(breaks, coeffs, delay, initial, integrate, D):
     piece is built in scalars, one after the other (the axes never mix: the same operations in the
     same order as axis-innermost loops)."""
     K, _, A = coeffs.shape
-    rec = _exact_reciprocals(D + 2)
-    consts = _constants(breaks, coeffs, rec, D)
-    # two passes of the same merge (no merged arrays kept): count the new pieces of positive
-    # length, then fill them. An empty piece is never evaluated (a right search takes the next
-    # piece), integrates to 0, and the next filter's pieces that would take their coefficients
-    # from it are empty too; the breaks are the same values, the function the same
+    consts = _constants(breaks, coeffs, D)
+    # one pass of the merge (no merged arrays kept) fills the new pieces of positive length into
+    # arrays sized for all ``2 K + 1`` (a view of them returned). An empty piece is never evaluated
+    # (a right search takes the next piece), integrates to 0, and the next filter's pieces that
+    # would take their coefficients from it are empty too; the breaks are the same values, the
+    # function the same. The merged breaks never decrease, from ``breaks[0]`` to ``breaks[K] + T``:
+    # every piece is empty when those are equal, and then the first one is kept
     R = D + 2 if integrate else D + 1  # coefficient rows of a result piece
-    count = 0
-    i, j = 0, 0  # breaks of C(t) taken, breaks of C(t - T) taken (ties: C(t) first)
-    left = 0.0
-    for p in range(2 * (K + 1)):
-        b, i, j = _merge_step(breaks, delay, i, j, K)
-        if p > 0 and b > left:
-            count += 1
-        left = b
-    keep_first = count == 0  # every piece empty: keep the first one
-    n_out = max(count, 1)
-    out = np.empty((n_out + 1, R, A)) if integrate else np.empty((n_out, R, A))  # every entry written
-    out_breaks = np.empty(n_out + 2) if integrate else np.empty(n_out + 1)
+    keep_first = not (breaks[K] + delay > breaks[0])
+    cap = 2 * K + 1
+    out = np.empty((cap + 1, R, A)) if integrate else np.empty((cap, R, A))  # written up to the pieces kept
+    out_breaks = np.empty(cap + 2) if integrate else np.empty(cap + 1)
     c, w, hp, acc = np.empty(D + 1), np.empty(D + 1), np.empty(D + 1), np.zeros(A)
-    i, j, q = 0, 0, 0  # as above; pieces kept
+    i, j, q = 0, 0, 0  # breaks of C(t) taken, breaks of C(t - T) taken (ties: C(t) first); pieces kept
     left, now, before = 0.0, -1, -1
     for p in range(2 * (K + 1)):
         b, i, j = _merge_step(breaks, delay, i, j, K)
@@ -304,11 +297,11 @@ def _filter_rows(breaks, coeffs, delay, initial, integrate, D):
             for m in range(1, D + 1):
                 hp[m] = hp[m - 1] * h
             for a in range(A):
-                _shifted_c(coeffs, consts, now, a, left - breaks[now], rec, c, D)
+                _shifted_c(coeffs, consts, now, a, left - breaks[now], c, D)
                 for m in range(D + 1):
                     w[m] = 0.0 + 1.0 * c[m]
                 if before >= 0:
-                    _shifted_c(coeffs, consts, before, a, (left - delay) - breaks[before], rec, c, D)
+                    _shifted_c(coeffs, consts, before, a, (left - delay) - breaks[before], c, D)
                     for m in range(D + 1):
                         w[m] += -1.0 * c[m]
                 if not integrate:
@@ -317,13 +310,14 @@ def _filter_rows(breaks, coeffs, delay, initial, integrate, D):
                 else:  # ``PiecewisePolynomial.antiderivative`` of this piece, in order
                     s = 0.0
                     for m in range(D + 1):
-                        cm = _over(w[m] / delay, m + 1, rec)
+                        cm = _over(w[m] / delay, m + 1)
                         out[q, m + 1, a] = cm
                         s += cm * hp[m]
                     acc[a] += s
                     out[q, 0, a] = (acc[a] - s) + initial[a]
             q += 1
         left, now, before = b, i - 1, j - 1
+    n_out = q
     if integrate:  # the closing rest piece: the end value (Horner on the last piece), v = a = j = 0
         h = out_breaks[n_out] - out_breaks[n_out - 1]
         for a in range(A):
@@ -334,7 +328,11 @@ def _filter_rows(breaks, coeffs, delay, initial, integrate, D):
             for m in range(1, R):
                 out[n_out, m, a] = 0.0
         out_breaks[n_out + 1] = out_breaks[n_out]
-    return out_breaks, out
+        n_out += 1
+    if integrate and 8 * n_out < 7 * cap:  # many empty pieces (the raw pulses of one filter): the
+        # profile kept is not held in a buffer sized for all
+        return out_breaks[: n_out + 1].copy(), out[:n_out].copy()
+    return out_breaks[: n_out + 1], out[:n_out]
 
 
 @numba.njit(**_OPTIONS)

@@ -19,7 +19,7 @@ from jax import Array
 from research.paths.toolpath import ToolPath
 from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_verify_kernels import corner_distances as _corner_kernel
-from research.interpolators._fir_verify_kernels import sample_charges, sampled_line_distances, scatter_max
+from research.interpolators._fir_verify_kernels import charge_samples, grid_times, sampled_line_distances, scatter_max
 from research.piecewise import NumpyPiecewise, PiecewisePolynomial, bucket_size
 
 _GRID = 9  # grid points per corner window for the corner-error search
@@ -117,17 +117,10 @@ def _sample_times(first: np.ndarray, count: np.ndarray, t0: float, t1: float, pe
     ends = np.cumsum(count)  # sample index after each run
     n_grid = int(ends[-1]) if ends.size else 0
     for i in range(0, n_grid, _CHUNK):
-        yield _grid_chunk(i, min(i + _CHUNK, n_grid), first, count, ends, t0, t1, period)
+        yield grid_times(i, min(i + _CHUNK, n_grid), first, count, ends, t0, t1, period)  # compiled
     tail = np.append(extra, t1)
     for i in range(0, tail.size, _CHUNK):
         yield np.clip(tail[i: i + _CHUNK], t0, t1)
-
-
-def _grid_chunk(i: int, j: int, first, count, ends, t0: float, t1: float, period: float) -> np.ndarray:
-    """Grid samples ``i .. j - 1`` of :func:`_sample_times` (its work arrays end with the call)."""
-    k = np.arange(i, j)
-    run = np.searchsorted(ends, k, side="right")  # the run holding sample k
-    return np.clip(t0 + (first[run] + (k - (ends[run] - count[run]))) * period, t0, t1)
 
 
 def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo) -> float:
@@ -139,21 +132,15 @@ def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo
     of about :data:`_BATCH` for :meth:`ToolPath.distance_bound` (a fixed cost per call that would
     otherwise come with every chunk); each sample's distance is its own, so the batching changes
     no value, and the maxima are the same in any order."""
+    arrays = _ScanArrays(position, path, starts, centre, tol_block, redo)
     deviation = -np.inf
     waiting: list[tuple[np.ndarray, ...]] = []
     n_waiting = 0
     for t in times:
-        dist, key, over, late, wait = _charged_samples(position, path, t, starts, centre, Td, tol_block)
-        keep = key >= 0 if redo is None else redo[key]
-        near = ~over
-        if near.any():
-            deviation = max(deviation, float(dist[near].max()))
-        final = keep & near
-        scatter_max(worst, key[final], dist[final])
-        final &= late
-        scatter_max(bad, key[final], dist[final])
+        near_max, wait = _charged_samples(arrays, path, t, Td, worst)
+        deviation = max(deviation, near_max)
         if wait is not None:
-            waiting.append(wait + (keep[over],))
+            waiting.append(wait)
             n_waiting += wait[0].shape[0]
         if n_waiting >= _BATCH:
             deviation = max(deviation, _bound_waiting(path, waiting, worst, bad))
@@ -161,6 +148,24 @@ def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo
     if waiting:
         deviation = max(deviation, _bound_waiting(path, waiting, worst, bad))
     return deviation
+
+
+class _ScanArrays:
+    """The arrays of one path check, made contiguous once for all its chunks: the profile's
+    breaks and coefficients, the block starts and corner instants [s], the tolerances [mm], the
+    path's arc flags and line segments (:func:`_line_segments`), and ``redo`` (empty: every key)."""
+
+    __slots__ = ("breaks", "coeffs", "starts", "centre", "tol", "is_arc", "has_arc", "segments", "redo")
+
+    def __init__(self, position: NumpyPiecewise, path: ToolPath, starts, centre, tol_block, redo):
+        self.breaks, self.coeffs = np.ascontiguousarray(position.breaks), np.ascontiguousarray(position.coeffs)
+        self.starts = np.ascontiguousarray(starts)
+        self.centre = np.ascontiguousarray(centre, dtype=np.float64)
+        self.tol = np.ascontiguousarray(tol_block, dtype=np.float64)
+        self.is_arc = np.ascontiguousarray(path.is_arc)
+        self.has_arc = bool(self.is_arc.any())
+        self.segments = _line_segments(path)
+        self.redo = np.zeros(0, bool) if redo is None else np.ascontiguousarray(redo)
 
 
 def _bound_waiting(path: ToolPath, waiting, worst, bad) -> float:
@@ -175,21 +180,19 @@ def _bound_waiting(path: ToolPath, waiting, worst, bad) -> float:
     return float(dist.max())
 
 
-def _charged_samples(position: NumpyPiecewise, path: ToolPath, t: np.ndarray, starts: np.ndarray, centre: np.ndarray,
-                     Td: float, tol_block: np.ndarray):
-    """Distance [mm] from the trajectory at each sample time ``t`` to the three blocks around the
-    one its window is centred on, the key it is charged to (vertex ``j < M - 1``, or ``M - 1 +
-    block``: see :func:`path_deviations`), whether that distance breaks its tolerance (``over``:
-    the nearest path samples are to be tried as well, :func:`_scan`), whether it does so by the
-    NumPy comparison where the compiled one said no (``late``; none, to rounding), and for the
-    samples ``over`` the rows ``(q, block, dist, limit, key)`` that the bound needs (None if none).
-    Returns ``(dist, key, over, late, rows)``."""
-    q, block, dist = _three_block_distance(path, position, t, starts, Td)
-    limit, key, over = sample_charges(np.ascontiguousarray(t), np.ascontiguousarray(centre, dtype=np.float64), block,
-                                      dist, np.ascontiguousarray(tol_block, dtype=np.float64), path.is_arc, 0.5 * Td)
-    late = ~over & (dist > verified_bound(limit))
-    rows = (q[over], block[over], dist[over], limit[over], key[over]) if over.any() else None
-    return dist, key, over, late, rows
+def _charged_samples(arrays: _ScanArrays, path: ToolPath, t: np.ndarray, Td: float, worst: np.ndarray):
+    """One chunk of a path check at sample times ``t``: the distance [mm] from the trajectory to
+    the three blocks around the one its window is centred on (:func:`_three_block_distance`), each
+    sample charged to a key (vertex ``j < M - 1``, or ``M - 1 + block``: see
+    :func:`path_deviations`) and, unless it breaks its tolerance, into ``worst`` where kept
+    (``_fir_verify_kernels.charge_samples``). Returns ``(largest distance of the samples within
+    tolerance, rows (q, block, dist, limit, key, keep) of those that break it)``: the nearest path
+    samples are to be tried for those as well (:func:`_scan`); None if none."""
+    q, block, d2 = _three_block_distance(arrays, path, t, Td)
+    near_max, over, dist, limit, key, keep = charge_samples(t, d2, block, arrays.centre, arrays.tol, arrays.is_arc,
+                                                             0.5 * Td, arrays.redo, worst)
+    rows = (q[over], block[over], dist, limit, key, keep) if over.size else None
+    return near_max, rows
 
 
 class RoundChecks:
@@ -344,26 +347,29 @@ def _meets(lo: np.ndarray, hi: np.ndarray, r_lo: np.ndarray, r_hi: np.ndarray) -
     return (i < r_lo.size) & (r_lo[np.minimum(i, max(r_lo.size - 1, 0))] <= hi) if r_lo.size else np.zeros(lo.size, bool)
 
 
-def _three_block_distance(path: ToolPath, position: NumpyPiecewise, t: np.ndarray, starts: np.ndarray, Td: float):
-    """Trajectory samples at ``t``, the block each one's window is centred on, and the distance [mm]
-    from each sample to the nearest of blocks ``block - 1 .. block + 1``.
-
-    Lines by one compiled pass (``_fir_verify_kernels.sampled_line_distances``); arc candidates through
-    ``ToolPath._block_distance`` (exact for planar arcs). Returns ``(q (N, d), block (N,), dist (N,))``."""
-    M = path.n_blocks
+def _line_segments(path: ToolPath):
+    """``(start (M, d), end - start (M, d), 1 / |end - start|^2 (M,))`` of every block as a segment
+    (0 for a zero-length one), kept in the path's cache."""
     if "line_segments" not in path._cache:
         ab = np.ascontiguousarray(path.ends - path.starts)
         ab2 = np.einsum("kd,kd->k", ab, ab)
         inv = np.where(ab2 > 0, 1.0 / np.where(ab2 > 0, ab2, 1.0), 0.0)
         path._cache["line_segments"] = (np.ascontiguousarray(path.starts, dtype=np.float64), ab, inv)
-    a, ab, inv = path._cache["line_segments"]
-    q, block, d2 = sampled_line_distances(np.ascontiguousarray(position.breaks), np.ascontiguousarray(position.coeffs),
-                                          np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(starts), 0.5 * Td,
-                                          a, ab, inv)
-    if path.is_arc.any():
+    return path._cache["line_segments"]
+
+
+def _three_block_distance(arrays: _ScanArrays, path: ToolPath, t: np.ndarray, Td: float):
+    """Trajectory samples at ``t``, the block each one's window is centred on, and the squared
+    distances [mm^2] from each sample to blocks ``block - 1 .. block + 1`` (clipped to the path).
+
+    Lines by one compiled pass (``_fir_verify_kernels.sampled_line_distances``); arc candidates through
+    ``ToolPath._block_distance`` (exact for planar arcs). Returns ``(q (N, d), block (N,), d2 (N, 3))``."""
+    M = path.n_blocks
+    q, block, d2 = sampled_line_distances(arrays.breaks, arrays.coeffs, t, arrays.starts, 0.5 * Td, *arrays.segments)
+    if arrays.has_arc:
         nb = np.clip(block[:, None] + np.arange(-1, 2)[None, :], 0, M - 1)
-        arc = path.is_arc[nb]
+        arc = arrays.is_arc[nb]
         if arc.any():
             rows = np.nonzero(arc)
             d2[rows] = path._block_distance(q[rows[0]], nb[rows]) ** 2
-    return q, block, np.sqrt(np.minimum(np.minimum(d2[:, 0], d2[:, 1]), d2[:, 2]))
+    return q, block, d2

@@ -5,7 +5,8 @@ corner-distance search) evaluate the exact profile on its NumPy arrays with Horn
 :class:`research.piecewise.NumpyPiecewise`, and replace per-sample NumPy gathers and the JAX grid +
 Newton search inside the planner's rounds. Each finds its piece from the last one's index and is
 compiled with the profile's row and axis counts as constants for two filters.
-:func:`sample_charges` charges path samples to their corner or arc, :func:`scatter_max` is
+:func:`charge_samples` charges path samples to their corner or arc and keeps the largest
+distance of each, :func:`grid_times` makes their times, :func:`scatter_max` is
 ``np.maximum.at`` in one pass. ``tests/interpolators/test_fir_kernels.py`` checks them against
 NumPy computations.
 """
@@ -253,26 +254,50 @@ def _left_from(a, v, hint):
 
 
 @numba.njit(**_OPTIONS)
-def sample_charges(t, centre, block, dist, tol_block, is_arc, half_window):
-    """Tolerance, violation and charge key of path samples (``_fir_verify._charged_samples``).
+def grid_times(i, j, first, count, ends, t0, t1, period):
+    """Grid samples ``i .. j - 1`` of the runs ``r`` of ``count[r]`` grid points from ``t0 + first[r]
+    period`` on (``ends``: their cumulative counts), clipped to ``[t0, t1]`` (``_fir_verify._sample_times``):
+    the run of sample ``k`` is ``searchsorted(ends, k, "right")``, its time ``t0 + (first[run] + k -
+    (ends[run] - count[run])) period``, the integer converted to a float before the product, as
+    NumPy's ``int64 * float64``."""
+    out = np.empty(max(j - i, 0))
+    run = 0
+    for k in range(i, j):
+        while ends[run] <= k:
+            run += 1
+        out[k - i] = min(max(t0 + (first[run] + (k - (ends[run] - count[run]))) * period, t0), t1)
+    return out
 
-    Sample ``i`` at time ``t[i]``, its window's block ``block[i]`` and distance ``dist[i]``: it is
-    near the corner whose instant (``centre``, ``(M - 1,)``, sorted) is closest, when within
+
+@numba.njit(**_OPTIONS)
+def charge_samples(t, d2, block, centre, tol_block, is_arc, half_window, redo, worst):
+    """Distance, tolerance, violation and charge key of path samples, and the largest distance of
+    each key (``_fir_verify._charged_samples``).
+
+    Sample ``i`` at time ``t[i]``, its window's block ``block[i]``, its squared distances ``d2[i]``
+    ``(3,)`` to blocks ``block - 1 .. block + 1``: its distance is ``sqrt(min d2[i])``. It is near
+    the corner whose instant (``centre``, ``(M - 1,)``, sorted) is closest, when within
     ``half_window``; its tolerance is its block's, or the smaller of that and the vertex's (the
-    smaller of the vertex's two blocks) when near. Key: the near vertex; else, on a line, the vertex
-    ``clip(block, 0, M - 2)``; else (inside an arc) ``M - 1 + block``; ``-1`` on a one-block path's
-    line. The same comparisons as the NumPy form it replaces.
+    smaller of the vertex's two blocks) when near. Key: the near vertex; else, on a line, the
+    vertex ``clip(block, 0, M - 2)``; else (inside an arc) ``M - 1 + block``; ``-1`` on a one-block
+    path's line. It is over when its distance is above ``verified_bound(tolerance)`` (the same
+    product and sum, compiled without contraction into a fused multiply-add). A sample kept
+    (``redo[key]``; with an empty ``redo``, every key ``>= 0``) and not over raises ``worst[key]``
+    to its distance, in place.
 
     Returns:
-        ``(limit (N,), key (N,), bad (N,))``.
+        ``(largest distance of the samples not over (-inf if none), over (V,) indices, their
+        distances, tolerances, keys and kept flags)``.
     """
     N, C = t.size, centre.size
     M = C + 1
-    limit = np.empty(N)
-    key = np.empty(N, np.int64)
-    bad = np.empty(N, np.bool_)
-    hint = 0
+    whole = redo.size == 0
+    over = np.empty(N, np.int64)
+    o_dist, o_limit, o_key, o_keep = np.empty(N), np.empty(N), np.empty(N, np.int64), np.empty(N, np.bool_)
+    deviation = -np.inf
+    n_over, hint = 0, 0
     for i in range(N):
+        dist = math.sqrt(min(min(d2[i, 0], d2[i, 1]), d2[i, 2]))
         b = block[i]
         lim = tol_block[b]
         near = -1
@@ -284,12 +309,18 @@ def sample_charges(t, centre, block, dist, tol_block, is_arc, half_window):
             if abs(centre[j] - t[i]) <= half_window:
                 near = j
                 lim = min(lim, min(tol_block[j], tol_block[j + 1]))
-        limit[i] = lim
-        bad[i] = dist[i] > lim * (1.0 + VERIFY_RTOL) + VERIFY_ATOL
         if near >= 0:
-            key[i] = near
+            key = near
         elif not is_arc[b]:
-            key[i] = min(max(b, 0), max(M - 2, 0)) if M > 1 else -1
+            key = min(max(b, 0), max(M - 2, 0)) if M > 1 else -1
         else:
-            key[i] = M - 1 + b
-    return limit, key, bad
+            key = M - 1 + b
+        keep = key >= 0 if whole else redo[key]
+        if dist > lim * (1.0 + VERIFY_RTOL) + VERIFY_ATOL:
+            over[n_over], o_dist[n_over], o_limit[n_over], o_key[n_over], o_keep[n_over] = i, dist, lim, key, keep
+            n_over += 1
+        else:
+            deviation = max(deviation, dist)
+            if keep and dist > worst[key]:
+                worst[key] = dist
+    return deviation, over[:n_over], o_dist[:n_over], o_limit[:n_over], o_key[:n_over], o_keep[:n_over]

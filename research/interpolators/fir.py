@@ -337,8 +337,15 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         ``[t - T_d, t]``), so the corners whose search window ``centre +- T_d / 2`` ends by then
         have their errors of the full check; their repairs bound the first round's
         (``_fir_repair``: a subset of the violators at the same errors)."""
-        frac, piece_tv, _, _, gaps = timing_gaps(factor, head, tail, full, shrink, others, arc_rel, top=False)
         c = int(table.first_motion[K])  # the pieces of blocks 0 .. K - 1 and their gaps
+        if d_np.size > 2:  # the JAX inversion of eq 13/14 on the padded shapes of every corner
+            frac, piece_tv, _, _, gaps = timing_gaps(factor, head, tail, full, shrink, others, arc_rel, top=False)
+        else:  # elementwise: the timing of those pieces and of corners 0 .. K - 1 alone (the same values)
+            frac, piece_factor = table.pieces(head, tail, factor, arc_rel)
+            piece_tv, overlaps = _fir_profile.timing(lengths_np, feeds_np, table.block[: c + 1], piece_factor[: c + 1],
+                                                     motion_ends_np[:, : K + 1], tangents_np[:, : K + 1], full[:K],
+                                                     shrink[:K], others[:K], tv_np[:K], d_np)
+            gaps = np.concatenate([Td_np - overlaps, np.zeros(Mp - K)])
         starts, _, breaks, coeffs, centre = _fir_profile.profile(tp.start, table.geo[:c], table.block[:c],
                                                                  table.gap[:c], frac[:c], piece_tv[:c], gaps, d_np)
         j = np.flatnonzero(centre[: K - 1] + 0.5 * Td_np <= starts[K])

@@ -357,9 +357,11 @@ def test_range_min_matches_brute_force():
 
 
 def test_sample_charges_match_the_vectorised_rule():
-    """Near corner, tolerance, violation and key of path samples against the NumPy statement of
-    the rule (nearest corner instant within T_d / 2; lines charge their vertex, arcs their block)."""
-    from research.interpolators._fir_verify_kernels import sample_charges
+    """Distance, near corner, tolerance, violation, key and per-key maxima of path samples against
+    the NumPy statement of the rule (the nearest of three squared distances; nearest corner instant
+    within T_d / 2; lines charge their vertex, arcs their block; the samples within tolerance raise
+    the maxima of the keys kept), with every key kept and with some."""
+    from research.interpolators._fir_verify_kernels import charge_samples
 
     rng = np.random.default_rng(2)
     M, half = 40, 0.05
@@ -367,18 +369,46 @@ def test_sample_charges_match_the_vectorised_rule():
     t = np.concatenate([np.sort(rng.uniform(-0.1, 4.1, 3000)), centre, [4.1]])
     block = rng.integers(0, M, t.size)
     tol = rng.uniform(0.01, 0.05, M)
-    dist = rng.uniform(0.0, 0.06, t.size)
+    d2 = rng.uniform(0.0, 0.06, (t.size, 3)) ** 2
     arc = rng.random(M) < 0.3
-    limit, key, bad = sample_charges(t, centre, block, dist, tol, arc, half)
+    dist = np.sqrt(d2.min(axis=1))
     k = np.clip(np.searchsorted(centre, t), 1, M - 1)
     j = np.where(np.abs(centre[k - 1] - t) <= np.abs(centre[np.minimum(k, M - 2)] - t), k - 1, np.minimum(k, M - 2))
     close = np.abs(centre[j] - t) <= half
     want_limit = np.where(close, np.minimum(tol[block], np.minimum(tol[:-1], tol[1:])[j]), tol[block])
     want_key = np.where(close, j, np.where(~arc[block], np.clip(block, 0, M - 2), M - 1 + block))
-    np.testing.assert_array_equal(limit, want_limit)
-    np.testing.assert_array_equal(key, want_key)
-    np.testing.assert_array_equal(bad, dist > want_limit * (1 + 1e-9) + 1e-9)
-    assert close.any() and (~close).any() and (want_key >= M - 1).any()
+    want_over = dist > want_limit * (1 + 1e-9) + 1e-9
+    assert close.any() and (~close).any() and (want_key >= M - 1).any() and want_over.any() and (~want_over).any()
+    for redo in (np.zeros(0, bool), rng.random(2 * M - 1) < 0.5):
+        kept = np.ones(t.size, bool) if redo.size == 0 else redo[want_key]
+        worst = np.full(2 * M - 1, -np.inf)
+        near_max, over, o_dist, o_limit, o_key, o_keep = charge_samples(t, d2, block, centre, tol, arc, half, redo, worst)
+        np.testing.assert_array_equal(over, np.flatnonzero(want_over))
+        np.testing.assert_array_equal(o_dist, dist[want_over])
+        np.testing.assert_array_equal(o_limit, want_limit[want_over])
+        np.testing.assert_array_equal(o_key, want_key[want_over])
+        np.testing.assert_array_equal(o_keep, kept[want_over])
+        assert near_max == dist[~want_over].max()
+        want_worst = np.full(2 * M - 1, -np.inf)
+        np.maximum.at(want_worst, want_key[~want_over & kept], dist[~want_over & kept])
+        np.testing.assert_array_equal(worst, want_worst)
+
+
+def test_grid_times_are_the_numpy_runs():
+    """The check's grid times in runs (``first[r] .. first[r] + count[r] - 1`` grid points, some
+    runs empty), any chunk of them, against the NumPy gather of the run of each sample."""
+    from research.interpolators._fir_verify_kernels import grid_times
+
+    first = np.array([0, 7, 7, 30, 100], np.int64)
+    count = np.array([5, 0, 12, 40, 3], np.int64)
+    ends = np.cumsum(count)
+    t0, t1, period = 0.25, 0.25 + 101 * 1e-3, 1e-3
+    k = np.arange(ends[-1])
+    run = np.searchsorted(ends, k, side="right")
+    want = np.clip(t0 + (first[run] + (k - (ends[run] - count[run]))) * period, t0, t1)
+    assert want[-1] == t1  # the last run reaches past the end: clipped
+    for i, j in ((0, ends[-1]), (3, 20), (17, 17), (21, ends[-1])):
+        np.testing.assert_array_equal(grid_times(i, j, first, count, ends, t0, t1, period), want[i:j])
 
 
 def numpy_staircase_cut(r_h, f_h, r_t, f_t, length, cap):
