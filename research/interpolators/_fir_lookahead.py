@@ -184,15 +184,14 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
             # the windows that reach a removed turn: a dwell vertex strictly inside the reach
             removed = np.concatenate([[0], np.cumsum(gap)])
             f = f_w.copy()
-            q = (removed[w_hi] > removed[w_lo]) & ~gap
+            q = np.flatnonzero((removed[w_hi] > removed[w_lo]) & ~gap)
             for g_old, f_old in solved:  # f_old: that set's feeds (f_w at its dwell vertices)
-                if not q.any():
+                if not q.size:
                     break
                 moved = np.concatenate([[0], np.cumsum(g_old != gap)])
-                same = q & (moved[w_hi] == moved[w_lo])
-                f[same] = f_old[same]
-                q &= ~same
-            q = np.flatnonzero(q)
+                same = moved[w_hi[q]] == moved[w_lo[q]]
+                f[q[same]] = f_old[q[same]]
+                q = q[~same]
             if q.size:
                 f[q] = chain(~gap).largest_feed(s_v[q], Fv[q], tol_v[q])
             solved.append((gap, f))
