@@ -153,6 +153,8 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     arc_turns = _arc_turns(tp, float(np.min(tol_v, initial=np.inf))) if tp.is_arc.any() else (np.zeros(0), np.zeros((0, tp.dim)))
 
     def chain(keep):
+        if not arc_turns[0].size:  # the vertices' arc lengths are sorted already (a stable sort keeps them)
+            return ChainError(s_v[keep], du[keep], delays)
         s_t, du_t = np.concatenate([s_v[keep], arc_turns[0]]), np.concatenate([du[keep], arc_turns[1]])
         order = np.argsort(s_t, kind="stable")
         return ChainError(s_t[order], du_t[order], delays)
@@ -170,7 +172,7 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     reach = Fv * every.rho.max()  # a window at a feed <= Fv sums the turns strictly inside s_v +- reach
     # the vertices strictly inside each window's reach: indices [w_lo, w_hi)
     w_lo, w_hi = np.searchsorted(s_v, s_v - reach, side="right"), np.searchsorted(s_v, s_v + reach, side="left")
-    memo, solved = {}, []  # gap bytes -> feeds of the vertices that do not dwell; the gaps solved
+    memo, solved = {}, []  # gap bytes -> feeds of the vertices that do not dwell; (gap, its feeds (M - 1,)) solved
 
     def feeds_without(gap):
         """Window feeds of the vertices that do not dwell, on the chain without the dwell turns:
@@ -179,23 +181,20 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
         set's feed (it sums the same turns; up to the rounding of the chain's prefix sums)."""
         key = gap.tobytes()
         if key not in memo:
-            removed = s_v[gap]
-            hit = np.searchsorted(removed, s_v + reach, side="left") > np.searchsorted(removed, s_v - reach, side="right")
+            # the windows that reach a removed turn: a dwell vertex strictly inside the reach
+            removed = np.concatenate([[0], np.cumsum(gap)])
             f = f_w.copy()
-            q = hit & ~gap
-            for g_old in solved:
-                if not q.any():
+            q = np.flatnonzero((removed[w_hi] > removed[w_lo]) & ~gap)
+            for g_old, f_old in solved:  # f_old: that set's feeds (f_w at its dwell vertices)
+                if not q.size:
                     break
                 moved = np.concatenate([[0], np.cumsum(g_old != gap)])
-                same = q & (moved[w_hi] == moved[w_lo])
-                f_old = f_w.copy()  # that set's feeds (f_w at its dwell vertices)
-                f_old[~g_old] = memo[g_old.tobytes()]
-                f[same] = f_old[same]
-                q &= ~same
-            q = np.flatnonzero(q)
+                same = moved[w_hi[q]] == moved[w_lo[q]]
+                f[q[same]] = f_old[q[same]]
+                q = q[~same]
             if q.size:
                 f[q] = chain(~gap).largest_feed(s_v[q], Fv[q], tol_v[q])
-            solved.append(gap)
+            solved.append((gap, f))
             memo[key] = f[~gap]
         return memo[key]
 
