@@ -55,6 +55,7 @@ import numba
 import numpy as np
 
 from research.errors import ConvergenceError, ParameterError
+from research.interpolators._fir_alone_bound import alone_bounds
 from research.interpolators._fir_profile import profile
 from research.limits import AxisLimits
 from research.piecewise import NumpyPiecewise
@@ -343,8 +344,19 @@ def block_peak_ratios(peaks: PiecePeaks, starts: np.ndarray, pulse_times: np.nda
     return peaks.over(starts, ends)
 
 
+#: a block whose closed-form bound (:func:`_fir_alone_bound.alone_bounds`) is at most this is not
+#: built by :func:`alone_block_ratios`: its exact ratio lies within rounding (~1e-13) of at most the
+#: bound, below ``1 + LIMIT_RTOL``, so no check would find it above a limit
+PROVEN = 1.0 + 1e-12
+#: with blocks left out, :func:`alone_block_ratios` builds every block asked for after all when a
+#: block built comes within this of ``1 + LIMIT_RTOL`` (or above): its ratio at the other time
+#: offset differs by rounding (~1e-13), so decisions away from the threshold are those of the full build
+THRESHOLD_GUARD = 1e-11
+
+
 def alone_block_ratios(table, blocks: np.ndarray, fraction: np.ndarray, piece_factor: np.ndarray, lengths: np.ndarray,
-                       feeds: np.ndarray, start: np.ndarray, delays: np.ndarray, limits: AxisLimits) -> np.ndarray:
+                       feeds: np.ndarray, start: np.ndarray, delays: np.ndarray, limits: AxisLimits, *,
+                       prove: bool = True) -> np.ndarray:
     """``(M,)`` largest ``peak / limit`` of each block ``blocks`` alone (phase 1), 0 for the others.
 
     With every corner an exact stop no two blocks' filtered outputs overlap, so a block's own peaks
@@ -356,6 +368,15 @@ def alone_block_ratios(table, blocks: np.ndarray, fraction: np.ndarray, piece_fa
     a block's pieces lie at another time offset (the blocks asked for before it, not all), which
     moves its peaks by rounding only.
 
+    With ``prove``, a line block whose closed-form bound (:func:`_fir_alone_bound.alone_bounds`)
+    is at most :data:`PROVEN` is not built and gets that bound; unless a block built comes within
+    :data:`THRESHOLD_GUARD` of ``1 + LIMIT_RTOL``, then every block asked for is built (so every
+    ratio is the exact one of the build without ``prove``). Either way each comparison with
+    ``1 + LIMIT_RTOL`` comes out as without ``prove``: a block left out is below it, and a block
+    built is not moved across it by the other time offset (nor by the last piece of the block
+    before it, should that end past its start by rounding: the piece is within that block's own
+    bound or ratio).
+
     Args:
         table: the path's ``_fir_blocks.PulseTable``; ``blocks``: ``(M,)`` bool, the blocks asked for.
         fraction, piece_factor: ``(P,)`` share of its block and feed factor of every piece
@@ -363,7 +384,23 @@ def alone_block_ratios(table, blocks: np.ndarray, fraction: np.ndarray, piece_fa
         lengths, feeds: block lengths [mm] and commanded feeds [mm/s], indexed by a piece's block
             (``(M_pad + 1,)``, as ``_fir_profile.timing``).
         start: ``(d,)`` start point [mm]; delays: ``(n,)`` filter delays [s]; limits: the per-axis limits.
+        prove: leave out the blocks proven safe in closed form (above).
     """
+    blocks = np.asarray(blocks, dtype=bool)
+    if prove:
+        bound = alone_bounds(table, blocks, fraction, piece_factor, lengths, feeds, delays, limits)
+        proven = blocks & (bound <= PROVEN)
+        if proven.any():
+            rest = blocks & ~proven
+            out = _built_ratios(table, rest, fraction, piece_factor, lengths, feeds, start, delays, limits)
+            if not np.any(out[rest] > 1.0 + LIMIT_RTOL - THRESHOLD_GUARD):
+                out[proven] = bound[proven]
+                return out
+    return _built_ratios(table, blocks, fraction, piece_factor, lengths, feeds, start, delays, limits)
+
+
+def _built_ratios(table, blocks, fraction, piece_factor, lengths, feeds, start, delays, limits) -> np.ndarray:
+    """:func:`alone_block_ratios` without ``prove``: the exact-stop profile of the blocks ``blocks``."""
     M = table.n_blocks
     out = np.zeros(M)
     ks = np.flatnonzero(blocks)

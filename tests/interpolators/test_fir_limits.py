@@ -265,7 +265,7 @@ def test_alone_block_ratios_match_the_whole_exact_stop_profile(delays):
         s, e = np.asarray(starts)[:M], np.asarray(ends)[:M]
         want = corner_peak_ratios(position, s, np.minimum(e + Td, np.append(s[1:], np.inf)), limits)
         for blocks in (rng.random(M) < 0.4, np.eye(M, dtype=bool)[M - 1], np.ones(M, dtype=bool)):
-            got = alone_block_ratios(table, blocks, frac, piece_factor, lengths, feeds, tp.start, d, limits)
+            got = alone_block_ratios(table, blocks, frac, piece_factor, lengths, feeds, tp.start, d, limits, prove=False)
             np.testing.assert_allclose(got[blocks], want[blocks], rtol=1e-11)
             assert np.all(got[~blocks] == 0.0)
         s2, e2, breaks, coeffs, _ = _fir_profile.profile(tp.start, table.geo, table.block, table.gap, frac, piece_tv,
