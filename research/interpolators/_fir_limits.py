@@ -177,11 +177,36 @@ class PiecePeaks:
         self.per_piece = np.where(h > DEGENERATE_PIECE, ratio, 0.0)
 
     def over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-        """``(C,)`` largest piece ratio in each window ``[lo_c, hi_c]`` [s] (the pieces it meets)."""
-        K = self.per_piece.size
-        first = np.clip(np.searchsorted(self.breaks, lo, side="right") - 1, 0, K - 1)
-        last = np.clip(np.searchsorted(self.breaks, hi, side="left"), first + 1, K)
-        return _range_max(self.per_piece, first, last)
+        """``(C,)`` largest piece ratio in each window ``[lo_c, hi_c]`` [s] (the pieces it meets):
+        from the piece holding ``lo_c`` (``searchsorted`` right, less one) to the last piece
+        starting before ``hi_c`` (left), at least one. Windows in time order (``lo`` and ``hi``
+        nondecreasing: the corner windows, the own spans) find their pieces by one merge with the
+        breaks (:func:`_merged_windows`), others by binary search."""
+        lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+        if np.all(lo[1:] >= lo[:-1]) and np.all(hi[1:] >= hi[:-1]):
+            first, last = _merged_windows(self.breaks, lo, hi)
+        else:
+            K = self.per_piece.size
+            first = np.clip(np.searchsorted(self.breaks, lo, side="right") - 1, 0, K - 1)
+            last = np.clip(np.searchsorted(self.breaks, hi, side="left"), first + 1, K)
+        return range_max(self.per_piece, first, last)
+
+
+@numba.njit(cache=True, nogil=True)
+def _merged_windows(breaks, lo, hi):
+    """``(first, last)`` pieces of :meth:`PiecePeaks.over` for nondecreasing ``lo`` and ``hi``: the
+    counts of breaks ``<= lo_c`` and ``< hi_c`` (``searchsorted`` right and left) by one merge."""
+    K, C = breaks.size - 1, lo.size
+    first, last = np.empty(C, np.int64), np.empty(C, np.int64)
+    right, left = 0, 0
+    for i in range(C):
+        while right <= K and breaks[right] <= lo[i]:
+            right += 1
+        while left <= K and breaks[left] < hi[i]:
+            left += 1
+        first[i] = min(max(right - 1, 0), K - 1)
+        last[i] = min(max(left, first[i] + 1), K)
+    return first, last
 
 
 #: profiles up to this degree (lines under two filters: 3) have the roots of every next derivative
@@ -213,13 +238,20 @@ def _closed_form_ratios(coeffs, h, limit):
     """:func:`_piece_ratios` of a profile of degree <= :data:`CLOSED_FORM_DEGREE` in one compiled
     pass, by the same operations (Horner's rule, the closed-form roots of :func:`_real_roots`
     clipped to ``[0, h]``), so the same floats. Peaks are finite here (as in the planner)."""
+    return closed_form_ratios_at(coeffs, h, limit, np.arange(coeffs.shape[0]))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def closed_form_ratios_at(coeffs, h, limit, pieces):
+    """:func:`_closed_form_ratios` of the pieces ``pieces`` only (``(N,)`` indices; the same floats)."""
     K, D, A = coeffs.shape
     degree = D - 1
-    out = np.zeros(K)
+    out = np.zeros(pieces.size)
     c = np.zeros((5, D))
     n = np.zeros(5, np.int64)
     roots = np.zeros(3)
-    for k in range(K):
+    for i in range(pieces.size):
+        k = pieces[i]
         hk = h[k]
         best = 0.0
         for a in range(A):
@@ -268,23 +300,36 @@ def _closed_form_ratios(coeffs, h, limit):
                         v = v * t + c[order, m]
                     peak = max(peak, abs(v))
                 best = max(best, peak / limit[order - 1, a])
-        out[k] = best
+        out[i] = best
     return out
 
 
-def _range_max(values: np.ndarray, first: np.ndarray, last: np.ndarray) -> np.ndarray:
-    """``max(values[a:b])`` for every pair, by a sparse table (O((K + C) log K), no Python loop)."""
-    table = [values]
-    while (1 << len(table)) <= values.size:
-        prev, half = table[-1], 1 << (len(table) - 1)
-        table.append(np.maximum(prev[:-half], prev[half:]))
-    length = np.maximum(last - first, 1)
-    level = np.floor(np.log2(length)).astype(np.int64)
-    out = np.empty(first.size)
-    for lv in np.unique(level):
-        sel = level == lv
-        row = table[lv]
-        out[sel] = np.maximum(row[first[sel]], row[last[sel] - (1 << lv)])
+@numba.njit(cache=True, nogil=True)
+def range_max(values, first, last):
+    """``max(values[first_i:last_i])`` for every ``i`` (``first_i < last_i``) by a sparse table of
+    the maxima of ``2^l`` consecutive values, ``l`` up to the longest range (O(K log L + C)): each
+    range the union of two such runs, so the maximum of the same values."""
+    K, C = values.size, first.size
+    longest = 1
+    for i in range(C):
+        longest = max(longest, last[i] - first[i])
+    levels = 1
+    while (1 << levels) <= longest:
+        levels += 1
+    table = np.empty((levels, K))
+    table[0] = values
+    for lv in range(1, levels):
+        half = 1 << (lv - 1)
+        for k in range(K - (1 << lv) + 1):
+            a, b = table[lv - 1, k], table[lv - 1, k + half]
+            table[lv, k] = a if a >= b else b
+    out = np.empty(C)
+    for i in range(C):
+        n, lv = last[i] - first[i], 0
+        while (2 << lv) <= n:
+            lv += 1
+        a, b = table[lv, first[i]], table[lv, last[i] - (1 << lv)]
+        out[i] = a if a >= b else b
     return out
 
 
