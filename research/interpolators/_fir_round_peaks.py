@@ -51,6 +51,9 @@ class RoundPeaks:
     Args:
         table: the path's ``_fir_blocks.PulseTable``; limits: the per-axis limits;
         total_delay: ``T_d`` [s].
+
+    Attributes:
+        recomputed: windows recomputed by the last call (all ``2 M - 1`` on the whole profile).
     """
 
     def __init__(self, table, limits: AxisLimits, total_delay: float):
@@ -59,6 +62,7 @@ class RoundPeaks:
         self._limit = np.ascontiguousarray(np.stack([limits.velocity, limits.acceleration, limits.jerk]),
                                            dtype=np.float64)
         self._last = None  # the last round's inputs and ratios
+        self.recomputed = 0
 
     def __call__(self, position, starts, pulse_times, overlaps, factor, head, tail, arc_rel):
         """``(corner (M - 1,), own (M,))`` ratios of this round's profile, as
@@ -90,6 +94,7 @@ class RoundPeaks:
         if fresh is None or np.count_nonzero(fresh) > FULL_SHARE * fresh.size:
             values = np.zeros(2 * M - 1)
             values[use] = PiecePeaks(position, self.limits).over(lo[use], hi[use])
+            self.recomputed = values.size
         else:
             values = np.where(use, last[2], 0.0)
             fresh &= use
@@ -97,6 +102,7 @@ class RoundPeaks:
             again = ~fresh & use & self._near(values, M)
             if again.any():
                 values[again] = self._windows(position, lo[again], hi[again])
+            self.recomputed = int(np.count_nonzero(fresh) + np.count_nonzero(again))
         self._last = (key, use, values)
         return values[: M - 1].copy(), values[M - 1:].copy()
 
