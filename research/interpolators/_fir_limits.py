@@ -192,6 +192,39 @@ class PiecePeaks:
         return range_max(self.per_piece, first, last)
 
 
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _cubic_ratios_at(coeffs, h, limit, pieces):
+    """:func:`closed_form_ratios_at` of a cubic profile (lines under two filters), its loops written
+    out: the same operations in the same order (derivative rows ``c[o - 1, m + 1] * (m + 1)``,
+    Horner at 0 and ``h``, the acceleration's root ``-a0 / a1`` for the velocity), so the same
+    floats, without the small arrays of the general degree."""
+    A = coeffs.shape[2]
+    out = np.zeros(pieces.size)
+    for i in range(pieces.size):
+        k = pieces[i]
+        hk = h[k]
+        best = 0.0
+        for a in range(A):
+            c10, c11, c12 = coeffs[k, 1, a] * 1, coeffs[k, 2, a] * 2, coeffs[k, 3, a] * 3
+            c20, c21 = c11 * 1, c12 * 2
+            c30 = c21 * 1
+            # velocity: ends, then where the acceleration vanishes
+            v0 = (c12 * 0.0 + c11) * 0.0 + c10
+            vh = (c12 * hk + c11) * hk + c10
+            peak = max(abs(v0), abs(vh))
+            t = -c20 / c21 if c21 != 0 else 0.0
+            if t != t:
+                t = 0.0
+            t = min(max(t, 0.0), hk)
+            peak = max(peak, abs((c12 * t + c11) * t + c10))
+            best = max(best, peak / limit[0, a])
+            # acceleration (linear): its ends; jerk (constant)
+            best = max(best, max(abs(c21 * 0.0 + c20), abs(c21 * hk + c20)) / limit[1, a])
+            best = max(best, max(abs(c30), abs(c30)) / limit[2, a])
+        out[i] = best
+    return out
+
+
 @numba.njit(cache=True, nogil=True)
 def _merged_windows(breaks, lo, hi):
     """``(first, last)`` pieces of :meth:`PiecePeaks.over` for nondecreasing ``lo`` and ``hi``: the
@@ -245,6 +278,8 @@ def _closed_form_ratios(coeffs, h, limit):
 def closed_form_ratios_at(coeffs, h, limit, pieces):
     """:func:`_closed_form_ratios` of the pieces ``pieces`` only (``(N,)`` indices; the same floats)."""
     K, D, A = coeffs.shape
+    if D == 4:
+        return _cubic_ratios_at(coeffs, h, limit, pieces)
     degree = D - 1
     out = np.zeros(pieces.size)
     c = np.zeros((5, D))
