@@ -45,7 +45,8 @@ def alone_bounds(table, blocks: np.ndarray, fraction: np.ndarray, piece_factor: 
         delays: ``(n,)`` filter delays [s]; limits: the per-axis ``AxisLimits``.
     """
     d = np.sort(np.asarray(delays, dtype=np.float64))[::-1]
-    ks = np.flatnonzero(np.asarray(blocks, dtype=bool) & (table.role[table.first_motion] >= 0))
+    ks = np.flatnonzero(blocks)
+    ks = ks[table.role[table.first_motion[ks]] >= 0]  # lines (an arc's pieces have role -1)
     out = np.full(table.n_blocks, np.inf)
     if ks.size == 0:
         return out
@@ -54,7 +55,7 @@ def alone_bounds(table, blocks: np.ndarray, fraction: np.ndarray, piece_factor: 
     with np.errstate(divide="ignore"):  # a zero limit: no bound where an axis moves
         inv_limits = np.stack([1.0 / limits.velocity, 1.0 / (T1 * limits.acceleration),
                                (1.0 / (T1 * T2 * limits.jerk)) if d.size > 1 else np.zeros(limits.n_axes)])
-    out[ks] = _bounds(ks, table.first_motion, table.last_motion, table.block, np.abs(table.geo[:, 0, :]),
+    out[ks] = _bounds(ks, table.first_motion, table.last_motion, table.block, table.geo,
                       np.asarray(fraction, dtype=np.float64), np.asarray(piece_factor, dtype=np.float64),
                       np.asarray(lengths, dtype=np.float64), np.asarray(feeds, dtype=np.float64),
                       np.ascontiguousarray(inv_limits), T1, T2)
@@ -62,10 +63,11 @@ def alone_bounds(table, blocks: np.ndarray, fraction: np.ndarray, piece_factor: 
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _bounds(ks, first_motion, last_motion, block, geo0, fraction, piece_factor, lengths, feeds, inv_limits, T1, T2):
-    """The bound of :func:`alone_bounds` for the line blocks ``ks`` (module docstring)."""
+def _bounds(ks, first_motion, last_motion, block, geo, fraction, piece_factor, lengths, feeds, inv_limits, T1, T2):
+    """The bound of :func:`alone_bounds` for the line blocks ``ks`` (module docstring; ``geo``: the
+    pieces' ``dP/du`` coefficients, a line's ``L u`` in row 0)."""
     out = np.empty(ks.size)
-    A = geo0.shape[1]
+    A = geo.shape[2]
     width = 0
     for n in range(ks.size):
         width = max(width, last_motion[ks[n]] - first_motion[ks[n]] + 2)
@@ -93,7 +95,7 @@ def _bounds(ks, first_motion, last_motion, block, geo0, fraction, piece_factor, 
                         c = 2.0
         best = 0.0
         for a in range(A):
-            peak = geo0[first_motion[k], a] * top
+            peak = abs(geo[first_motion[k], 0, a]) * top
             if peak > 0.0:
                 best = max(best, peak * inv_limits[0, a], peak * inv_limits[1, a], c * peak * inv_limits[2, a])
         out[n] = best
