@@ -14,7 +14,7 @@ time. The filtered output at ``t`` depends on the input on ``[t - T_d, t]`` only
 :class:`RoundPeaks` keeps each window's ratio and recomputes, from the new profile's pieces, only
 the windows whose input changed (all of them in a candidate's first round, or where many did). A
 kept ratio is the new one up to rounding (the pieces' local coefficients and lengths at another
-time offset, ~1e-13 relative). Every decision of a round is a comparison with
+time offset, ~1e-13 relative), but for a window's end pieces (below). Every decision of a round is a comparison with
 ``1 + LIMIT_RTOL``, and the ratios above it are used as values (the slow-downs of ``plan_fir``):
 so a kept ratio within ``THRESHOLD_GUARD`` of it, or next to a window that is, is recomputed too.
 The second condition covers a window's ends: a window and its neighbours in time share their end
