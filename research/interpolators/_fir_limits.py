@@ -11,7 +11,10 @@ planned). Where a corner's window breaks one:
 
 1. **Blocks alone.** With every corner an exact stop (``T_k = 0``) no two blocks' filtered outputs
    overlap, so a block's own peaks depend on its own pulse only: the exact-stop profile of just
-   the blocks being checked gives them (:func:`alone_block_ratios`). A block
+   the blocks being checked gives them (:func:`alone_block_ratios`), but for the line blocks that
+   a closed-form bound on those peaks proves safe (``_fir_alone_bound``: a staircase pulse of top
+   level ``S`` peaks at most at ``S |u|``, ``S |u| / T_1`` and ``S |u| / (T_1 T_2)``, twice that
+   where an up-step and a down-step lie between ``T_1 - T_2`` and ``T_1 + T_2`` apart). A block
    that a violating window covers (:func:`blocks_in_windows`) and that breaks a limit even alone is
    slowed: its feed is bisected between the closed-form safe feed (:func:`feed_caps`,
    :func:`arc_limit_caps`; a block of ``T_v >= T_1 + T_2`` peaks at ``F |u_i|``, ``F |u_i| / T_1``,
@@ -43,7 +46,9 @@ bound passes the best verified plan; the closed-form capped candidates join the 
 any candidate needs a limit repair. On a seeded 400-segment CAM-like path under the FIR envelope
 this took planning from 2.6-4.3 s to 0.56-0.96 s at the same cycle time (benchmarks/README.md);
 phase 1's profiles of only the blocks it checks took ``hold_block_limits`` from 26-29 % of a
-limit-holding plan of the quick CAM file to 5-6 %.
+limit-holding plan of the quick CAM file to 5-6 %, and the bound, which proves all 2,246 blocks
+of its first checks safe, to 2-3 %. A round's corner-window and own-span ratios are recomputed
+only where the profile's input changed since the candidate's last round (``_fir_round_peaks``).
 """
 
 from __future__ import annotations
@@ -55,6 +60,7 @@ import numba
 import numpy as np
 
 from research.errors import ConvergenceError, ParameterError
+from research.interpolators._fir_alone_bound import alone_bounds
 from research.interpolators._fir_profile import profile
 from research.limits import AxisLimits
 from research.piecewise import NumpyPiecewise
@@ -176,11 +182,69 @@ class PiecePeaks:
         self.per_piece = np.where(h > DEGENERATE_PIECE, ratio, 0.0)
 
     def over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-        """``(C,)`` largest piece ratio in each window ``[lo_c, hi_c]`` [s] (the pieces it meets)."""
-        K = self.per_piece.size
-        first = np.clip(np.searchsorted(self.breaks, lo, side="right") - 1, 0, K - 1)
-        last = np.clip(np.searchsorted(self.breaks, hi, side="left"), first + 1, K)
-        return _range_max(self.per_piece, first, last)
+        """``(C,)`` largest piece ratio in each window ``[lo_c, hi_c]`` [s] (the pieces it meets):
+        from the piece holding ``lo_c`` (``searchsorted`` right, less one) to the last piece
+        starting before ``hi_c`` (left), at least one. Windows in time order (``lo`` and ``hi``
+        nondecreasing: the corner windows, the own spans) find their pieces by one merge with the
+        breaks (:func:`_merged_windows`), others by binary search."""
+        lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+        if np.all(lo[1:] >= lo[:-1]) and np.all(hi[1:] >= hi[:-1]):
+            first, last = _merged_windows(self.breaks, lo, hi)
+        else:
+            K = self.per_piece.size
+            first = np.clip(np.searchsorted(self.breaks, lo, side="right") - 1, 0, K - 1)
+            last = np.clip(np.searchsorted(self.breaks, hi, side="left"), first + 1, K)
+        return range_max(self.per_piece, first, last)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _cubic_ratios_at(coeffs, h, limit, pieces):
+    """:func:`closed_form_ratios_at` of a cubic profile (lines under two filters), its loops written
+    out: the same operations in the same order (derivative rows ``c[o - 1, m + 1] * (m + 1)``,
+    Horner at 0 and ``h``, the acceleration's root ``-a0 / a1`` for the velocity), so the same
+    floats, without the small arrays of the general degree."""
+    A = coeffs.shape[2]
+    out = np.zeros(pieces.size)
+    for i in range(pieces.size):
+        k = pieces[i]
+        hk = h[k]
+        best = 0.0
+        for a in range(A):
+            c10, c11, c12 = coeffs[k, 1, a] * 1, coeffs[k, 2, a] * 2, coeffs[k, 3, a] * 3
+            c20, c21 = c11 * 1, c12 * 2
+            c30 = c21 * 1
+            # velocity: ends, then where the acceleration vanishes
+            v0 = (c12 * 0.0 + c11) * 0.0 + c10
+            vh = (c12 * hk + c11) * hk + c10
+            peak = max(abs(v0), abs(vh))
+            t = -c20 / c21 if c21 != 0 else 0.0
+            if t != t:
+                t = 0.0
+            t = min(max(t, 0.0), hk)
+            peak = max(peak, abs((c12 * t + c11) * t + c10))
+            best = max(best, peak / limit[0, a])
+            # acceleration (linear): its ends; jerk (constant)
+            best = max(best, max(abs(c21 * 0.0 + c20), abs(c21 * hk + c20)) / limit[1, a])
+            best = max(best, max(abs(c30), abs(c30)) / limit[2, a])
+        out[i] = best
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _merged_windows(breaks, lo, hi):
+    """``(first, last)`` pieces of :meth:`PiecePeaks.over` for nondecreasing ``lo`` and ``hi``: the
+    counts of breaks ``<= lo_c`` and ``< hi_c`` (``searchsorted`` right and left) by one merge."""
+    K, C = breaks.size - 1, lo.size
+    first, last = np.empty(C, np.int64), np.empty(C, np.int64)
+    right, left = 0, 0
+    for i in range(C):
+        while right <= K and breaks[right] <= lo[i]:
+            right += 1
+        while left <= K and breaks[left] < hi[i]:
+            left += 1
+        first[i] = min(max(right - 1, 0), K - 1)
+        last[i] = min(max(left, first[i] + 1), K)
+    return first, last
 
 
 #: profiles up to this degree (lines under two filters: 3) have the roots of every next derivative
@@ -212,13 +276,22 @@ def _closed_form_ratios(coeffs, h, limit):
     """:func:`_piece_ratios` of a profile of degree <= :data:`CLOSED_FORM_DEGREE` in one compiled
     pass, by the same operations (Horner's rule, the closed-form roots of :func:`_real_roots`
     clipped to ``[0, h]``), so the same floats. Peaks are finite here (as in the planner)."""
+    return closed_form_ratios_at(coeffs, h, limit, np.arange(coeffs.shape[0]))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def closed_form_ratios_at(coeffs, h, limit, pieces):
+    """:func:`_closed_form_ratios` of the pieces ``pieces`` only (``(N,)`` indices; the same floats)."""
     K, D, A = coeffs.shape
+    if D == 4:
+        return _cubic_ratios_at(coeffs, h, limit, pieces)
     degree = D - 1
-    out = np.zeros(K)
+    out = np.zeros(pieces.size)
     c = np.zeros((5, D))
     n = np.zeros(5, np.int64)
     roots = np.zeros(3)
-    for k in range(K):
+    for i in range(pieces.size):
+        k = pieces[i]
         hk = h[k]
         best = 0.0
         for a in range(A):
@@ -267,23 +340,36 @@ def _closed_form_ratios(coeffs, h, limit):
                         v = v * t + c[order, m]
                     peak = max(peak, abs(v))
                 best = max(best, peak / limit[order - 1, a])
-        out[k] = best
+        out[i] = best
     return out
 
 
-def _range_max(values: np.ndarray, first: np.ndarray, last: np.ndarray) -> np.ndarray:
-    """``max(values[a:b])`` for every pair, by a sparse table (O((K + C) log K), no Python loop)."""
-    table = [values]
-    while (1 << len(table)) <= values.size:
-        prev, half = table[-1], 1 << (len(table) - 1)
-        table.append(np.maximum(prev[:-half], prev[half:]))
-    length = np.maximum(last - first, 1)
-    level = np.floor(np.log2(length)).astype(np.int64)
-    out = np.empty(first.size)
-    for lv in np.unique(level):
-        sel = level == lv
-        row = table[lv]
-        out[sel] = np.maximum(row[first[sel]], row[last[sel] - (1 << lv)])
+@numba.njit(cache=True, nogil=True)
+def range_max(values, first, last):
+    """``max(values[first_i:last_i])`` for every ``i`` (``first_i < last_i``) by a sparse table of
+    the maxima of ``2^l`` consecutive values, ``l`` up to the longest range (O(K log L + C)): each
+    range the union of two such runs, so the maximum of the same values."""
+    K, C = values.size, first.size
+    longest = 1
+    for i in range(C):
+        longest = max(longest, last[i] - first[i])
+    levels = 1
+    while (1 << levels) <= longest:
+        levels += 1
+    table = np.empty((levels, K))
+    table[0] = values
+    for lv in range(1, levels):
+        half = 1 << (lv - 1)
+        for k in range(K - (1 << lv) + 1):
+            a, b = table[lv - 1, k], table[lv - 1, k + half]
+            table[lv, k] = a if a >= b else b
+    out = np.empty(C)
+    for i in range(C):
+        n, lv = last[i] - first[i], 0
+        while (2 << lv) <= n:
+            lv += 1
+        a, b = table[lv, first[i]], table[lv, last[i] - (1 << lv)]
+        out[i] = a if a >= b else b
     return out
 
 
@@ -343,8 +429,19 @@ def block_peak_ratios(peaks: PiecePeaks, starts: np.ndarray, pulse_times: np.nda
     return peaks.over(starts, ends)
 
 
+#: a block whose closed-form bound (:func:`_fir_alone_bound.alone_bounds`) is at most this is not
+#: built by :func:`alone_block_ratios`: its exact ratio lies within rounding (~1e-13) of at most the
+#: bound, below ``1 + LIMIT_RTOL``, so no check would find it above a limit
+PROVEN = 1.0 + 1e-12
+#: with blocks left out, :func:`alone_block_ratios` builds every block asked for after all when a
+#: block built comes within this of ``1 + LIMIT_RTOL`` (or above): its ratio at the other time
+#: offset differs by rounding (~1e-13), so decisions away from the threshold are those of the full build
+THRESHOLD_GUARD = 1e-11
+
+
 def alone_block_ratios(table, blocks: np.ndarray, fraction: np.ndarray, piece_factor: np.ndarray, lengths: np.ndarray,
-                       feeds: np.ndarray, start: np.ndarray, delays: np.ndarray, limits: AxisLimits) -> np.ndarray:
+                       feeds: np.ndarray, start: np.ndarray, delays: np.ndarray, limits: AxisLimits, *,
+                       prove: bool = True) -> np.ndarray:
     """``(M,)`` largest ``peak / limit`` of each block ``blocks`` alone (phase 1), 0 for the others.
 
     With every corner an exact stop no two blocks' filtered outputs overlap, so a block's own peaks
@@ -356,6 +453,15 @@ def alone_block_ratios(table, blocks: np.ndarray, fraction: np.ndarray, piece_fa
     a block's pieces lie at another time offset (the blocks asked for before it, not all), which
     moves its peaks by rounding only.
 
+    With ``prove``, a line block whose closed-form bound (:func:`_fir_alone_bound.alone_bounds`)
+    is at most :data:`PROVEN` is not built and gets that bound; unless a block built comes within
+    :data:`THRESHOLD_GUARD` of ``1 + LIMIT_RTOL``, then every block asked for is built (so every
+    ratio is the exact one of the build without ``prove``). Either way each comparison with
+    ``1 + LIMIT_RTOL`` comes out as without ``prove``: a block left out is below it, and a block
+    built is not moved across it by the other time offset (nor by the last piece of the block
+    before it, should that end past its start by rounding: the piece is within that block's own
+    bound or ratio).
+
     Args:
         table: the path's ``_fir_blocks.PulseTable``; ``blocks``: ``(M,)`` bool, the blocks asked for.
         fraction, piece_factor: ``(P,)`` share of its block and feed factor of every piece
@@ -363,7 +469,23 @@ def alone_block_ratios(table, blocks: np.ndarray, fraction: np.ndarray, piece_fa
         lengths, feeds: block lengths [mm] and commanded feeds [mm/s], indexed by a piece's block
             (``(M_pad + 1,)``, as ``_fir_profile.timing``).
         start: ``(d,)`` start point [mm]; delays: ``(n,)`` filter delays [s]; limits: the per-axis limits.
+        prove: leave out the blocks proven safe in closed form (above).
     """
+    blocks = np.asarray(blocks, dtype=bool)
+    if prove:
+        bound = alone_bounds(table, blocks, fraction, piece_factor, lengths, feeds, delays, limits)
+        proven = blocks & (bound <= PROVEN)
+        if proven.any():
+            rest = blocks & ~proven
+            out = _built_ratios(table, rest, fraction, piece_factor, lengths, feeds, start, delays, limits)
+            if not np.any(out[rest] > 1.0 + LIMIT_RTOL - THRESHOLD_GUARD):
+                out[proven] = bound[proven]
+                return out
+    return _built_ratios(table, blocks, fraction, piece_factor, lengths, feeds, start, delays, limits)
+
+
+def _built_ratios(table, blocks, fraction, piece_factor, lengths, feeds, start, delays, limits) -> np.ndarray:
+    """:func:`alone_block_ratios` without ``prove``: the exact-stop profile of the blocks ``blocks``."""
     M = table.n_blocks
     out = np.zeros(M)
     ks = np.flatnonzero(blocks)

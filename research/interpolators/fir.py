@@ -72,19 +72,17 @@ from research.interpolators._fir_limits import (
     BISECTION_STEPS,
     LIMIT_RTOL,
     CornerBisection,
-    PiecePeaks,
     alone_block_ratios,
     arc_limit_caps,
     blocks_in_windows,
-    corner_limit_ratios,
     feed_caps,
     hold_block_limits,
-    own_span_ratios,
 )
 from research.interpolators._fir_lookahead import look_ahead
 from research.interpolators import _fir_pauses, _fir_profile
 from research.interpolators._fir_overlap import overlap_time
 from research.interpolators._fir_repair import Repairs
+from research.interpolators._fir_round_peaks import RoundPeaks
 from research.interpolators._fir_verify import RoundChecks, corner_distances, vertex_distances
 from research.limits import AxisLimits
 from research.paths.gcode import checked_pauses
@@ -374,6 +372,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         candidate, shrink = None, np.ones(M - 1)
         # without limits no corner bisects: its multipliers stay 1 (no (M - 1,) arrays per candidate)
         bisection = CornerBisection(M - 1) if limits is not None else _NO_BISECTION
+        round_peaks = RoundPeaks(table, limits, Td_np) if limits is not None else None
         checked, repaired = np.zeros(M, dtype=bool), False
         checks = RoundChecks(tp, tb_np, table.block, Td_np, check_period)  # redone only where the profile changed
         checks.adopt(last_check[0])  # from another candidate's last complete check: redone where they differ
@@ -402,9 +401,8 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                 (pulse_np, starts_np, pos_np, centre_np), durations = state[2:6], state[7]
                 too_fast, slowed = False, False
                 if limits is not None and M > 1:
-                    peaks = PiecePeaks(pos_np, limits)  # one profile: its pieces' peaks once for both
-                    ratios = corner_limit_ratios(peaks, starts_np, pulse_np, Td_np)
-                    own = own_span_ratios(peaks, starts_np, pulse_np, Td_np)
+                    # recomputed where the input changed since the last round (_fir_round_peaks)
+                    ratios, own = round_peaks(pos_np, starts_np, pulse_np, state[1], *state[6][:3], state[6][6])
                     bad, own_bad = ratios > 1.0 + LIMIT_RTOL, own > 1.0 + LIMIT_RTOL
                     near = (blocks_in_windows(bad, starts_np, pulse_np, Td_np) | own_bad) & ~checked
                     g = hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), near) if near.any() else 1.0

@@ -265,10 +265,121 @@ def test_alone_block_ratios_match_the_whole_exact_stop_profile(delays):
         s, e = np.asarray(starts)[:M], np.asarray(ends)[:M]
         want = corner_peak_ratios(position, s, np.minimum(e + Td, np.append(s[1:], np.inf)), limits)
         for blocks in (rng.random(M) < 0.4, np.eye(M, dtype=bool)[M - 1], np.ones(M, dtype=bool)):
-            got = alone_block_ratios(table, blocks, frac, piece_factor, lengths, feeds, tp.start, d, limits)
+            got = alone_block_ratios(table, blocks, frac, piece_factor, lengths, feeds, tp.start, d, limits, prove=False)
             np.testing.assert_allclose(got[blocks], want[blocks], rtol=1e-11)
             assert np.all(got[~blocks] == 0.0)
         s2, e2, breaks, coeffs, _ = _fir_profile.profile(tp.start, table.geo, table.block, table.gap, frac, piece_tv,
                                                          gaps, d)
         whole = block_peak_ratios(PiecePeaks(NumpyPiecewise(breaks, coeffs), limits), s2[:M], e2[:M] - s2[:M], Td)
         np.testing.assert_array_equal(got, whole)
+
+
+def _alone_inputs(tp, rng, feed, head=None, tail=None, factor=None):
+    """The phase-1 inputs of ``alone_block_ratios`` for a program at feeds ``feed`` (random shares
+    and factors unless given)."""
+    from research.interpolators.fir import _pulse_table
+
+    table, M = _pulse_table(tp), tp.n_blocks
+    Mp = table.m_pad
+    head = rng.uniform(0.0, 0.4, M) if head is None else head
+    tail = rng.uniform(0.0, 0.4, M) if tail is None else tail
+    factor = rng.uniform(0.2, 1.0, (M, 3)) if factor is None else factor
+    arc_rel = rng.uniform(0.5, 1.0, table.arc_pieces.size) if table.arc_pieces.size else None
+    frac, piece_factor = table.pieces(head, tail, factor, arc_rel)
+    lengths = np.concatenate([tp.lengths, np.ones(Mp - M + 1)])
+    feeds = np.concatenate([np.broadcast_to(feed, (M,)), np.ones(Mp - M + 1)])
+    return table, frac, piece_factor, lengths, feeds
+
+
+@pytest.mark.parametrize("delays", [(0.06, 0.03), (0.05, 0.03, 0.01), (0.04, 0.04), (0.05,)])
+def test_alone_bound_holds_on_random_staircases(delays):
+    """``_fir_alone_bound.alone_bounds`` against the exact peaks of each block alone (the
+    exact-stop profile, itself checked against the JAX build above): never below them, on seeded
+    random programs with random head / tail shares and feed factors (level staircases of every
+    order, zero-length heads and tails included); arcs get no bound."""
+    from research.interpolators._fir_alone_bound import alone_bounds
+    from research.interpolators._fir_limits import alone_block_ratios
+    from research.paths.library import random_program
+
+    d = np.array(delays)
+    tight = 0
+    for seed in range(40):
+        rng = np.random.default_rng(700 + seed)
+        tp = random_program(rng, arcs=bool(seed % 4 == 3))
+        M = tp.n_blocks
+        head = np.where(rng.random(M) < 0.2, 0.0, rng.uniform(0.0, 0.5, M))
+        tail = np.where(rng.random(M) < 0.2, 0.0, rng.uniform(0.0, 0.5, M))
+        table, frac, pf, lengths, feeds = _alone_inputs(tp, rng, rng.uniform(20.0, 400.0, M), head, tail)
+        jerk = rng.uniform(2e3, 2e5, tp.dim) if d.size > 1 else np.full(tp.dim, np.inf)
+        limits = AxisLimits(rng.uniform(50.0, 300.0, tp.dim), rng.uniform(500.0, 8e3, tp.dim), jerk)
+        blocks = np.ones(M, dtype=bool)
+        exact = alone_block_ratios(table, blocks, frac, pf, lengths, feeds, tp.start, d, limits, prove=False)
+        bound = alone_bounds(table, blocks, frac, pf, lengths, feeds, d, limits)
+        assert np.all(bound >= exact * (1 - 1e-12)), (seed, bound, exact)
+        assert np.all(np.isinf(bound[tp.is_arc]))
+        tight += int(np.sum(np.isclose(bound, exact, rtol=1e-9)))
+    assert tight > 20  # often tight (28-128 of about 200 blocks): a level's own peak reaches the bound
+
+
+@pytest.mark.parametrize("pulse", [0.2, 0.05, 0.08, 0.02])
+def test_alone_bound_of_a_rectangular_pulse_is_the_paper_peak(pulse):
+    """One line at one feed (a rectangular pulse of ``T_v = L / F``) under T1/T2 = 60/30 ms:
+    velocity ``F |u|`` and acceleration ``F |u| / T1`` (Sencer 2015 §2.1) in the bound and in the
+    exact peaks; jerk ``F |u| / (T1 T2)``, doubled where ``T1 - T2 < T_v < T1 + T2`` (the
+    deceleration of the first filter's output meets the second's, as in ``feed_caps``)."""
+    from research.interpolators._fir_alone_bound import alone_bounds
+    from research.interpolators._fir_limits import alone_block_ratios
+    from research.paths.toolpath import ToolPath
+
+    T1, T2, F = 0.06, 0.03, 100.0
+    u = np.array([0.6, 0.8])
+    tp = ToolPath.from_polyline(Polyline(np.array([[0.0, 0.0], F * pulse * u])))
+    rng = np.random.default_rng(0)
+    table, frac, pf, lengths, feeds = _alone_inputs(tp, rng, F, np.zeros(1), np.zeros(1), np.ones((1, 3)))
+    limits = AxisLimits.uniform(2, 1e9, 1e9, 1.0)  # the jerk ratio alone: |j| / 1
+    doubled = T1 - T2 < pulse < T1 + T2
+    want = (2.0 if doubled else 1.0) * F * 0.8 / (T1 * T2)
+    blocks = np.ones(1, dtype=bool)
+    got = alone_bounds(table, blocks, frac, pf, lengths, feeds, np.array([T1, T2]), limits)
+    exact = alone_block_ratios(table, blocks, frac, pf, lengths, feeds, tp.start, np.array([T1, T2]), limits,
+                               prove=False)
+    np.testing.assert_allclose(got, [want], rtol=1e-12)
+    np.testing.assert_allclose(exact, [want], rtol=1e-9)
+    for limits, want in ((AxisLimits.uniform(2, 1.0, 1e9, 1e12), F * 0.8), (AxisLimits.uniform(2, 1e9, 1.0, 1e12), F * 0.8 / T1)):
+        got = alone_bounds(table, blocks, frac, pf, lengths, feeds, np.array([T1, T2]), limits)
+        np.testing.assert_allclose(got, [want], rtol=1e-12)
+
+
+def test_phase_one_decides_alike_with_and_without_the_bound():
+    """``hold_block_limits`` on random programs and limits near their peaks: the same multipliers
+    (to the bit) whether ``alone_block_ratios`` leaves out the blocks its bound proves safe or builds
+    them all, with some blocks left out and some repaired."""
+    from research.interpolators._fir_alone_bound import alone_bounds
+    from research.interpolators._fir_limits import PROVEN, alone_block_ratios
+    from research.paths.library import random_program
+
+    d = np.array([0.06, 0.03])
+    left_out = repaired = 0
+    for seed in range(30):
+        rng = np.random.default_rng(900 + seed)
+        tp = random_program(rng, arcs=bool(seed % 2))
+        M = tp.n_blocks
+        table, frac0, pf0, lengths, feeds = _alone_inputs(tp, rng, rng.uniform(50.0, 300.0, M))
+        head, tail = rng.uniform(0.0, 0.4, M), rng.uniform(0.0, 0.4, M)
+        factor = rng.uniform(0.3, 1.0, (M, 3))
+        limits = AxisLimits.fir_envelope(tp.dim, float(rng.uniform(40.0, 200.0)), d)
+        which = rng.random(M) < 0.8
+
+        def ratios(g, blocks, prove):
+            frac, pf = table.pieces(head, tail, factor * g[:, None], None if not table.arc_pieces.size
+                                    else np.ones(table.arc_pieces.size))
+            return alone_block_ratios(table, blocks, frac, pf, lengths, feeds, tp.start, d, limits, prove=prove)
+
+        frac, pf = table.pieces(head, tail, factor, None if not table.arc_pieces.size else np.ones(table.arc_pieces.size))
+        left_out += int(np.sum(which & (alone_bounds(table, which, frac, pf, lengths, feeds, d, limits) <= PROVEN)))
+        safe = np.full(M, 0.3)
+        g_with = hold_block_limits(lambda g, b: ratios(g, b, True), safe, which)
+        g_without = hold_block_limits(lambda g, b: ratios(g, b, False), safe, which)
+        np.testing.assert_array_equal(g_with, g_without)
+        repaired += int(np.sum(g_without < 1.0))
+    assert left_out > 10 and repaired > 10

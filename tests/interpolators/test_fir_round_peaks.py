@@ -1,0 +1,104 @@
+"""The limit rounds' window ratios (``_fir_round_peaks.RoundPeaks``) and the window maxima of
+``_fir_limits.PiecePeaks.over``, against independent computations: brute-force maxima and binary
+searches, and every ratio recomputed on the whole profile."""
+
+import numpy as np
+import pytest
+
+from research.interpolators import _fir_profile
+from research.interpolators._fir_limits import (
+    LIMIT_RTOL,
+    PiecePeaks,
+    _merged_windows,
+    corner_limit_ratios,
+    own_span_ratios,
+    range_max,
+)
+from research.interpolators._fir_round_peaks import RoundPeaks
+from research.limits import AxisLimits
+from research.paths.toolpath import ToolPath
+from research.piecewise import NumpyPiecewise
+
+from ._paths import turning_path
+
+
+def test_range_max_is_the_maximum_of_each_range():
+    """Random values (with ties) and ranges of every length: the maximum of each slice."""
+    rng = np.random.default_rng(5)
+    for K in (1, 2, 7, 64, 1000):
+        values = np.round(rng.random(K), 2)
+        first = rng.integers(0, K, 300)
+        last = np.minimum(first + 1 + rng.integers(0, K, 300) // rng.integers(1, 50, 300), K)
+        want = np.array([values[a:b].max() for a, b in zip(first, last)])
+        np.testing.assert_array_equal(range_max(values, first, last), want)
+
+
+def test_merged_windows_are_the_binary_searches():
+    """Sorted windows on breaks with repeats (empty pieces): the pieces of ``searchsorted``."""
+    rng = np.random.default_rng(6)
+    breaks = np.sort(np.round(rng.random(200) * 50, 1))
+    K = breaks.size - 1
+    for _ in range(20):
+        lo = np.sort(np.where(rng.random(80) < 0.5, breaks[rng.integers(0, K + 1, 80)], rng.uniform(-5, 55, 80)))
+        hi = np.sort(lo + rng.choice([0.0, 0.5, 3.0], 80))
+        first, last = _merged_windows(breaks, lo, hi)
+        want_first = np.clip(np.searchsorted(breaks, lo, side="right") - 1, 0, K - 1)
+        want_last = np.clip(np.searchsorted(breaks, hi, side="left"), want_first + 1, K)
+        np.testing.assert_array_equal(first, want_first)
+        np.testing.assert_array_equal(last, want_last)
+
+
+def _profile(tp, table, F, head, tail, factor, overlaps, d):
+    """The exact position profile of a plan of ``tp`` (the planner's NumPy build) and its timing."""
+    M, Mp = tp.n_blocks, table.m_pad
+    frac, pf = table.pieces(head, tail, factor, None)
+    lengths = np.concatenate([tp.lengths, np.ones(Mp - M + 1)])
+    feeds = np.concatenate([F, np.ones(Mp - M + 1)])
+    piece_tv = lengths[table.block] / (feeds[table.block] * pf)
+    gaps = np.concatenate([float(np.sum(d)) - overlaps, np.zeros(Mp - M + 1)])
+    s, e, breaks, coeffs, _ = _fir_profile.profile(tp.start, table.geo, table.block, table.gap, frac, piece_tv, gaps, d)
+    return NumpyPiecewise(breaks, coeffs), s[:M], e[:M] - s[:M]
+
+
+@pytest.mark.parametrize("delays", [(0.06, 0.03), (0.05, 0.03, 0.01)])
+def test_round_peaks_decide_as_the_whole_profile(delays):
+    """Rounds of seeded random 80-block line paths, each changing a few blocks' feed factors or shares
+    and a few overlaps (as repairs and bisections do): every ratio's comparison with the
+    threshold as on the whole profile (``PiecePeaks``, every window), and the ratios above it
+    equal to the bit; in most rounds after the first, most ratios are kept."""
+    from research.interpolators.fir import _pulse_table
+
+    d = np.array(delays)
+    Td = float(np.sum(d))
+    thr = 1.0 + LIMIT_RTOL
+    kept = above = 0
+    for seed in range(12):
+        rng = np.random.default_rng(40 + seed)
+        tp = ToolPath.from_polyline(turning_path(60 + seed, 80, (0.2, 12.0), 90.0))
+        table, M = _pulse_table(tp), tp.n_blocks
+        F = rng.uniform(50.0, 300.0, M)
+        head, tail = rng.uniform(0.0, 0.4, M), rng.uniform(0.0, 0.4, M)
+        factor = rng.uniform(0.5, 1.0, (M, 3))
+        overlaps = rng.uniform(0.0, Td, M - 1)
+        limits = AxisLimits.fir_envelope(tp.dim, float(rng.uniform(200.0, 300.0)), d)  # a few windows above
+        peaks = RoundPeaks(table, limits, Td)
+        for _ in range(6):
+            position, starts, pulse = _profile(tp, table, F, head, tail, factor, overlaps, d)
+            corner, own = peaks(position, starts, pulse, overlaps, factor, head, tail, None)
+            whole = PiecePeaks(position, limits)
+            for got, want in ((corner, corner_limit_ratios(whole, starts, pulse, Td)),
+                              (own, own_span_ratios(whole, starts, pulse, Td))):
+                np.testing.assert_array_equal(got > thr, want > thr)
+                np.testing.assert_array_equal(got[want > thr], want[want > thr])
+                above += int(np.sum(want > thr))
+            kept += int(peaks.recomputed < (corner.size + own.size) // 2)
+            # a round's repairs: a few blocks slowed or reshaped, a few overlaps shrunk
+            k = rng.choice(M, size=2, replace=False)
+            factor = factor.copy()
+            factor[k] *= rng.uniform(0.7, 1.0, (k.size, 1))
+            head = head.copy()
+            head[k[:1]] = rng.uniform(0.0, 0.4)
+            c = rng.choice(M - 1, size=2, replace=False)
+            overlaps = overlaps.copy()
+            overlaps[c] *= 0.5
+    assert above > 50 and kept > 15  # windows above a limit seen (3000+); rounds that kept most ratios (25-38 of 60)
