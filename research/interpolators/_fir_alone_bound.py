@@ -18,7 +18,7 @@ each piece's factor; zero before and after) through the FIR chain ``T_1 >= T_2 >
   exists ``|J| <= max(|A(t)|, |A(t - T_1)|) <= S``.
 
 With one filter the exact profile is piecewise quadratic: its jerk on every piece is 0 (what the
-exact peaks of ``_fir_limits.PiecePeaks`` read). Arc blocks (turning direction) get no bound.
+exact peaks of ``_fir_piece_peaks.PiecePeaks`` read). Arc blocks (turning direction) get no bound.
 """
 
 from __future__ import annotations

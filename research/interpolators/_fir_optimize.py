@@ -29,7 +29,7 @@ theorem (a peak's location is held). SciPy's SLSQP solves the problem with JAX J
 samples are grouped by their maximum (``_GROUP`` per row) to keep the QP small.
 
 Feasibility is never left to the solver: the answer is checked on the exact profile (corner
-errors, ``path_deviations`` every ``check_period``, ``_fir_limits.corner_peak_ratios``) and, if it
+errors, ``path_deviations`` every ``check_period``, ``_fir_piece_peaks.corner_peak_ratios``) and, if it
 breaks anything, pulled back by bisection along the segment to the best feasible start plan
 (the limit-holding ``plan_fir`` where its plan fits this parametrization, else exact stops at the
 closed-form safe feeds), so the result always holds the tolerance and the limits.
@@ -58,7 +58,8 @@ from research.errors import ParameterError, PathError
 from research.interpolators._fir_blocks import build_profile
 from research.interpolators._fir_chain import check_delays
 from research.interpolators._fir_kernels import verified_bound
-from research.interpolators._fir_limits import DEGENERATE_PIECE, LIMIT_RTOL, corner_peak_ratios, feed_caps
+from research.interpolators._fir_limits import LIMIT_RTOL, feed_caps
+from research.interpolators._fir_piece_peaks import DEGENERATE_PIECE, corner_peak_ratios
 from research.interpolators._fir_polish import polish
 from research.interpolators._fir_reorder import mode_tuples, profile_residuals, smooth_search
 from research.interpolators._fir_verify import corner_distances, path_deviations
@@ -445,7 +446,7 @@ def _polyline_distance(q, P0, P1):
 
 def _piece_peak_ratios(position, lim):
     """Largest ``|q^(nu)_a| / limit_a,nu`` (``nu`` = 1..3, all axes) on every piece of the exact
-    profile; pieces shorter than ``_fir_limits.DEGENERATE_PIECE`` give 0 (as in the exact check).
+    profile; pieces shorter than ``_fir_piece_peaks.DEGENERATE_PIECE`` give 0 (as in the exact check).
     Candidates: both ends and the real roots of the next derivative inside the piece (degree <= 2,
     closed form), the root held fixed under differentiation (envelope theorem)."""
     c = position.coeffs  # (K, D + 1, A) ascending local

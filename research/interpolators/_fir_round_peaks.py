@@ -28,11 +28,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from research.interpolators._fir_limits import (
+from research.interpolators._fir_limits import LIMIT_RTOL, THRESHOLD_GUARD
+from research.interpolators._fir_piece_peaks import (
     CLOSED_FORM_DEGREE,
     DEGENERATE_PIECE,
-    LIMIT_RTOL,
-    THRESHOLD_GUARD,
     PiecePeaks,
     _piece_ratios,
     closed_form_ratios_at,

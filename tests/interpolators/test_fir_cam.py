@@ -13,7 +13,7 @@ from scipy.optimize import brentq
 
 from research.interpolators import plan_fir, plan_fir_sweep
 from research.interpolators._fir_candidates import envelope
-from research.interpolators._fir_limits import corner_peak_ratios
+from research.interpolators._fir_piece_peaks import corner_peak_ratios
 from research.limits import AxisLimits
 from research.paths import Polyline
 from research.paths.library import random_program

@@ -144,7 +144,8 @@ def test_block_own_span_is_held_regression():
     no corner window covers, the y jerk reached 1.71x the limit while both corner windows held (0.88,
     0.98). The limits are checked here on the sampled trajectory (``metrics.limit_ratios``, independent
     of the planner's exact peaks), and the own-span peaks the planner now checks match it."""
-    from research.interpolators._fir_limits import PiecePeaks, own_span_ratios
+    from research.interpolators._fir_limits import own_span_ratios
+    from research.interpolators._fir_piece_peaks import PiecePeaks
     from research.piecewise import NumpyPiecewise
 
     path = Polyline([[0.0, 0.0], [3.3178550046703728, 3.029993981949344],
@@ -169,7 +170,7 @@ def test_piece_peaks_match_per_piece_polynomial_roots(degree):
     on seeded random profiles of three axes; and its windows against the largest piece they meet."""
     from numpy.polynomial import Polynomial
 
-    from research.interpolators._fir_limits import PiecePeaks
+    from research.interpolators._fir_piece_peaks import PiecePeaks
     from research.piecewise import NumpyPiecewise
 
     rng = np.random.default_rng(degree)
@@ -209,7 +210,7 @@ def test_compiled_piece_peaks_equal_the_numpy_form(degree):
     floats of its whole-array NumPy form, bit for bit: random pieces with zero leading
     coefficients (roots of lower degree), zero derivatives, roots outside the piece and a jerk
     limit of inf."""
-    from research.interpolators._fir_limits import _closed_form_ratios, _piece_ratios
+    from research.interpolators._fir_piece_peaks import _closed_form_ratios, _piece_ratios
 
     rng = np.random.default_rng(40 + degree)
     K, A = 300, 3
@@ -233,12 +234,8 @@ def test_alone_block_ratios_match_the_whole_exact_stop_profile(delays):
 
     from research.interpolators import _fir_profile
     from research.interpolators._fir_blocks import build_profile
-    from research.interpolators._fir_limits import (
-        PiecePeaks,
-        alone_block_ratios,
-        block_peak_ratios,
-        corner_peak_ratios,
-    )
+    from research.interpolators._fir_limits import alone_block_ratios, block_peak_ratios
+    from research.interpolators._fir_piece_peaks import PiecePeaks, corner_peak_ratios
     from research.interpolators.fir import _pulse_table
     from research.paths.library import random_program
     from research.piecewise import NumpyPiecewise

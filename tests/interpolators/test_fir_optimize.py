@@ -3,7 +3,7 @@
 Every check is independent of the optimizer's own constraint functions: corner errors and path
 deviation from the sampled trajectory (``research.metrics``), peaks sampled and refined
 (``metrics.limit_ratios``), end points from the path, and the exact per-piece peaks of the NLP
-against the planner's NumPy root finder (``_fir_limits.corner_peak_ratios``)."""
+against the planner's NumPy root finder (``_fir_piece_peaks.corner_peak_ratios``)."""
 
 import jax.numpy as jnp
 import numpy as np
@@ -11,7 +11,7 @@ import pytest
 
 from research.errors import ParameterError, PathError
 from research.interpolators import optimize_fir, plan_fir
-from research.interpolators._fir_limits import corner_peak_ratios
+from research.interpolators._fir_piece_peaks import corner_peak_ratios
 from research.interpolators._fir_optimize import _piece_peak_ratios
 from research.limits import AxisLimits
 from research.metrics import corner_errors, limit_ratios, max_contour_error

@@ -1,19 +1,13 @@
 """The limit rounds' window ratios (``_fir_round_peaks.RoundPeaks``) and the window maxima of
-``_fir_limits.PiecePeaks.over``, against independent computations: brute-force maxima and binary
+``_fir_piece_peaks.PiecePeaks.over``, against independent computations: brute-force maxima and binary
 searches, and every ratio recomputed on the whole profile."""
 
 import numpy as np
 import pytest
 
 from research.interpolators import _fir_profile
-from research.interpolators._fir_limits import (
-    LIMIT_RTOL,
-    PiecePeaks,
-    _merged_windows,
-    corner_limit_ratios,
-    own_span_ratios,
-    range_max,
-)
+from research.interpolators._fir_limits import LIMIT_RTOL, corner_limit_ratios, own_span_ratios
+from research.interpolators._fir_piece_peaks import PiecePeaks, _merged_windows, range_max
 from research.interpolators._fir_round_peaks import RoundPeaks
 from research.limits import AxisLimits
 from research.paths.toolpath import ToolPath

@@ -1,0 +1,306 @@
+"""Exact per-axis peaks of a piecewise-polynomial FIR profile, piece by piece, for the windows the
+limit-holding planner checks (``_fir_limits``).
+
+A profile's velocity, acceleration and jerk peak at its break points or where the next derivative
+vanishes; :class:`PiecePeaks` finds every piece's largest ``peak / limit`` once (closed form for the
+degree-<= 4 pieces of two filters, real roots of the next derivative otherwise) and answers the
+largest over any set of time windows (:meth:`PiecePeaks.over`); :func:`corner_peak_ratios` is one
+such call.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from research.limits import AxisLimits
+
+
+#: pieces shorter than this [s] are ignored by :func:`corner_peak_ratios`: two breaks that coincide up
+#: to rounding leave a piece of ~1e-16 s carrying both neighbours' jerk, which no motion realizes
+DEGENERATE_PIECE = 1e-12
+
+
+def corner_peak_ratios(position, lo: np.ndarray, hi: np.ndarray, limits: AxisLimits) -> np.ndarray:
+    """Largest ``peak / limit`` over axes and over velocity, acceleration, jerk, in each window
+    ``[lo_c, hi_c]`` [s]; exact (roots of the next derivative) for pieces of any degree.
+
+    ``position``: a :class:`PiecewisePolynomial` or its NumPy evaluator. Pieces shorter than
+    :data:`DEGENERATE_PIECE` are skipped (their continuous derivatives are the neighbours' end values).
+    Several window sets on one profile: :class:`PiecePeaks` once, then :meth:`PiecePeaks.over`."""
+    return PiecePeaks(position, limits).over(lo, hi)
+
+
+class PiecePeaks:
+    """Largest ``peak / limit`` of every piece of a profile (over axes and over velocity,
+    acceleration, jerk), computed once, for the windows of :meth:`over`.
+
+    Each derivative of order 1-3 peaks, on a piece, at one of its ends or where the next
+    derivative vanishes (its real roots in ``[0, h]``: closed form up to degree 2, companion
+    eigenvalues above); each axis is evaluated at its own roots.
+
+    Args:
+        position: a :class:`PiecewisePolynomial` or its NumPy evaluator (``breaks``, ``coeffs``
+            ``(K, d + 1, A)`` ascending local).
+        limits: the per-axis limits.
+
+    Example (``q = 2 t`` on one axis for 1 s: speed 2 against a limit of 4)::
+
+        >>> import numpy as np
+        >>> from research.limits import AxisLimits
+        >>>         >>> q = NumpyPiecewise(np.array([0.0, 1.0]), np.array([[[0.0], [2.0], [0.0], [0.0]]]))
+        >>> peaks = PiecePeaks(q, AxisLimits.uniform(1, 4.0, 1.0, 1.0))
+        >>> peaks.over(np.array([0.0]), np.array([1.0]))  # one window set of many on one profile
+        array([0.5])
+    """
+
+    def __init__(self, position, limits: AxisLimits):
+        breaks = np.asarray(position.breaks, dtype=np.float64)
+        coeffs = np.asarray(position.coeffs, dtype=np.float64)
+        h = np.diff(breaks)
+        limit = np.stack([limits.velocity, limits.acceleration, limits.jerk]).astype(np.float64)  # (3, A)
+        if coeffs.shape[1] - 1 <= CLOSED_FORM_DEGREE:  # roots in closed form: one compiled pass
+            ratio = _closed_form_ratios(np.ascontiguousarray(coeffs), h, np.ascontiguousarray(limit))
+        else:
+            ratio = _piece_ratios(coeffs, h, limit)
+        self.breaks = breaks
+        self.per_piece = np.where(h > DEGENERATE_PIECE, ratio, 0.0)
+
+    def over(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """``(C,)`` largest piece ratio in each window ``[lo_c, hi_c]`` [s] (the pieces it meets):
+        from the piece holding ``lo_c`` (``searchsorted`` right, less one) to the last piece
+        starting before ``hi_c`` (left), at least one. Windows in time order (``lo`` and ``hi``
+        nondecreasing: the corner windows, the own spans) find their pieces by one merge with the
+        breaks (:func:`_merged_windows`), others by binary search."""
+        lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+        if np.all(lo[1:] >= lo[:-1]) and np.all(hi[1:] >= hi[:-1]):
+            first, last = _merged_windows(self.breaks, lo, hi)
+        else:
+            K = self.per_piece.size
+            first = np.clip(np.searchsorted(self.breaks, lo, side="right") - 1, 0, K - 1)
+            last = np.clip(np.searchsorted(self.breaks, hi, side="left"), first + 1, K)
+        return range_max(self.per_piece, first, last)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _cubic_ratios_at(coeffs, h, limit, pieces):
+    """:func:`closed_form_ratios_at` of a cubic profile (lines under two filters), its loops written
+    out: the same operations in the same order (derivative rows ``c[o - 1, m + 1] * (m + 1)``,
+    Horner at 0 and ``h``, the acceleration's root ``-a0 / a1`` for the velocity), so the same
+    floats, without the small arrays of the general degree."""
+    A = coeffs.shape[2]
+    out = np.zeros(pieces.size)
+    for i in range(pieces.size):
+        k = pieces[i]
+        hk = h[k]
+        best = 0.0
+        for a in range(A):
+            c10, c11, c12 = coeffs[k, 1, a] * 1, coeffs[k, 2, a] * 2, coeffs[k, 3, a] * 3
+            c20, c21 = c11 * 1, c12 * 2
+            c30 = c21 * 1
+            # velocity: ends, then where the acceleration vanishes
+            v0 = (c12 * 0.0 + c11) * 0.0 + c10
+            vh = (c12 * hk + c11) * hk + c10
+            peak = max(abs(v0), abs(vh))
+            t = -c20 / c21 if c21 != 0 else 0.0
+            if t != t:
+                t = 0.0
+            t = min(max(t, 0.0), hk)
+            peak = max(peak, abs((c12 * t + c11) * t + c10))
+            best = max(best, peak / limit[0, a])
+            # acceleration (linear): its ends; jerk (constant)
+            best = max(best, max(abs(c21 * 0.0 + c20), abs(c21 * hk + c20)) / limit[1, a])
+            best = max(best, max(abs(c30), abs(c30)) / limit[2, a])
+        out[i] = best
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _merged_windows(breaks, lo, hi):
+    """``(first, last)`` pieces of :meth:`PiecePeaks.over` for nondecreasing ``lo`` and ``hi``: the
+    counts of breaks ``<= lo_c`` and ``< hi_c`` (``searchsorted`` right and left) by one merge."""
+    K, C = breaks.size - 1, lo.size
+    first, last = np.empty(C, np.int64), np.empty(C, np.int64)
+    right, left = 0, 0
+    for i in range(C):
+        while right <= K and breaks[right] <= lo[i]:
+            right += 1
+        while left <= K and breaks[left] < hi[i]:
+            left += 1
+        first[i] = min(max(right - 1, 0), K - 1)
+        last[i] = min(max(left, first[i] + 1), K)
+    return first, last
+
+
+#: profiles up to this degree (lines under two filters: 3) have the roots of every next derivative
+#: in closed form (degree <= 2) and take the compiled :func:`_closed_form_ratios`
+CLOSED_FORM_DEGREE = 4
+
+
+def _piece_ratios(coeffs: np.ndarray, h: np.ndarray, limit: np.ndarray) -> np.ndarray:
+    """``(K,)`` largest ``peak / limit`` of each piece (:class:`PiecePeaks`), by whole-array NumPy."""
+    K, degree = coeffs.shape[0], coeffs.shape[1] - 1
+    derivs = [coeffs]  # derivative coefficients of orders 1..4 at every piece
+    for _ in range(4):
+        c = derivs[-1]
+        derivs.append(c[:, 1:, :] * np.arange(1, c.shape[1])[None, :, None] if c.shape[1] > 1 else np.zeros_like(c))
+    A = coeffs.shape[2]
+    ends = np.broadcast_to(np.stack([np.zeros(K), h], axis=1)[:, None, :], (K, A, 2))  # both ends of each piece
+    ratio = np.zeros((K, 3, A))
+    for order in (1, 2, 3):
+        tau = ends  # (K, A, 2 + R): the ends, then each axis' own roots of the next derivative
+        if order < degree:
+            tau = np.concatenate([ends, _real_roots(derivs[order + 1], h)], axis=2)
+        peak = np.max(np.abs(_horner_axes(derivs[order], tau)), axis=2)  # (K, A)
+        ratio[:, order - 1, :] = peak / limit[order - 1][None, :]
+    return ratio.reshape(K, -1).max(axis=1)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _closed_form_ratios(coeffs, h, limit):
+    """:func:`_piece_ratios` of a profile of degree <= :data:`CLOSED_FORM_DEGREE` in one compiled
+    pass, by the same operations (Horner's rule, the closed-form roots of :func:`_real_roots`
+    clipped to ``[0, h]``), so the same floats. Peaks are finite here (as in the planner)."""
+    return closed_form_ratios_at(coeffs, h, limit, np.arange(coeffs.shape[0]))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def closed_form_ratios_at(coeffs, h, limit, pieces):
+    """:func:`_closed_form_ratios` of the pieces ``pieces`` only (``(N,)`` indices; the same floats)."""
+    K, D, A = coeffs.shape
+    if D == 4:
+        return _cubic_ratios_at(coeffs, h, limit, pieces)
+    degree = D - 1
+    out = np.zeros(pieces.size)
+    c = np.zeros((5, D))
+    n = np.zeros(5, np.int64)
+    roots = np.zeros(3)
+    for i in range(pieces.size):
+        k = pieces[i]
+        hk = h[k]
+        best = 0.0
+        for a in range(A):
+            n[0] = D
+            for m in range(D):
+                c[0, m] = coeffs[k, m, a]
+            for o in range(1, 5):  # derivative coefficients (a constant's derivative: one 0)
+                if n[o - 1] > 1:
+                    n[o] = n[o - 1] - 1
+                    for m in range(n[o]):
+                        c[o, m] = c[o - 1, m + 1] * (m + 1)
+                else:
+                    n[o] = 1
+                    c[o, 0] = 0.0
+            for order in range(1, 4):
+                no = n[order]
+                v0 = c[order, no - 1]
+                vh = c[order, no - 1]
+                for m in range(no - 2, -1, -1):
+                    v0 = v0 * 0.0 + c[order, m]
+                    vh = vh * hk + c[order, m]
+                peak = max(abs(v0), abs(vh))
+                nr = 0
+                if order < degree:
+                    deg = n[order + 1] - 1
+                    if deg == 1:
+                        a1, a0 = c[order + 1, 1], c[order + 1, 0]
+                        roots[0] = -a0 / a1 if a1 != 0 else 0.0
+                        nr = 1
+                    elif deg == 2:
+                        a2, a1, a0 = c[order + 1, 2], c[order + 1, 1], c[order + 1, 0]
+                        disc = a1 * a1 - 4 * a2 * a0
+                        sq = math.sqrt(max(disc, 0.0))
+                        ok = a2 != 0 and disc >= 0
+                        roots[0] = (-a1 + sq) / (2 * a2) if ok else 0.0
+                        roots[1] = (-a1 + -sq) / (2 * a2) if ok else 0.0
+                        roots[2] = -a0 / a1 if (a2 == 0 and a1 != 0) else 0.0
+                        nr = 3
+                for r in range(nr):
+                    t = roots[r]
+                    if t != t:
+                        t = 0.0
+                    t = min(max(t, 0.0), hk)
+                    v = c[order, no - 1]
+                    for m in range(no - 2, -1, -1):
+                        v = v * t + c[order, m]
+                    peak = max(peak, abs(v))
+                best = max(best, peak / limit[order - 1, a])
+        out[i] = best
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def range_max(values, first, last):
+    """``max(values[first_i:last_i])`` for every ``i`` (``first_i < last_i``) by a sparse table of
+    the maxima of ``2^l`` consecutive values, ``l`` up to the longest range (O(K log L + C)): each
+    range the union of two such runs, so the maximum of the same values."""
+    K, C = values.size, first.size
+    longest = 1
+    for i in range(C):
+        longest = max(longest, last[i] - first[i])
+    levels = 1
+    while (1 << levels) <= longest:
+        levels += 1
+    table = np.empty((levels, K))
+    table[0] = values
+    for lv in range(1, levels):
+        half = 1 << (lv - 1)
+        for k in range(K - (1 << lv) + 1):
+            a, b = table[lv - 1, k], table[lv - 1, k + half]
+            table[lv, k] = a if a >= b else b
+    out = np.empty(C)
+    for i in range(C):
+        n, lv = last[i] - first[i], 0
+        while (2 << lv) <= n:
+            lv += 1
+        a, b = table[lv, first[i]], table[lv, last[i] - (1 << lv)]
+        out[i] = a if a >= b else b
+    return out
+
+
+def _horner_axes(c: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """``(K, A, R)`` values of each axis' polynomial ``c[:, :, a]`` at its own times ``tau[:, a, :]``."""
+    out = np.broadcast_to(c[:, -1, :, None], tau.shape)
+    for m in range(c.shape[1] - 2, -1, -1):
+        out = out * tau + c[:, m, :, None]
+    return out
+
+
+def _real_roots(c: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """Real roots in ``[0, h]`` of the per-piece, per-axis polynomials ``c`` (ascending, ``(K, m+1, A)``),
+    as local times ``(K, A, R)`` (``R`` candidates per axis; out-of-range or complex ones replaced
+    by 0). Degree <= 2 in closed form, higher degrees by the eigenvalues of the companion matrices."""
+    deg = c.shape[1] - 1
+    K, A = c.shape[0], c.shape[2]
+    if deg == 1:
+        a1, a0 = c[:, 1, :], c[:, 0, :]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = np.where(a1 != 0, -a0 / np.where(a1 != 0, a1, 1.0), 0.0)
+        out = r[:, :, None]
+    elif deg == 2:
+        a2, a1, a0 = c[:, 2, :], c[:, 1, :], c[:, 0, :]
+        disc = a1**2 - 4 * a2 * a0
+        sq = np.sqrt(np.maximum(disc, 0.0))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            safe = np.where(a2 != 0, a2, 1.0)
+            roots = [np.where((a2 != 0) & (disc >= 0), (-a1 + s * sq) / (2 * safe), 0.0) for s in (1.0, -1.0)]
+            roots.append(np.where((a2 == 0) & (a1 != 0), -a0 / np.where(a1 != 0, a1, 1.0), 0.0))
+        out = np.stack(roots, axis=2)
+    elif deg > 2:
+        # scale time to the piece length so the companion matrix is well conditioned
+        hs = np.where(h > 0, h, 1.0)
+        cs = c * hs[:, None, None] ** np.arange(deg + 1)[None, :, None]
+        lead = cs[:, -1, :]
+        ok = np.abs(lead) > 1e-14 * np.max(np.abs(cs), axis=1)
+        comp = np.zeros((K, A, deg, deg))
+        comp[:, :, 1:, :-1] = np.eye(deg - 1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            comp[:, :, :, -1] = -np.where(ok[:, None, :], cs[:, :-1, :] / np.where(ok, lead, 1.0)[:, None, :], 0.0).transpose(0, 2, 1)
+        eig = np.linalg.eigvals(comp)  # (K, A, deg)
+        real = np.abs(eig.imag) <= 1e-9 * np.maximum(1.0, np.abs(eig.real))
+        out = np.where(real & ok[:, :, None] & (eig.real >= 0) & (eig.real <= 1), eig.real, 0.0) * hs[:, None, None]
+    else:
+        return np.zeros((K, A, 0))
+    return np.clip(np.nan_to_num(out), 0.0, h[:, None, None])
