@@ -50,7 +50,8 @@ class PiecePeaks:
 
         >>> import numpy as np
         >>> from research.limits import AxisLimits
-        >>>         >>> q = NumpyPiecewise(np.array([0.0, 1.0]), np.array([[[0.0], [2.0], [0.0], [0.0]]]))
+        >>> from research.piecewise import NumpyPiecewise
+        >>> q = NumpyPiecewise(np.array([0.0, 1.0]), np.array([[[0.0], [2.0], [0.0], [0.0]]]))
         >>> peaks = PiecePeaks(q, AxisLimits.uniform(1, 4.0, 1.0, 1.0))
         >>> peaks.over(np.array([0.0]), np.array([1.0]))  # one window set of many on one profile
         array([0.5])
