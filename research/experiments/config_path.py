@@ -7,7 +7,6 @@ a path config describes (:func:`build_path`). Coordinates in mm.
 from __future__ import annotations
 
 import logging
-
 from pathlib import Path
 from typing import Annotated, Union
 

@@ -262,12 +262,13 @@ def _figure(cfg: ExperimentConfig, ev) -> bytes:
     from research.experiments.run_figure import plot_run
 
     name = f"{cfg.name}: base point of the sweep (no [sweep] applied)" if cfg.sweep is not None else cfg.name
+    title = name + (f"\n{cfg.reproduces}" if cfg.reproduces else "")
     if cfg.path is None:  # a [control] study without a tool path: the ch 5 error panels
         from research.experiments.control_figure import plot_control
 
-        fig = plot_control(ev.arrays, ev.record["details"]["control"], title=name + (f"\n{cfg.reproduces}" if cfg.reproduces else ""))
+        fig = plot_control(ev.arrays, ev.record["details"]["control"], title=title)
     else:
-        fig = plot_run(ev.objects["path"], ev.objects["runs"], title=name + (f"\n{cfg.reproduces}" if cfg.reproduces else ""))
+        fig = plot_run(ev.objects["path"], ev.objects["runs"], title=title)
     buf = io.BytesIO()
     save(fig, buf)
     return buf.getvalue()

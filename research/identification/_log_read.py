@@ -106,20 +106,19 @@ def _number(cell: str, path: Path, lineno: int, col: int, name: str, decimal_com
                             "plain decimal number") from None
 
 
-def _rows(lines, first_lineno: int, sep: str, names, path: Path, expected: str) -> list[list[float]]:
+def _rows(lines, first_lineno: int, sep: str, names, path: Path, expected: str,
+          decimal_comma: bool = False) -> list[list[float]]:
     """Numbers of the delimited rows ``lines`` (the first is line ``first_lineno`` of the file); blank and
     ``#`` lines are skipped; a row of another length raises, its message ending with ``expected``.
-    With ``;`` or a tab as the separator a decimal comma is read as a point (``0,5`` = 0.5: the CSV of
-    spreadsheets in locales that write decimal commas)."""
+    ``decimal_comma``: a comma in a number is read as a point (``0,5`` = 0.5)."""
     rows = []
-    comma = sep != ","
     for lineno, line in enumerate(lines, start=first_lineno):
         if not line.strip() or line.lstrip().startswith("#"):
             continue
         cells = line.split(sep)
         if len(cells) != len(names):
             raise DriveLogError(f"{path}:{lineno}: row has {len(cells)} values but {expected}")
-        rows.append([_number(c, path, lineno, i, names[i - 1], comma) for i, c in enumerate(cells, start=1)])
+        rows.append([_number(c, path, lineno, i, names[i - 1], decimal_comma) for i, c in enumerate(cells, start=1)])
     return rows
 
 
@@ -132,7 +131,8 @@ def _read_csv(path: Path) -> dict[str, np.ndarray]:
     if not header or any(not n for n in names):
         raise DriveLogError(f"{path}:1: a CSV drive log needs a header line naming every column, got {header!r}")
     _unique(names, path, 1)
-    rows = _rows(lines[1:], 2, sep, names, path, f"the header names {len(names)} columns {names}")
+    # with ';' or a tab as the separator, a decimal comma (the CSV of spreadsheets in locales that write one)
+    rows = _rows(lines[1:], 2, sep, names, path, f"the header names {len(names)} columns {names}", sep != ",")
     if not rows:
         raise DriveLogError(f"{path}: the CSV has a header {names} but no data rows")
     data = np.array(rows, dtype=np.float64)

@@ -25,7 +25,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from research.paths.toolpath import ToolPath, _arc_eval
+from research.paths.toolpath import ToolPath
 from research.piecewise import PiecewisePolynomial, bucket_size
 
 #: largest sub-arc angle of one polynomial velocity piece [rad]
@@ -140,16 +140,14 @@ def _arc_pieces(path: ToolPath, arcs: np.ndarray, n: np.ndarray) -> np.ndarray:
     vander = np.vander(x, DEGREE + 1, increasing=True)
     owner = np.repeat(np.arange(arcs.size), n)  # arc of each sub-arc
     i = _ranks(n)  # index of each sub-arc in its arc
-    sweep = path.sweeps[arcs][owner]
+    block, sweep = arcs[owner], path.sweeps[arcs][owner]
     h = 1.0 / n[owner]
-    g = path._arc_rows(arcs[owner])
     u = h[:, None] * (i[:, None] + x[None, :])  # (S, DEGREE + 1)
-    nodes = {key: np.repeat(v, DEGREE + 1, axis=0) for key, v in g.items()}
-    vel = (_arc_eval(nodes, (sweep[:, None] * u).reshape(-1), 1)[:, : path.dim]
+    vel = (path.arc_derivatives(np.repeat(block, DEGREE + 1), (sweep[:, None] * u).reshape(-1), 1)
            * np.repeat(sweep, DEGREE + 1)[:, None]).reshape(-1, DEGREE + 1, path.dim)  # dP/du
     # sub-arc ends: the arc's points at its sub-arc angles, the block's own start and end at the ends
-    ends0 = _arc_eval(g, sweep * h * i, 0)[:, : path.dim]
-    ends1 = _arc_eval(g, sweep * h * (i + 1), 0)[:, : path.dim]
+    ends0 = path.arc_points(block, sweep * h * i)
+    ends1 = path.arc_points(block, sweep * h * (i + 1))
     first, last = i == 0, i == n[owner] - 1
     ends0[first] = path.starts[arcs]
     ends1[last] = path.ends[arcs]

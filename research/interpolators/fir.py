@@ -355,7 +355,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         f, sh = repairs.bound(viol, errors, False, factor, shrink)
         return predicted_time((f, head, tail, full, others, arc_rel), sh)
 
-    last_check = [None]  # the last complete check of any candidate (RoundChecks.snapshot)
+    last_check = None  # the last complete check of any candidate (RoundChecks.snapshot)
 
     def settle(candidate, several=False):
         """Verify and repair one candidate plan (``candidate()`` builds its new arrays ``(factor,
@@ -368,6 +368,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         bracket's upper end (:attr:`CornerBisection.bound_scale`), above which it never ends.
         ``several``: other candidates compete (worth a first bound from the first blocks,
         :func:`prefix_bound`, before the whole profile)."""
+        nonlocal last_check
         factor, head, tail, full, others, arc_rel = candidate()  # ``factor``: its own, repaired in place
         candidate, shrink = None, np.ones(M - 1)
         # without limits no corner bisects: its multipliers stay 1 (no (M - 1,) arrays per candidate)
@@ -375,7 +376,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         round_peaks = RoundPeaks(table, limits, Td_np) if limits is not None else None
         checked, repaired = np.zeros(M, dtype=bool), False
         checks = RoundChecks(tp, tb_np, table.block, Td_np, check_period)  # redone only where the profile changed
-        checks.adopt(last_check[0])  # from another candidate's last complete check: redone where they differ
+        checks.adopt(last_check)  # from another candidate's last complete check: redone where they differ
         repairs = Repairs(full, head, tail, tv_np, tb_np, F_np, tp.lengths, Td_np, d_np.size, cum_np)
 
         def alone(g, blocks):  # ``_fir_limits`` phase 1: the own peaks of ``blocks`` (every corner an exact stop)
@@ -451,7 +452,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                                 pos_np, starts_np, centre_np = state[4], state[3], state[5]
                                 checks.swap_profile(pos_np, starts_np, centre_np)
                         deviation, at_vertex, at_block = checks.samples_check()
-                        last_check[0] = checks.snapshot()
+                        last_check = checks.snapshot()
                     viol = errors > limit_v
                     if refine:
                         for j, e in at_vertex.items():

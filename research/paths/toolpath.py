@@ -229,17 +229,17 @@ class ToolPath:
         cross = np.linalg.norm(b - a * dot[:, None], axis=1)
         return np.arctan2(cross, dot)
 
-    def arc_points(self, block: int, phi) -> np.ndarray:
-        """Points ``P(phi)`` of arc block ``block`` at angles ``phi`` [rad] from its start, ``(N, d)``."""
-        g = self._arc_rows(np.array([block]))
-        phi = np.asarray(phi, dtype=np.float64).reshape(-1)
-        return _arc_eval(_take(g, np.zeros(phi.size, dtype=np.int64)), phi, 0)[:, : self.dim]
+    def arc_points(self, block, phi) -> np.ndarray:
+        """Points ``P(phi)`` of arc block ``block`` at angles ``phi`` [rad] from its start, ``(N, d)``
+        (``block``: one block, or one per angle)."""
+        return self.arc_derivatives(block, phi, 0)
 
-    def arc_derivatives(self, block: int, phi, order: int) -> np.ndarray:
-        """``d^order P / d phi^order`` of arc block ``block`` at ``phi`` [mm / rad^order], ``(N, d)``."""
-        g = self._arc_rows(np.array([block]))
+    def arc_derivatives(self, block, phi, order: int) -> np.ndarray:
+        """``d^order P / d phi^order`` of arc block ``block`` at ``phi`` [mm / rad^order], ``(N, d)``
+        (``block``: one block, or one per angle, ``(N,)``)."""
         phi = np.asarray(phi, dtype=np.float64).reshape(-1)
-        return _arc_eval(_take(g, np.zeros(phi.size, dtype=np.int64)), phi, order)[:, : self.dim]
+        blocks = np.broadcast_to(np.asarray(block, dtype=np.int64), phi.shape)
+        return _arc_eval(self._arc_rows(blocks), phi, order)[:, : self.dim]
 
     def _arc_rows(self, blocks: np.ndarray) -> dict:
         rows = self._cache["arc_row"][blocks]
