@@ -157,12 +157,32 @@ def timing(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, full, s
 def profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
     """``_fir_blocks.build_profile`` on concrete arrays (same arguments and results, NumPy):
     ``(block_starts, block_ends, breaks, coeffs, centre)`` with the position profile as its breaks
-    ``(K + 1,)`` and ascending local coefficients ``(K, D, d)``."""
-    return _profile(
-        np.ascontiguousarray(start, dtype=np.float64), np.ascontiguousarray(geo, dtype=np.float64),
-        np.ascontiguousarray(block), np.ascontiguousarray(gap), np.ascontiguousarray(fraction, dtype=np.float64),
-        np.ascontiguousarray(piece_tv, dtype=np.float64), np.ascontiguousarray(gaps, dtype=np.float64),
-        np.ascontiguousarray(delays, dtype=np.float64))
+    ``(K + 1,)`` and ascending local coefficients ``(K, D, d)``.
+
+    The input pulses (:func:`_input_pulses`), each filter in turn (:func:`_moving_average`, the last one
+    integrated: the position) and the blocks' times (:func:`_block_times`) are compiled apart, the
+    filters once per coefficient row count ``D`` met: a path of lines (``D = 1``) through two
+    filters compiles the forms of 1 and 2 rows, a path with arcs (``D = 6``) of 6 and 7, each on its
+    first use (one compiled build compiled all of 1, 2, 3, 6, 7, 8 and a generic form twice over on
+    a fresh install's first plan: 38 s of Numba)."""
+    delays = np.ascontiguousarray(delays, dtype=np.float64)
+    block, gaps = np.ascontiguousarray(block), np.ascontiguousarray(gaps, dtype=np.float64)
+    breaks, coeffs = _input_pulses(np.ascontiguousarray(geo, dtype=np.float64), block, np.ascontiguousarray(gap),
+                                   np.ascontiguousarray(fraction, dtype=np.float64),
+                                   np.ascontiguousarray(piece_tv, dtype=np.float64), gaps)
+    vb, vc = breaks, coeffs
+    for k in range(delays.size - 1):
+        vb, vc = _moving_average(vb, vc, delays[k])
+    # the last filter integrated as it goes: the position, closed by a rest piece of zero length (as
+    # the JAX form's trailing empty piece): the right-hand limit at the end time is the machine at
+    # rest (v = a = j = 0), not the last decelerating piece's left limit (sampled trajectories end
+    # at rest, ``Trajectory.from_piecewise``)
+    pos_breaks, position = _filter(vb, vc, delays[-1], start, True)
+    Td = 0.0
+    for d in delays.tolist():  # summed in order, as the compiled build did
+        Td += d
+    starts, ends, centre = _block_times(breaks, block, gaps, Td)
+    return starts, ends, pos_breaks, position, centre
 
 
 @numba.njit(inline="always", **_OPTIONS)
@@ -170,7 +190,7 @@ def _over(x, m):
     """``x / m`` for an integer ``m >= 1``: ``x * (1 / m)`` at a power of two (``1 / m`` exact, both
     round the same real number, so the same bits) without a division, which costs several
     multiplications; the test folds away where ``m`` is a compile-time constant (the unrolled row
-    loops of :func:`_filter`)."""
+    loops of :func:`_filter_rows`)."""
     if m & (m - 1) == 0:
         return x * (1.0 / m)
     return x / m
@@ -219,35 +239,60 @@ def _shifted_c(coeffs, consts, k, a, delta, c, D):
             c[m] = c[m] + delta * c[m + 1]
 
 
-@numba.njit(**_OPTIONS)
 def _moving_average(breaks, coeffs, delay):
-    """``PiecewisePolynomial.moving_average`` (Sencer 2015 eq 1): breaks ``(K' + 1,)`` and
-    coefficients ``(K', D + 1, A)`` of ``(C(t) - C(t - T)) / T``, ``C`` the antiderivative of a
-    function that is zero outside its breaks, on the ``K' <= 2K + 1`` pieces of positive length of
-    the merge of ``b`` and ``b + T`` (the JAX form keeps the empty ones too)."""
+    """``PiecewisePolynomial.moving_average`` (Sencer 2015 eq 1) on concrete arrays: breaks ``(K' + 1,)``
+    and coefficients ``(K', D + 1, A)`` of ``(C(t) - C(t - T)) / T`` (:func:`_filter_rows`)."""
     return _filter(breaks, coeffs, delay, np.zeros(coeffs.shape[2]), False)
 
 
+def _filter(breaks, coeffs, delay, initial, integrate: bool):
+    """:func:`_filter_rows` through the compiled form of its row count ``D = coeffs.shape[1]``.
+
+    ``D`` is a constant in the code of :data:`_ROWS`' functions for the counts the planner meets
+    (lines 1, arcs ``DEGREE + 1`` = 6, each filter one more): the loops over rows then unroll and
+    the small arrays stay in registers (2-2.5x faster, the same operations in the same order); any
+    other count runs the generic form. Chosen here, not in compiled code, each is compiled on its
+    first use only (a compiled choice compiles every branch: 38 s of a fresh install's first plan)."""
+    rows = _ROWS.get(coeffs.shape[1], _rows_any)
+    return rows(breaks, coeffs, delay, np.ascontiguousarray(initial, dtype=np.float64), integrate)
+
+
 @numba.njit(**_OPTIONS)
-def _filter(breaks, coeffs, delay, initial, integrate):
-    """:func:`_filter_rows` with its ``D`` (coefficient rows of ``coeffs``) a compile-time constant
-    for the row counts the planner meets (lines 1, arcs ``DEGREE + 1`` = 6, each filter one more):
-    its loops over rows then unroll and its small arrays stay in registers (2-2.5x faster, the same
-    operations in the same order); any other count runs the generic compilation."""
-    D = coeffs.shape[1]
-    if D == 1:
-        return _filter_rows(breaks, coeffs, delay, initial, integrate, 1)
-    if D == 2:
-        return _filter_rows(breaks, coeffs, delay, initial, integrate, 2)
-    if D == 3:
-        return _filter_rows(breaks, coeffs, delay, initial, integrate, 3)
-    if D == 6:
-        return _filter_rows(breaks, coeffs, delay, initial, integrate, 6)
-    if D == 7:
-        return _filter_rows(breaks, coeffs, delay, initial, integrate, 7)
-    if D == 8:
-        return _filter_rows(breaks, coeffs, delay, initial, integrate, 8)
-    return _filter_rows(breaks, coeffs, delay, initial, integrate, D)
+def _rows_any(breaks, coeffs, delay, initial, integrate):
+    return _filter_rows(breaks, coeffs, delay, initial, integrate, coeffs.shape[1])
+
+
+@numba.njit(**_OPTIONS)
+def _rows1(breaks, coeffs, delay, initial, integrate):
+    return _filter_rows(breaks, coeffs, delay, initial, integrate, 1)
+
+
+@numba.njit(**_OPTIONS)
+def _rows2(breaks, coeffs, delay, initial, integrate):
+    return _filter_rows(breaks, coeffs, delay, initial, integrate, 2)
+
+
+@numba.njit(**_OPTIONS)
+def _rows3(breaks, coeffs, delay, initial, integrate):
+    return _filter_rows(breaks, coeffs, delay, initial, integrate, 3)
+
+
+@numba.njit(**_OPTIONS)
+def _rows6(breaks, coeffs, delay, initial, integrate):
+    return _filter_rows(breaks, coeffs, delay, initial, integrate, 6)
+
+
+@numba.njit(**_OPTIONS)
+def _rows7(breaks, coeffs, delay, initial, integrate):
+    return _filter_rows(breaks, coeffs, delay, initial, integrate, 7)
+
+
+@numba.njit(**_OPTIONS)
+def _rows8(breaks, coeffs, delay, initial, integrate):
+    return _filter_rows(breaks, coeffs, delay, initial, integrate, 8)
+
+
+_ROWS = {1: _rows1, 2: _rows2, 3: _rows3, 6: _rows6, 7: _rows7, 8: _rows8}
 
 
 @numba.njit(inline="always", **_OPTIONS)
@@ -261,7 +306,9 @@ def _merge_step(breaks, delay, i, j, K):
 
 @numba.njit(**_OPTIONS)
 def _filter_rows(breaks, coeffs, delay, initial, integrate, D):
-    """:func:`_moving_average`, or with ``integrate`` its integral from the first break plus
+    """The moving average (Sencer 2015 eq 1, ``(C(t) - C(t - T)) / T``: breaks ``(K' + 1,)``, coefficients
+    ``(K', D + 1, A)`` on the ``K' <= 2K + 1`` pieces of positive length of the merge of ``b`` and ``b + T``;
+    the JAX form keeps the empty ones too), or with ``integrate`` its integral from the first break plus
     ``initial`` ``(A,)`` (``(K' + 1, D + 2, A)`` coefficients on ``K' + 2`` breaks), built piece by
     piece as the average comes (no averaged profile kept), closed by a rest piece of zero length
     whose value is the end value. ``C`` is never held: its constants (:func:`_constants`) and the
@@ -336,7 +383,10 @@ def _filter_rows(breaks, coeffs, delay, initial, integrate, D):
 
 
 @numba.njit(**_OPTIONS)
-def _profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
+def _input_pulses(geo, block, gap, fraction, piece_tv, gaps):
+    """The input velocity pulses as a piecewise polynomial: breaks ``(P + 1,)`` (from 0, each piece
+    its share of its block's pulse or its gap) and coefficients ``(P, D, A)`` (``geo`` in ``u``
+    scaled to time)."""
     P, D, A = geo.shape
     Mp = gaps.size
     breaks = np.empty(P + 1)
@@ -357,18 +407,15 @@ def _profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
             for a in range(A):
                 coeffs[i, m, a] = 0.0 if gap[i] else geo[i, m, a] * s
             s *= inv
-    vb, vc = breaks, coeffs
-    for k in range(delays.size - 1):
-        vb, vc = _moving_average(vb, vc, delays[k])
-    # the last filter integrated as it goes: the position, closed by a rest piece of zero length (as
-    # the JAX form's trailing empty piece): the right-hand limit at the end time is the machine at
-    # rest (v = a = j = 0), not the last decelerating piece's left limit (sampled trajectories end
-    # at rest, ``Trajectory.from_piecewise``)
-    pos_breaks, position = _filter(vb, vc, delays[delays.size - 1], start, True)
+    return breaks, coeffs
+
+
+@numba.njit(**_OPTIONS)
+def _block_times(breaks, block, gaps, Td):
+    """Each block's pulse start and end and its corner instant (the end, half the gap and ``T_d /
+    2`` later) [s], ``(Mp,)`` each, from the input pulses' breaks."""
+    P, Mp = block.size, gaps.size
     starts, ends, centre = np.empty(Mp), np.empty(Mp), np.empty(Mp)
-    Td = 0.0
-    for k in range(delays.size):
-        Td += delays[k]
     first = 0
     for k in range(Mp):
         while first < P and block[first] < k:
@@ -379,4 +426,4 @@ def _profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
         starts[k] = breaks[first]
         ends[k] = breaks[last] - gaps[k]
         centre[k] = ends[k] + 0.5 * gaps[k] + 0.5 * Td
-    return starts, ends, pos_breaks, position, centre
+    return starts, ends, centre

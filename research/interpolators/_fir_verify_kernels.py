@@ -21,7 +21,6 @@ import numpy as np
 from research.interpolators._fir_kernels import _OPTIONS, VERIFY_ATOL, VERIFY_RTOL, _left_in, _right_from
 
 
-@numba.njit(**_OPTIONS)
 def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv):
     """Trajectory samples and their squared distances to the three blocks around each (lines).
 
@@ -33,8 +32,9 @@ def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, se
     searches step on from the previous sample's (:func:`_right_next`: the samples run forward, a grid
     then the corner instants), and any order of ``t`` gives the same result. Compiled with the row
     count ``D`` and axis count ``A`` of ``coeffs`` as constants for the profiles of two filters
-    (``D`` = 4 on lines, 9 with arcs; ``A`` = 2 or 3; about 2x faster), any other pair generically
-    (each pair costs about 1.2 s of compilation, once per cache).
+    (``D`` = 4 on lines, 9 with arcs; ``A`` = 2 or 3; about 2x faster), any other pair generically;
+    the form is chosen here, in Python, so that only the pairs met are compiled (each costs about
+    1.2-2 s of compilation, once per cache; a compiled choice compiled all five at once).
 
     Args:
         breaks, coeffs: ``(K + 1,)`` and ``(K, D, A)`` of the position profile.
@@ -45,18 +45,35 @@ def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, se
     Returns:
         ``(q (N, A), block (N,), d2 (N, 3))``.
     """
-    D, A = coeffs.shape[1], coeffs.shape[2]
-    if A == 3:
-        if D == 4:
-            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 4, 3)
-        if D == 9:
-            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 9, 3)
-    if A == 2:
-        if D == 4:
-            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 4, 2)
-        if D == 9:
-            return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 9, 2)
-    return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, D, A)
+    return _LINE_FORMS.get(coeffs.shape[1:], _line_any)(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv)
+
+
+@numba.njit(**_OPTIONS)
+def _line_4_3(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv):
+    return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 4, 3)
+
+
+@numba.njit(**_OPTIONS)
+def _line_9_3(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv):
+    return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 9, 3)
+
+
+@numba.njit(**_OPTIONS)
+def _line_4_2(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv):
+    return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 4, 2)
+
+
+@numba.njit(**_OPTIONS)
+def _line_9_2(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv):
+    return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 9, 2)
+
+
+@numba.njit(**_OPTIONS)
+def _line_any(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv):
+    return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, coeffs.shape[1], coeffs.shape[2])
+
+
+_LINE_FORMS = {(4, 3): _line_4_3, (9, 3): _line_9_3, (4, 2): _line_4_2, (9, 2): _line_9_2}
 
 
 @numba.njit(**_OPTIONS)
@@ -128,7 +145,6 @@ def _squared_distance(coeffs, piece, tau, vertices, c, D, A):
     return d2
 
 
-@numba.njit(**_OPTIONS)
 def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
     """Distance [mm] from each vertex ``(C, A)`` to the profile near ``centre`` ``(C,)`` [s]: the best
     of ``grid`` points evenly spread over ``centre +- half_window``, refined by ``newton_steps``
@@ -141,18 +157,35 @@ def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton
     of the last corner, the first Newton step's from the best grid point, the others' from the
     last step. Compiled for the same row and axis counts as constants as
     :func:`sampled_line_distances`."""
-    D, A = coeffs.shape[1], coeffs.shape[2]
-    if A == 3:
-        if D == 4:
-            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 4, 3)
-        if D == 9:
-            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 9, 3)
-    if A == 2:
-        if D == 4:
-            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 4, 2)
-        if D == 9:
-            return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 9, 2)
-    return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, D, A)
+    return _CORNER_FORMS.get(coeffs.shape[1:], _corner_any)(breaks, coeffs, vertices, centre, half_window, grid, newton_steps)
+
+
+@numba.njit(**_OPTIONS)
+def _corner_4_3(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
+    return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 4, 3)
+
+
+@numba.njit(**_OPTIONS)
+def _corner_9_3(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
+    return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 9, 3)
+
+
+@numba.njit(**_OPTIONS)
+def _corner_4_2(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
+    return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 4, 2)
+
+
+@numba.njit(**_OPTIONS)
+def _corner_9_2(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
+    return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 9, 2)
+
+
+@numba.njit(**_OPTIONS)
+def _corner_any(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
+    return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, coeffs.shape[1], coeffs.shape[2])
+
+
+_CORNER_FORMS = {(4, 3): _corner_4_3, (9, 3): _corner_9_3, (4, 2): _corner_4_2, (9, 2): _corner_9_2}
 
 
 @numba.njit(**_OPTIONS)
