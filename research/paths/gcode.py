@@ -27,8 +27,9 @@ Accepted words (anything else is a :class:`~research.errors.GCodeError` naming f
   ``[H<n>]`` / ``G49`` (tool length offset on / off: the program coordinates are taken as tool-tip
   coordinates, so the offset moves only the machine's Z, as the work offsets move its frame),
   ``G54``-``G59`` (work offsets: the program frame is taken as the work frame, one frame for all six,
-  whose machine origin is ``machine_origin``), ``G94`` (feed per minute, the only feed mode supported), ``G98``/``G99`` (canned-cycle retract mode, written in the
-  safety line of Fanuc-style posts: with the canned cycles refused it changes nothing);
+  whose machine origin is ``machine_origin``), ``G94`` (feed per minute, the only feed mode supported),
+  ``G98``/``G99`` (canned-cycle retract mode, written in the safety line of Fanuc-style posts: with the
+  canned cycles refused it changes nothing);
 * ``G28 [X] [Y] [Z]`` (return to home, LinuxCNC: a rapid to the point of the axis words, then a
   rapid of those axes, or of all three when none is given, to the home position) when ``home`` is
   given to the reader; without it an error that asks for it;
