@@ -61,6 +61,37 @@ def test_run_twice_is_served_from_the_store(tmp_path, capsys):
     assert main(args) == 0 and "(cached)" in capsys.readouterr().out
 
 
+def test_summary_counts_the_programs_blocks_not_its_chords(tmp_path, capsys):
+    """The summary of a G-code run counts the program's blocks and arcs, computed and from the store:
+    by hand, the program below has 5 blocks (G0 Z1, G1 Z0, G1 X10, the G2 half circle of R 5 about
+    (15, 0), G1 X30) of which 1 arc; its polyline view has 4 + 79 chords (the arc cut at 1 um:
+    ceil(pi / (4 asin(sqrt(0.001 / 10)))) = 79), which the row must not show. A named polyline keeps
+    "segments / corners" (corner90: 2 segments, 1 corner)."""
+    import math
+    import re
+
+    from research.cli import main
+
+    assert math.ceil(math.pi / (4 * math.asin(math.sqrt(0.001 / 10)))) == 79
+    (tmp_path / "part.nc").write_text("G21 G90 G17\nG0 Z1\nG1 Z0 F600\nG1 X10\nG2 X20 Y0 I5 J0\nG1 X30\nM30\n")
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('name = "c"\nreproduces = "-"\n[path]\ngcode = "part.nc"\n[output]\nfigure = false\n')
+    args = ["run", str(cfg), "--cache", str(tmp_path / "cache"), "--results", str(tmp_path / "results")]
+    for served in ("computing", "(cached)"):
+        assert main(args) == 0
+        out = capsys.readouterr().out
+        assert served in out
+        summary = out[out.index("\nexperiment "):]
+        assert re.search(r"^blocks / arcs +5 / 1$", summary, re.M), out
+        assert "segments / corners" not in summary and "83 / 82" not in summary  # the chords, as before
+        assert ("interpolator fir: 5 blocks, 1 arc(s), 83 chords" in out) == (served == "computing")
+    record = json.loads((tmp_path / "results" / "c" / "results.json").read_text())
+    assert len(record["details"]["fir"]["turning_angle_deg"]) == 82  # the chords are still what the metrics use
+    cfg.write_text('name = "d"\nreproduces = "-"\n[path]\nname = "corner90"\n[output]\nfigure = false\n')
+    assert main(args) == 0
+    assert re.search(r"^segments / corners +2 / 1$", capsys.readouterr().out, re.M)
+
+
 def test_sweep_command(tmp_path, capsys):
     from research.cli import main
 

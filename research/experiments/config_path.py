@@ -34,6 +34,9 @@ class PathConfig(_Strict):
                                   "(x, y, z) [mm]; with gcode only")
     home_mm: list[float] | None = Field(None, description="machine home (x, y, z) [mm, program frame], the target "
                                         "of G28; a program with G28 needs it; with gcode only")
+    machine_origin_mm: list[float] | None = Field(None, description="origin of the machine coordinates (x, y, z) [mm, "
+                                                  "program frame: minus the work offset, one for G54-G59], the frame "
+                                                  "of G53's X Y Z; a program with G53 needs it; with gcode only")
     initial_feed_mm_per_s: float | None = Field(None, gt=0, description="feed in effect before the program's first "
                                                 "F word [mm/s] (a controller's default feed); without it a move "
                                                 "before any F word is an error naming its line; with gcode only")
@@ -46,14 +49,15 @@ class PathConfig(_Strict):
             raise ValueError(f"give exactly one of name, gcode, points_mm, bspline (got {given or 'none'})")
         if self.gcode is None:
             # by value, not by fields set: a dumped config (sweeps, the store) writes every field back
-            extra = [k for k, v in (("home_mm", None), ("start_mm", [0.0, 0.0, 0.0]), ("initial_feed_mm_per_s", None)) if getattr(self, k) != v]
+            extra = [k for k, v in (("home_mm", None), ("machine_origin_mm", None), ("start_mm", [0.0, 0.0, 0.0]),
+                                    ("initial_feed_mm_per_s", None)) if getattr(self, k) != v]
             if extra:
                 raise ValueError(f"{', '.join(extra)} only apply to a G-code path (gcode = ...); remove them or give gcode")
         if self.name is not None and self.name not in PATHS:
             raise ValueError(f"unknown path name {self.name!r}; expected one of {sorted(PATHS)}")
         return self
 
-    @field_validator("start_mm", "home_mm")
+    @field_validator("start_mm", "home_mm", "machine_origin_mm")
     @classmethod
     def _xyz(cls, v, info):
         if v is not None and (len(v) != 3 or any(abs(c) > MAX_COORDINATE_MM for c in v)):
@@ -116,11 +120,13 @@ def build_path(cfg: PathConfig, base: Path) -> tuple[Polyline, np.ndarray | None
 def read_program(cfg: PathConfig, base: Path):
     """The :class:`~research.paths.gcode.GCodeProgram` of a G-code path config (read relative to
     ``base``; arcs as chords at ``chord_tolerance_um`` and as blocks; from ``start_mm``, ``G28`` to
-    ``home_mm``, ``F`` before the first F word from ``initial_feed_mm_per_s``)."""
+    ``home_mm``, ``G53`` from ``machine_origin_mm``, ``F`` before the first F word from
+    ``initial_feed_mm_per_s``)."""
     from research.paths.gcode import read_gcode
 
     program = read_gcode(base / cfg.gcode, chord_tolerance=cfg.chord_tolerance_um * 1e-3, start=tuple(cfg.start_mm),
                          home=None if cfg.home_mm is None else tuple(cfg.home_mm),
+                         machine_origin=None if cfg.machine_origin_mm is None else tuple(cfg.machine_origin_mm),
                          initial_feed=None if cfg.initial_feed_mm_per_s is None else 60.0 * cfg.initial_feed_mm_per_s)
     if program.unread_lines:
         logging.getLogger(__name__).warning(

@@ -126,21 +126,26 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
             path, program_feeds = program.polyline, program.feeds
             blocks = program.blocks, program.block_feeds, program.block_tolerance, program.block_pauses
             pauses = _pauses_planned(cfg, program)
+            # the program's own blocks (moves and arcs kept as arcs), for the summary: the chords are its polyline view
+            path_counts = {"path_blocks": program.n_blocks, "path_arcs": int(np.count_nonzero(program.blocks.is_arc))}
         else:
             (path, program_feeds), blocks, pauses = build_path(cfg.path, base), None, None
+            path_counts = {}
         objects["path"] = path
         cam = path if cfg.path.bspline is None else cfg.path.bspline.curve()  # errors against the curve itself
         several = len(cfg.interpolators) > 1
         for ic in cfg.interpolators:
             label = ic.label or ic.kind
             prefix = f"{label}." if several else ""
-            log(f"interpolator {label}: {path.n_segments} segments")
+            log(f"interpolator {label}: " + (f"{path_counts['path_blocks']} blocks, {path_counts['path_arcs']} arc(s), "
+                                             f"{path.n_segments} chords" if path_counts else f"{path.n_segments} segments"))
             if getattr(ic, "limits_from", None) is not None:  # the peaks of an earlier interpolator as the limits
                 ic = _limits_of(ic, next(tr for lb, _, tr, _ in objects["runs"] if lb == ic.limits_from))
             traj, info, plan = interpolate(ic, path, program_feeds, blocks, pauses)
             metrics = summarize(traj, path)
             objects.setdefault("runs", []).append((label, plan, traj, metrics))
-            details[label] = info | {"metrics": metrics.as_dict(), "turning_angle_deg": np.degrees(path.turning_angles).tolist()}
+            details[label] = info | {"metrics": metrics.as_dict(), "turning_angle_deg": np.degrees(path.turning_angles).tolist()} \
+                | path_counts
             scalars |= {prefix + k: float(getattr(metrics, k)) for k in ("cycle_time", "max_corner_error", "max_contour_error", "peak_feed")}
             arrays |= {f"{label}.{k}": np.asarray(getattr(traj, k)) for k in ("t", "q", "v", "a", "j")}
             if cfg.drive is None:

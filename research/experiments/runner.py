@@ -286,8 +286,11 @@ def format_summary(result: RunResult) -> str:
     for (label, d), ic in zip(runs.items(), cfg.interpolators):
         m = d["metrics"]
         tag = f"{label}: " if len(runs) > 1 else ""
-        n = len(d["turning_angle_deg"])
-        rows.append((f"{tag}segments / corners", f"{n + 1} / {n}"))
+        if "path_blocks" in d:  # a G-code program: its blocks (arcs kept as arcs), not the chords of its polyline
+            rows.append((f"{tag}blocks / arcs", f"{d['path_blocks']:,} / {d['path_arcs']:,}"))
+        else:  # a polyline (or a record stored before the block counts were)
+            n = len(d["turning_angle_deg"])
+            rows.append((f"{tag}segments / corners", f"{n + 1:,} / {n:,}"))
         rows.append((f"{tag}interpolator", ic.kind))
         if ic.kind == "fir":
             rows += [(f"{tag}feed F [mm/s]", _range(np.asarray(d["feeds"]))),

@@ -43,6 +43,7 @@ _G_ACCEPT = {
     400: "cutter_comp",
     430: "tool_length", 490: "tool_length",
     280: "home",
+    530: "machine_coordinates",
     **{k: "work_offset" for k in (540, 550, 560, 570, 580, 590)},
     610: "path_mode", 611: "path_mode", 640: "path_mode",
     940: "feed_mode",
@@ -72,7 +73,6 @@ _G_REFUSE = {
     421: "G42.1 (dynamic cutter compensation right) is not supported: post-process with compensation off (G40)",
     431: "G43.1 (dynamic tool length compensation) is not supported: only G43 H<n> and G49",
     432: "G43.2 (additional tool length offset) is not supported: only G43 H<n> and G49",
-    530: "G53 (machine coordinates) is not supported",
     730: f"canned cycle G73 is not supported: {_CUT}",
     760: f"canned cycle G76 is not supported: {_CUT}",
     **{10 * c: f"canned cycle G{c} is not supported: {_CUT}" for c in range(81, 90)},
@@ -94,7 +94,7 @@ _LETTER_REFUSE = {
     "L": "L (repeat count / G10 parameter) is not supported",
 }
 _ACCEPTED_LETTERS = frozenset("GMNOFSTXYZIJKRPQH")
-_ACCEPTED_G_TEXT = ("G0 G1 G2 G3 G4 G80 G17 G18 G19 G20 G21 G28 G40 G43 G49 G54-G59 G61 G61.1 G64 G90 G91 "
+_ACCEPTED_G_TEXT = ("G0 G1 G2 G3 G4 G80 G17 G18 G19 G20 G21 G28 G40 G43 G49 G53 G54-G59 G61 G61.1 G64 G90 G91 "
                     "G90.1 G91.1 G94 G98 G99")
 _ACCEPTED_M_TEXT = "M0 M1 M2 M3 M4 M5 M6 M7 M8 M9 M30 M60"
 # code text: optional '+', leading zeros, 1-4 digits, optionally '.' and one digit (trailing zeros ok)
@@ -136,9 +136,10 @@ class _Interpreter:
     """Modal state machine; ``line(words, lineno)`` executes one block, ``simple(...)`` a plain move."""
 
     def __init__(self, chord_tolerance, rapid_feed_mm_s, initial_feed_mm_s, start, arc_radius_tolerance,
-                 arc_relative_tolerance, home=None):
+                 arc_relative_tolerance, home=None, machine_origin=None):
         self.tol = chord_tolerance
         self.home = home  # G28 target (x, y, z) [mm], or None: G28 is an error
+        self.machine_origin = machine_origin  # G53's frame origin (x, y, z) [mm, program frame], or None: G53 is an error
         self.arc_tol = arc_radius_tolerance  # mm, or None: LinuxCNC's (unit dependent)
         self.arc_rel = arc_relative_tolerance
         self.rapid_feed = rapid_feed_mm_s
@@ -337,11 +338,19 @@ class _Interpreter:
         if "motion" in groups:
             self.motion = _MOTION[groups["motion"][0]]
 
+        if "machine_coordinates" in groups:  # RS274/NGC modal group 0: G4, G28, G53 (G92, G10 refused)
+            other = next((kind for kind in ("home", "dwell") if kind in groups), None)
+            if other is not None:
+                raise _LineError(f"G53 and G{_fmt_key(groups[other][0])} on one line; expected at most one of G4, "
+                                 "G28, G53 per line (RS274/NGC modal group 0)", groups["machine_coordinates"][1])
         if "dwell" in groups:
             self._dwell(vals, groups, g64)
         if "home" in groups:
             self._home(vals, lineno, groups)
             vals = {k: v for k, v in vals.items() if k not in "XYZ"}  # G28's axis words are its own
+        if "machine_coordinates" in groups:
+            self._machine(vals, lineno, groups, motion_word)
+            vals = {k: v for k, v in vals.items() if k not in "XYZ"}  # G53's axis words are its own
         moves = not _AXIS_LETTERS.isdisjoint(vals)
         if "P" in vals and not g64 and "dwell" not in groups and not (moves and self.motion in (2, 3)):
             raise _LineError("P word with no G2/G3, G4 or G64 to use it; expected P only as G64 P<tolerance>, "
@@ -403,6 +412,43 @@ class _Interpreter:
         via = self._target(vals)
         self._move(via, self.rapid_feed, True, lineno)
         self._move([self.home[i] if (i in named or not named) else via[i] for i in range(3)], self.rapid_feed, True, lineno)
+
+    def _machine(self, vals, lineno, groups, motion_word):
+        """``G53 [G0|G1] [X] [Y] [Z]`` (LinuxCNC): a straight move, rapid or at the feed of the motion mode
+        in effect, to ``machine_origin + words`` (words in the current units, absolute); axes not given
+        keep their position. Errors as LinuxCNC: G53 without G0/G1 in effect (none, G80, or an arc
+        mode), under G91 (``interp_check.cc``: "Cannot use G53 incremental"); G4/G28 on its line are refused
+        by ``line``."""
+        k = groups["machine_coordinates"][1]
+        if self.machine_origin is None:
+            raise _LineError("G53 (move in machine coordinates) needs the machine coordinate system's origin; expected "
+                             "machine_origin=(x, y, z) [mm, program frame] given to parse_gcode / read_gcode "
+                             "([path] machine_origin_mm in a config)", k)
+        named = [i for i, letter in enumerate("XYZ") if letter in vals]
+        if "motion" not in groups and not named:
+            raise _LineError("G53 without G0/G1 on the line and without X, Y or Z; expected G53 G0 or G53 G1 with "
+                             "the machine coordinates to move to (LinuxCNC: must use G0 or G1 with G53)", k)
+        if self.motion not in (0, 1):
+            mode = "no motion mode in effect (none yet, or cancelled by G80)" if self.motion is None else \
+                f"the arc motion mode G{self.motion} in effect"
+            raise _LineError(f"G53 with {mode}; expected G0 or G1 on this line or in effect (LinuxCNC: G53 "
+                             "moves in a straight line only)", k)
+        if not self.absolute:
+            raise _LineError("G53 under G91 (incremental distance mode); expected G90: the machine coordinates of "
+                             "G53 are absolute (LinuxCNC: cannot use G53 incremental)", k)
+        if not named:  # "G53 G0" alone: LinuxCNC sets the motion mode and moves nothing
+            return
+        s = self.scale
+        t = list(self.pos)
+        for i in named:
+            num, kw = vals["XYZ"[i]]
+            v = self.machine_origin[i] + float(num) * s
+            if not -_MAXC <= v <= _MAXC:
+                raise _LineError(f"G53 {'XYZ'[i]}{_short(num)}: expected a finite machine coordinate with the position "
+                                 f"(machine_origin + {'XYZ'[i]}) inside +-{_MAXC:g} mm", kw)
+            t[i] = v
+        rapid = self.motion == 0
+        self._move(t, self._feed_for(rapid, vals, motion_word), rapid, lineno)
 
     def _target(self, vals):
         s = self.scale

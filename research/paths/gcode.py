@@ -26,12 +26,20 @@ Accepted words (anything else is a :class:`~research.errors.GCodeError` naming f
 * harmless modal codes that do not change the geometry: ``G40`` (cutter compensation off), ``G43``
   ``[H<n>]`` / ``G49`` (tool length offset on / off: the program coordinates are taken as tool-tip
   coordinates, so the offset moves only the machine's Z, as the work offsets move its frame),
-  ``G54``-``G59`` (work offsets: the program frame is taken as the work frame), ``G94`` (feed per
-  minute, the only feed mode supported), ``G98``/``G99`` (canned-cycle retract mode, written in the
-  safety line of Fanuc-style posts: with the canned cycles refused it changes nothing);
+  ``G54``-``G59`` (work offsets: the program frame is taken as the work frame, one frame for all six,
+  whose machine origin is ``machine_origin``), ``G94`` (feed per minute, the only feed mode supported),
+  ``G98``/``G99`` (canned-cycle retract mode, written in the safety line of Fanuc-style posts: with the
+  canned cycles refused it changes nothing);
 * ``G28 [X] [Y] [Z]`` (return to home, LinuxCNC: a rapid to the point of the axis words, then a
   rapid of those axes, or of all three when none is given, to the home position) when ``home`` is
   given to the reader; without it an error that asks for it;
+* ``G53 [G0|G1] [X] [Y] [Z]`` (move in machine coordinates, LinuxCNC; not modal: on each line that
+  uses it): a straight ``G0`` or ``G1`` block to ``machine_origin`` plus the axis words (absolute, in
+  the current units; axes not given keep their position) when ``machine_origin`` is given to the
+  reader; without it an error that asks for it. As LinuxCNC it needs ``G0`` or ``G1`` on its line or
+  in effect (an arc mode, ``G80`` or a lone ``G53`` is an error), and ``G90``: ``G53`` under ``G91`` is
+  an error (LinuxCNC's "cannot use G53 incremental"); ``G53 G0`` without axis words only sets the
+  motion mode;
 * ``G4 P<seconds>`` (dwell; P in seconds whatever the units, as LinuxCNC: Fanuc's milliseconds are
   not read) and ``M0 M1 M60`` (program stop, optional stop, pallet-change pause: a stop of 0 s, the
   operator's wait not counted): the motion stops at the vertex and waits (``block_pauses``; the FIR
@@ -65,7 +73,9 @@ Refused with a message naming the feature: O-word subroutines and control flow (
 expressions ``[...]`` and functions (``sin[30]``), ``/`` block delete; ``G17.1 G18.1 G19.1`` (UVW
 planes), ``G41 G42 G41.1 G42.1`` (cutter compensation), ``G43.1 G43.2`` (dynamic / additional tool length
 offsets), ``G4`` without ``P``, ``G5 G5.1 G5.2`` (splines),
-``G28`` without ``home``, ``G30 G53 G92`` (machine / coordinate-system moves), ``G73 G76 G81``-``G89`` (canned
+``G28`` without ``home``, ``G53`` without ``machine_origin``, with an arc mode or ``G80`` in effect,
+without ``G0``/``G1`` and axis words, under ``G91``, or with ``G4``/``G28`` on its line, ``G30 G92``
+(secondary home, coordinate-system offset), ``G73 G76 G81``-``G89`` (canned
 cycles), ``G93 G95`` (inverse-time / per-revolution feed), every other G or M code (a code with more
 than one decimal digit such as ``G1.00000001`` is not read as ``G1``); the letters ``A B C U V W``
 (extra axes), ``D`` (cutter radius offset), ``H`` without ``G43``, ``L``, every other letter; the off-plane centre word (``K`` in
@@ -370,6 +380,7 @@ def parse_gcode(
     arc_radius_tolerance: float | None = None,
     arc_relative_tolerance: float = SPIRAL_RELATIVE_TOLERANCE,
     home=None,
+    machine_origin=None,
 ) -> GCodeProgram:
     """Read a G-code program into blocks (lines and arcs) and straight chords with feeds.
 
@@ -397,6 +408,15 @@ def parse_gcode(
             exactly at the programmed point. For an absolute limit alone pass a tiny relative one.
         home: the machine home position ``(x, y, z)`` [mm] in the program frame, the target of ``G28``;
             ``None`` (default) makes ``G28`` an error that asks for it (the reader cannot know it).
+        machine_origin: the origin of the machine coordinate system ``(x, y, z)`` [mm] in the program
+            frame, i.e. minus the active work offset (a work offset ``G54 X-100 Y-50 Z-200`` puts the
+            machine origin at ``(100, 50, 200)`` in the program frame): ``G53 X Y Z`` goes to
+            ``machine_origin + (X, Y, Z)``. One origin for the whole program: ``G54``-``G59`` are all
+            taken as this one frame (the reader keeps no offset table). The program's coordinates are
+            tool-tip coordinates, while LinuxCNC's ``G53`` words are the machine axis positions (the
+            tool tip ends the tool length below them under ``G43``): give ``z`` less that length
+            when a tool length offset is in force at the ``G53`` moves. ``None`` (default) makes
+            ``G53`` an error that asks for it.
 
     Semantics worth knowing:
 
@@ -451,6 +471,7 @@ def parse_gcode(
     feed0 = None if initial_feed is None else _check_positive("initial_feed", initial_feed) / 60.0
     st = _point("start", start)
     home_t = None if home is None else _point("home", home)
+    origin_t = None if machine_origin is None else _point("machine_origin", machine_origin)
     if not isinstance(text, str):
         raise GCodeError(f"expected the program as str, got {type(text).__name__}", source=source, line=0, column=0)
     if text.startswith("\ufeff"):  # a byte-order mark written by some Windows editors
@@ -458,7 +479,7 @@ def parse_gcode(
     if "\r" in text:
         text = text.replace("\r\n", "\n").replace("\r", "\n")
 
-    it = _Interpreter(tol, rapid, feed0, st, arc_tol, arc_rel, home_t)
+    it = _Interpreter(tol, rapid, feed0, st, arc_tol, arc_rel, home_t, origin_t)
     line_fn = it.line
     simple_fn = it.simple
     simple_match = _SIMPLE.fullmatch
@@ -560,7 +581,7 @@ def read_gcode(path: str | PathLike, **kwargs) -> GCodeProgram:
         path: file to read; its path string becomes ``source`` in messages and the result.
         **kwargs: as :func:`parse_gcode` (``chord_tolerance`` [mm], ``rapid_feed`` [mm/min],
             ``initial_feed`` [mm/min], ``start`` [mm], ``arc_radius_tolerance`` [mm],
-            ``arc_relative_tolerance``, ``home`` [mm]).
+            ``arc_relative_tolerance``, ``home`` [mm], ``machine_origin`` [mm]).
 
     Raises:
         GCodeError: the file cannot be read (line 0), or as :func:`parse_gcode`.

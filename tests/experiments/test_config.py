@@ -140,6 +140,36 @@ def test_gcode_path_with_g28_needs_home_mm(tmp_path):
         load_config(write(tmp_path, GOOD.replace('name = "corner90"', 'name = "corner90"\nhome_mm = [0, 0, 1]'), "c.toml"))
 
 
+def test_gcode_path_with_g53_needs_machine_origin_mm(tmp_path):
+    """A post's ``G53 G0 Z0.`` / ``G53 G0 X0. Y0.`` end-of-program retract, read with ``machine_origin_mm =
+    [-5, 2, 20]``: from (10, 0, 5) a rapid to z = 20 + 0, then to x = -5 + 0, y = 2 + 0 (z kept), so the
+    run ends at (-5, 2, 20) and its block feeds are rapid, F1200 = 20 mm/s, rapid, rapid (the rapid feed
+    15000 mm/min = 250 mm/s). Without the key the run stops with the reader's error naming the file,
+    line 4, column 1 and the key; a misspelt key is the usual "did you mean"; the key with a named
+    path, or with two coordinates, is a config error."""
+    (tmp_path / "part.nc").write_text("G21 G90\nG0 Z5\nG1 X10 F1200\nG53 G0 Z0.\nG53 X0. Y0.\nM30\n")
+    text = GOOD.replace('name = "corner90"', 'gcode = "part.nc"\nmachine_origin_mm = [-5.0, 2.0, 20.0]')
+    text = text.replace("feed_mm_per_s = 200.0\n", "")
+    result = run_experiment(write(tmp_path, text), cache_dir=tmp_path / "c", figures_dir=tmp_path / "f", log=lambda s: None)
+    traj = Trajectory.load(tmp_path / "c" / "t" / "trajectory.npz")
+    np.testing.assert_allclose(traj.q[-1], [-5.0, 2.0, 20.0], atol=1e-9)
+    np.testing.assert_allclose(result.record["details"]["fir"]["feeds"], [250.0, 20.0, 250.0, 250.0], rtol=1e-12)
+    with pytest.raises(Exception, match=r"part.nc:4:1: G53 \(move in machine coordinates\) needs the machine "
+                                        r"coordinate system's origin; .*\[path\] machine_origin_mm"):
+        run_experiment(write(tmp_path, text.replace("machine_origin_mm = [-5.0, 2.0, 20.0]\n", ""), "b.toml"),
+                       cache_dir=tmp_path / "c2", figures_dir=tmp_path / "f", log=lambda s: None)
+    typo = write(tmp_path, text.replace("machine_origin_mm", "machine_orign_mm"), "typo.toml")
+    with pytest.raises(ConfigError, match=r"key 'path.machine_orign_mm': unknown key \(typo\? did you mean "
+                                          r"'machine_origin_mm'\?\)") as e:
+        load_config(typo)
+    assert str(typo) in str(e.value)
+    with pytest.raises(ConfigError, match=r"machine_origin_mm only apply to a G-code path"):
+        load_config(write(tmp_path, GOOD.replace('name = "corner90"', 'name = "corner90"\nmachine_origin_mm = [0, 0, 1]'),
+                          "c.toml"))
+    with pytest.raises(ConfigError, match=r"machine_origin_mm = \[0.0, 1.0\]: expected 3 coordinates"):
+        load_config(write(tmp_path, text.replace("[-5.0, 2.0, 20.0]", "[0, 1]"), "d.toml"))
+
+
 def test_gcode_pauses_are_planned_by_fir_and_refused_elsewhere(tmp_path):
     """A program with a spindle warm-up ``G4 P1.5`` and an ``M1`` between its two cuts: the FIR run's
     cycle time is the two cuts planned alone (here, from the same planner without pauses) plus 1.5 s;

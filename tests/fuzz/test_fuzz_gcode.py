@@ -35,8 +35,8 @@ NUMBERS = st.one_of(
 CODES = st.sampled_from(
     ["G0", "G1", "G2", "G3", "G00", "G01", "G17", "G18", "G19", "G20", "G21", "G90", "G91", "G90.1", "G91.1",
      "G61", "G61.1", "G64", "G80", "G40", "G49", "G54", "G94", "M3", "M5", "M8", "M9", "M2", "M30", "M6", "G43", "G43 H1",
-     "G4 P0.5", "M0", "M1",
-     # refused (G28: without home, G4: without P)
+     "G4 P0.5", "M0", "M1", "G53", "G53 G0", "G53 G1",
+     # refused (G28: without home, G4: without P; G53 without machine_origin, under G91 or with an arc mode)
      "G4", "G81", "G41", "G43.1", "G17.1", "G1.00000001", "G1.5", "G93", "G28", "M98", "M99", "G-1", "G5"])
 ODD = st.sampled_from(
     ["#1", "#<x>", "[1+2]", "sin[30]", "o100 sub", "o100 endsub", "O<a> call", "(comment)", "(", ")", "(a(b))",
@@ -66,6 +66,7 @@ KWARGS = st.fixed_dictionaries({}, optional={
     "initial_feed": st.sampled_from([None, 100.0, 0.0, -5.0]),
     "rapid_feed": st.sampled_from([15000.0, 0.0]),
     "start": st.sampled_from([(0, 0, 0), (1.5, -2, 3), (0, 0), (0, float("nan"), 0), (1e7, 0, 0), "abc"]),
+    "machine_origin": st.sampled_from([None, (0, 0, 0), (-350.0, 250.0, 300.0), (0, 0), (float("inf"), 0, 0)]),
 })
 
 
@@ -78,8 +79,10 @@ def _bad_kwargs(kw: dict) -> bool:
     for name in ("arc_radius_tolerance", "initial_feed"):
         if kw.get(name) is not None and bad_pos(kw[name]):
             return True
-    s = kw.get("start", (0, 0, 0))
-    return isinstance(s, str) or len(s) != 3 or not all(abs(float(v)) <= 1e6 for v in s)
+    for s in (kw.get("start", (0, 0, 0)), kw.get("machine_origin") or (0, 0, 0)):
+        if isinstance(s, str) or len(s) != 3 or not all(abs(float(v)) <= 1e6 for v in s):
+            return True
+    return False
 
 
 def _check_program(prog: GCodeProgram):
