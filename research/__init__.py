@@ -11,6 +11,9 @@ Compiled JAX functions are kept on disk (JAX's persistent compilation cache), so
 once does not cost a fresh compile in a later process: in ``$RESEARCH_JAX_CACHE`` if set (``off``
 disables it), else ``~/.cache/research/jax``. Array shapes are also bucketed (16 sizes per octave,
 see :func:`research.piecewise.bucket_size`), so paths of similar size share one compiled function.
+The FIR planner's Numba kernels are compiled on their first use after an install and kept in
+``__pycache__`` beside their modules (Numba's own cache; ``$NUMBA_CACHE_DIR`` moves it): the first
+plan of a fresh install pays that once (``benchmarks/bench_cold_start.py``), later processes load it.
 """
 
 import os as _os
