@@ -161,10 +161,8 @@ def profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
 
     The input pulses (:func:`_input_pulses`), each filter in turn (:func:`_moving_average`, the last one
     integrated: the position) and the blocks' times (:func:`_block_times`) are compiled apart, the
-    filters once per coefficient row count ``D`` met: a path of lines (``D = 1``) through two
-    filters compiles the forms of 1 and 2 rows, a path with arcs (``D = 6``) of 6 and 7, each on its
-    first use (one compiled build compiled all of 1, 2, 3, 6, 7, 8 and a generic form twice over on
-    a fresh install's first plan: 38 s of Numba)."""
+    filters once per coefficient row count ``D`` met (:func:`_filter`): a path of lines (``D = 1``)
+    through two filters compiles the forms of 1 and 2 rows, a path with arcs (``D = 6``) of 6 and 7."""
     delays = np.ascontiguousarray(delays, dtype=np.float64)
     block, gaps = np.ascontiguousarray(block), np.ascontiguousarray(gaps, dtype=np.float64)
     breaks, coeffs = _input_pulses(np.ascontiguousarray(geo, dtype=np.float64), block, np.ascontiguousarray(gap),
@@ -257,6 +255,8 @@ def _filter(breaks, coeffs, delay, initial, integrate: bool):
     return rows(breaks, coeffs, delay, np.ascontiguousarray(initial, dtype=np.float64), integrate)
 
 
+# one function per row count, written out: Numba caches a compiled function by its source, and the
+# constant in each one's source is what unrolls its row loops
 @numba.njit(**_OPTIONS)
 def _rows_any(breaks, coeffs, delay, initial, integrate):
     return _filter_rows(breaks, coeffs, delay, initial, integrate, coeffs.shape[1])

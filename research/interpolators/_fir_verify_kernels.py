@@ -48,6 +48,8 @@ def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, se
     return _LINE_FORMS.get(coeffs.shape[1:], _line_any)(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv)
 
 
+# one function per (rows, axes) pair, written out as _fir_profile's _rows1 ...: Numba caches a compiled
+# function by its source, and the constants in each one's source are what make its form fast
 @numba.njit(**_OPTIONS)
 def _line_4_3(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv):
     return _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv, 4, 3)
