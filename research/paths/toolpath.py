@@ -325,9 +325,25 @@ class ToolPath:
         out = np.linalg.norm(q - (a + u[:, None] * ab), axis=1)
         arc = self.is_arc[blocks]
         if arc.any():
-            g = self._arc_rows(blocks[arc])
-            out[arc] = _arc_distance(g, _lift(q[arc]))
+            out[arc] = self._arc_distance(_lift(q[arc]), blocks[arc])
         return out
+
+    def _arc_distance(self, q: np.ndarray, blocks: np.ndarray) -> np.ndarray:
+        """Distance from ``q`` (3-D, one row per entry of ``blocks``) to arc blocks ``blocks``:
+        projection angle, clamped to the sweep, then safeguarded Newton on ``|P(phi) - q|^2`` (exact
+        in one step for planar circles). The projection angle is NumPy's ``arctan2`` (whose SIMD
+        loop may differ from the C library's by an ulp) between two compiled passes that read the
+        arc geometry by row (:func:`_arc_projection`, :func:`_nearest_arc`)."""
+        if "geo_rows" not in self._cache:
+            g = self._cache["geo"]
+            self._cache["geo_rows"] = tuple(np.ascontiguousarray(g[k]) for k in
+                                            ("c", "n", "e1", "e2", "r0", "r1", "a0", "a1", "sweep"))
+        c, n, e1, e2, r0, r1, a0, a1, sweep = self._cache["geo_rows"]
+        rows = np.ascontiguousarray(self._cache["arc_row"][blocks])
+        q = np.ascontiguousarray(q)
+        y, x = _arc_projection(q, rows, c, e1, e2)
+        base = np.arctan2(y, x) % (2 * np.pi)
+        return _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep)
 
     def _tree(self):
         if "tree" not in self._cache:
@@ -438,46 +454,57 @@ def _arc_eval(g: dict, phi: np.ndarray, order: int) -> np.ndarray:
     return out
 
 
-def _arc_distance(g: dict, q: np.ndarray) -> np.ndarray:
-    """Distance from ``q`` (3-D, one per row of ``g``) to the arcs: projection angle, clamped to the
-    sweep, then safeguarded Newton on ``|P(phi) - q|^2`` (exact in one step for planar circles).
-    The projection angle is NumPy's ``arctan2`` (whose SIMD loop may differ from the C library's by
-    an ulp), the rest one compiled pass (:func:`_nearest_arc`)."""
-    rel = q - g["c"]
-    base = np.arctan2(np.sum(rel * g["e2"], axis=1), np.sum(rel * g["e1"], axis=1)) % (2 * np.pi)
-    return _nearest_arc(np.ascontiguousarray(q), base, np.ascontiguousarray(g["c"]), np.ascontiguousarray(g["n"]),
-                        np.ascontiguousarray(g["e1"]), np.ascontiguousarray(g["e2"]), g["r0"], g["r1"], g["a0"],
-                        g["a1"], g["sweep"])
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _arc_projection(q, rows, c, e1, e2):
+    """In-plane coordinates ``(y, x)`` of ``q[i] - c`` on the frame ``e2, e1`` of arc row
+    ``rows[i]``: the arithmetic of NumPy's ``np.sum((q - c) * e, axis=1)``, term by term."""
+    N = q.shape[0]
+    y, x = np.empty(N), np.empty(N)
+    for i in range(N):
+        j = rows[i]
+        sy, sx = 0.0, 0.0
+        for a in range(3):
+            rel = q[i, a] - c[j, a]
+            if a == 0:
+                sy, sx = rel * e2[j, a], rel * e1[j, a]
+            else:
+                sy += rel * e2[j, a]
+                sx += rel * e1[j, a]
+        y[i], x[i] = sy, sx
+    return y, x
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _arc_point(c, n, e1, e2, r0, dr, a0, da, phi, order, out):
-    """``d^order P / d phi^order`` (order 0, 1, 2) of one arc at ``phi`` into ``out`` (3,): the
-    arithmetic of :func:`_arc_eval`, term by term in its order."""
+def _arc_points(c, n, e1, e2, r0, dr, a0, da, phi, order, p, d1, d2):
+    """``P``, and with ``order`` 2 its first and second derivatives in ``phi``, of one arc at
+    ``phi`` into ``p``, ``d1``, ``d2`` (3,): the arithmetic of :func:`_arc_eval`, term by term in
+    its order, with one cosine and sine for the three."""
     co, si = math.cos(phi), math.sin(phi)
     r = r0 + dr * phi
     for a in range(3):
-        if order == 0:
-            out[a] = (c[a] + (a0 + da * phi) * n[a]) + r * (co * e1[a] + si * e2[a])
-        elif order == 1:
-            out[a] = (r * (-si * e1[a] + co * e2[a]) + dr * (co * e1[a] + si * e2[a])) + da * n[a]
-        else:
-            out[a] = r * (-co * e1[a] + -si * e2[a]) + (2.0 * dr) * (-si * e1[a] + co * e2[a])
+        p[a] = (c[a] + (a0 + da * phi) * n[a]) + r * (co * e1[a] + si * e2[a])
+        if order == 2:
+            d1[a] = (r * (-si * e1[a] + co * e2[a]) + dr * (co * e1[a] + si * e2[a])) + da * n[a]
+            d2[a] = r * (-co * e1[a] + -si * e2[a]) + (2.0 * dr) * (-si * e1[a] + co * e2[a])
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _nearest_arc(q, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
-    """Distance from ``q[i]`` to arc row ``i``: from each candidate angle (both ends, and every turn
-    of the projection angle ``base[i]`` [rad, in [0, 2 pi)] inside the sweep, clamped), three
-    safeguarded Newton steps on ``|P(phi) - q|^2``, then the least distance over the candidates."""
+def _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
+    """Distance from ``q[i]`` to arc row ``rows[i]``: from each candidate angle (both ends, and every
+    turn of the projection angle ``base[i]`` [rad, in [0, 2 pi)] inside the sweep, clamped), at most
+    three safeguarded Newton steps on ``|P(phi) - q|^2``, then the least distance over the candidates.
+    A candidate angle equal to an earlier one, and the steps after one that leaves the angle where
+    it was, would repeat the same arithmetic: they are skipped (the result is the same)."""
     N = q.shape[0]
     out = np.empty(N)
     p, d1, d2 = np.empty(3), np.empty(3), np.empty(3)
     two_pi = 2.0 * np.pi
     for i in range(N):
-        sw = sweep[i]
-        dr, da = (r1[i] - r0[i]) / sw, (a1[i] - a0[i]) / sw
+        j = rows[i]
+        sw = sweep[j]
+        dr, da = (r1[j] - r0[j]) / sw, (a1[j] - a0[j]) / sw
         turns = int(np.ceil(sw / two_pi)) + 1
+        starts = np.empty(turns + 2)
         best = np.inf
         for m in range(turns + 2):
             if m == 0:
@@ -486,10 +513,14 @@ def _nearest_arc(q, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
                 phi = sw
             else:
                 phi = min(max(base[i] + two_pi * (m - 2), 0.0), sw)
+            starts[m] = phi
+            seen = False
+            for k in range(m):
+                seen = seen or starts[k] == phi
+            if seen:
+                continue
             for _ in range(3):
-                _arc_point(c[i], n[i], e1[i], e2[i], r0[i], dr, a0[i], da, phi, 0, p)
-                _arc_point(c[i], n[i], e1[i], e2[i], r0[i], dr, a0[i], da, phi, 1, d1)
-                _arc_point(c[i], n[i], e1[i], e2[i], r0[i], dr, a0[i], da, phi, 2, d2)
+                _arc_points(c[j], n[j], e1[j], e2[j], r0[j], dr, a0[j], da, phi, 2, p, d1, d2)
                 slope, dd, ed = 0.0, 0.0, 0.0
                 for a in range(3):
                     e = p[a] - q[i, a]
@@ -497,10 +528,12 @@ def _nearest_arc(q, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
                     dd += d1[a] * d1[a]
                     ed += e * d2[a]
                 curv = dd + ed
-                if curv > 0:
-                    phi = phi - slope / curv
-                phi = min(max(phi, 0.0), sw)
-            _arc_point(c[i], n[i], e1[i], e2[i], r0[i], dr, a0[i], da, phi, 0, p)
+                new = phi - slope / curv if curv > 0 else phi
+                new = min(max(new, 0.0), sw)
+                if new == phi:
+                    break
+                phi = new
+            _arc_points(c[j], n[j], e1[j], e2[j], r0[j], dr, a0[j], da, phi, 0, p, d1, d2)
             acc = 0.0
             for a in range(3):
                 e = p[a] - q[i, a]
