@@ -37,7 +37,9 @@ _OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
 
 #: rounding slack of every tolerance check of the planner: an error [mm] passes a tolerance ``eps``
 #: when ``<= eps (1 + VERIFY_RTOL) + VERIFY_ATOL`` (1e-9 relative and 1 pm absolute, for the rounding
-#: of the exact profile's evaluation; far below any machine's resolution)
+#: of the exact profile's evaluation; far below any machine's resolution); ``plan_fir``'s checks add
+#: the rounding each profile has accumulated by its end (``_fir_verify.profile_rounding``: nm on
+#: programs of tens of minutes, where 1 pm would have the planner repair rounding)
 VERIFY_RTOL, VERIFY_ATOL = 1e-9, 1e-9
 
 

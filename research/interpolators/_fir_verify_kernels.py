@@ -305,7 +305,7 @@ def grid_times(i, j, first, count, ends, t0, t1, period):
 
 
 @numba.njit(**_OPTIONS)
-def charge_samples(t, d2, block, centre, tol_block, is_arc, half_window, redo, worst):
+def charge_samples(t, d2, block, centre, tol_block, is_arc, half_window, redo, worst, slack):
     """Distance, tolerance, violation and charge key of path samples, and the largest distance of
     each key (``_fir_verify._charged_samples``).
 
@@ -315,8 +315,9 @@ def charge_samples(t, d2, block, centre, tol_block, is_arc, half_window, redo, w
     ``half_window``; its tolerance is its block's, or the smaller of that and the vertex's (the
     smaller of the vertex's two blocks) when near. Key: the near vertex; else, on a line, the
     vertex ``clip(block, 0, M - 2)``; else (inside an arc) ``M - 1 + block``; ``-1`` on a one-block
-    path's line. It is over when its distance is above ``verified_bound(tolerance)`` (the same
-    product and sum, compiled without contraction into a fused multiply-add). A sample kept
+    path's line. It is over when its distance is above ``verified_bound(tolerance) + slack``
+    (the same product and sums, compiled without contraction into a fused multiply-add; ``slack``
+    [mm]: the profile's own rounding, ``_fir_verify.profile_rounding``). A sample kept
     (``redo[key]``; with an empty ``redo``, every key ``>= 0``) and not over raises ``worst[key]``
     to its distance, in place.
 
@@ -351,7 +352,7 @@ def charge_samples(t, d2, block, centre, tol_block, is_arc, half_window, redo, w
         else:
             key = M - 1 + b
         keep = key >= 0 if whole else redo[key]
-        if dist > lim * (1.0 + VERIFY_RTOL) + VERIFY_ATOL:
+        if dist > (lim * (1.0 + VERIFY_RTOL) + VERIFY_ATOL) + slack:
             over[n_over], o_dist[n_over], o_limit[n_over], o_key[n_over], o_keep[n_over] = i, dist, lim, key, keep
             n_over += 1
         else:

@@ -28,7 +28,9 @@ CAM programs (beyond the paper, which assumes every block longer than the window
   windows that cover them.
 * **Verification and repair**: the exact profile is checked at every vertex (distance from the
   vertex to the trajectory) and between vertices (distance from the trajectory, sampled every
-  ``check_period``, to the programmed path). A violating dwell corner has its overlap shrunk by
+  ``check_period``, to the programmed path), both up to the rounding of the profile (a fixed slack
+  plus what the profile has accumulated by its end, ``_fir_verify.profile_rounding``, which grows
+  with the program's duration). A violating dwell corner has its overlap shrunk by
   ``(eps / error)^(1/(n+1))`` (the small-overlap scaling of ``H2``), a violating full-overlap
   vertex slows the blocks of its window by ``sqrt(eps / error)`` (the error of a chain is
   quadratic in feed); after :data:`_SCALING_ROUNDS` rounds a vertex still violating becomes an exact
@@ -83,7 +85,7 @@ from research.interpolators import _fir_pauses, _fir_profile
 from research.interpolators._fir_overlap import overlap_time
 from research.interpolators._fir_repair import Repairs
 from research.interpolators._fir_round_peaks import RoundPeaks
-from research.interpolators._fir_verify import RoundChecks, corner_distances, vertex_distances
+from research.interpolators._fir_verify import RoundChecks, corner_distances, profile_rounding, vertex_distances
 from research.limits import AxisLimits
 from research.paths.gcode import checked_pauses
 from research.paths.polyline import Polyline
@@ -348,8 +350,9 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                                                                  table.gap[:c], frac[:c], piece_tv[:c], gaps, d_np)
         j = np.flatnonzero(centre[: K - 1] + 0.5 * Td_np <= starts[K])
         errors = np.zeros(M - 1)
-        errors[j] = vertex_distances(NumpyPiecewise(breaks, coeffs), tp.vertices[j], centre[j], 0.5 * Td_np)
-        viol = errors > limit_v
+        prefix = NumpyPiecewise(breaks, coeffs)
+        errors[j] = vertex_distances(prefix, tp.vertices[j], centre[j], 0.5 * Td_np)
+        viol = errors > limit_v + profile_rounding(prefix, tp.ends[K - 1])  # it ends at rest there
         if not viol.any():
             return None
         f, sh = repairs.bound(viol, errors, False, factor, shrink)
@@ -400,6 +403,9 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             tol_due = True  # the tolerance state changed since the last tolerance check
             for rounds in range(1, max_rounds + 1):
                 (pulse_np, starts_np, pos_np, centre_np), durations = state[2:6], state[7]
+                # the tolerance up to the rounding of this profile (_fir_verify.profile_rounding)
+                checks.slack = profile_rounding(pos_np, tp.ends[-1])
+                bound_v = limit_v + checks.slack
                 too_fast, slowed = False, False
                 if limits is not None and M > 1:
                     # recomputed where the input changed since the last round (_fir_round_peaks)
@@ -434,11 +440,11 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                 if tol_due or not too_fast:
                     if refine:
                         errors = checks.vertices(pos_np, starts_np, centre_np, durations, M > 1)
-                        if M > 1 and np.any(errors > limit_v):
+                        if M > 1 and np.any(errors > bound_v):
                             # the vertex errors first: a bound from their repairs alone (a lower bound
                             # on the whole round's) can rule the candidate out before its path samples
                             # (suspended here, it keeps its profile for the samples unless released)
-                            low_f, low_s = repairs.bound(errors > limit_v, errors, rounds > _SCALING_ROUNDS, factor, shrink)
+                            low_f, low_s = repairs.bound(errors > bound_v, errors, rounds > _SCALING_ROUNDS, factor, shrink)
                             low = predicted_time((low_f, head, tail, full, others, arc_rel), low_s * bisection.bound_scale)
                             low_f = low_s = None  # not held while suspended
                             if (yield low, repaired, True) is _RELEASE:
@@ -453,7 +459,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                                 checks.swap_profile(pos_np, starts_np, centre_np)
                         deviation, at_vertex, at_block = checks.samples_check()
                         last_check = checks.snapshot()
-                    viol = errors > limit_v
+                    viol = errors > bound_v
                     if refine:
                         for j, e in at_vertex.items():
                             viol[j], errors[j] = True, max(errors[j], e)
@@ -466,7 +472,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                     raise ConvergenceError(
                         f"plan_fir: {int(viol.sum())} vertices and {int((arc_slow > 0).sum())} arcs still violate the "
                         f"tolerance{' (or corners a limit)' if too_fast else ''} after {max_rounds} rounds",
-                        residual=float(np.max(errors - limit_v, initial=0.0)), steps=rounds)
+                        residual=float(np.max(errors - bound_v, initial=0.0)), steps=rounds)
                 late = rounds > _SCALING_ROUNDS
                 # suspended in the branch and bound, a candidate keeps no profile and no round's
                 # arrays; dropped before the repairs, which change ``factor`` and ``shrink`` in place
