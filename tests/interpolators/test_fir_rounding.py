@@ -61,8 +61,11 @@ def plans():
     """The loops after a lead-in of 10 s and of 20,000 s (5.6 h: the same stretch late in a long
     program, where each piece's times carry 2,000 times the rounding)."""
     loops = _loops(3, 150)
-    return {lead: (plan_fir(*_after_lead_in(loops, lead), DELAYS, EPS), _after_lead_in(loops, lead)[0])
-            for lead in (10.0, 20000.0)}
+    out = {}
+    for lead in (10.0, 20000.0):
+        path, feed = _after_lead_in(loops, lead)
+        out[lead] = (plan_fir(path, feed, DELAYS, EPS), path)
+    return out
 
 
 def test_a_stretch_plans_the_same_whenever_it_runs(plans):
