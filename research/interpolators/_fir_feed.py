@@ -21,8 +21,9 @@ forms of the FIR chain's kernel give feeds that keep the tolerance there:
   CAM coordinates) the alternating ``du_i`` cancel, which the per-corner rule cannot see.
   ``|d_j|`` bounds the distance from the vertex to the trajectory; the largest feed with
   ``|d_j(F)| <= eps`` is found by a safeguarded Newton search (:meth:`ChainError.largest_feed`), each
-  evaluation a direct sum over the window's turns (or prefix sums of ``du_i s_i^m`` for windows of
-  very many turns: ``H2`` is a truncated power of degree ``n + 1``).
+  evaluation a direct sum over the window's turns (or, for windows of very many turns, prefix sums
+  of ``du_i (s_i - o)^m`` over chunks of turns, each about its own origin ``o``: ``H2`` is a
+  truncated power of degree ``n + 1``).
 
 Where a single sharp corner needs a slow-down, the paper's dwell (partial overlap, eq 13/14) is
 cheaper; the look-ahead of ``fir`` picks per corner the option of lower estimated time. Everything is
@@ -42,6 +43,7 @@ from research.interpolators._fir_kernels import chain_displacements, chain_feed_
 
 _ARC_STEPS = 60  # arc feeds to machine precision (cheap: one evaluation per arc and step)
 _DIRECT = 64  # windows of at most this many direction changes are summed directly
+_CHUNK = 1024  # turns per chunk of the prefix sums of larger windows (ChainError.prefix)
 _BISECTION_STEPS = 36  # feed resolution F_max / 2^36, below 1e-10 F
 _CLOSE = 0.5 ** 30  # a feed whose |d_j| is this close below eps (log ratio) is the root (to ~1e-9 F)
 _TINY = 1e-12  # floor of |d_j| / eps in the log-space secant (an error 1e-12 eps is no error)
@@ -117,11 +119,20 @@ class ChainError:
 
     @property
     def prefix(self) -> np.ndarray:
-        """``(p + 1, T + 1, d)`` prefix sums of ``du * s^m``, ``m = 0 .. p`` (made on first use)."""
+        """``(K, C + 1, p + 1, d)`` prefix sums of ``du * (s - o_c)^m``, ``m = 0 .. p``, restarted in
+        every chunk ``c`` of ``C =`` :data:`_CHUNK` turns about its first turn's arc length ``o_c``
+        (``K`` chunks; ``[c, j, m]``: the chunk's first ``j`` turns), made on first use. The kernels
+        read them only for chunks near a window (``_fir_kernels._window_displacement``)."""
         if self._prefix is None:
-            du = self.du
-            self._prefix = np.stack([np.vstack([np.zeros((1, du.shape[1])), np.cumsum(du * (self.s ** m)[:, None], axis=0)])
-                                     for m in range(self.p + 1)])
+            du, T, C = self.du, self.s.size, _CHUNK
+            K = -(-T // C)
+            sig = self.s - self.s[(np.arange(T) // C) * C]
+            terms = np.zeros((K, C + 1, self.p + 1, du.shape[1]))
+            padded = np.zeros((K * C, du.shape[1]))
+            for m in range(self.p + 1):
+                padded[:T] = du * (sig ** m)[:, None]
+                terms[:, 1:, m] = padded.reshape(K, C, -1)
+            self._prefix = np.cumsum(terms, axis=1, out=terms)
         return self._prefix
 
     def __call__(self, s_query: np.ndarray, feed: np.ndarray) -> np.ndarray:
@@ -138,7 +149,7 @@ class ChainError:
             R = F * np.max(self.rho)
             count = np.searchsorted(self.s, q + R, side="left") - np.searchsorted(self.s, q - R, side="right")
             if not np.any(count > _DIRECT):
-                prefix = np.zeros((self.p + 1, 0, self.du.shape[1]))
+                prefix = np.zeros((0, _CHUNK + 1, self.p + 1, self.du.shape[1]))
         if prefix is None:
             prefix = self.prefix
         return (self.s, self.du, self.rho, self.sign, self.p, self.norm, prefix, self.binom, _DIRECT)
@@ -148,9 +159,9 @@ class ChainError:
 
         Windows holding at most :data:`_DIRECT` direction changes are summed directly (exact in
         floating point whatever the window's size against the path), each over its own turns only;
-        larger ones through the prefix sums, whose binomial re-centring loses ``(|s| / R)^(n+1)``
-        ulps (small there, because a window of many turns is long). One compiled loop over the
-        queries (``_fir_kernels.chain_displacements``)."""
+        larger ones through the chunked prefix sums (:attr:`prefix`), whose binomial re-centring
+        loses a few hundred ulps of the window's own terms wherever it lies on the path. One
+        compiled loop over the queries (``_fir_kernels.chain_displacements``)."""
         q = np.asarray(s_query, dtype=np.float64).reshape(-1) - self.origin
         F = np.ascontiguousarray(np.broadcast_to(np.asarray(feed, dtype=np.float64), q.shape))
         return chain_displacements(*self._args(q, F), q, F)

@@ -253,24 +253,24 @@ class ToolPath:
         Returns:
             ``(polyline, block)``: the chords and the block index of every chord ``(M_chords,)``.
         """
-        pts, owner = [self.start[None]], []
+        counts = np.ones(self.n_blocks, dtype=np.int64)
         g = self._cache["geo"]
-        arc_row = self._cache["arc_row"]
-        for k in range(self.n_blocks):
-            i = arc_row[k]
-            if i >= 0:
-                r = max(g["r0"][i], g["r1"][i])
-                step = min(4.0 * np.arcsin(np.sqrt(min(chord_tolerance / (2.0 * r), 1.0))), 0.5 * np.pi)
-                n = max(1, int(np.ceil(g["sweep"][i] / step)))
-                phi = g["sweep"][i] * np.arange(1, n + 1) / n
-                p = self.arc_points(k, phi)
-                p[-1] = self.ends[k]
-                pts.append(p)
-                owner += [k] * n
-            else:
-                pts.append(self.ends[k][None])
-                owner.append(k)
-        return Polyline(np.vstack(pts), self.axes), np.asarray(owner, dtype=np.int64)
+        arcs = np.flatnonzero(self._cache["arc_row"] >= 0)
+        if arcs.size:
+            rows = self._cache["arc_row"][arcs]
+            r = np.maximum(g["r0"][rows], g["r1"][rows])
+            step = np.minimum(4.0 * np.arcsin(np.sqrt(np.minimum(chord_tolerance / (2.0 * r), 1.0))), 0.5 * np.pi)
+            counts[arcs] = np.maximum(1, np.ceil(g["sweep"][rows] / step).astype(np.int64))
+        owner = np.repeat(np.arange(self.n_blocks), counts)
+        pts = self.ends[owner]  # a block's last point is its end; an arc's others are its points
+        inner = np.flatnonzero(owner[1:] == owner[:-1])  # chord ends inside one (arc) block
+        if inner.size:
+            blk = owner[inner]
+            j = inner - (np.cumsum(counts) - counts)[blk] + 1  # the chord's index in its arc, from 1
+            rows = self._cache["arc_row"][blk]
+            phi = g["sweep"][rows] * j.astype(np.float64) / counts[blk].astype(np.float64)
+            pts[inner] = _arc_eval(_take(g, rows), phi, 0)[:, : self.dim]
+        return Polyline(np.vstack([self.start[None], pts]), self.axes), owner
 
     # -- distance ----------------------------------------------------------------------------
     def distance(self, query) -> np.ndarray:

@@ -45,6 +45,30 @@ def test_window_displacement_matches_the_term_by_term_sum(delays, span):
     assert np.max(np.abs(got - want)) <= 1e-9 * scale
 
 
+@pytest.mark.parametrize("chunk", [16, 1024])  # many chunks per window; one chunk spanning both stretches
+@pytest.mark.parametrize("delays", [(0.06, 0.03), (0.05, 0.02, 0.01)])
+def test_dense_windows_far_along_a_long_chain_keep_their_precision(delays, chunk, monkeypatch):
+    """Two dense stretches of turns (800 each over 40 mm) 100 m of path apart, as on a long
+    program with arcs: windows of many turns at either end match the term-by-term sum to 1e-9 of
+    their size, with chunks of the prefix sums smaller than a window, and with a chunk that holds
+    turns of both stretches (read turn by turn where it reaches far out). (With the prefix sums
+    about one origin for the whole chain, midway between the two, the binomial re-centring
+    cancelled ``(5e4 mm / 13.5 mm)^3 ~ 5e10`` ulps: errors of 1e-5 of the window's value here, and
+    of the whole tolerance on a 26 m adaptive-clearing program.)"""
+    monkeypatch.setattr("research.interpolators._fir_feed._CHUNK", chunk)
+    rng = np.random.default_rng(3)
+    s = np.concatenate([np.sort(rng.uniform(0.0, 40.0, 800)), 1e5 + np.sort(rng.uniform(0.0, 40.0, 800))])
+    du = rng.normal(0.0, 0.05, (s.size, 3))
+    chain = ChainError(s, du, np.asarray(delays))
+    sq = np.concatenate([rng.uniform(0.0, 40.0, 20), 1e5 + rng.uniform(0.0, 40.0, 20)])
+    F = rng.uniform(50.0, 300.0, 40)
+    got = chain.displacement(sq, F)
+    want = slow_displacement(s, du, delays, sq, F)
+    assert chain._prefix is not None  # the dense windows took the prefix sums
+    err = np.max(np.abs(got - want), axis=1)
+    assert np.all(err <= 1e-9 * np.max(np.abs(want), axis=1))
+
+
 @pytest.mark.parametrize("span", [2000.0, 40.0])  # sparse windows (no prefix sums made), dense ones
 def test_prefix_sums_are_made_only_for_windows_of_many_turns(span):
     """Sparse windows (800 turns over 2000 mm, windows <= 300 mm/s x 0.045 s each side) are all
