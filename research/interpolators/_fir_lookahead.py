@@ -152,12 +152,20 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     h_full = float(kernel_second_integral(0.5 * Td, delays))
     arc_turns = _arc_turns(tp, float(np.min(tol_v, initial=np.inf))) if tp.is_arc.any() else (np.zeros(0), np.zeros((0, tp.dim)))
 
+    if arc_turns[0].size:  # every turn in arc-length order, vertices first where equal (a stable sort)
+        s_all, du_all = np.concatenate([s_v, arc_turns[0]]), np.concatenate([du, arc_turns[1]])
+        order_all = np.argsort(s_all, kind="stable")
+        s_all, du_all, is_vertex = s_all[order_all], du_all[order_all], order_all < M - 1
+        vertex_of = order_all[is_vertex]
+        order_all = None
+
     def chain(keep):
         if not arc_turns[0].size:  # the vertices' arc lengths are sorted already (a stable sort keeps them)
             return ChainError(s_v[keep], du[keep], delays)
-        s_t, du_t = np.concatenate([s_v[keep], arc_turns[0]]), np.concatenate([du[keep], arc_turns[1]])
-        order = np.argsort(s_t, kind="stable")
-        return ChainError(s_t[order], du_t[order], delays)
+        # the stable order of the kept vertices and the arc turns is the whole order without the others
+        take = ~is_vertex
+        take[is_vertex] = keep[vertex_of]
+        return ChainError(s_all[take], du_all[take], delays)
 
     every = chain(np.ones(M - 1, dtype=bool))
     d_all = every.displacement(s_v, Fv)
@@ -442,9 +450,11 @@ def staircase_cut(r_h, f_h, r_t, f_t, length, cap):
 
 
 def _arc_turns(tp: ToolPath, tol: float):
-    """Arc length and direction change of the interior chord vertices of every arc block."""
-    chords, owner = tp.to_polyline(max(min(tol, 1e-2) * 1e-2, 1e-6))
-    inner = np.flatnonzero(owner[1:] == owner[:-1])  # chord vertex inside one block
-    inner = inner[tp.is_arc[owner[inner]]]
-    u = chords.directions
-    return chords.arc_length[inner + 1], u[inner + 1] - u[inner]
+    """Arc length [mm] and direction change of the interior chord vertices of every arc block
+    (chords of sagitta ``tol / 100``, at least 1 um and at most 0.1 mm), placed at their exact arc
+    length on the path: chords are shorter than their arcs, so a running sum of chord lengths
+    would drift ahead of the block vertices (about 20 mm over the 50,006 arcs of a 101,262-block
+    program, against windows of 3.6 mm)."""
+    block, fraction, du = tp.arc_chord_turns(max(min(tol, 1e-2) * 1e-2, 1e-6))
+    start = np.concatenate([[0.0], np.cumsum(tp.lengths)[:-1]])
+    return start[block] + fraction * tp.lengths[block], du

@@ -253,14 +253,8 @@ class ToolPath:
         Returns:
             ``(polyline, block)``: the chords and the block index of every chord ``(M_chords,)``.
         """
-        counts = np.ones(self.n_blocks, dtype=np.int64)
+        counts = self._chord_counts(chord_tolerance)
         g = self._cache["geo"]
-        arcs = np.flatnonzero(self._cache["arc_row"] >= 0)
-        if arcs.size:
-            rows = self._cache["arc_row"][arcs]
-            r = np.maximum(g["r0"][rows], g["r1"][rows])
-            step = np.minimum(4.0 * np.arcsin(np.sqrt(np.minimum(chord_tolerance / (2.0 * r), 1.0))), 0.5 * np.pi)
-            counts[arcs] = np.maximum(1, np.ceil(g["sweep"][rows] / step).astype(np.int64))
         owner = np.repeat(np.arange(self.n_blocks), counts)
         pts = self.ends[owner]  # a block's last point is its end; an arc's others are its points
         inner = np.flatnonzero(owner[1:] == owner[:-1])  # chord ends inside one (arc) block
@@ -271,6 +265,43 @@ class ToolPath:
             phi = g["sweep"][rows] * j.astype(np.float64) / counts[blk].astype(np.float64)
             pts[inner] = _arc_eval(_take(g, rows), phi, 0)[:, : self.dim]
         return Polyline(np.vstack([self.start[None], pts]), self.axes), owner
+
+    def _chord_counts(self, chord_tolerance: float) -> np.ndarray:
+        """``(M,)`` chords per block: 1 for lines, equal angles of sagitta <= ``chord_tolerance`` [mm] on arcs."""
+        counts = np.ones(self.n_blocks, dtype=np.int64)
+        g = self._cache["geo"]
+        arcs = np.flatnonzero(self._cache["arc_row"] >= 0)
+        if arcs.size:
+            rows = self._cache["arc_row"][arcs]
+            r = np.maximum(g["r0"][rows], g["r1"][rows])
+            step = np.minimum(4.0 * np.arcsin(np.sqrt(np.minimum(chord_tolerance / (2.0 * r), 1.0))), 0.5 * np.pi)
+            counts[arcs] = np.maximum(1, np.ceil(g["sweep"][rows] / step).astype(np.int64))
+        return counts
+
+    def arc_chord_turns(self, chord_tolerance: float = 1e-3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Direction changes between the chords of :meth:`to_polyline` inside every arc block, where
+        a curvature-driven computation needs the arcs as many small turns.
+
+        Returns:
+            ``(block (N,), fraction (N,), du (N, d))``: the arc block of each interior chord vertex,
+            its share of the block's length (``j / n`` at the ``j``-th of ``n`` equal angles: exact
+            for circles and helices, whose arc length grows with the angle), and the unit chord
+            direction after it less the one before it. One compiled pass over the arcs.
+        """
+        counts = self._chord_counts(chord_tolerance)
+        arcs = np.flatnonzero(counts > 1)
+        n = counts[arcs]
+        g = self._cache["geo"]
+        if "geo_rows" not in self._cache:
+            self._cache["geo_rows"] = tuple(np.ascontiguousarray(g[k]) for k in
+                                            ("c", "n", "e1", "e2", "r0", "r1", "a0", "a1", "sweep"))
+        c, nrm, e1, e2, r0, r1, a0, a1, sweep = self._cache["geo_rows"]
+        block = np.repeat(arcs, n - 1)
+        j = np.arange(block.size) - np.repeat(np.cumsum(n - 1) - (n - 1), n - 1) + 1  # 1 .. n - 1 in each arc
+        fraction = j / np.repeat(n, n - 1).astype(np.float64)
+        du = _chord_turns(np.ascontiguousarray(self._cache["arc_row"][arcs]), n, _lift(self.starts[arcs]),
+                          _lift(self.ends[arcs]), c, nrm, e1, e2, r0, r1, a0, a1, sweep, block.size)
+        return block, fraction, du[:, : self.dim]
 
     # -- distance ----------------------------------------------------------------------------
     def distance(self, query) -> np.ndarray:
@@ -486,6 +517,42 @@ def _arc_points(c, n, e1, e2, r0, dr, a0, da, phi, order, p, d1, d2):
         if order == 2:
             d1[a] = (r * (-si * e1[a] + co * e2[a]) + dr * (co * e1[a] + si * e2[a])) + da * n[a]
             d2[a] = r * (-co * e1[a] + -si * e2[a]) + (2.0 * dr) * (-si * e1[a] + co * e2[a])
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _chord_turns(rows, counts, starts, ends, c, n, e1, e2, r0, r1, a0, a1, sweep, total):
+    """``(total, 3)`` direction changes at the interior vertices of ``counts[i]`` equal-angle chords
+    of arc row ``rows[i]`` from ``starts[i]`` to ``ends[i]`` (:meth:`ToolPath.arc_chord_turns`)."""
+    out = np.empty((total, 3))
+    p, q, u, v, d1, d2 = np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    o = 0
+    for i in range(rows.size):
+        j, m = rows[i], counts[i]
+        sw = sweep[j]
+        dr, da = (r1[j] - r0[j]) / sw, (a1[j] - a0[j]) / sw
+        for a in range(3):
+            p[a] = starts[i, a]
+        for k in range(1, m + 1):
+            if k < m:
+                _arc_points(c[j], n[j], e1[j], e2[j], r0[j], dr, a0[j], da, sw * k / m, 0, q, d1, d2)
+            else:
+                for a in range(3):
+                    q[a] = ends[i, a]
+            acc = 0.0
+            for a in range(3):
+                v[a] = q[a] - p[a]
+                acc += v[a] * v[a]
+            norm = math.sqrt(acc)
+            for a in range(3):
+                v[a] = v[a] / norm if norm > 0 else 0.0
+            if k > 1:
+                for a in range(3):
+                    out[o, a] = v[a] - u[a]
+                o += 1
+            for a in range(3):
+                u[a] = v[a]
+                p[a] = q[a]
+    return out
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
