@@ -121,18 +121,14 @@ class ChainError:
     def prefix(self) -> np.ndarray:
         """``(K, C + 1, p + 1, d)`` prefix sums of ``du * (s - o_c)^m``, ``m = 0 .. p``, restarted in
         every chunk ``c`` of ``C =`` :data:`_CHUNK` turns about its first turn's arc length ``o_c``
-        (``K`` chunks; ``[c, j, m]``: the chunk's first ``j`` turns), made on first use. The kernels
-        read them only for chunks near a window (``_fir_kernels._window_displacement``)."""
+        (``K`` chunks; ``[c, j, m]``: the chunk's first ``j`` turns). Made on first use unfilled (a
+        NaN at ``[c, 0, 0, 0]``); the kernels fill a chunk when a window first reads it
+        (``_fir_kernels._window_displacement``), so only the chunks of dense windows cost time or
+        memory (the pages of the others are never written)."""
         if self._prefix is None:
-            du, T, C = self.du, self.s.size, _CHUNK
-            K = -(-T // C)
-            sig = self.s - self.s[(np.arange(T) // C) * C]
-            terms = np.zeros((K, C + 1, self.p + 1, du.shape[1]))
-            padded = np.zeros((K * C, du.shape[1]))
-            for m in range(self.p + 1):
-                padded[:T] = du * (sig ** m)[:, None]
-                terms[:, 1:, m] = padded.reshape(K, C, -1)
-            self._prefix = np.cumsum(terms, axis=1, out=terms)
+            K = -(-self.s.size // _CHUNK)
+            self._prefix = np.empty((K, _CHUNK + 1, self.p + 1, self.du.shape[1]))
+            self._prefix[:, 0, 0, 0] = np.nan
         return self._prefix
 
     def __call__(self, s_query: np.ndarray, feed: np.ndarray) -> np.ndarray:

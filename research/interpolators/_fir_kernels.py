@@ -182,6 +182,8 @@ def _window_displacement(s, du, rho, sign, p, norm, prefix, binom, direct, q, F,
         if not (s[lo] > q - near and s[hi - 1] < q + near):  # a chunk reaching far out: its turns
             _cut_turns(s, du, rho, sign, p, q, F, max(lo, first), min(hi, last), out, dout)
             continue
+        if prefix[c, 0, 0, 0] != 0.0:  # not filled yet (NaN)
+            _fill_chunk(prefix, s, du, c, lo, hi, p)
         shift = q - s[lo]
         for r_i in range(rho.size):
             rr = rho[r_i]
@@ -203,6 +205,23 @@ def _window_displacement(s, du, rho, sign, p, norm, prefix, binom, direct, q, F,
     for k in range(d):
         dout[k] = dscale * out[k] + scale * dout[k]
         out[k] *= scale
+
+
+@numba.njit(**_OPTIONS)
+def _fill_chunk(prefix, s, du, c, lo, hi, p):
+    """Fill chunk ``c`` (turns ``lo .. hi - 1``) of ``ChainError.prefix``: ``prefix[c, j, m]`` the sum
+    over its first ``j`` turns of ``du_i (s_i - s_lo)^m`` (powers by repeated multiplication)."""
+    for m in range(p + 1):
+        for k in range(du.shape[1]):
+            prefix[c, 0, m, k] = 0.0
+    for j in range(hi - lo):
+        i = lo + j
+        sig = s[i] - s[lo]
+        pw = 1.0
+        for m in range(p + 1):
+            for k in range(du.shape[1]):
+                prefix[c, j + 1, m, k] = prefix[c, j, m, k] + du[i, k] * pw
+            pw *= sig
 
 
 @numba.njit(inline="always", **_OPTIONS)
