@@ -381,7 +381,7 @@ def _three_block_distance(arrays: _ScanArrays, path: ToolPath, t: np.ndarray, Td
     distances [mm^2] from each sample to blocks ``block - 1 .. block + 1`` (clipped to the path).
 
     Lines by one compiled pass (``_fir_verify_kernels.sampled_line_distances``); arc candidates through
-    ``ToolPath._block_distance`` (exact for planar arcs). Returns ``(q (N, d), block (N,), d2 (N, 3))``."""
+    ``ToolPath.arc_distance`` (exact for planar arcs). Returns ``(q (N, d), block (N,), d2 (N, 3))``."""
     M = path.n_blocks
     q, block, d2 = sampled_line_distances(arrays.breaks, arrays.coeffs, t, arrays.starts, 0.5 * Td, *arrays.segments)
     if arrays.has_arc:
@@ -389,5 +389,5 @@ def _three_block_distance(arrays: _ScanArrays, path: ToolPath, t: np.ndarray, Td
         arc = arrays.is_arc[nb]
         if arc.any():
             rows = np.nonzero(arc)
-            d2[rows] = path._block_distance(q[rows[0]], nb[rows]) ** 2
+            d2[rows] = path.arc_distance(q[rows[0]], nb[rows]) ** 2
     return q, block, d2

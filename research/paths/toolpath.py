@@ -356,8 +356,14 @@ class ToolPath:
         out = np.linalg.norm(q - (a + u[:, None] * ab), axis=1)
         arc = self.is_arc[blocks]
         if arc.any():
-            out[arc] = self._arc_distance(_lift(q[arc]), blocks[arc])
+            out[arc] = self.arc_distance(q[arc], blocks[arc])
         return out
+
+    def arc_distance(self, query: np.ndarray, blocks: np.ndarray) -> np.ndarray:
+        """Distance [mm] from each point ``query[i]`` ``(N, d)`` to arc block ``blocks[i]`` ``(N,)``
+        (every one an arc), as :meth:`distance` takes it: exact for planar circles, safeguarded
+        Newton steps in the angle for helices and spirals."""
+        return self._arc_distance(_lift(np.asarray(query, dtype=np.float64)), np.asarray(blocks))
 
     def _arc_distance(self, q: np.ndarray, blocks: np.ndarray) -> np.ndarray:
         """Distance from ``q`` (3-D, one row per entry of ``blocks``) to arc blocks ``blocks``:
