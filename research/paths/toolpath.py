@@ -566,18 +566,22 @@ def _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
     """Distance from ``q[i]`` to arc row ``rows[i]``: from each candidate angle (both ends, and every
     turn of the projection angle ``base[i]`` [rad, in [0, 2 pi)] inside the sweep, clamped), at most
     three safeguarded Newton steps on ``|P(phi) - q|^2``, then the least distance over the candidates.
-    A candidate angle equal to an earlier one, and the steps after one that leaves the angle where
-    it was, would repeat the same arithmetic: they are skipped (the result is the same)."""
+    A candidate angle equal to an earlier one, the steps after one that leaves the angle where it
+    was, and the point's evaluation after such a step (which computed it) would repeat the same
+    arithmetic: they are skipped (the result is the same)."""
     N = q.shape[0]
     out = np.empty(N)
     p, d1, d2 = np.empty(3), np.empty(3), np.empty(3)
     two_pi = 2.0 * np.pi
+    most = 0
+    for i in range(N):
+        most = max(most, int(np.ceil(sweep[rows[i]] / two_pi)) + 1)
+    starts = np.empty(most + 2)
     for i in range(N):
         j = rows[i]
         sw = sweep[j]
         dr, da = (r1[j] - r0[j]) / sw, (a1[j] - a0[j]) / sw
         turns = int(np.ceil(sw / two_pi)) + 1
-        starts = np.empty(turns + 2)
         best = np.inf
         for m in range(turns + 2):
             if m == 0:
@@ -592,6 +596,7 @@ def _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
                 seen = seen or starts[k] == phi
             if seen:
                 continue
+            at_phi = False  # p holds P(phi) already (the step that left phi unchanged evaluated it)
             for _ in range(3):
                 _arc_points(c[j], n[j], e1[j], e2[j], r0[j], dr, a0[j], da, phi, 2, p, d1, d2)
                 slope, dd, ed = 0.0, 0.0, 0.0
@@ -604,9 +609,11 @@ def _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
                 new = phi - slope / curv if curv > 0 else phi
                 new = min(max(new, 0.0), sw)
                 if new == phi:
+                    at_phi = True
                     break
                 phi = new
-            _arc_points(c[j], n[j], e1[j], e2[j], r0[j], dr, a0[j], da, phi, 0, p, d1, d2)
+            if not at_phi:
+                _arc_points(c[j], n[j], e1[j], e2[j], r0[j], dr, a0[j], da, phi, 0, p, d1, d2)
             acc = 0.0
             for a in range(3):
                 e = p[a] - q[i, a]
