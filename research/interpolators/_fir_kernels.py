@@ -224,7 +224,7 @@ def _fill_chunk(prefix, s, du, c, lo, hi, p):
             pw *= sig
 
 
-@numba.njit(inline="always", **_OPTIONS)
+@numba.njit(**_OPTIONS)
 def _chunk_side(prefix, c, j0, j1, end, sgn, rr, sign, binom, p, pw, out, dout):
     """Turns ``j0 .. j1 - 1`` of chunk ``c`` on one side of ``q``, added to ``S`` and ``dS / dF`` of
     :func:`_window_displacement` from the chunk's prefix sums ``P_m`` about its origin ``o``:
@@ -247,7 +247,7 @@ def _chunk_side(prefix, c, j0, j1, end, sgn, rr, sign, binom, p, pw, out, dout):
         sm *= sgn
 
 
-@numba.njit(inline="always", **_OPTIONS)
+@numba.njit(**_OPTIONS)
 def _cut_turns(s, du, rho, sign, p, q, F, lo, hi, out, dout):
     """Turns ``lo .. hi - 1`` of a chunk the window cuts, added to ``S`` and ``dS / dF`` of
     :func:`_window_displacement` term by term: ``sign_r y^p du_i`` and ``sign_r p rho_r y^(p-1) du_i``

@@ -279,28 +279,35 @@ class ToolPath:
         return counts
 
     def arc_chord_turns(self, chord_tolerance: float = 1e-3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Direction changes between the chords of :meth:`to_polyline` inside every arc block, where
-        a curvature-driven computation needs the arcs as many small turns.
+        """The turning of every arc block as small turns, where a curvature-driven computation needs
+        it so: the direction changes between the chords of :meth:`to_polyline` (``n`` equal angles)
+        at their vertices, and at a quarter chord from each end the turn from the arc's end tangent to
+        its first chord and from its last chord to its end tangent (each stands for the half chord
+        of turning the vertices leave out), so that an arc's turns add up to its whole turning
+        ``t_out - t_in``.
 
         Returns:
-            ``(block (N,), fraction (N,), du (N, d))``: the arc block of each interior chord vertex,
-            its share of the block's length (``j / n`` at the ``j``-th of ``n`` equal angles: exact
-            for circles and helices, whose arc length grows with the angle), and the unit chord
-            direction after it less the one before it. One compiled pass over the arcs.
+            ``(block (N,), fraction (N,), du (N, d))``, ``n + 1`` rows per arc in path order: the arc
+            block, the turn's share of the block's length (``1 / 4n``, ``j / n``, ``1 - 1 / 4n``:
+            exact for circles and helices, whose arc length grows with the angle), and the change of
+            unit direction there. One compiled pass over the arcs.
         """
         counts = self._chord_counts(chord_tolerance)
-        arcs = np.flatnonzero(counts > 1)
+        arcs = np.flatnonzero(self._cache["arc_row"] >= 0)
         n = counts[arcs]
         g = self._cache["geo"]
         if "geo_rows" not in self._cache:
             self._cache["geo_rows"] = tuple(np.ascontiguousarray(g[k]) for k in
                                             ("c", "n", "e1", "e2", "r0", "r1", "a0", "a1", "sweep"))
         c, nrm, e1, e2, r0, r1, a0, a1, sweep = self._cache["geo_rows"]
-        block = np.repeat(arcs, n - 1)
-        j = np.arange(block.size) - np.repeat(np.cumsum(n - 1) - (n - 1), n - 1) + 1  # 1 .. n - 1 in each arc
-        fraction = j / np.repeat(n, n - 1).astype(np.float64)
+        block = np.repeat(arcs, n + 1)
+        j = (np.arange(block.size) - np.repeat(np.cumsum(n + 1) - (n + 1), n + 1)).astype(np.float64)  # 0 .. n
+        nb = np.repeat(n, n + 1).astype(np.float64)
+        fraction = np.where(j == 0, 0.25 / nb, np.where(j == nb, 1.0 - 0.25 / nb, j / nb))
+        t_in, t_out = self.tangents()
         du = _chord_turns(np.ascontiguousarray(self._cache["arc_row"][arcs]), n, _lift(self.starts[arcs]),
-                          _lift(self.ends[arcs]), c, nrm, e1, e2, r0, r1, a0, a1, sweep, block.size)
+                          _lift(self.ends[arcs]), _lift(t_in[arcs]), _lift(t_out[arcs]), c, nrm, e1, e2, r0, r1,
+                          a0, a1, sweep, block.size)
         return block, fraction, du[:, : self.dim]
 
     # -- distance ----------------------------------------------------------------------------
@@ -526,9 +533,10 @@ def _arc_points(c, n, e1, e2, r0, dr, a0, da, phi, order, p, d1, d2):
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _chord_turns(rows, counts, starts, ends, c, n, e1, e2, r0, r1, a0, a1, sweep, total):
-    """``(total, 3)`` direction changes at the interior vertices of ``counts[i]`` equal-angle chords
-    of arc row ``rows[i]`` from ``starts[i]`` to ``ends[i]`` (:meth:`ToolPath.arc_chord_turns`)."""
+def _chord_turns(rows, counts, starts, ends, t_in, t_out, c, n, e1, e2, r0, r1, a0, a1, sweep, total):
+    """``(total, 3)`` turns of ``counts[i]`` equal-angle chords of arc row ``rows[i]`` from
+    ``starts[i]`` to ``ends[i]`` with end tangents ``t_in[i]``, ``t_out[i]``: first chord less
+    ``t_in``, the chords' direction changes, ``t_out`` less the last chord (:meth:`ToolPath.arc_chord_turns`)."""
     out = np.empty((total, 3))
     p, q, u, v, d1, d2 = np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     o = 0
@@ -538,6 +546,7 @@ def _chord_turns(rows, counts, starts, ends, c, n, e1, e2, r0, r1, a0, a1, sweep
         dr, da = (r1[j] - r0[j]) / sw, (a1[j] - a0[j]) / sw
         for a in range(3):
             p[a] = starts[i, a]
+            u[a] = t_in[i, a]
         for k in range(1, m + 1):
             if k < m:
                 _arc_points(c[j], n[j], e1[j], e2[j], r0[j], dr, a0[j], da, sw * k / m, 0, q, d1, d2)
@@ -551,13 +560,13 @@ def _chord_turns(rows, counts, starts, ends, c, n, e1, e2, r0, r1, a0, a1, sweep
             norm = math.sqrt(acc)
             for a in range(3):
                 v[a] = v[a] / norm if norm > 0 else 0.0
-            if k > 1:
-                for a in range(3):
-                    out[o, a] = v[a] - u[a]
-                o += 1
-            for a in range(3):
+                out[o, a] = v[a] - u[a]
                 u[a] = v[a]
                 p[a] = q[a]
+            o += 1
+        for a in range(3):
+            out[o, a] = t_out[i, a] - u[a]
+        o += 1
     return out
 
 

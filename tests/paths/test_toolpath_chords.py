@@ -1,5 +1,5 @@
 """``ToolPath.arc_chord_turns`` (the arcs as small turns for the FIR look-ahead) against the chords of
-``to_polyline`` and against arc lengths written in closed form here."""
+``to_polyline``, the block tangents, and arc lengths written in closed form here."""
 
 import numpy as np
 import pytest
@@ -29,21 +29,30 @@ def wavy_arcs(n: int, seed: int) -> ToolPath:
     return ToolPath([0.0, 0.0], ends, centers, normals, sweeps), r
 
 
-@pytest.mark.parametrize("tol", [1e-3, 5e-4])
-def test_chord_turns_are_the_direction_changes_of_the_chords(tol):
-    """The direction changes inside each arc are those of ``to_polyline``'s chords (unit chord
-    directions differenced here), in the same order, and each sits at ``j / n`` of its arc."""
+@pytest.mark.parametrize("tol", [1e-3, 5e-4, 0.2])  # 0.2 mm: arcs of one chord
+def test_chord_turns_are_the_chords_turns_and_add_up_to_the_arcs_turning(tol):
+    """Per arc, ``n + 1`` turns: the first chord's direction less the start tangent at ``1 / 4n``
+    of the arc, the direction changes of ``to_polyline``'s chords (unit directions differenced
+    here) at ``j / n``, and the end tangent less the last chord's direction at ``1 - 1 / 4n``;
+    they add up to the arc's whole turning ``t_out - t_in`` (``ToolPath.tangents``)."""
     tp, _ = wavy_arcs(40, 1)
     block, fraction, du = tp.arc_chord_turns(tol)
     chords, owner = tp.to_polyline(tol)
     u = np.diff(chords.points, axis=0)
     u /= np.linalg.norm(u, axis=1, keepdims=True)
-    inner = np.flatnonzero(owner[1:] == owner[:-1])
-    np.testing.assert_array_equal(block, owner[inner])
-    np.testing.assert_allclose(du, u[inner + 1] - u[inner], rtol=0, atol=1e-14)
-    n = np.bincount(owner, minlength=tp.n_blocks)[block]
-    first = np.searchsorted(owner, block)
-    np.testing.assert_array_equal(fraction, (inner - first + 1) / n)
+    t_in, t_out = tp.tangents()
+    arcs = np.flatnonzero(tp.is_arc)
+    n = np.bincount(owner, minlength=tp.n_blocks)[arcs]
+    np.testing.assert_array_equal(block, np.repeat(arcs, n + 1))
+    first = np.searchsorted(owner, arcs)  # the arc's first chord
+    for k, a in enumerate(arcs):
+        rows = np.flatnonzero(block == a)
+        c = first[k] + np.arange(n[k])
+        want = np.vstack([u[c[0]] - t_in[a], u[c[1:]] - u[c[:-1]], t_out[a] - u[c[-1]]])
+        np.testing.assert_allclose(du[rows], want, rtol=0, atol=1e-14)
+        np.testing.assert_allclose(du[rows].sum(axis=0), t_out[a] - t_in[a], rtol=0, atol=1e-14)
+        j = np.arange(n[k] + 1.0)
+        np.testing.assert_array_equal(fraction[rows], np.where(j == 0, 0.25 / n[k], np.where(j == n[k], 1 - 0.25 / n[k], j / n[k])))
 
 
 def test_look_ahead_turns_sit_at_their_exact_arc_length():
@@ -61,5 +70,5 @@ def test_look_ahead_turns_sit_at_their_exact_arc_length():
     np.testing.assert_allclose(s, want, rtol=0, atol=1e-9 * lengths.sum())
     chords, owner = tp.to_polyline(1e-4)
     inner = np.flatnonzero(owner[1:] == owner[:-1])
-    drift = want[-1] - chords.arc_length[inner[-1] + 1]
+    drift = want[-2] - chords.arc_length[inner[-1] + 1]  # the last arc's last chord vertex, both ways
     assert drift > 0.1  # [mm]: what the chord sum would have misplaced, 1e4 times the tolerance above
