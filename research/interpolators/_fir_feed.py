@@ -124,7 +124,8 @@ class ChainError:
         (``K`` chunks; ``[c, j, m]``: the chunk's first ``j`` turns). Made on first use unfilled (a
         NaN at ``[c, 0, 0, 0]``); the kernels fill a chunk when a window first reads it
         (``_fir_kernels._window_displacement``), so only the chunks of dense windows cost time or
-        memory (the pages of the others are never written)."""
+        memory (the pages of the others are never written). A chain is read by one thread, the
+        plan that made it: two threads filling one chunk at once would race."""
         if self._prefix is None:
             K = -(-self.s.size // _CHUNK)
             self._prefix = np.empty((K, _CHUNK + 1, self.p + 1, self.du.shape[1]))
