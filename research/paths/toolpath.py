@@ -295,11 +295,7 @@ class ToolPath:
         counts = self._chord_counts(chord_tolerance)
         arcs = np.flatnonzero(self._cache["arc_row"] >= 0)
         n = counts[arcs]
-        g = self._cache["geo"]
-        if "geo_rows" not in self._cache:
-            self._cache["geo_rows"] = tuple(np.ascontiguousarray(g[k]) for k in
-                                            ("c", "n", "e1", "e2", "r0", "r1", "a0", "a1", "sweep"))
-        c, nrm, e1, e2, r0, r1, a0, a1, sweep = self._cache["geo_rows"]
+        c, nrm, e1, e2, r0, r1, a0, a1, sweep = self._geo_rows()
         block = np.repeat(arcs, n + 1)
         j = (np.arange(block.size) - np.repeat(np.cumsum(n + 1) - (n + 1), n + 1)).astype(np.float64)  # 0 .. n
         nb = np.repeat(n, n + 1).astype(np.float64)
@@ -372,17 +368,22 @@ class ToolPath:
         Newton steps in the angle for helices and spirals."""
         return self._arc_distance(_lift(np.asarray(query, dtype=np.float64)), np.asarray(blocks))
 
+    def _geo_rows(self) -> tuple:
+        """The arc geometry as contiguous arrays by arc row (cached): ``c, n, e1, e2, r0, r1, a0,
+        a1, sweep``."""
+        if "geo_rows" not in self._cache:
+            g = self._cache["geo"]
+            self._cache["geo_rows"] = tuple(np.ascontiguousarray(g[k]) for k in
+                                            ("c", "n", "e1", "e2", "r0", "r1", "a0", "a1", "sweep"))
+        return self._cache["geo_rows"]
+
     def _arc_distance(self, q: np.ndarray, blocks: np.ndarray) -> np.ndarray:
         """Distance from ``q`` (3-D, one row per entry of ``blocks``) to arc blocks ``blocks``:
         projection angle, clamped to the sweep, then safeguarded Newton on ``|P(phi) - q|^2`` (exact
         in one step for planar circles). The projection angle is NumPy's ``arctan2`` (whose SIMD
         loop may differ from the C library's by an ulp) between two compiled passes that read the
         arc geometry by row (:func:`_arc_projection`, :func:`_nearest_arc`)."""
-        if "geo_rows" not in self._cache:
-            g = self._cache["geo"]
-            self._cache["geo_rows"] = tuple(np.ascontiguousarray(g[k]) for k in
-                                            ("c", "n", "e1", "e2", "r0", "r1", "a0", "a1", "sweep"))
-        c, n, e1, e2, r0, r1, a0, a1, sweep = self._cache["geo_rows"]
+        c, n, e1, e2, r0, r1, a0, a1, sweep = self._geo_rows()
         rows = np.ascontiguousarray(self._cache["arc_row"][blocks])
         q = np.ascontiguousarray(q)
         y, x = _arc_projection(q, rows, c, e1, e2)
