@@ -1,0 +1,171 @@
+"""Compiled (Numba) kernels of ``ToolPath``: distances to lines and arcs, read by row from the arc
+geometry (centre ``c``, normal ``n``, in-plane frame ``e1, e2``, end radii ``r0, r1``, end axial
+offsets ``a0, a1``, sweep), and the direction changes of an arc's chords. Each states the NumPy
+arithmetic it repeats where its results must equal ``ToolPath``'s vectorised ones."""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _nearest_line(q, blocks, starts, ends):
+    """``min_c`` of :meth:`ToolPath._block_distance` (line blocks) from ``q[i]`` to ``blocks[i, c]``:
+    the same projection, clamp and norm, summed in axis order as NumPy's reductions."""
+    N, C, d = q.shape[0], blocks.shape[1], q.shape[1]
+    out = np.empty(N)
+    for i in range(N):
+        best = np.inf
+        for c in range(C):
+            k = blocks[i, c]
+            ab2, dot = 0.0, 0.0
+            for a in range(d):
+                ab = ends[k, a] - starts[k, a]
+                ab2 += ab * ab
+                dot += (q[i, a] - starts[k, a]) * ab
+            u = min(max(dot / (ab2 if ab2 > 0 else 1.0), 0.0), 1.0)
+            acc = 0.0
+            for a in range(d):
+                ab = ends[k, a] - starts[k, a]
+                r = q[i, a] - (starts[k, a] + u * ab)
+                acc += r * r
+            best = min(best, math.sqrt(acc))
+        out[i] = best
+    return out
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _arc_projection(q, rows, c, e1, e2):
+    """In-plane coordinates ``(y, x)`` of ``q[i] - c`` on the frame ``e2, e1`` of arc row
+    ``rows[i]``: the arithmetic of NumPy's ``np.sum((q - c) * e, axis=1)``, term by term."""
+    N = q.shape[0]
+    y, x = np.empty(N), np.empty(N)
+    for i in range(N):
+        j = rows[i]
+        sy, sx = 0.0, 0.0
+        for a in range(3):
+            rel = q[i, a] - c[j, a]
+            if a == 0:
+                sy, sx = rel * e2[j, a], rel * e1[j, a]
+            else:
+                sy += rel * e2[j, a]
+                sx += rel * e1[j, a]
+        y[i], x[i] = sy, sx
+    return y, x
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _arc_points(c, n, e1, e2, r0, dr, a0, da, phi, order, p, d1, d2):
+    """``P``, and with ``order`` 2 its first and second derivatives in ``phi``, of one arc at
+    ``phi`` into ``p``, ``d1``, ``d2`` (3,): the arithmetic of :func:`_arc_eval`, term by term in
+    its order, with one cosine and sine for the three."""
+    co, si = math.cos(phi), math.sin(phi)
+    r = r0 + dr * phi
+    for a in range(3):
+        p[a] = (c[a] + (a0 + da * phi) * n[a]) + r * (co * e1[a] + si * e2[a])
+        if order == 2:
+            d1[a] = (r * (-si * e1[a] + co * e2[a]) + dr * (co * e1[a] + si * e2[a])) + da * n[a]
+            d2[a] = r * (-co * e1[a] + -si * e2[a]) + (2.0 * dr) * (-si * e1[a] + co * e2[a])
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _chord_turns(rows, counts, starts, ends, t_in, t_out, c, n, e1, e2, r0, r1, a0, a1, sweep, total):
+    """``(total, 3)`` turns of ``counts[i]`` equal-angle chords of arc row ``rows[i]`` from
+    ``starts[i]`` to ``ends[i]`` with end tangents ``t_in[i]``, ``t_out[i]``: first chord less
+    ``t_in``, the chords' direction changes, ``t_out`` less the last chord (:meth:`ToolPath.arc_chord_turns`)."""
+    out = np.empty((total, 3))
+    p, q, u, v, d1, d2 = np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    o = 0
+    for i in range(rows.size):
+        j, m = rows[i], counts[i]
+        sw = sweep[j]
+        dr, da = (r1[j] - r0[j]) / sw, (a1[j] - a0[j]) / sw
+        for a in range(3):
+            p[a] = starts[i, a]
+            u[a] = t_in[i, a]
+        for k in range(1, m + 1):
+            if k < m:
+                _arc_points(c[j], n[j], e1[j], e2[j], r0[j], dr, a0[j], da, sw * k / m, 0, q, d1, d2)
+            else:
+                for a in range(3):
+                    q[a] = ends[i, a]
+            acc = 0.0
+            for a in range(3):
+                v[a] = q[a] - p[a]
+                acc += v[a] * v[a]
+            norm = math.sqrt(acc)
+            for a in range(3):
+                v[a] = v[a] / norm if norm > 0 else 0.0
+                out[o, a] = v[a] - u[a]
+                u[a] = v[a]
+                p[a] = q[a]
+            o += 1
+        for a in range(3):
+            out[o, a] = t_out[i, a] - u[a]
+        o += 1
+    return out
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
+    """Distance from ``q[i]`` to arc row ``rows[i]``: from each candidate angle (both ends, and every
+    turn of the projection angle ``base[i]`` [rad, in [0, 2 pi)] inside the sweep, clamped), at most
+    three safeguarded Newton steps on ``|P(phi) - q|^2``, then the least distance over the candidates.
+    A candidate angle equal to an earlier one, the steps after one that leaves the angle where it
+    was, and the point's evaluation after such a step (which computed it) would repeat the same
+    arithmetic: they are skipped (the result is the same)."""
+    N = q.shape[0]
+    out = np.empty(N)
+    p, d1, d2 = np.empty(3), np.empty(3), np.empty(3)
+    two_pi = 2.0 * np.pi
+    most = 0
+    for i in range(N):
+        most = max(most, int(np.ceil(sweep[rows[i]] / two_pi)) + 1)
+    starts = np.empty(most + 2)
+    for i in range(N):
+        j = rows[i]
+        sw = sweep[j]
+        dr, da = (r1[j] - r0[j]) / sw, (a1[j] - a0[j]) / sw
+        turns = int(np.ceil(sw / two_pi)) + 1
+        best = np.inf
+        for m in range(turns + 2):
+            if m == 0:
+                phi = 0.0
+            elif m == 1:
+                phi = sw
+            else:
+                phi = min(max(base[i] + two_pi * (m - 2), 0.0), sw)
+            starts[m] = phi
+            seen = False
+            for k in range(m):
+                seen = seen or starts[k] == phi
+            if seen:
+                continue
+            at_phi = False  # p holds P(phi) already (the step that left phi unchanged evaluated it)
+            for _ in range(3):
+                _arc_points(c[j], n[j], e1[j], e2[j], r0[j], dr, a0[j], da, phi, 2, p, d1, d2)
+                slope, dd, ed = 0.0, 0.0, 0.0
+                for a in range(3):
+                    e = p[a] - q[i, a]
+                    slope += e * d1[a]
+                    dd += d1[a] * d1[a]
+                    ed += e * d2[a]
+                curv = dd + ed
+                new = phi - slope / curv if curv > 0 else phi
+                new = min(max(new, 0.0), sw)
+                if new == phi:
+                    at_phi = True
+                    break
+                phi = new
+            if not at_phi:
+                _arc_points(c[j], n[j], e1[j], e2[j], r0[j], dr, a0[j], da, phi, 0, p, d1, d2)
+            acc = 0.0
+            for a in range(3):
+                e = p[a] - q[i, a]
+                acc += e * e
+            best = min(best, math.sqrt(acc))
+        out[i] = best
+    return out
