@@ -29,9 +29,11 @@ def slow_displacement(s, du, delays, sq, F):
     return F[:, None] * (h2 @ du)
 
 
+@pytest.mark.parametrize("chunk", [7, 1024])  # windows over many chunks of the prefix sums (a prime size); one
 @pytest.mark.parametrize("delays", [(0.06, 0.03), (0.05, 0.02, 0.01)])
 @pytest.mark.parametrize("span", [2000.0, 40.0])  # sparse windows (direct sums), dense ones (prefix sums)
-def test_window_displacement_matches_the_term_by_term_sum(delays, span):
+def test_window_displacement_matches_the_term_by_term_sum(delays, span, chunk, monkeypatch):
+    monkeypatch.setattr("research.interpolators._fir_feed._CHUNK", chunk)
     rng = np.random.default_rng(7)
     T = 800
     s = np.sort(rng.uniform(0.0, span, T))
@@ -91,11 +93,13 @@ def test_prefix_sums_are_made_only_for_windows_of_many_turns(span):
     assert np.max(np.abs(d - want)) <= 1e-9 * np.max(np.abs(want))
 
 
+@pytest.mark.parametrize("chunk", [7, 1024])  # windows over many chunks of the prefix sums; one
 @pytest.mark.parametrize("delays", [(0.06, 0.03), (0.05, 0.02, 0.01)])
 @pytest.mark.parametrize("span", [2000.0, 40.0])  # direct sums, prefix sums
-def test_window_slope_matches_central_differences_of_the_term_by_term_sum(delays, span):
+def test_window_slope_matches_central_differences_of_the_term_by_term_sum(delays, span, chunk, monkeypatch):
     """``d d_j / dF`` (the Newton search's slope) against ``(d_j(F (1 + h)) - d_j(F (1 - h))) / (2 F h)``
     of the independent sum, ``h = 1e-6`` (truncation ``O(h^2)``, rounding ``1e-16 / h``)."""
+    monkeypatch.setattr("research.interpolators._fir_feed._CHUNK", chunk)
     rng = np.random.default_rng(11)
     T = 800
     s = np.sort(rng.uniform(0.0, span, T))
