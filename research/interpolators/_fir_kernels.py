@@ -249,8 +249,9 @@ def _chunk_side(prefix, c, j0, j1, end, sgn, rr, sign, binom, p, pw, out, dout):
 
 @numba.njit(**_OPTIONS)
 def _cut_turns(s, du, rho, sign, p, q, F, lo, hi, out, dout):
-    """Turns ``lo .. hi - 1`` of a chunk the window cuts, added to ``S`` and ``dS / dF`` of
-    :func:`_window_displacement` term by term: ``sign_r y^p du_i`` and ``sign_r p rho_r y^(p-1) du_i``
+    """Turns ``lo .. hi - 1`` (the window's turns in a chunk reaching far beyond it, whose prefix
+    sums would cancel too much), added to ``S`` and ``dS / dF`` of :func:`_window_displacement`
+    term by term: ``sign_r y^p du_i`` and ``sign_r p rho_r y^(p-1) du_i``
     with ``y = F rho_r - |s_i - q| > 0``."""
     for i in range(lo, hi):
         dist = abs(s[i] - q)
