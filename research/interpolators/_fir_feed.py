@@ -119,17 +119,16 @@ class ChainError:
 
     @property
     def prefix(self) -> np.ndarray:
-        """``(K, C + 1, p + 1, d)`` prefix sums of ``du * (s - o_c)^m``, ``m = 0 .. p``, restarted in
+        """``(K, C + 2, p + 1, d)`` prefix sums of ``du * (s - o_c)^m``, ``m = 0 .. p``, restarted in
         every chunk ``c`` of ``C =`` :data:`_CHUNK` turns about its first turn's arc length ``o_c``
-        (``K`` chunks; ``[c, j, m]``: the chunk's first ``j`` turns). Made on first use unfilled (a
-        NaN at ``[c, 0, 0, 0]``); the kernels fill a chunk when a window first reads it
-        (``_fir_kernels._window_displacement``), so only the chunks of dense windows cost time or
-        memory (the pages of the others are never written). A chain is read by one thread, the
+        (``K`` chunks; ``[c, j, m]``: the chunk's first ``j`` turns; ``[c, C + 1, 0, 0]``: 1 once the
+        chunk is filled). Made on first use as zeros, which the system maps without writing them;
+        the kernels fill a chunk when a window first reads it (``_fir_kernels._window_displacement``),
+        so only the chunks of dense windows cost time or memory. A chain is read by one thread, the
         plan that made it: two threads filling one chunk at once would race."""
         if self._prefix is None:
             K = -(-self.s.size // _CHUNK)
-            self._prefix = np.empty((K, _CHUNK + 1, self.p + 1, self.du.shape[1]))
-            self._prefix[:, 0, 0, 0] = np.nan
+            self._prefix = np.zeros((K, _CHUNK + 2, self.p + 1, self.du.shape[1]))
         return self._prefix
 
     def __call__(self, s_query: np.ndarray, feed: np.ndarray) -> np.ndarray:
@@ -146,7 +145,7 @@ class ChainError:
             R = F * np.max(self.rho)
             count = np.searchsorted(self.s, q + R, side="left") - np.searchsorted(self.s, q - R, side="right")
             if not np.any(count > _DIRECT):
-                prefix = np.zeros((0, _CHUNK + 1, self.p + 1, self.du.shape[1]))
+                prefix = np.zeros((0, _CHUNK + 2, self.p + 1, self.du.shape[1]))
         if prefix is None:
             prefix = self.prefix
         return (self.s, self.du, self.rho, self.sign, self.p, self.norm, prefix, self.binom, _DIRECT)

@@ -152,7 +152,7 @@ def _window_displacement(s, du, rho, sign, p, norm, prefix, binom, direct, q, F,
 
     Chunked prefix sums (windows of more than ``direct`` turns): ``d_j = norm F^(1-p) S(F)`` with
     ``S = sum_i sum_r sign_r (F rho_r - |s_i - q|)_+^p du_i``. The turns are cut into chunks of
-    ``C`` turns (``prefix`` ``(K, C + 1, p + 1, d)``, ``ChainError.prefix``); a chunk within
+    ``C`` turns (``prefix`` ``(K, C + 2, p + 1, d)``, ``ChainError.prefix``); a chunk within
     ``q +- (kappa - 2) R`` (``R = F max rho``) adds,
     per subset term and side of ``q``, a polynomial in ``F rho_r +- (q - o_c)`` whose coefficients
     are the chunk's prefix sums of ``du_i (s_i - o_c)^m`` about its own first turn ``o_c``; the
@@ -172,7 +172,7 @@ def _window_displacement(s, du, rho, sign, p, norm, prefix, binom, direct, q, F,
         out[k] = 0.0
         dout[k] = 0.0
     T = s.size
-    C = prefix.shape[1] - 1
+    C = prefix.shape[1] - 2
     last = first + count
     at = _left(s, q)
     rp, lp = np.empty(p + 1), np.empty(p + 1)  # powers of the re-centred window ends
@@ -182,7 +182,7 @@ def _window_displacement(s, du, rho, sign, p, norm, prefix, binom, direct, q, F,
         if not (s[lo] > q - near and s[hi - 1] < q + near):  # a chunk reaching far out: its turns
             _cut_turns(s, du, rho, sign, p, q, F, max(lo, first), min(hi, last), out, dout)
             continue
-        if prefix[c, 0, 0, 0] != 0.0:  # not filled yet (NaN)
+        if prefix[c, C + 1, 0, 0] == 0.0:  # not filled yet
             _fill_chunk(prefix, s, du, c, lo, hi, p)
         shift = q - s[lo]
         for r_i in range(rho.size):
@@ -210,7 +210,8 @@ def _window_displacement(s, du, rho, sign, p, norm, prefix, binom, direct, q, F,
 @numba.njit(**_OPTIONS)
 def _fill_chunk(prefix, s, du, c, lo, hi, p):
     """Fill chunk ``c`` (turns ``lo .. hi - 1``) of ``ChainError.prefix``: ``prefix[c, j, m]`` the sum
-    over its first ``j`` turns of ``du_i (s_i - s_lo)^m`` (powers by repeated multiplication)."""
+    over its first ``j`` turns of ``du_i (s_i - s_lo)^m`` (powers by repeated multiplication), and
+    its flag ``prefix[c, C + 1, 0, 0] = 1``."""
     for m in range(p + 1):
         for k in range(du.shape[1]):
             prefix[c, 0, m, k] = 0.0
@@ -222,6 +223,7 @@ def _fill_chunk(prefix, s, du, c, lo, hi, p):
             for k in range(du.shape[1]):
                 prefix[c, j + 1, m, k] = prefix[c, j, m, k] + du[i, k] * pw
             pw *= sig
+    prefix[c, prefix.shape[1] - 1, 0, 0] = 1.0  # filled
 
 
 @numba.njit(**_OPTIONS)
