@@ -39,7 +39,7 @@ class PiecePeaks:
 
     Each derivative of order 1-3 peaks, on a piece, at one of its ends or where the next
     derivative vanishes (its real roots in ``[0, h]``: closed form up to degree 2, isolated by the
-    roots of its own derivatives above, :func:`_interval_roots`); each axis is evaluated at its own roots.
+    roots of its own derivatives above, :func:`_isolated_roots`); each axis is evaluated at its own roots.
 
     Args:
         position: a :class:`PiecewisePolynomial` or its NumPy evaluator (``breaks``, ``coeffs``
@@ -62,10 +62,7 @@ class PiecePeaks:
         coeffs = np.asarray(position.coeffs, dtype=np.float64)
         h = np.diff(breaks)
         limit = np.stack([limits.velocity, limits.acceleration, limits.jerk]).astype(np.float64)  # (3, A)
-        if coeffs.shape[1] - 1 <= CLOSED_FORM_DEGREE:  # roots in closed form: one compiled pass
-            ratio = _closed_form_ratios(np.ascontiguousarray(coeffs), h, np.ascontiguousarray(limit))
-        else:
-            ratio = _piece_ratios(coeffs, h, limit)
+        ratio = piece_ratios_at(coeffs, h, np.ascontiguousarray(limit), np.arange(coeffs.shape[0]))
         self.breaks = breaks
         self.per_piece = np.where(h > DEGENERATE_PIECE, ratio, 0.0)
 
@@ -136,40 +133,31 @@ def _merged_windows(breaks, lo, hi):
 
 
 #: profiles up to this degree (lines under two filters: 3) have the roots of every next derivative
-#: in closed form (degree <= 2) and take the compiled :func:`_closed_form_ratios`
+#: in closed form (degree <= 2) and take the compiled :func:`closed_form_ratios_at`
 CLOSED_FORM_DEGREE = 4
 
 
-def _piece_ratios(coeffs: np.ndarray, h: np.ndarray, limit: np.ndarray) -> np.ndarray:
-    """``(K,)`` largest ``peak / limit`` of each piece (:class:`PiecePeaks`), by whole-array NumPy."""
-    K, degree = coeffs.shape[0], coeffs.shape[1] - 1
-    derivs = [coeffs]  # derivative coefficients of orders 1..4 at every piece
-    for _ in range(4):
-        c = derivs[-1]
-        derivs.append(c[:, 1:, :] * np.arange(1, c.shape[1])[None, :, None] if c.shape[1] > 1 else np.zeros_like(c))
-    A = coeffs.shape[2]
-    ends = np.broadcast_to(np.stack([np.zeros(K), h], axis=1)[:, None, :], (K, A, 2))  # both ends of each piece
-    ratio = np.zeros((K, 3, A))
-    for order in (1, 2, 3):
-        tau = ends  # (K, A, 2 + R): the ends, then each axis' own roots of the next derivative
-        if order < degree:
-            tau = np.concatenate([ends, _real_roots(derivs[order + 1], h)], axis=2)
-        peak = np.max(np.abs(_horner_axes(derivs[order], tau)), axis=2)  # (K, A)
-        ratio[:, order - 1, :] = peak / limit[order - 1][None, :]
-    return ratio.reshape(K, -1).max(axis=1)
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def _closed_form_ratios(coeffs, h, limit):
-    """:func:`_piece_ratios` of a profile of degree <= :data:`CLOSED_FORM_DEGREE` in one compiled
-    pass, by the same operations (Horner's rule, the closed-form roots of :func:`_real_roots`
-    clipped to ``[0, h]``), so the same floats. Peaks are finite here (as in the planner)."""
-    return closed_form_ratios_at(coeffs, h, limit, np.arange(coeffs.shape[0]))
+def piece_ratios_at(coeffs: np.ndarray, h: np.ndarray, limit: np.ndarray, pieces: np.ndarray) -> np.ndarray:
+    """``(N,)`` largest ``peak / limit`` of the pieces ``pieces`` of a profile (``coeffs`` ``(K, D, A)``
+    ascending local, ``h`` ``(K,)`` piece lengths [s], ``limit`` ``(3, A)``), over axes and over
+    velocity, acceleration and jerk: each peaks at a piece end or a real root of the next
+    derivative. One compiled pass: :func:`closed_form_ratios_at` to degree
+    :data:`CLOSED_FORM_DEGREE`, :func:`general_ratios_at` above (``tests/interpolators/_peaks_reference.py``
+    holds the whole-array NumPy form: the first reproduces it bit for bit, the second up to the
+    rounding of the roots)."""
+    coeffs = np.ascontiguousarray(coeffs, dtype=np.float64)
+    pieces = np.ascontiguousarray(pieces, dtype=np.int64)
+    if coeffs.shape[1] - 1 <= CLOSED_FORM_DEGREE:
+        return closed_form_ratios_at(coeffs, h, limit, pieces)
+    return general_ratios_at(coeffs, h, limit, pieces)
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def closed_form_ratios_at(coeffs, h, limit, pieces):
-    """:func:`_closed_form_ratios` of the pieces ``pieces`` only (``(N,)`` indices; the same floats)."""
+    """:func:`piece_ratios_at` of a profile of degree <= :data:`CLOSED_FORM_DEGREE`: Horner's rule
+    and the closed-form roots of the next derivative clipped to ``[0, h]``, the operations of the
+    NumPy reference (``tests/interpolators/_peaks_reference.py``), so the same floats. Peaks are
+    finite here (as in the planner)."""
     K, D, A = coeffs.shape
     if D == 4:
         return _cubic_ratios_at(coeffs, h, limit, pieces)
@@ -261,121 +249,73 @@ def range_max(values, first, last):
     return out
 
 
-def _horner_axes(c: np.ndarray, tau: np.ndarray) -> np.ndarray:
-    """``(K, A, R)`` values of each axis' polynomial ``c[:, :, a]`` at its own times ``tau[:, a, :]``."""
-    out = np.broadcast_to(c[:, -1, :, None], tau.shape)
-    for m in range(c.shape[1] - 2, -1, -1):
-        out = out * tau + c[:, m, :, None]
-    return out
-
-
-def _real_roots(c: np.ndarray, h: np.ndarray) -> np.ndarray:
-    """Real roots in ``[0, h]`` of the per-piece, per-axis polynomials ``c`` (ascending, ``(K, m+1, A)``),
-    as local times ``(K, A, R)`` (``R`` candidates per axis; out-of-range or complex ones replaced
-    by 0). Degree <= 2 in closed form, higher degrees by :func:`_interval_roots` (compiled)."""
-    deg = c.shape[1] - 1
-    K, A = c.shape[0], c.shape[2]
-    if deg == 1:
-        a1, a0 = c[:, 1, :], c[:, 0, :]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            r = np.where(a1 != 0, -a0 / np.where(a1 != 0, a1, 1.0), 0.0)
-        out = r[:, :, None]
-    elif deg == 2:
-        a2, a1, a0 = c[:, 2, :], c[:, 1, :], c[:, 0, :]
-        disc = a1**2 - 4 * a2 * a0
-        sq = np.sqrt(np.maximum(disc, 0.0))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            safe = np.where(a2 != 0, a2, 1.0)
-            roots = [np.where((a2 != 0) & (disc >= 0), (-a1 + s * sq) / (2 * safe), 0.0) for s in (1.0, -1.0)]
-            roots.append(np.where((a2 == 0) & (a1 != 0), -a0 / np.where(a1 != 0, a1, 1.0), 0.0))
-        out = np.stack(roots, axis=2)
-    elif deg > 2:
-        out = _interval_roots(np.ascontiguousarray(c), np.ascontiguousarray(h))
-    else:
-        return np.zeros((K, A, 0))
-    return np.clip(np.nan_to_num(out), 0.0, h[:, None, None])
-
-
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _interval_roots(c, h):
-    """Real roots in ``[0, h_k]`` of each piece's and axis' polynomial ``c[k, :, a]`` (ascending,
-    degree ``n``), ``(K, A, n)``, unused slots 0 (an end, which the peaks take anyway).
+def _isolated_roots(p, n, hk, d, pts, roots):
+    """Real roots in ``(0, hk)`` of ``p[0 .. n]`` (ascending) into ``roots`` (increasing), their count.
 
     Root isolation by the derivatives: the roots of the ``(n - 1)``-th derivative (linear) in closed
     form; then, for each lower derivative down to the polynomial itself, the roots of the next one
-    cut ``[0, h]`` into intervals where it is monotone, so each interval holds at most one root,
+    cut ``[0, hk]`` into intervals where it is monotone, so each interval holds at most one root,
     bracketed by a sign change and found by false position with the Illinois modification (Dowell
-    & Jarratt 1971) to the float resolution of ``h``. Exact up to rounding for every degree (the
-    companion-matrix eigenvalues it replaces took 35 of 44 s of a limit-holding plan of 1,632
-    adaptive-clearing blocks, whose arcs give pieces of degree 8)."""
-    K, D, A = c.shape
-    n = D - 1
-    out = np.zeros((K, A, max(n, 0)))
-    d = np.zeros((D, D))  # d[j, m]: coefficient m of the j-th derivative
-    pts = np.zeros(D + 1)  # the interval ends of the current derivative: 0, roots of the next, h
-    roots = np.zeros(D)
-    for k in range(K):
-        hk = h[k]
-        if not hk > 0:
-            continue
-        for a in range(A):
-            for m in range(D):
-                d[0, m] = c[k, m, a]
-            for j in range(1, n):
-                for m in range(D - j):
-                    d[j, m] = d[j - 1, m + 1] * (m + 1)
-            # roots of the (n - 1)-th derivative: linear d[n-1, 0] + d[n-1, 1] t
-            nr = 0
-            if n >= 1 and d[n - 1, 1] != 0.0:
-                t = -d[n - 1, 0] / d[n - 1, 1]
-                if 0.0 < t < hk:
-                    roots[0] = t
-                    nr = 1
-            for j in range(n - 2, -1, -1):  # roots of derivative j from those of j + 1
-                deg = n - j
-                pts[0] = 0.0
-                for i in range(nr):
-                    pts[i + 1] = roots[i]
-                pts[nr + 1] = hk
-                npts = nr + 2
-                nr = 0
-                for i in range(npts - 1):
-                    x0, x1 = pts[i], pts[i + 1]
-                    f0 = _horner(d, j, deg, x0)
-                    f1 = _horner(d, j, deg, x1)
-                    if f0 == 0.0:
-                        if x0 > 0.0 and (nr == 0 or roots[nr - 1] != x0):
-                            roots[nr] = x0
-                            nr += 1
-                        continue
-                    if f1 == 0.0 or (f0 < 0.0) == (f1 < 0.0):
-                        continue  # no sign change inside (a zero at x1 is the next interval's start)
-                    side = 0
-                    for _ in range(200):
-                        x = x1 - f1 * (x1 - x0) / (f1 - f0)
-                        if not (x0 < x < x1):
-                            x = 0.5 * (x0 + x1)
-                        if x <= x0 or x >= x1:
-                            break
-                        fx = _horner(d, j, deg, x)
-                        if fx == 0.0:
-                            x0 = x1 = x
-                            break
-                        if (fx < 0.0) == (f0 < 0.0):
-                            x0, f0 = x, fx
-                            if side == -1:
-                                f1 *= 0.5
-                            side = -1
-                        else:
-                            x1, f1 = x, fx
-                            if side == 1:
-                                f0 *= 0.5
-                            side = 1
-                    roots[nr] = 0.5 * (x0 + x1)
+    & Jarratt 1971) to the float resolution of ``hk``. A root of even multiplicity (no sign change)
+    is not an extremum of the polynomial's antiderivative, so the peaks do not need it. (The
+    companion-matrix eigenvalues this replaces took 35 of 44 s of a limit-holding plan of 1,632
+    adaptive-clearing blocks, whose arcs give pieces of degree 8.) ``d`` ``(n + 1, n + 1)``, ``pts``
+    ``(n + 2,)``: scratch."""
+    for m in range(n + 1):
+        d[0, m] = p[m]
+    for j in range(1, n):
+        for m in range(n + 1 - j):
+            d[j, m] = d[j - 1, m + 1] * (m + 1)
+    nr = 0
+    if n >= 1 and d[n - 1, 1] != 0.0:  # the (n - 1)-th derivative: d[n-1, 0] + d[n-1, 1] t
+        t = -d[n - 1, 0] / d[n - 1, 1]
+        if 0.0 < t < hk:
+            roots[0] = t
+            nr = 1
+    for j in range(n - 2, -1, -1):  # roots of derivative j from those of j + 1
+        deg = n - j
+        pts[0] = 0.0
+        for i in range(nr):
+            pts[i + 1] = roots[i]
+        pts[nr + 1] = hk
+        npts = nr + 2
+        nr = 0
+        for i in range(npts - 1):
+            x0, x1 = pts[i], pts[i + 1]
+            f0 = _horner(d, j, deg, x0)
+            f1 = _horner(d, j, deg, x1)
+            if f0 == 0.0:
+                if x0 > 0.0 and (nr == 0 or roots[nr - 1] != x0):
+                    roots[nr] = x0
                     nr += 1
-            for i in range(nr):
-                out[k, a, i] = roots[i]
-    return out
+                continue
+            if f1 == 0.0 or (f0 < 0.0) == (f1 < 0.0):
+                continue  # no sign change inside (a zero at x1 is the next interval's start)
+            side = 0
+            for _ in range(200):
+                x = x1 - f1 * (x1 - x0) / (f1 - f0)
+                if not (x0 < x < x1):
+                    x = 0.5 * (x0 + x1)
+                if x <= x0 or x >= x1:
+                    break
+                fx = _horner(d, j, deg, x)
+                if fx == 0.0:
+                    x0 = x1 = x
+                    break
+                if (fx < 0.0) == (f0 < 0.0):
+                    x0, f0 = x, fx
+                    if side == -1:
+                        f1 *= 0.5
+                    side = -1
+                else:
+                    x1, f1 = x, fx
+                    if side == 1:
+                        f0 *= 0.5
+                    side = 1
+            roots[nr] = 0.5 * (x0 + x1)
+            nr += 1
+    return nr
 
 
 @numba.njit(inline="always", cache=True, nogil=True, error_model="numpy")
@@ -385,3 +325,78 @@ def _horner(d, j, deg, x):
     for m in range(deg - 1, -1, -1):
         v = v * x + d[j, m]
     return v
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def general_ratios_at(coeffs, h, limit, pieces):
+    """:func:`piece_ratios_at` of a profile of any degree: derivative rows
+    ``c[o - 1, m + 1] * (m + 1)``, Horner's rule, the roots of the next derivative in closed form
+    to degree 2 and by :func:`_isolated_roots` above, each replaced by 0 where NaN and clipped to
+    ``[0, h]``: the operations of the NumPy reference (``tests/interpolators/_peaks_reference.py``)
+    but for the roots above degree 2, which it takes from companion-matrix eigenvalues."""
+    K, D, A = coeffs.shape
+    degree = D - 1
+    out = np.zeros(pieces.size)
+    c = np.zeros((5, D))
+    n = np.zeros(5, np.int64)
+    tau = np.zeros(D + 2)
+    d = np.zeros((D, D))
+    pts = np.zeros(D + 1)
+    roots = np.zeros(D)
+    for i in range(pieces.size):
+        k = pieces[i]
+        hk = h[k]
+        best = 0.0
+        for a in range(A):
+            n[0] = D
+            for m in range(D):
+                c[0, m] = coeffs[k, m, a]
+            for o in range(1, 5):  # derivative rows (a constant's derivative: one 0)
+                if n[o - 1] > 1:
+                    n[o] = n[o - 1] - 1
+                    for m in range(n[o]):
+                        c[o, m] = c[o - 1, m + 1] * (m + 1)
+                else:
+                    n[o] = 1
+                    c[o, 0] = 0.0
+            for order in range(1, 4):
+                tau[0], tau[1] = 0.0, hk
+                nt = 2
+                if order < degree:
+                    r = n[order + 1] - 1  # degree of the next derivative
+                    if r == 1:
+                        a1, a0 = c[order + 1, 1], c[order + 1, 0]
+                        tau[2] = -a0 / (a1 if a1 != 0 else 1.0) if a1 != 0 else 0.0
+                        nt = 3
+                    elif r == 2:
+                        a2, a1, a0 = c[order + 1, 2], c[order + 1, 1], c[order + 1, 0]
+                        disc = a1 * a1 - 4 * a2 * a0
+                        sq = math.sqrt(max(disc, 0.0))
+                        safe = a2 if a2 != 0 else 1.0
+                        tau[2] = (-a1 + 1.0 * sq) / (2 * safe) if (a2 != 0 and disc >= 0) else 0.0
+                        tau[3] = (-a1 + -1.0 * sq) / (2 * safe) if (a2 != 0 and disc >= 0) else 0.0
+                        tau[4] = -a0 / (a1 if a1 != 0 else 1.0) if (a2 == 0 and a1 != 0) else 0.0
+                        nt = 5
+                    elif r > 2:
+                        for m in range(r):
+                            roots[m] = 0.0
+                        if hk > 0:
+                            _isolated_roots(c[order + 1], r, hk, d, pts, roots)
+                        for m in range(r):
+                            tau[2 + m] = roots[m]
+                        nt = 2 + r
+                    for m in range(2, nt):
+                        x = tau[m]
+                        if x != x:
+                            x = 0.0
+                        tau[m] = min(max(x, 0.0), hk)
+                no = n[order]
+                peak = 0.0
+                for m in range(nt):
+                    v = c[order, no - 1]
+                    for q in range(no - 2, -1, -1):
+                        v = v * tau[m] + c[order, q]
+                    peak = max(peak, abs(v))
+                best = max(best, peak / limit[order - 1, a])
+        out[i] = best
+    return out

@@ -33,8 +33,7 @@ from research.interpolators._fir_piece_peaks import (
     CLOSED_FORM_DEGREE,
     DEGENERATE_PIECE,
     PiecePeaks,
-    _piece_ratios,
-    closed_form_ratios_at,
+    piece_ratios_at,
     range_max,
 )
 from research.limits import AxisLimits
@@ -150,10 +149,7 @@ class RoundPeaks:
         np.add.at(mark, last, -1)
         pieces = np.flatnonzero(np.cumsum(mark[:K]) > 0)
         h = np.diff(breaks)
-        if coeffs.shape[1] - 1 <= CLOSED_FORM_DEGREE:
-            ratio = closed_form_ratios_at(np.ascontiguousarray(coeffs), h, self._limit, pieces)
-        else:
-            ratio = _piece_ratios(coeffs[pieces], h[pieces], self._limit)
+        ratio = piece_ratios_at(coeffs, h, self._limit, pieces)
         per_piece = np.zeros(K)
         per_piece[pieces] = np.where(h[pieces] > DEGENERATE_PIECE, ratio, 0.0)
         return range_max(per_piece, first, last)

@@ -99,8 +99,8 @@ def test_round_peaks_decide_as_the_whole_profile(delays):
 
 
 @pytest.mark.parametrize("degree", [3, 5, 6, 7])
-def test_interval_roots_are_the_polynomials_real_roots_in_the_piece(degree):
-    """``_fir_piece_peaks._interval_roots`` (roots isolated by the derivatives' roots) against
+def test_isolated_roots_are_the_polynomials_real_roots_in_the_piece(degree):
+    """``_fir_piece_peaks._isolated_roots`` (roots isolated by the derivatives' roots) against
     polynomials built from known roots: ``prod (t - r_i)`` times a random scale, with real roots
     drawn inside and outside ``[0, h]`` and a complex pair where the degree allows; every root
     inside is found, none outside: each at a backward error below 1e-12 of the polynomial's scale
@@ -109,7 +109,7 @@ def test_interval_roots_are_the_polynomials_real_roots_in_the_piece(degree):
     ``h`` apart; a peak moves by the square of that). (Limit-holding plans of programs with arcs
     have pieces of degree 8, whose velocity, acceleration and jerk peaks need the roots of
     derivatives of degree 4-6.)"""
-    from research.interpolators._fir_piece_peaks import _interval_roots
+    from research.interpolators._fir_piece_peaks import _isolated_roots
 
     rng = np.random.default_rng(degree)
     K, A = 300, 3
@@ -129,10 +129,10 @@ def test_interval_roots_are_the_polynomials_real_roots_in_the_piece(degree):
             inside = np.sort(real[(real > 1e-9 * h[k]) & (real < h[k] * (1 - 1e-9))])
             row.append(inside)
         want.append(row)
-    got = _interval_roots(coeffs, h)
+    d, pts, roots = np.zeros((degree + 1, degree + 1)), np.zeros(degree + 2), np.zeros(degree + 1)
     for k in range(K):
         for a in range(A):
-            found = np.sort(got[k, a][got[k, a] > 0])
+            found = roots[: _isolated_roots(coeffs[k, :, a].copy(), degree, h[k], d, pts, roots)].copy()
             assert found.size == want[k][a].size
             np.testing.assert_allclose(found, want[k][a], rtol=0, atol=1e-6 * h[k])
             powers = found[:, None] ** np.arange(degree + 1)[None, :]
