@@ -2,10 +2,10 @@
 limit-holding planner checks (``_fir_limits``).
 
 A profile's velocity, acceleration and jerk peak at its break points or where the next derivative
-vanishes; :class:`PiecePeaks` finds every piece's largest ``peak / limit`` once (closed form for the
-degree-<= 4 pieces of two filters, real roots of the next derivative otherwise) and answers the
-largest over any set of time windows (:meth:`PiecePeaks.over`); :func:`corner_peak_ratios` is one
-such call.
+vanishes; :class:`PiecePeaks` finds every piece's largest ``peak / limit`` once (one compiled pass
+over the pieces: the real roots of the next derivative in closed form to degree 2, isolated by its
+own derivatives' roots above) and answers the largest over any set of time windows
+(:meth:`PiecePeaks.over`); :func:`corner_peak_ratios` is one such call.
 """
 
 from __future__ import annotations
@@ -84,7 +84,7 @@ class PiecePeaks:
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _cubic_ratios_at(coeffs, h, limit, pieces):
-    """:func:`closed_form_ratios_at` of a cubic profile (lines under two filters), its loops written
+    """:func:`general_ratios_at` of a cubic profile (lines under two filters), its loops written
     out: the same operations in the same order (derivative rows ``c[o - 1, m + 1] * (m + 1)``,
     Horner at 0 and ``h``, the acceleration's root ``-a0 / a1`` for the velocity), so the same
     floats, without the small arrays of the general degree."""
@@ -132,92 +132,37 @@ def _merged_windows(breaks, lo, hi):
     return first, last
 
 
-#: profiles up to this degree (lines under two filters: 3) have the roots of every next derivative
-#: in closed form (degree <= 2) and take the compiled :func:`closed_form_ratios_at`
-CLOSED_FORM_DEGREE = 4
-
-
 def piece_ratios_at(coeffs: np.ndarray, h: np.ndarray, limit: np.ndarray, pieces: np.ndarray) -> np.ndarray:
     """``(N,)`` largest ``peak / limit`` of the pieces ``pieces`` of a profile (``coeffs`` ``(K, D, A)``
     ascending local, ``h`` ``(K,)`` piece lengths [s], ``limit`` ``(3, A)``), over axes and over
     velocity, acceleration and jerk: each peaks at a piece end or a real root of the next
-    derivative. One compiled pass: :func:`closed_form_ratios_at` to degree
-    :data:`CLOSED_FORM_DEGREE`, :func:`general_ratios_at` above (``tests/interpolators/_peaks_reference.py``
-    holds the whole-array NumPy form: the first reproduces it bit for bit, the second up to the
-    rounding of the roots)."""
+    derivative. One compiled pass: :func:`_cubic_ratios_at` for cubic profiles (lines under two
+    filters), :func:`general_ratios_at` for any other degree (``tests/interpolators/_peaks_reference.py``
+    holds the whole-array NumPy form: both reproduce it bit for bit to degree 4, up to the
+    rounding of the roots above)."""
     coeffs = np.ascontiguousarray(coeffs, dtype=np.float64)
     pieces = np.ascontiguousarray(pieces, dtype=np.int64)
-    if coeffs.shape[1] - 1 <= CLOSED_FORM_DEGREE:
-        return closed_form_ratios_at(coeffs, h, limit, pieces)
+    if coeffs.shape[1] == 4:
+        return _cubic_ratios_at(coeffs, h, limit, pieces)
     return general_ratios_at(coeffs, h, limit, pieces)
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def closed_form_ratios_at(coeffs, h, limit, pieces):
-    """:func:`piece_ratios_at` of a profile of degree <= :data:`CLOSED_FORM_DEGREE`: Horner's rule
-    and the closed-form roots of the next derivative clipped to ``[0, h]``, the operations of the
-    NumPy reference (``tests/interpolators/_peaks_reference.py``), so the same floats. Peaks are
-    finite here (as in the planner)."""
-    K, D, A = coeffs.shape
-    if D == 4:
-        return _cubic_ratios_at(coeffs, h, limit, pieces)
-    degree = D - 1
-    out = np.zeros(pieces.size)
-    c = np.zeros((5, D))
-    n = np.zeros(5, np.int64)
-    roots = np.zeros(3)
-    for i in range(pieces.size):
-        k = pieces[i]
-        hk = h[k]
-        best = 0.0
-        for a in range(A):
-            n[0] = D
-            for m in range(D):
-                c[0, m] = coeffs[k, m, a]
-            for o in range(1, 5):  # derivative coefficients (a constant's derivative: one 0)
-                if n[o - 1] > 1:
-                    n[o] = n[o - 1] - 1
-                    for m in range(n[o]):
-                        c[o, m] = c[o - 1, m + 1] * (m + 1)
-                else:
-                    n[o] = 1
-                    c[o, 0] = 0.0
-            for order in range(1, 4):
-                no = n[order]
-                v0 = c[order, no - 1]
-                vh = c[order, no - 1]
-                for m in range(no - 2, -1, -1):
-                    v0 = v0 * 0.0 + c[order, m]
-                    vh = vh * hk + c[order, m]
-                peak = max(abs(v0), abs(vh))
-                nr = 0
-                if order < degree:
-                    deg = n[order + 1] - 1
-                    if deg == 1:
-                        a1, a0 = c[order + 1, 1], c[order + 1, 0]
-                        roots[0] = -a0 / a1 if a1 != 0 else 0.0
-                        nr = 1
-                    elif deg == 2:
-                        a2, a1, a0 = c[order + 1, 2], c[order + 1, 1], c[order + 1, 0]
-                        disc = a1 * a1 - 4 * a2 * a0
-                        sq = math.sqrt(max(disc, 0.0))
-                        ok = a2 != 0 and disc >= 0
-                        roots[0] = (-a1 + sq) / (2 * a2) if ok else 0.0
-                        roots[1] = (-a1 + -sq) / (2 * a2) if ok else 0.0
-                        roots[2] = -a0 / a1 if (a2 == 0 and a1 != 0) else 0.0
-                        nr = 3
-                for r in range(nr):
-                    t = roots[r]
-                    if t != t:
-                        t = 0.0
-                    t = min(max(t, 0.0), hk)
-                    v = c[order, no - 1]
-                    for m in range(no - 2, -1, -1):
-                        v = v * t + c[order, m]
-                    peak = max(peak, abs(v))
-                best = max(best, peak / limit[order - 1, a])
-        out[i] = best
-    return out
+@numba.njit(inline="always", cache=True, nogil=True, error_model="numpy")
+def _derivative_rows(coeffs, k, a, c, n):
+    """Rows ``c[o, :n[o]]`` of the derivatives of order ``o = 0 .. 4`` of piece ``k``'s axis ``a``
+    (ascending; ``c[o - 1, m + 1] * (m + 1)``, a constant's derivative: one 0)."""
+    D = coeffs.shape[1]
+    n[0] = D
+    for m in range(D):
+        c[0, m] = coeffs[k, m, a]
+    for o in range(1, 5):
+        if n[o - 1] > 1:
+            n[o] = n[o - 1] - 1
+            for m in range(n[o]):
+                c[o, m] = c[o - 1, m + 1] * (m + 1)
+        else:
+            n[o] = 1
+            c[o, 0] = 0.0
 
 
 @numba.njit(cache=True, nogil=True)
@@ -348,17 +293,7 @@ def general_ratios_at(coeffs, h, limit, pieces):
         hk = h[k]
         best = 0.0
         for a in range(A):
-            n[0] = D
-            for m in range(D):
-                c[0, m] = coeffs[k, m, a]
-            for o in range(1, 5):  # derivative rows (a constant's derivative: one 0)
-                if n[o - 1] > 1:
-                    n[o] = n[o - 1] - 1
-                    for m in range(n[o]):
-                        c[o, m] = c[o - 1, m + 1] * (m + 1)
-                else:
-                    n[o] = 1
-                    c[o, 0] = 0.0
+            _derivative_rows(coeffs, k, a, c, n)
             for order in range(1, 4):
                 tau[0], tau[1] = 0.0, hk
                 nt = 2

@@ -30,7 +30,6 @@ import numpy as np
 
 from research.interpolators._fir_limits import LIMIT_RTOL, THRESHOLD_GUARD
 from research.interpolators._fir_piece_peaks import (
-    CLOSED_FORM_DEGREE,
     DEGENERATE_PIECE,
     PiecePeaks,
     piece_ratios_at,
