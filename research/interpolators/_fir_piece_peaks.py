@@ -195,8 +195,9 @@ def range_max(values, first, last):
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _isolated_roots(p, n, hk, d, pts, roots):
-    """Real roots in ``(0, hk)`` of ``p[0 .. n]`` (ascending) into ``roots`` (increasing), their count.
+def _isolated_roots(p, n, hk, d, lev, nlev):
+    """Real roots in ``(0, hk)`` of ``p[0 .. n]`` (ascending) and of each of its derivatives: those of
+    derivative ``j`` into ``lev[j, :nlev[j]]`` (increasing), ``j = 0 .. n - 1``.
 
     Root isolation by the derivatives: the roots of the ``(n - 1)``-th derivative (linear) in closed
     form; then, for each lower derivative down to the polynomial itself, the roots of the next one
@@ -205,34 +206,30 @@ def _isolated_roots(p, n, hk, d, pts, roots):
     & Jarratt 1971) to the float resolution of ``hk``. A root of even multiplicity (no sign change)
     is not an extremum of the polynomial's antiderivative, so the peaks do not need it. (The
     companion-matrix eigenvalues this replaces took 35 of 44 s of a limit-holding plan of 1,632
-    adaptive-clearing blocks, whose arcs give pieces of degree 8.) ``d`` ``(n + 1, n + 1)``, ``pts``
-    ``(n + 2,)``: scratch."""
+    adaptive-clearing blocks, whose arcs give pieces of degree 8.) ``d`` ``(n + 1, n + 1)``: scratch;
+    ``lev`` ``(n, n + 1)`` and ``nlev`` ``(n,)``: the output."""
     for m in range(n + 1):
         d[0, m] = p[m]
     for j in range(1, n):
         for m in range(n + 1 - j):
             d[j, m] = d[j - 1, m + 1] * (m + 1)
-    nr = 0
-    if n >= 1 and d[n - 1, 1] != 0.0:  # the (n - 1)-th derivative: d[n-1, 0] + d[n-1, 1] t
+    nlev[n - 1] = 0
+    if d[n - 1, 1] != 0.0:  # the (n - 1)-th derivative: d[n-1, 0] + d[n-1, 1] t
         t = -d[n - 1, 0] / d[n - 1, 1]
         if 0.0 < t < hk:
-            roots[0] = t
-            nr = 1
-    for j in range(n - 2, -1, -1):  # roots of derivative j from those of j + 1
+            lev[n - 1, 0] = t
+            nlev[n - 1] = 1
+    for j in range(n - 2, -1, -1):  # roots of derivative j between those of j + 1 (and the ends)
         deg = n - j
-        pts[0] = 0.0
-        for i in range(nr):
-            pts[i + 1] = roots[i]
-        pts[nr + 1] = hk
-        npts = nr + 2
         nr = 0
-        for i in range(npts - 1):
-            x0, x1 = pts[i], pts[i + 1]
+        for i in range(nlev[j + 1] + 1):
+            x0 = lev[j + 1, i - 1] if i > 0 else 0.0
+            x1 = lev[j + 1, i] if i < nlev[j + 1] else hk
             f0 = _horner(d, j, deg, x0)
             f1 = _horner(d, j, deg, x1)
             if f0 == 0.0:
-                if x0 > 0.0 and (nr == 0 or roots[nr - 1] != x0):
-                    roots[nr] = x0
+                if x0 > 0.0 and (nr == 0 or lev[j, nr - 1] != x0):
+                    lev[j, nr] = x0
                     nr += 1
                 continue
             if f1 == 0.0 or (f0 < 0.0) == (f1 < 0.0):
@@ -258,9 +255,9 @@ def _isolated_roots(p, n, hk, d, pts, roots):
                     if side == 1:
                         f0 *= 0.5
                     side = 1
-            roots[nr] = 0.5 * (x0 + x1)
+            lev[j, nr] = 0.5 * (x0 + x1)
             nr += 1
-    return nr
+        nlev[j] = nr
 
 
 @numba.njit(inline="always", cache=True, nogil=True, error_model="numpy")
@@ -286,8 +283,8 @@ def general_ratios_at(coeffs, h, limit, pieces):
     n = np.zeros(5, np.int64)
     tau = np.zeros(D + 2)
     d = np.zeros((D, D))
-    pts = np.zeros(D + 1)
-    roots = np.zeros(D)
+    lev = np.zeros((D, D))  # roots of the second derivative and of its own derivatives (_isolated_roots)
+    nlev = np.zeros(D, np.int64)
     for i in range(pieces.size):
         k = pieces[i]
         hk = h[k]
@@ -301,24 +298,26 @@ def general_ratios_at(coeffs, h, limit, pieces):
                     r = n[order + 1] - 1  # degree of the next derivative
                     if r == 1:
                         a1, a0 = c[order + 1, 1], c[order + 1, 0]
-                        tau[2] = -a0 / (a1 if a1 != 0 else 1.0) if a1 != 0 else 0.0
+                        tau[2] = -a0 / a1 if a1 != 0 else 0.0
                         nt = 3
                     elif r == 2:
                         a2, a1, a0 = c[order + 1, 2], c[order + 1, 1], c[order + 1, 0]
                         disc = a1 * a1 - 4 * a2 * a0
                         sq = math.sqrt(max(disc, 0.0))
-                        safe = a2 if a2 != 0 else 1.0
-                        tau[2] = (-a1 + 1.0 * sq) / (2 * safe) if (a2 != 0 and disc >= 0) else 0.0
-                        tau[3] = (-a1 + -1.0 * sq) / (2 * safe) if (a2 != 0 and disc >= 0) else 0.0
-                        tau[4] = -a0 / (a1 if a1 != 0 else 1.0) if (a2 == 0 and a1 != 0) else 0.0
+                        ok = a2 != 0 and disc >= 0
+                        tau[2] = (-a1 + sq) / (2 * a2) if ok else 0.0
+                        tau[3] = (-a1 + -sq) / (2 * a2) if ok else 0.0
+                        tau[4] = -a0 / a1 if (a2 == 0 and a1 != 0) else 0.0
                         nt = 5
                     elif r > 2:
+                        # order 1 isolates the roots of the second derivative and, on the way, of the
+                        # third and fourth: the later orders read those levels
+                        if order == 1:
+                            nlev[:] = 0
+                            if hk > 0:
+                                _isolated_roots(c[2], r, hk, d, lev, nlev)
                         for m in range(r):
-                            roots[m] = 0.0
-                        if hk > 0:
-                            _isolated_roots(c[order + 1], r, hk, d, pts, roots)
-                        for m in range(r):
-                            tau[2 + m] = roots[m]
+                            tau[2 + m] = lev[order - 1, m] if m < nlev[order - 1] else 0.0
                         nt = 2 + r
                     for m in range(2, nt):
                         x = tau[m]

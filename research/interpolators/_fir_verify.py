@@ -159,10 +159,10 @@ def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo
             waiting.append(wait)
             n_waiting += wait[0].shape[0]
         if n_waiting >= _BATCH:
-            deviation = max(deviation, _bound_waiting(path, waiting, worst, bad, slack))
+            deviation = max(deviation, _bound_waiting(path, waiting, worst, bad, arrays.slack))
             waiting, n_waiting = [], 0
     if waiting:
-        deviation = max(deviation, _bound_waiting(path, waiting, worst, bad, slack))
+        deviation = max(deviation, _bound_waiting(path, waiting, worst, bad, arrays.slack))
     return deviation
 
 

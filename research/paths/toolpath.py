@@ -363,9 +363,17 @@ class ToolPath:
 
     def arc_distance(self, query: np.ndarray, blocks: np.ndarray) -> np.ndarray:
         """Distance [mm] from each point ``query[i]`` ``(N, d)`` to arc block ``blocks[i]`` ``(N,)``
-        (every one an arc), as :meth:`distance` takes it: exact for planar circles, safeguarded
-        Newton steps in the angle for helices and spirals."""
-        return self._arc_distance(_lift(np.asarray(query, dtype=np.float64)), np.asarray(blocks))
+        (every one an arc), as :meth:`distance` takes it: projection angle, clamped to the sweep,
+        then safeguarded Newton on ``|P(phi) - q|^2`` (exact in one step for planar circles). The
+        projection angle is NumPy's ``arctan2`` (whose SIMD loop may differ from the C library's by
+        an ulp) between two compiled passes that read the arc geometry by row
+        (``_toolpath_kernels._arc_projection``, ``_nearest_arc``)."""
+        c, n, e1, e2, r0, r1, a0, a1, sweep = self._geo_rows()
+        rows = np.ascontiguousarray(self._cache["arc_row"][np.asarray(blocks)])
+        q = np.ascontiguousarray(_lift(np.asarray(query, dtype=np.float64)))
+        y, x = _arc_projection(q, rows, c, e1, e2)
+        base = np.arctan2(y, x) % (2 * np.pi)
+        return _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep)
 
     def _geo_rows(self) -> tuple:
         """The arc geometry as contiguous arrays by arc row (cached): ``c, n, e1, e2, r0, r1, a0,
@@ -375,19 +383,6 @@ class ToolPath:
             self._cache["geo_rows"] = tuple(np.ascontiguousarray(g[k]) for k in
                                             ("c", "n", "e1", "e2", "r0", "r1", "a0", "a1", "sweep"))
         return self._cache["geo_rows"]
-
-    def _arc_distance(self, q: np.ndarray, blocks: np.ndarray) -> np.ndarray:
-        """Distance from ``q`` (3-D, one row per entry of ``blocks``) to arc blocks ``blocks``:
-        projection angle, clamped to the sweep, then safeguarded Newton on ``|P(phi) - q|^2`` (exact
-        in one step for planar circles). The projection angle is NumPy's ``arctan2`` (whose SIMD
-        loop may differ from the C library's by an ulp) between two compiled passes that read the
-        arc geometry by row (:func:`_arc_projection`, :func:`_nearest_arc`)."""
-        c, n, e1, e2, r0, r1, a0, a1, sweep = self._geo_rows()
-        rows = np.ascontiguousarray(self._cache["arc_row"][blocks])
-        q = np.ascontiguousarray(q)
-        y, x = _arc_projection(q, rows, c, e1, e2)
-        base = np.arctan2(y, x) % (2 * np.pi)
-        return _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep)
 
     def _tree(self):
         if "tree" not in self._cache:

@@ -129,10 +129,11 @@ def test_isolated_roots_are_the_polynomials_real_roots_in_the_piece(degree):
             inside = np.sort(real[(real > 1e-9 * h[k]) & (real < h[k] * (1 - 1e-9))])
             row.append(inside)
         want.append(row)
-    d, pts, roots = np.zeros((degree + 1, degree + 1)), np.zeros(degree + 2), np.zeros(degree + 1)
+    d, lev, nlev = np.zeros((degree + 1, degree + 1)), np.zeros((degree, degree + 1)), np.zeros(degree, np.int64)
     for k in range(K):
         for a in range(A):
-            found = roots[: _isolated_roots(coeffs[k, :, a].copy(), degree, h[k], d, pts, roots)].copy()
+            _isolated_roots(coeffs[k, :, a].copy(), degree, h[k], d, lev, nlev)
+            found = lev[0, : nlev[0]].copy()
             assert found.size == want[k][a].size
             np.testing.assert_allclose(found, want[k][a], rtol=0, atol=1e-6 * h[k])
             powers = found[:, None] ** np.arange(degree + 1)[None, :]
