@@ -336,7 +336,12 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         start is the plan's own until that instant (the output at ``t`` averages the input over
         ``[t - T_d, t]``), so the corners whose search window ``centre +- T_d / 2`` ends by then
         have their errors of the full check; their repairs bound the first round's
-        (``_fir_repair``: a subset of the violators at the same errors)."""
+        (``_fir_repair``: a subset of the violators at the same errors). With ``limits`` as well:
+        the first round's limit repairs only lower feed factors (every factor ``<= 1``, so a piece
+        the bound slows ends no faster) and its corner bisections enter the prediction at their
+        brackets' upper ends, at most the overlap the bound keeps. (The candidates this drops
+        before their first limit check no longer bring in the limit-capped candidates of
+        ``verify``; on 125 limit-holding plans, 625 timing arrays, no plan changed.)"""
         c = int(table.first_motion[K])  # the pieces of blocks 0 .. K - 1 and their gaps
         if d_np.size > 2:  # the JAX inversion of eq 13/14 on the padded shapes of every corner
             frac, piece_tv, _, _, gaps = timing_gaps(factor, head, tail, full, shrink, others, arc_rel, top=False)
@@ -390,7 +395,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             g = hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), np.ones(1, dtype=bool))
             factor, repaired = factor * g[:, None], bool(g[0] < 1.0)
         K = M // _PREFIX_SHARE
-        if refine and limits is None and several and K >= _PREFIX_MIN_BLOCKS:
+        if refine and several and K >= _PREFIX_MIN_BLOCKS:
             # the vertex errors of the first blocks alone, on the profile of their input: a loser
             # (errors everywhere) falls behind the others for a share of a profile and its check
             bound = prefix_bound(factor, head, tail, full, shrink, others, arc_rel, K, limit_v, repairs)
