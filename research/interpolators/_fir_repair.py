@@ -102,7 +102,10 @@ def _repair_vertices(viol, ratio, full, F, cum, head, tail, lengths, Td, n, fact
     neighbours' repairs left, by ``0.98 sqrt(ratio)`` -- of an end block the window reaches only in
     part, the piece on its side (tail of ``lo``, head of ``hi - 1``) where that piece is at least
     as long as the stretch covered, else the whole block; a dwell corner shrinks its overlap by
-    ``min(0.98 ratio^(1/(n+1)), 1)``. A compiled loop: each window depends on the repairs before it."""
+    ``0.98 ratio^(1/(n+1))``; ``ratio`` is taken at most 1, so a repair never speeds a window up
+    (a violation read against a looser tolerance than the one it broke gave ratios above 1:
+    ``_fir_verify._bound_waiting``) and a dwell shrinks in every round. A compiled loop: each window
+    depends on the repairs before it."""
     M = F.size
     for q in range(viol.size):
         j = viol[q]
@@ -111,7 +114,7 @@ def _repair_vertices(viol, ratio, full, F, cum, head, tail, lengths, Td, n, fact
             a, b = cum[j + 1] - half, cum[j + 1] + half
             lo = max(np.searchsorted(cum, a, side="right") - 1, 0)
             hi = max(min(np.searchsorted(cum, b, side="left"), M), j + 2)
-            g = 0.98 * np.sqrt(ratio[q])
+            g = 0.98 * np.sqrt(min(ratio[q], 1.0))
             for k in range(lo, hi):
                 if k == lo and cum[k] < a and cum[k + 1] - a <= tail[k] * lengths[k]:
                     factor[k, 2] *= g  # the window covers only the block's tail piece
@@ -121,4 +124,4 @@ def _repair_vertices(viol, ratio, full, F, cum, head, tail, lengths, Td, n, fact
                     for c in range(3):
                         factor[k, c] *= g
         else:
-            shrink[j] *= min(0.98 * ratio[q] ** (1.0 / (n + 1)), 1.0)
+            shrink[j] *= 0.98 * min(ratio[q], 1.0) ** (1.0 / (n + 1))

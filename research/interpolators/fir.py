@@ -85,7 +85,8 @@ from research.interpolators import _fir_pauses, _fir_profile
 from research.interpolators._fir_overlap import overlap_time
 from research.interpolators._fir_repair import Repairs
 from research.interpolators._fir_round_peaks import RoundPeaks
-from research.interpolators._fir_verify import RoundChecks, corner_distances, profile_rounding, vertex_distances
+from research.interpolators._fir_verify import (RoundChecks, charged_repairs, corner_distances, profile_rounding,
+                                                stop_rounding, vertex_distances)
 from research.limits import AxisLimits
 from research.paths.gcode import checked_pauses
 from research.paths.polyline import Polyline
@@ -445,6 +446,9 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                 if tol_due or not too_fast:
                     if refine:
                         errors = checks.vertices(pos_np, starts_np, centre_np, durations, M > 1)
+                        stops = state[1] == 0.0  # exact stops: the exact profile passes through their vertices
+                        checks.slack = max(checks.slack, stop_rounding(errors, stops))
+                        bound_v = limit_v + checks.slack
                         if M > 1 and np.any(errors > bound_v):
                             # the vertex errors first: a bound from their repairs alone (a lower bound
                             # on the whole round's) can rule the candidate out before its path samples
@@ -466,10 +470,14 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         last_check = checks.snapshot()
                     viol = errors > bound_v
                     if refine:
-                        for j, e in at_vertex.items():
-                            viol[j], errors[j] = True, max(errors[j], e)
                         for k, e in at_block.items():
                             arc_slow[k] = e
+                        for j, e in at_vertex.items():
+                            corners, arcs = charged_repairs(j, e, stops, centre_np, tv_np, tb_np, tp.is_arc, Td_np)
+                            for i, e_i in corners:
+                                viol[i], errors[i] = True, max(errors[i], e_i)
+                            for k, e_k in arcs:
+                                arc_slow[k] = max(arc_slow[k], e_k)
                 tol_due = bool(viol.any() or arc_slow.any() or slowed)
                 if not (viol.any() or too_fast or arc_slow.any()):
                     break
