@@ -82,6 +82,9 @@ class Repairs:
             shrink[j] = 0.0
             return factor, shrink
         ratio = self.tv[j] / errors[j]
+        zero = self.full[j] & ~(ratio > 0.0)  # full-overlap vertices of tolerance 0 stop (as apply)
+        shrink[j[zero]] = 0.0
+        j, ratio = j[~zero], ratio[~zero]
         w = self.full[j]
         g = np.ones((self.M, 3))
         gw, jw = 0.98 * np.sqrt(ratio[w]), j[w]
@@ -99,7 +102,8 @@ def _repair_vertices(viol, ratio, full, F, cum, head, tail, lengths, Td, n, fact
     """The vertex repairs of :meth:`Repairs.apply` (not late), in place, vertices ``viol`` in path
     order with ``ratio = eps / error``: a full-overlap vertex slows the blocks of its window
     ``[lo, max(hi, j + 2))``, its half-width ``T_d F_j / 2`` at the tail feed its earlier
-    neighbours' repairs left, by ``0.98 sqrt(ratio)`` -- of an end block the window reaches only in
+    neighbours' repairs left, by ``0.98 sqrt(ratio)`` (or stops exactly where ``ratio`` is 0: a
+    tolerance of 0, which no feed keeps and a zero feed would never leave) -- of an end block the window reaches only in
     part, the piece on its side (tail of ``lo``, head of ``hi - 1``) where that piece is at least
     as long as the stretch covered, else the whole block; a dwell corner shrinks its overlap by
     ``0.98 ratio^(1/(n+1))``; ``ratio`` is taken at most 1, so a repair never speeds a window up
@@ -109,7 +113,9 @@ def _repair_vertices(viol, ratio, full, F, cum, head, tail, lengths, Td, n, fact
     M = F.size
     for q in range(viol.size):
         j = viol[q]
-        if full[j]:  # slow the window's blocks: the error of a chain is quadratic in feed
+        if full[j] and not ratio[q] > 0.0:  # a tolerance of 0: no feed keeps it, an exact stop does
+            shrink[j] = 0.0
+        elif full[j]:  # slow the window's blocks: the error of a chain is quadratic in feed
             half = 0.5 * Td * F[j] * factor[j, 2]
             a, b = cum[j + 1] - half, cum[j + 1] + half
             lo = max(np.searchsorted(cum, a, side="right") - 1, 0)

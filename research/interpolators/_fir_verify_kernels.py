@@ -150,7 +150,8 @@ def _squared_distance(coeffs, piece, tau, vertices, c, D, A):
 def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
     """Distance [mm] from each vertex ``(C, A)`` to the profile near ``centre`` ``(C,)`` [s]: the best
     of ``grid`` points evenly spread over ``centre +- half_window``, refined by ``newton_steps``
-    safeguarded Newton steps on ``|p(t) - V|^2`` kept within one grid step (the compiled form of
+    safeguarded Newton steps on ``|p(t) - V|^2`` (Gauss-Newton where Newton's curvature is not
+    positive) kept within one grid step (the compiled form of
     ``_fir_verify._corner_distances``; never above the best grid point's distance).
 
     The profile is evaluated as :class:`research.piecewise.NumpyPiecewise` (clipped time, piece
@@ -221,7 +222,7 @@ def _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_ste
             piece = min(max(found - 1, 0), K - 1)
             tau = tc - breaks[piece]
             inside = t_lo <= t <= t_hi
-            slope, curvature = 0.0, 0.0
+            slope, curvature, speed2 = 0.0, 0.0, 0.0
             for a in range(A):
                 v = coeffs[piece, D - 1, a]
                 for m in range(D - 2, -1, -1):
@@ -241,8 +242,11 @@ def _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_ste
                 e = v - vertices[c, a]
                 slope += e * v1
                 curvature += v1 * v1 + e * v2
+                speed2 += v1 * v1
             if curvature > 0:
                 t = t - slope / curvature
+            elif speed2 > 0:  # Gauss-Newton where Newton's model has no minimum (_fir_verify._corner_distances)
+                t = t - slope / speed2
             t = min(max(t, lo), hi)
         tc = min(max(t, t_lo), t_hi)
         found = _right_next(breaks, tc, found)

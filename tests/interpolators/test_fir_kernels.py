@@ -288,15 +288,17 @@ def test_sampled_line_distances_match_numpy_on_random_profiles(D, A):
 def numpy_corner_distances(pos, vertices, centre, half, grid=9, steps=4):
     """The corner search of ``_fir_verify.corner_distances`` in NumPy on ``NumpyPiecewise``: the
     best of ``grid`` points over ``centre +- half``, then ``steps`` Newton steps on ``|p(t) - V|^2``
-    clipped to one grid step around it; the smaller of that point's and the grid's distance."""
+    (Gauss-Newton, curvature ``|v|^2``, where Newton's curvature is not positive) clipped to one
+    grid step around it; the smaller of that point's and the grid's distance."""
     tg = centre[:, None] + half * np.linspace(-1.0, 1.0, grid)[None, :]
     d2 = np.sum((pos(tg) - vertices[:, None, :]) ** 2, axis=-1)
     t = tg[np.arange(centre.size), np.argmin(d2, axis=1)]
     lo, hi = t - 2.0 * half / (grid - 1), t + 2.0 * half / (grid - 1)
     for _ in range(steps):
         e, v, acc = pos(t) - vertices, pos(t, 1), pos(t, 2)
-        slope, curvature = np.sum(e * v, axis=1), np.sum(v * v + e * acc, axis=1)
-        t = np.clip(np.where(curvature > 0, t - slope / np.where(curvature > 0, curvature, 1.0), t), lo, hi)
+        slope, curvature, speed2 = np.sum(e * v, axis=1), np.sum(v * v + e * acc, axis=1), np.sum(v * v, axis=1)
+        gauss = np.where(speed2 > 0, t - slope / np.where(speed2 > 0, speed2, 1.0), t)
+        t = np.clip(np.where(curvature > 0, t - slope / np.where(curvature > 0, curvature, 1.0), gauss), lo, hi)
     return np.sqrt(np.minimum(np.sum((pos(t) - vertices) ** 2, axis=1), d2.min(axis=1)))
 
 

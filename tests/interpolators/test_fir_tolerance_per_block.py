@@ -11,7 +11,11 @@ programs": ``G64 P<tol>`` as eps, per block, changeable mid-program):
   (``ConvergenceError`` after 36 rounds on 87 of 200 random programs with per-block tolerances;
   ``_fir_verify.charged_repairs``);
 * the rounding of a long profile at its exact stops (nm after an hour of motion) broke a
-  tolerance of 0, which no repair can reach (``_fir_verify.stop_rounding``).
+  tolerance of 0, which no repair can reach (``_fir_verify.stop_rounding``);
+* the corner search stayed at a grid point 63 um short of a collinear vertex passed while the
+  motion accelerates (Newton's model has no minimum there), and the false error slowed a straight
+  line 20x, or at tolerance 0 set its feed to 0: a plan that never left the start
+  (``_fir_verify._corner_distances``' Gauss-Newton step, ``_fir_repair``'s exact stop at ratio 0).
 
 Expected values are properties or independent closed forms (never the planner's earlier output).
 """
@@ -100,3 +104,32 @@ def test_random_programs_with_a_tolerance_per_block_plan_within_them(seed):
     delays = (0.06, 0.03) if seed % 3 else (0.02, 0.01)
     tol = rng.choice(TOLS[1:] if tp.is_arc.any() else TOLS, tp.n_blocks)
     _check(plan_fir(tp, feed, delays, tol), feed, tol)
+
+
+@pytest.mark.parametrize("delays", [(0.03, 0.02, 0.01), (0.06, 0.03)])
+@pytest.mark.parametrize("tol", [0.0, 1e-4])
+def test_a_straight_line_split_near_its_start_plans_as_one_block(delays, tol):
+    """A 10 mm line split at 0.1 mm (or 1 mm) at F = 250 mm/s: the input is the same pulse as the
+    unsplit line's, so the cycle time is ``L / F + T_d`` (Sencer 2015, one block). Before: the
+    corner search kept its grid point 63 um short of the collinear vertex (Newton's curvature is
+    negative while the motion accelerates), so tolerance 0 slowed the window to feed 0 (a plan that
+    never left the start) and 1e-4 mm to 9.7 mm/s (1.12 s)."""
+    split = 1.0 if len(delays) == 3 else 0.1
+    plan = plan_fir(Polyline([[0, 0], [split, 0], [10, 0]]), 250.0, delays, tol)
+    assert float(plan.cycle_time) == pytest.approx(10.0 / 250.0 + sum(delays), rel=1e-9)
+    assert np.all(np.asarray(plan.feeds) == 250.0)
+
+
+def test_the_corner_search_finds_a_vertex_passed_while_accelerating():
+    """The corner-error search on the unverified plan of a line split 0.1 mm after its start: the
+    trajectory runs along the line through the vertex, so its distance is 0; the search's grid
+    alone finds 63 um (the nearest grid point) and Newton's steps cannot leave it (their model has
+    no minimum there). Both forms, the compiled and the JAX one, find it within 10 nm."""
+    from research.interpolators._fir_verify import corner_distances, vertex_distances
+    from research.piecewise import NumpyPiecewise
+
+    plan = plan_fir(Polyline([[0, 0], [0.1, 0], [10, 0]]), 250.0, (0.06, 0.03), 1e-4, refine=False)
+    pos = NumpyPiecewise(np.asarray(plan.position.breaks), np.asarray(plan.position.coeffs))
+    vertices, centre = np.asarray(plan.vertices), np.asarray(plan.corner_times)
+    assert vertex_distances(pos, vertices, centre, 0.045)[0] <= 1e-8
+    assert float(corner_distances(plan.position, vertices, centre, 0.045)[0]) <= 1e-8
