@@ -29,6 +29,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from research._device import device_array
 from research._grid_sample import GRID_SNAP, sample_grid  # noqa: F401 (GRID_SNAP: documented here, re-exported)
 
 
@@ -66,11 +67,13 @@ class PiecewisePolynomial(eqx.Module):
 
     @property
     def start(self) -> Array:
-        return self.breaks[0]
+        """First break [s] (a 0-d array)."""
+        return _break(self.breaks, 0)
 
     @property
     def end(self) -> Array:
-        return self.breaks[-1]
+        """Last break [s] (a 0-d array)."""
+        return _break(self.breaks, -1)
 
     def derivative(self, nu: int = 1) -> "PiecewisePolynomial":
         """The ``nu``-th derivative (degree drops by ``nu``; a constant if ``nu > degree``)."""
@@ -151,6 +154,14 @@ class PiecewisePolynomial(eqx.Module):
     def numpy_evaluator(self) -> "NumpyPiecewise":
         """The same function on NumPy copies of the breaks and coefficients (see :class:`NumpyPiecewise`)."""
         return NumpyPiecewise(np.asarray(self.breaks, dtype=np.float64), np.asarray(self.coeffs, dtype=np.float64))
+
+
+def _break(breaks, i: int) -> Array:
+    """``breaks[i]``: indexed by JAX where traced; read in NumPy and transferred where concrete
+    (a JAX index of a concrete array compiles a slice per array size: ``research._device``)."""
+    if isinstance(breaks, jax.core.Tracer):
+        return breaks[i]
+    return device_array(np.asarray(breaks)[i])
 
 
 @dataclass(frozen=True)

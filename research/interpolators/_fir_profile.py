@@ -27,6 +27,7 @@ import jax.numpy as jnp
 import numba
 import numpy as np
 
+from research._device import device_array
 from research.interpolators._fir_overlap import overlap_time
 from research.piecewise import PiecewisePolynomial, bucket_size
 
@@ -69,7 +70,7 @@ class ProfileInputs(eqx.Module):
 
     def __init__(self, table, fraction, piece_tv, gaps, delays, start, span):
         self.fraction, self.piece_tv, self.gaps, self.delays, self.start = fraction, piece_tv, gaps, delays, start
-        self.span, self.pieces = jnp.asarray(span), _PathPieces(table)
+        self.span, self.pieces = device_array(span), _PathPieces(table)
 
     def position(self) -> PiecewisePolynomial:
         """The exact position profile [mm], built on the first call (the same arrays as the
@@ -78,7 +79,7 @@ class ProfileInputs(eqx.Module):
             t = self.pieces.table
             _, _, breaks, coeffs, _ = profile(self.start, t.geo, t.block, t.gap, self.fraction, self.piece_tv, self.gaps,
                                               self.delays)
-            self.pieces.built = PiecewisePolynomial(jnp.asarray(breaks), jnp.asarray(coeffs))
+            self.pieces.built = PiecewisePolynomial(device_array(breaks), device_array(coeffs))
         return self.pieces.built
 
 
