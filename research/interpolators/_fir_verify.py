@@ -202,7 +202,8 @@ def _sample_times(first: np.ndarray, count: np.ndarray, t0: float, t1: float, pe
         yield np.clip(tail[i: i + _CHUNK], t0, t1)
 
 
-def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo, slack: float = 0.0) -> float:
+def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo, slack: float = 0.0,
+          stopped=None) -> float:
     """Check the sample chunks ``times`` (an iterable of time arrays, :func:`_sample_times`): the
     largest distance of each charge key into ``worst`` and of its violations into ``bad`` (keys
     where ``redo``, all if None). Returns the largest distance over all samples.
@@ -211,7 +212,7 @@ def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo
     of about :data:`_BATCH` for :meth:`ToolPath.distance_bound` (a fixed cost per call that would
     otherwise come with every chunk); each sample's distance is its own, so the batching changes
     no value, and the maxima are the same in any order."""
-    arrays = _ScanArrays(position, path, starts, centre, tol_block, redo, slack)
+    arrays = _ScanArrays(position, path, starts, centre, tol_block, redo, slack, stopped)
     deviation = -np.inf
     waiting: list[tuple[np.ndarray, ...]] = []
     n_waiting = 0
@@ -235,9 +236,10 @@ class _ScanArrays:
     path's arc flags and line segments (:func:`_line_segments`), and ``redo`` (empty: every key)."""
 
     __slots__ = ("breaks", "coeffs", "starts", "centre", "tol", "key_tol", "is_arc", "has_arc", "segments", "redo",
-                 "slack")
+                 "slack", "stopped")
 
-    def __init__(self, position: NumpyPiecewise, path: ToolPath, starts, centre, tol_block, redo, slack=0.0):
+    def __init__(self, position: NumpyPiecewise, path: ToolPath, starts, centre, tol_block, redo, slack=0.0,
+                 stopped=None):
         self.breaks, self.coeffs = np.ascontiguousarray(position.breaks), np.ascontiguousarray(position.coeffs)
         self.starts = np.ascontiguousarray(starts)
         self.centre = np.ascontiguousarray(centre, dtype=np.float64)
@@ -250,6 +252,7 @@ class _ScanArrays:
         self.segments = _line_segments(path)
         self.redo = np.zeros(0, bool) if redo is None else np.ascontiguousarray(redo)
         self.slack = float(slack)
+        self.stopped = np.zeros(0, bool) if stopped is None else np.ascontiguousarray(stopped, dtype=bool)
 
 
 def _bound_waiting(path: ToolPath, waiting, worst, bad, slack: float, key_tol: np.ndarray) -> float:
@@ -265,14 +268,14 @@ def _bound_waiting(path: ToolPath, waiting, worst, bad, slack: float, key_tol: n
     the vertex's, and its plain distance over the vertex's tolerance gave a ratio above 1 (a
     "repair" that sped the window up; measured on three lines of tolerances 0.1 / 50 / 50 um at
     F 50 mm/s: planned feeds of 816 mm/s). Equal where the two tolerances are equal (all of a
-    program with one tolerance); 1 where the sample's limit is 0."""
+    program with one tolerance); 1 where the sample's limit or the key's tolerance is 0."""
     q, block, dist, limit, key, keep = (np.concatenate(parts) for parts in zip(*waiting))
     dist = np.minimum(dist, path.distance_bound(q, near=block))
     scatter_max(worst, key[keep], dist[keep])
     keep &= dist > verified_bound(limit) + slack
     k, lim = key[keep], limit[keep]
     own = key_tol[k]
-    scale = np.where((lim > 0) & (lim != own), own / np.where(lim > 0, lim, 1.0), 1.0)
+    scale = np.where((lim > 0) & (own > 0) & (lim != own), own / np.where(lim > 0, lim, 1.0), 1.0)
     scatter_max(bad, k, dist[keep] * scale)
     return float(dist.max())
 
@@ -287,7 +290,7 @@ def _charged_samples(arrays: _ScanArrays, path: ToolPath, t: np.ndarray, Td: flo
     samples are to be tried for those as well (:func:`_scan`); None if none."""
     q, block, d2 = _three_block_distance(arrays, path, t, Td)
     near_max, over, dist, limit, key, keep = charge_samples(t, d2, block, arrays.centre, arrays.tol, arrays.is_arc,
-                                                             0.5 * Td, arrays.redo, worst, arrays.slack)
+                                                             0.5 * Td, arrays.redo, worst, arrays.slack, arrays.stopped)
     rows = (q[over], block[over], dist, limit, key, keep) if over.size else None
     return near_max, rows
 
@@ -322,6 +325,7 @@ class RoundChecks:
         self.piece_block = piece_block  # padding pieces (block M_pad) count as the last block's
         self.durations, self.samples, self._pending = None, 0, None
         self.slack = 0.0  # [mm] added to the tolerance of the path samples: the profile's rounding
+        self.stops = None  # (M - 1,) exact stops of the profile checked (charge_samples), None: none
 
     def __call__(self, position: NumpyPiecewise, starts: np.ndarray, centre: np.ndarray, durations: np.ndarray,
                  vertex_errors: bool):
@@ -421,7 +425,8 @@ class RoundChecks:
             bad[self.bad[0]] = self.bad[1]
             self.worst[redo], bad[redo] = -np.inf, -np.inf
             times = _sample_times(first, count, t0, t1, self.period, extra)
-            _scan(position, path, times, starts, centre, self.Td, self.tol, self.worst, bad, redo, self.slack)
+            _scan(position, path, times, starts, centre, self.Td, self.tol, self.worst, bad, redo, self.slack,
+                  self.stops)
             keys = np.flatnonzero(bad > -np.inf)
             self.bad = (keys, bad[keys])
         keys, values = self.bad

@@ -309,7 +309,7 @@ def grid_times(i, j, first, count, ends, t0, t1, period):
 
 
 @numba.njit(**_OPTIONS)
-def charge_samples(t, d2, block, centre, tol_block, is_arc, half_window, redo, worst, slack):
+def charge_samples(t, d2, block, centre, tol_block, is_arc, half_window, redo, worst, slack, stopped):
     """Distance, tolerance, violation and charge key of path samples, and the largest distance of
     each key (``_fir_verify._charged_samples``).
 
@@ -317,7 +317,11 @@ def charge_samples(t, d2, block, centre, tol_block, is_arc, half_window, redo, w
     ``(3,)`` to blocks ``block - 1 .. block + 1``: its distance is ``sqrt(min d2[i])``. It is near
     the corner whose instant (``centre``, ``(M - 1,)``, sorted) is closest, when within
     ``half_window``; its tolerance is its block's, or the smaller of that and the vertex's (the
-    smaller of the vertex's two blocks) when near. Key: the near vertex; else, on a line, the
+    smaller of the vertex's two blocks) when near. A corner that is an exact stop (``stopped[j]``;
+    an empty ``stopped``: none) has no blend and passes through its vertex at its instant: a sample
+    by it is not near it but on its block on that side of the instant (``j`` before, ``j + 1``
+    after), whose tolerance and key it takes (the window's own block is the one before the stop's
+    gap, whose tolerance, 0 under ``G61``, held the next arc's start to 0 before). Key: the near vertex; else, on a line, the
     vertex ``clip(block, 0, M - 2)``; else (inside an arc) ``M - 1 + block``; ``-1`` on a one-block
     path's line. It is over when its distance is above ``verified_bound(tolerance) + slack``
     (the same product and sums, compiled without contraction into a fused multiply-add; ``slack``
@@ -347,8 +351,12 @@ def charge_samples(t, d2, block, centre, tol_block, is_arc, half_window, redo, w
             k2 = min(k, M - 2)
             j = k - 1 if abs(centre[k - 1] - t[i]) <= abs(centre[k2] - t[i]) else k2
             if abs(centre[j] - t[i]) <= half_window:
-                near = j
-                lim = min(lim, min(tol_block[j], tol_block[j + 1]))
+                if stopped.size and stopped[j]:  # the block on its side of the stop, not the window's
+                    b = j if t[i] < centre[j] else j + 1
+                    lim = tol_block[b]
+                else:
+                    near = j
+                    lim = min(lim, min(tol_block[j], tol_block[j + 1]))
         if near >= 0:
             key = near
         elif not is_arc[b]:

@@ -459,6 +459,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         errors = checks.vertices(pos_np, starts_np, centre_np, durations, M > 1)
                         stops = state[1] == 0.0  # exact stops: the exact profile passes through their vertices
                         checks.slack = max(checks.slack, stop_rounding(errors, stops))
+                        checks.stops = stops  # no blend there: samples by them are their blocks' own
                         bound_v = limit_v + checks.slack
                         if M > 1 and np.any(errors > bound_v):
                             # the vertex errors first: a bound from their repairs alone (a lower bound

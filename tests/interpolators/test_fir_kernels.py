@@ -386,11 +386,13 @@ def test_range_min_matches_brute_force():
     assert range_min(np.array([0]), np.array([3]), np.array([1.0]), 0, np.zeros(0)).shape == (0,)
 
 
-def test_sample_charges_match_the_vectorised_rule():
+@pytest.mark.parametrize("with_stops", [False, True])
+def test_sample_charges_match_the_vectorised_rule(with_stops):
     """Distance, near corner, tolerance, violation, key and per-key maxima of path samples against
     the NumPy statement of the rule (the nearest of three squared distances; nearest corner instant
     within T_d / 2; lines charge their vertex, arcs their block; the samples within tolerance raise
-    the maxima of the keys kept), with every key kept and with some."""
+    the maxima of the keys kept), with every key kept and with some; ``with_stops``: a third of the
+    corners exact stops, by which a sample takes the block on its side of the corner instant."""
     from research.interpolators._fir_verify_kernels import charge_samples
 
     rng = np.random.default_rng(2)
@@ -401,12 +403,17 @@ def test_sample_charges_match_the_vectorised_rule():
     tol = rng.uniform(0.01, 0.05, M)
     d2 = rng.uniform(0.0, 0.06, (t.size, 3)) ** 2
     arc = rng.random(M) < 0.3
+    stopped = rng.random(M - 1) < 0.3 if with_stops else np.zeros(0, bool)
     dist = np.sqrt(d2.min(axis=1))
     k = np.clip(np.searchsorted(centre, t), 1, M - 1)
     j = np.where(np.abs(centre[k - 1] - t) <= np.abs(centre[np.minimum(k, M - 2)] - t), k - 1, np.minimum(k, M - 2))
     close = np.abs(centre[j] - t) <= half
-    want_limit = np.where(close, np.minimum(tol[block], np.minimum(tol[:-1], tol[1:])[j]), tol[block])
-    want_key = np.where(close, j, np.where(~arc[block], np.clip(block, 0, M - 2), M - 1 + block))
+    at_stop = close & (stopped[j] if with_stops else False)
+    own = np.where(at_stop, np.where(t < centre[j], j, j + 1), block)  # the block whose tolerance and key
+    close = close & ~at_stop
+    want_limit = np.where(close, np.minimum(tol[own], np.minimum(tol[:-1], tol[1:])[j]), tol[own])
+    want_key = np.where(close, j, np.where(~arc[own], np.clip(own, 0, M - 2), M - 1 + own))
+    assert at_stop.any() == with_stops
     for redo, slack in ((np.zeros(0, bool), 0.0), (rng.random(2 * M - 1) < 0.5, 0.0), (np.zeros(0, bool), 3e-3)):
         # slack [mm]: the profile's own rounding, added to the bound (_fir_verify.profile_rounding)
         want_over = dist > (want_limit * (1 + 1e-9) + 1e-9) + slack
@@ -414,7 +421,7 @@ def test_sample_charges_match_the_vectorised_rule():
         kept = np.ones(t.size, bool) if redo.size == 0 else redo[want_key]
         worst = np.full(2 * M - 1, -np.inf)
         near_max, over, o_dist, o_limit, o_key, o_keep = charge_samples(t, d2, block, centre, tol, arc, half, redo, worst,
-                                                                         slack)
+                                                                         slack, stopped)
         np.testing.assert_array_equal(over, np.flatnonzero(want_over))
         np.testing.assert_array_equal(o_dist, dist[want_over])
         np.testing.assert_array_equal(o_limit, want_limit[want_over])

@@ -133,3 +133,22 @@ def test_the_corner_search_finds_a_vertex_passed_while_accelerating():
     vertices, centre = np.asarray(plan.vertices), np.asarray(plan.corner_times)
     assert vertex_distances(pos, vertices, centre, 0.045)[0] <= 1e-8
     assert float(corner_distances(plan.position, vertices, centre, 0.045)[0]) <= 1e-8
+
+
+@pytest.mark.parametrize("text", [
+    "G21 G90 G17 F9000\nG61\nG1 X10\nG64 P0.01\nG2 X20 Y0 R5\nG1 X30\nM30\n",
+    "G21 G90 G17 F6000\nG61\nG1 X10\nG1 X10.2 Y0.3\nG64 P0.01\nG3 X12 Y2 R2\nG61\nG1 X12 Y5\nM30\n",
+])
+def test_an_arc_after_g61_lines_is_held_to_its_own_tolerance(text):
+    """``G61`` lines (tolerance 0), then ``G64 P0.01`` and an arc: the corner between them stops
+    exactly, and the arc's start, just after the stop, was held to the tolerance of the block whose
+    input the sampling window was centred on -- the line before the stop's gap, 0 -- so the arc was
+    slowed 2 % a round without end (``ConvergenceError``; 3 of the sweep's G-code programs). By an
+    exact stop a sample is on its block on that side of the corner instant (the motion on each side
+    of a stop is that block's alone), and takes that block's tolerance."""
+    from research.paths.gcode import parse_gcode
+
+    prog = parse_gcode(text)
+    tol = np.asarray(prog.block_tolerance)
+    plan = plan_fir(prog.blocks, prog.block_feeds, [0.02, 0.01], tol, pauses=prog.block_pauses)
+    _check(plan, float(np.max(prog.block_feeds)), tol)
