@@ -10,14 +10,18 @@ same array is a transfer (0.15 ms, nothing kept).
 from __future__ import annotations
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
 
 def device_array(x) -> Array:
-    """``x`` (array-like) as a float64 JAX array by a transfer, not a staged conversion.
+    """``x`` as a float64 JAX array: a NumPy array (or array-like) by a transfer, not a staged
+    conversion; a JAX array or tracer as it is (``jnp.asarray``, no copy at float64).
 
     On the CPU the result may share the memory of a 64-byte aligned ``x``: pass arrays the caller
-    does not change afterwards (the planner's own results)."""
+    does not change afterwards (the planner's own results, a trajectory's samples)."""
+    if isinstance(x, jax.Array):
+        return jnp.asarray(x, dtype=jnp.float64)
     a = np.asarray(x, dtype=np.float64)  # (np.ascontiguousarray would make a 0-d array 1-d)
     return jax.device_put(a if a.flags.c_contiguous else np.ascontiguousarray(a))

@@ -34,6 +34,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from research._device import device_array
 from research.drives._discretize import HOLDS, continuous_system, discretize
 from research.drives._friction import coulomb_sign, smooth_sign
 from research.drives._modes import FlexibleMode
@@ -138,14 +139,6 @@ def _layout(model) -> dict:
     return _LAYOUTS[key]
 
 
-def _to_device(x) -> Array:
-    """``x`` as a float64 JAX array; a NumPy array is shared rather than copied where JAX allows it
-    (``jax.device_put`` on CPU aliases 64-byte aligned host memory)."""
-    if isinstance(x, np.ndarray) and x.dtype == np.float64:
-        return jax.device_put(x)
-    return jnp.asarray(x, dtype=jnp.float64)
-
-
 def _per_axis(name, value, axes, kind):
     """Broadcast one object to all axes, or check a sequence has one per axis."""
     if isinstance(value, (list, tuple)):
@@ -215,13 +208,13 @@ def simulate(
             check_sample_period(f"the drive model of axis {name!r}", poles, Ts)
     if not (isinstance(friction_width, jax.core.Tracer) or float(friction_width) > 0):
         raise ParameterError(f"friction_width must be > 0 mm/s, got {friction_width!r}")
-    q, v, a, j = (_to_device(x) for x in (trajectory.q, trajectory.v, trajectory.a, trajectory.j))
+    q, v, a, j = (device_array(x) for x in (trajectory.q, trajectory.v, trajectory.a, trajectory.j))
     x, xd, control, deflection, fr = _core(
         stacked, stacked_modes, q, v, a, j, jnp.asarray(friction_width, dtype=jnp.float64),
         sample_period=Ts, hold=hold, friction=friction, has_modes=has_modes, **_layout(models[0]),
     )
     return DriveResponse(
-        t=_to_device(trajectory.t), reference=q, position=x, velocity=xd,
+        t=device_array(trajectory.t), reference=q, position=x, velocity=xd,
         control=control, deflection=deflection, friction=fr,
         axes=tuple(axes), sample_period=Ts,
     )

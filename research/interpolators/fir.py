@@ -174,10 +174,8 @@ class FIRPlan(eqx.Module):
         arrays = (pos.breaks, pos.coeffs, self.corner_times, self.delays, self.vertices)
         if any(isinstance(x, jax.core.Tracer) for x in arrays):
             return corner_distances(pos, self.vertices, self.corner_times, 0.5 * jnp.sum(self.delays))
-        concrete = NumpyPiecewise(np.asarray(pos.breaks, dtype=np.float64), np.asarray(pos.coeffs, dtype=np.float64))
-        return device_array(vertex_distances(concrete, np.asarray(self.vertices, dtype=np.float64),
-                                            np.asarray(self.corner_times, dtype=np.float64),
-                                            0.5 * float(np.sum(np.asarray(self.delays)))))
+        return device_array(vertex_distances(pos.numpy_evaluator(), np.asarray(self.vertices),
+                                            np.asarray(self.corner_times), 0.5 * float(np.sum(self.delays))))
 
     def trajectory(self, sample_period: float = 1e-3) -> Trajectory:
         """Sample the exact profile at the interpolation period ``Ts`` [s]."""
@@ -572,8 +570,8 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         # the profile's inputs, not its coefficients (the same arrays when rebuilt: ``settle``'s release)
         frac, piece_tv, _, _, gaps = timing_gaps(*state[6])
         profile = _fir_profile.ProfileInputs(table, frac, piece_tv, gaps, d_np, tp.start, np.array(state[4]))
-    return FIRPlan(starts, pulse, overlaps, feeds, delays if traced else device_array(delays), profile, centre,
-                   device_array(tp.vertices), float(deviation), int(rounds), tp.axes)
+    return FIRPlan(starts, pulse, overlaps, feeds, device_array(delays), profile, centre, device_array(tp.vertices),
+                   float(deviation), int(rounds), tp.axes)
 
 
 def plan_fir_sweep(path, feed, delays, tolerances, *, limits: AxisLimits | None = None,
