@@ -116,6 +116,35 @@ class PulseTable:
             f[self.arc_pieces] *= arc_rel
         return np.where(real, frac, 0.0), np.where(real, f, 1.0)
 
+    def block_pieces(self, ks: np.ndarray, gaps: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """``(idx, owner)``: the pieces of blocks ``ks`` (ascending ``(K,)``), each block's motion
+        pieces then (with ``gaps``) its gap piece (the path's last block has none), and the
+        position in ``ks`` of each piece's block."""
+        ks = np.asarray(ks, dtype=np.int64)
+        first = self.first_motion[ks]
+        counts = self.last_motion[ks] - first + 1 + ((ks < self.n_blocks - 1) if gaps else 0)
+        owner = np.repeat(np.arange(ks.size), counts)
+        return first[owner] + np.arange(owner.size) - np.repeat(np.cumsum(counts) - counts, counts), owner
+
+    def pieces_at(self, idx: np.ndarray, head: np.ndarray, tail: np.ndarray, factor: np.ndarray,
+                  arc_rel: np.ndarray | None = None, g: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`pieces` of the real pieces ``idx`` only (the same floats), with the block feed
+        factors times ``g`` ``(M,)`` where given (``pieces(head, tail, factor * g[:, None])``):
+        a few blocks' pieces without the whole path's."""
+        idx = np.asarray(idx, dtype=np.int64)
+        role, blk = self.role[idx], self.block[idx]
+        frac = self.fraction[idx]  # a copy (fancy index)
+        for k, share in ((0, lambda b: head[b]), (1, lambda b: 1.0 - head[b] - tail[b]), (2, lambda b: tail[b])):
+            at = role == k
+            frac[at] = share(blk[at])
+        column = np.where(role < 0, 1, role)
+        f = factor[blk, column] * g[blk] if g is not None else factor[blk, column]
+        if arc_rel is not None and self.arc_pieces.size:
+            pos = np.minimum(np.searchsorted(self.arc_pieces, idx), self.arc_pieces.size - 1)
+            arc = self.arc_pieces[pos] == idx
+            f[arc] *= arc_rel[pos[arc]]
+        return frac, f
+
     @cached_property
     def _roles(self):
         """Index arrays of :meth:`pieces` (the head, body and tail pieces of lines and their blocks;

@@ -29,7 +29,10 @@ planned). Where a corner's window breaks one:
 
 Convergence bound: a call of phase 1 builds at most ``2 + BISECTION_STEPS + HALVINGS`` exact-stop
 profiles, of the blocks it checks (then of those it bisects), and costs one round; it runs only in
-rounds that find a block not checked before, so at most ``M`` times (once on the benchmark paths).
+rounds that find a block not checked before, so at most ``M`` times (once on the benchmark paths);
+within such a round the slow-down is followed along the chain (``_fir_limit_spread``: the blocks
+whose corner windows the slowed blocks' feed steps break are checked in the same round, at most
+``M`` steps in all), so a chain of blocks slowed one after another costs one round, not ``N / 2``.
 Phase 2 takes at most ``BISECTION_STEPS + 2`` rounds for the bisections, then exact-stop rounds for
 corners still above a limit, each of which adds at least one exact stop (the profile away from a
 corner set to ``T_k = 0`` is unchanged up to a shift), so at most ``M - 1`` more (0-1 on the
@@ -201,11 +204,7 @@ def _built_ratios(table, blocks, fraction, piece_factor, lengths, feeds, start, 
     ks = np.flatnonzero(blocks)
     if ks.size == 0:
         return out
-    # block k's pieces: its motion pieces, then its gap piece (all but the path's last block)
-    first = table.first_motion[ks]
-    counts = table.last_motion[ks] - first + 1 + (ks < M - 1)
-    sub = np.repeat(np.arange(ks.size), counts)
-    idx = first[sub] + np.arange(sub.size) - np.repeat(np.cumsum(counts) - counts, counts)
+    idx, sub = table.block_pieces(ks)  # block k's motion pieces, then its gap piece (all but the path's last block)
     blk = table.block[idx]
     piece_tv = lengths[blk] / (feeds[blk] * piece_factor[idx])  # eq 5, the operations of _fir_profile.timing
     total_delay = float(np.sum(delays))

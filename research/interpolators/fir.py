@@ -81,6 +81,7 @@ from research.interpolators._fir_limits import (
     feed_caps,
     hold_block_limits,
 )
+from research.interpolators._fir_limit_spread import CornerWindows, spread_slow_down
 from research.interpolators._fir_lookahead import look_ahead
 from research.interpolators import _fir_pauses, _fir_profile
 from research.interpolators._fir_overlap import overlap_time
@@ -277,6 +278,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     pad_b = Mp - M  # per-block inputs padded to the bucketed block count (one compiled JAX kernel)
     motion_ends_np = np.stack([np.pad(table.first_motion, (0, pad_b)), np.pad(table.last_motion, (0, pad_b))])
     tangents_np = np.stack([np.pad(t_in, ((0, pad_b), (0, 0))), np.pad(t_out, ((0, pad_b), (0, 0)))])
+    windows = CornerWindows(table, tp.lengths, F_np, t_in, t_out, tv_np, d_np, limits) if limits is not None else None
 
     def timing(factor, head, tail, full, shrink, others, arc_rel, top=True):
         """Piece shares, pulse lengths, block top feeds (None unless ``top``) and overlaps of a
@@ -397,12 +399,21 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         checks.adopt(last_check)  # from another candidate's last complete check: redone where they differ
         repairs = Repairs(full, head, tail, tv_np, tb_np, F_np, tp.lengths, Td_np, d_np.size, cum_np)
 
-        def alone(g, blocks):  # ``_fir_limits`` phase 1: the own peaks of ``blocks`` (every corner an exact stop)
-            frac, piece_factor = table.pieces(head, tail, factor * g[:, None], arc_rel)
-            return alone_block_ratios(table, blocks, frac, piece_factor, lengths_np, feeds_np, tp.start, d_np, limits)
+        def hold(fac, which):
+            """``_fir_limits`` phase 1 at feed factors ``fac``: multipliers under which the blocks
+            ``which`` alone (every corner an exact stop) keep the limits."""
+            def alone(g, blocks):  # their pieces only (the others are not read)
+                idx, _ = table.block_pieces(np.flatnonzero(blocks))
+                frac, piece_factor = np.zeros(table.block.size), np.ones(table.block.size)
+                frac[idx], piece_factor[idx] = table.pieces_at(idx, head, tail, fac, arc_rel, g)
+                return alone_block_ratios(table, blocks, frac, piece_factor, lengths_np, feeds_np, tp.start, d_np, limits)
+            return hold_block_limits(alone, safe_feed / (F_np * fac.max(axis=1)), which)
+
+        def breaking(fac, corners):  # the blocks in the corners' windows above a limit at ``fac`` (_fir_limit_spread)
+            return windows.breaking(corners, head, tail, fac, arc_rel, full, shrink * bisection.scale, others)
 
         if limits is not None and M == 1:
-            g = hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), np.ones(1, dtype=bool))
+            g = hold(factor, np.ones(1, dtype=bool))
             factor, repaired = factor * g[:, None], bool(g[0] < 1.0)
         K = M // _PREFIX_SHARE
         if refine and several and K >= _PREFIX_MIN_BLOCKS:
@@ -427,7 +438,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                     ratios, own = round_peaks(pos_np, starts_np, pulse_np, state[1], *state[6][:3], state[6][6])
                     bad, own_bad = ratios > 1.0 + LIMIT_RTOL, own > 1.0 + LIMIT_RTOL
                     near = (blocks_in_windows(bad, starts_np, pulse_np, Td_np) | own_bad) & ~checked
-                    g = hold_block_limits(alone, safe_feed / (F_np * factor.max(axis=1)), near) if near.any() else 1.0
+                    g = hold(factor, near) if near.any() else 1.0
                     checked |= near
                     if bad.any() and not near.any() and np.all(bisection.scale[bad] == 0.0):
                         # exact stops still above a limit (blocks checked alone before, in other
@@ -437,6 +448,8 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                         g = np.where(own_bad, 0.98 / np.maximum(own, 1.0), g)
                     if np.any(g < 1.0):  # slowed blocks: check the corners again before bisecting
                         factor = factor * np.reshape(g, (-1, 1))  # new array: the state's inputs are the old
+                        # their feed steps' corners at once, along the chain (not one block a round)
+                        factor = spread_slow_down(np.reshape(g, -1) < 1.0, checked, factor, breaking, hold)
                         too_fast = slowed = True
                     else:
                         too_fast = bisection.update(ratios)

@@ -1,0 +1,149 @@
+"""A slowed block's feed step followed along the chain within one limit-holding round
+(``_fir_limit_spread``), against independent computations: the whole path's profile and its
+corner windows, the pulse table's own :meth:`PulseTable.pieces`, and closed-form feeds."""
+
+import time
+
+import numpy as np
+import pytest
+
+from research.interpolators import _fir_profile, plan_fir
+from research.interpolators._fir_limit_spread import CornerWindows
+from research.interpolators._fir_limits import LIMIT_RTOL, THRESHOLD_GUARD, blocks_in_windows, corner_limit_ratios
+from research.interpolators._fir_piece_peaks import PiecePeaks
+from research.limits import AxisLimits
+from research.metrics import within_limits
+from research.paths import Polyline
+from research.paths.library import random_program
+from research.paths.toolpath import ToolPath
+from research.piecewise import NumpyPiecewise
+
+from ._paths import turning_path
+
+
+def _plan_inputs(tp, rng):
+    """Random plan inputs of ``tp`` as the rounds hold them: feeds, line shares, feed factors (a few
+    blocks slowed hard: the feed steps this module follows), sub-arc factors, full-overlap flags,
+    overlap multipliers and tolerance shares."""
+    from research.interpolators.fir import _pulse_table
+
+    table, M = _pulse_table(tp), tp.n_blocks
+    F = rng.uniform(50.0, 300.0, M)
+    head, tail = rng.uniform(0.0, 0.4, M), rng.uniform(0.0, 0.4, M)
+    factor = rng.uniform(0.5, 1.0, (M, 3)) * np.where(rng.random(M) < 0.2, 0.1, 1.0)[:, None]
+    arc_rel = rng.uniform(0.5, 1.0, table.arc_pieces.size) if table.arc_pieces.size else None
+    full = rng.random(M - 1) < 0.5
+    shrink = np.where(rng.random(M - 1) < 0.2, rng.uniform(0.0, 1.0, M - 1), 1.0)
+    others = rng.uniform(0.0, 0.02, M - 1)
+    tol = rng.uniform(0.01, 0.1, M - 1)
+    return table, F, head, tail, factor, arc_rel, full, shrink, others, tol
+
+
+def _whole_windows(tp, table, F, head, tail, factor, arc_rel, full, shrink, others, tol, d, limits):
+    """``(M - 1,)`` corner-window ratios and the starts and pulse lengths of the whole path's
+    profile, built as ``plan_fir``'s ``schedule`` builds it (every piece, every corner)."""
+    M, Mp = tp.n_blocks, table.m_pad
+    t_in, t_out = tp.tangents()
+    pad = Mp - M
+    frac, pf = table.pieces(head, tail, factor, arc_rel)
+    lengths = np.concatenate([tp.lengths, np.ones(pad + 1)])
+    feeds = np.concatenate([F, np.ones(pad + 1)])
+    ends = np.stack([np.pad(table.first_motion, (0, pad)), np.pad(table.last_motion, (0, pad))])
+    tangents = np.stack([np.pad(t_in, ((0, pad), (0, 0))), np.pad(t_out, ((0, pad), (0, 0)))])
+    piece_tv, overlaps = _fir_profile.timing(lengths, feeds, table.block, pf, ends, tangents, full, shrink, others, tol, d)
+    Td = float(np.sum(d))
+    gaps = np.concatenate([Td - overlaps, np.zeros(pad + 1)])
+    s, e, breaks, coeffs, _ = _fir_profile.profile(tp.start, table.geo, table.block, table.gap, frac, piece_tv, gaps, d)
+    peaks = PiecePeaks(NumpyPiecewise(breaks, coeffs), limits)
+    return corner_limit_ratios(peaks, s[:M], e[:M] - s[:M], Td), s[:M], e[:M] - s[:M]
+
+
+@pytest.mark.parametrize("delays", [(0.06, 0.03), (0.05, 0.03, 0.01)])
+def test_corner_windows_decide_as_the_whole_profile(delays):
+    """Seeded random programs (lines of 0.2-12 mm, whose windows reach over several blocks; lines
+    and arcs) with random plan inputs: the blocks that :meth:`CornerWindows.breaking` flags for a
+    random set of corners are those of ``blocks_in_windows`` over the same corners' windows of the
+    whole path's profile whose ratio is above ``1 + LIMIT_RTOL + THRESHOLD_GUARD``. Limits are set
+    so that some windows break and some do not."""
+    d = np.array(delays)
+    Td = float(np.sum(d))
+    thr = 1.0 + LIMIT_RTOL + THRESHOLD_GUARD
+    broke = kept = 0
+    for seed in range(10):
+        rng = np.random.default_rng(700 + seed)
+        if seed % 2:
+            tp = random_program(rng, arcs=True)
+        else:
+            tp = ToolPath.from_polyline(turning_path(80 + seed, 60, (0.2, 12.0), 40.0))
+        M = tp.n_blocks
+        table, F, head, tail, factor, arc_rel, full, shrink, others, tol = _plan_inputs(tp, rng)
+        limits = AxisLimits.fir_envelope(tp.dim, float(rng.uniform(100.0, 250.0)), d)
+        ratios, starts, pulse = _whole_windows(tp, table, F, head, tail, factor, arc_rel, full, shrink, others, tol, d,
+                                               limits)
+        assert not np.any(np.abs(ratios - thr) < 1e-9)  # no window within rounding of the threshold
+        t_in, t_out = tp.tangents()
+        windows = CornerWindows(table, tp.lengths, F, t_in, t_out, tol, d, limits)
+        for _ in range(4):
+            corners = np.flatnonzero(rng.random(M - 1) < rng.choice([0.05, 0.3, 1.0]))
+            got = windows.breaking(corners, head, tail, factor, arc_rel, full, shrink, others)
+            flags = np.zeros(M - 1, dtype=bool)
+            flags[corners] = ratios[corners] > thr
+            np.testing.assert_array_equal(got, blocks_in_windows(flags, starts, pulse, Td))
+            broke += int(flags.sum())
+            kept += int(corners.size - flags.sum())
+    assert broke > 20 and kept > 20
+
+
+def test_pieces_at_are_the_pieces_of_the_whole_table():
+    """``PulseTable.pieces_at`` (a few blocks' pieces, with multipliers ``g``) against
+    ``PulseTable.pieces`` of the whole table at ``factor * g``: the same floats."""
+    from research.interpolators.fir import _pulse_table
+
+    for seed in range(10):
+        rng = np.random.default_rng(900 + seed)
+        tp = random_program(rng, arcs=bool(seed % 2))
+        table, M = _pulse_table(tp), tp.n_blocks
+        head, tail = rng.uniform(0.0, 0.4, M), rng.uniform(0.0, 0.4, M)
+        factor, g = rng.uniform(0.2, 1.0, (M, 3)), rng.uniform(0.3, 1.0, M)
+        arc_rel = rng.uniform(0.5, 1.0, table.arc_pieces.size) if table.arc_pieces.size else None
+        frac, pf = table.pieces(head, tail, factor * g[:, None], arc_rel)
+        idx, owner = table.block_pieces(np.flatnonzero(rng.random(M) < 0.5))
+        got_frac, got_pf = table.pieces_at(idx, head, tail, factor, arc_rel, g)
+        np.testing.assert_array_equal(got_frac, frac[idx])
+        np.testing.assert_array_equal(got_pf, pf[idx])
+
+
+def test_limits_below_the_envelope_on_a_line_cut_into_blocks_take_few_rounds_regression():
+    """Regression: a 1,000 mm line cut into 300 collinear blocks, under limits below the FIR
+    envelope (jerk 1e4 mm/s^3 with T1 T2 = 2e-4 s^2: every block alone at most 2 mm/s, Sencer 2015
+    §2.1, a pulse peaks at F / (T1 T2)), was slowed one block a round from each end: 151 rounds
+    (2,000 blocks: 1,001 rounds, 4.2 s). Now the slow-down follows the chain within the round: a
+    few rounds, the unsplit line's cycle time L / F + T_d at F = 2 mm/s (the closed-form feed), and
+    the limits held on the sampled trajectory."""
+    lim = AxisLimits.uniform(2, velocity=12.2, acceleration=500.0, jerk=1e4)
+    d = (0.02, 0.01)
+    x = np.linspace(0.0, 1000.0, 301)
+    plan = plan_fir(Polyline(np.column_stack([x, 0.0 * x])), 12.2, d, 1e-4, limits=lim)
+    assert plan.rounds <= 3
+    feed = min(12.2, 500.0 * d[0], 1e4 * d[0] * d[1])  # = 2 mm/s, the jerk's
+    assert float(plan.cycle_time) == pytest.approx(1000.0 / feed + sum(d), rel=1e-9)
+    assert within_limits(plan.trajectory(1e-3), lim)
+
+
+def test_slow_down_along_a_chain_costs_linear_time():
+    """The same chain at 400 and 1,600 blocks: planning time (best of two, process time) grows at
+    most 8x for 4x the blocks (it grew 16x, one block a round: N / 2 rounds of O(N) each)."""
+    lim = AxisLimits.uniform(2, velocity=12.2, acceleration=500.0, jerk=1e4)
+
+    def cost(n):
+        x = np.linspace(0.0, 1000.0, n + 1)
+        path = Polyline(np.column_stack([x, 0.0 * x]))
+        best = np.inf
+        for _ in range(2):
+            t = time.process_time()
+            plan_fir(path, 12.2, (0.02, 0.01), 1e-4, limits=lim)
+            best = min(best, time.process_time() - t)
+        return best
+
+    cost(50)  # compiled kernels warm
+    assert cost(1600) < 8.0 * cost(400)
