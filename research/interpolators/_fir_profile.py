@@ -12,6 +12,17 @@ has the same arrays as the JAX one up to rounding). The moving average of a piec
 merge of the breaks ``b`` and ``b + T``, each new piece two Taylor re-centrings
 (:func:`_moving_average`), as ``research.piecewise.PiecewisePolynomial.moving_average``.
 
+Times and integrals as double-doubles: the breaks are absolute times, and after hours of motion
+``b + T`` rounds by ~1e-11 s; a local time or piece length taken from rounded absolute breaks moved
+every piece's value, and the running integrals (``C`` and the position) lost the digits of a large
+displacement, so the profile drifted off the path (6.4 um at the end of a 5.2 h plan; the checks
+took the drift as slack). Here the breaks carry their rests (``lo``: the input's running sum by
+two-sums, each merged ``b + T`` by one), lengths and local times are differences of breaks first
+(:func:`_between`), and ``C``'s constants and the position's are summed as double-doubles
+(:func:`_add`); the returned breaks are the rounded ones (a local time off by their rest,
+< 1e-11 s, does not accumulate). The same 5.2 h plan ends 8.5e-14 mm from the path's end. The
+JAX form keeps plain sums (its plans are short: gradients of one plan).
+
 JAX stays the differentiable form: ``plan_fir`` rebuilds the chosen plan with it when an input is
 a tracer (``jax.grad`` / ``jax.jacfwd``).
 """
@@ -166,17 +177,17 @@ def profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
     through two filters compiles the forms of 1 and 2 rows, a path with arcs (``D = 6``) of 6 and 7."""
     delays = np.ascontiguousarray(delays, dtype=np.float64)
     block, gaps = np.ascontiguousarray(block), np.ascontiguousarray(gaps, dtype=np.float64)
-    breaks, coeffs = _input_pulses(np.ascontiguousarray(geo, dtype=np.float64), block, np.ascontiguousarray(gap),
-                                   np.ascontiguousarray(fraction, dtype=np.float64),
-                                   np.ascontiguousarray(piece_tv, dtype=np.float64), gaps)
-    vb, vc = breaks, coeffs
+    breaks, lo, coeffs = _input_pulses(np.ascontiguousarray(geo, dtype=np.float64), block, np.ascontiguousarray(gap),
+                                       np.ascontiguousarray(fraction, dtype=np.float64),
+                                       np.ascontiguousarray(piece_tv, dtype=np.float64), gaps)
+    vb, vl, vc = breaks, lo, coeffs
     for k in range(delays.size - 1):
-        vb, vc = _moving_average(vb, vc, delays[k])
+        vb, vl, vc = _moving_average(vb, vl, vc, delays[k])
     # the last filter integrated as it goes: the position, closed by a rest piece of zero length (as
     # the JAX form's trailing empty piece): the right-hand limit at the end time is the machine at
     # rest (v = a = j = 0), not the last decelerating piece's left limit (sampled trajectories end
     # at rest, ``Trajectory.from_piecewise``)
-    pos_breaks, position = _filter(vb, vc, delays[-1], start, True)
+    pos_breaks, _, position = _filter(vb, vl, vc, delays[-1], start, True)
     Td = 0.0
     for d in delays.tolist():  # summed in order, as the compiled build did
         Td += d
@@ -195,17 +206,31 @@ def _over(x, m):
     return x / m
 
 
+@numba.njit(inline="always", **_OPTIONS)
+def _add(hi, lo, a, s):
+    """``(hi[a], lo[a]) += s`` as a double-double (two-sum, renormalized)."""
+    x = hi[a]
+    t = x + s
+    z = t - x
+    r = lo[a] + ((x - (t - z)) + (s - z))
+    hi[a] = t + r
+    lo[a] = r - (hi[a] - t)
+
+
 @numba.njit(**_OPTIONS)
-def _constants(breaks, coeffs, D):
-    """Constant terms ``(K + 1, A)`` of ``C``, the integral of the function from ``breaks[0]``
+def _constants(breaks, lo, coeffs, D):
+    """Constant terms of ``C``, the integral of the function from ``breaks[0]``
     (``PiecewisePolynomial.antiderivative``; the other coefficients of piece ``i`` are
-    ``coeffs[i, m] / (m + 1)``), and as row ``K`` its end value (Horner on the last piece)."""
+    ``coeffs[i, m] / (m + 1)``), and as row ``K`` its end value, as double-doubles ``(hi, lo)``
+    ``(K + 1, A)`` each: the moving average takes differences of two of them (``C(t) - C(t - T)``),
+    which at a large displacement from the start would lose the digits a rounded sum drops (the
+    breaks are ``breaks + lo``, :func:`_between`)."""
     K, _, A = coeffs.shape
-    out = np.empty((K + 1, A))
-    acc = np.zeros(A)
+    c_hi, c_lo = np.empty((K + 1, A)), np.empty((K + 1, A))
+    acc, rest = np.zeros(A), np.zeros(A)
     hp = np.empty(D)
     for i in range(K):
-        h = breaks[i + 1] - breaks[i]
+        h = _between(breaks, lo, 0.0, 0, i + 1, 0, i)
         hp[0] = h
         for m in range(1, D):
             hp[m] = hp[m - 1] * h  # h^(m + 1) by products (a C pow costs tens of ns)
@@ -213,24 +238,21 @@ def _constants(breaks, coeffs, D):
             s = 0.0
             for m in range(D):
                 s += _over(coeffs[i, m, a], m + 1) * hp[m]
-            acc[a] += s
-            out[i, a] = (acc[a] - s) + 0.0
-    h = breaks[K] - breaks[K - 1]
+            c_hi[i, a], c_lo[i, a] = acc[a], rest[a]
+            _add(acc, rest, a, s)
     for a in range(A):
-        v = _over(coeffs[K - 1, D - 1, a], D)
-        for m in range(D - 1, 0, -1):
-            v = v * h + _over(coeffs[K - 1, m - 1, a], m)
-        out[K, a] = v * h + out[K - 1, a]
-    return out
+        c_hi[K, a], c_lo[K, a] = acc[a], rest[a]
+    return c_hi, c_lo
 
 
 @numba.njit(inline="always", **_OPTIONS)
-def _shifted_c(coeffs, consts, k, a, delta, c, D):
-    """Piece ``k`` of ``C`` on axis ``a`` (ascending coefficients ``(D + 1,)`` into ``c``; piece ``K``
-    the end value held after the last break), re-centred by ``delta``: the Taylor shift of
-    ``research.piecewise._taylor_shift``."""
+def _shifted_c(coeffs, k, a, delta, c, D):
+    """Piece ``k`` of ``C`` on axis ``a`` less its constant term (ascending coefficients ``(D + 1,)``
+    into ``c``; piece ``K`` the end value held after the last break, all 0), re-centred by
+    ``delta``: the Taylor shift of ``research.piecewise._taylor_shift``. ``c[0]`` is then the
+    integral from the piece's break to ``delta``; the constant (:func:`_constants`) is added apart."""
     K = coeffs.shape[0]
-    c[0] = consts[k, a]
+    c[0] = 0.0
     for m in range(D):
         c[m + 1] = _over(coeffs[k, m, a], m + 1) if k < K else 0.0
     for i in range(D):
@@ -238,13 +260,14 @@ def _shifted_c(coeffs, consts, k, a, delta, c, D):
             c[m] = c[m] + delta * c[m + 1]
 
 
-def _moving_average(breaks, coeffs, delay):
+def _moving_average(breaks, lo, coeffs, delay):
     """``PiecewisePolynomial.moving_average`` (Sencer 2015 eq 1) on concrete arrays: breaks ``(K' + 1,)``
-    and coefficients ``(K', D + 1, A)`` of ``(C(t) - C(t - T)) / T`` (:func:`_filter_rows`)."""
-    return _filter(breaks, coeffs, delay, np.zeros(coeffs.shape[2]), False)
+    (and their low parts, :func:`_between`) and coefficients ``(K', D + 1, A)`` of ``(C(t) - C(t - T))
+    / T`` (:func:`_filter_rows`)."""
+    return _filter(breaks, lo, coeffs, delay, np.zeros(coeffs.shape[2]), False)
 
 
-def _filter(breaks, coeffs, delay, initial, integrate: bool):
+def _filter(breaks, lo, coeffs, delay, initial, integrate: bool):
     """:func:`_filter_rows` through the compiled form of its row count ``D = coeffs.shape[1]``.
 
     ``D`` is a constant in the code of :data:`_ROWS`' functions for the counts the planner meets
@@ -253,44 +276,44 @@ def _filter(breaks, coeffs, delay, initial, integrate: bool):
     other count runs the generic form. Chosen here, not in compiled code, each is compiled on its
     first use only (a compiled choice compiles every branch: 38 s of a fresh install's first plan)."""
     rows = _ROWS.get(coeffs.shape[1], _rows_any)
-    return rows(breaks, coeffs, delay, np.ascontiguousarray(initial, dtype=np.float64), integrate)
+    return rows(breaks, lo, coeffs, delay, np.ascontiguousarray(initial, dtype=np.float64), integrate)
 
 
 # one function per row count, written out: Numba caches a compiled function by its source, and the
 # constant in each one's source is what unrolls its row loops
 @numba.njit(**_OPTIONS)
-def _rows_any(breaks, coeffs, delay, initial, integrate):
-    return _filter_rows(breaks, coeffs, delay, initial, integrate, coeffs.shape[1])
+def _rows_any(breaks, lo, coeffs, delay, initial, integrate):
+    return _filter_rows(breaks, lo, coeffs, delay, initial, integrate, coeffs.shape[1])
 
 
 @numba.njit(**_OPTIONS)
-def _rows1(breaks, coeffs, delay, initial, integrate):
-    return _filter_rows(breaks, coeffs, delay, initial, integrate, 1)
+def _rows1(breaks, lo, coeffs, delay, initial, integrate):
+    return _filter_rows(breaks, lo, coeffs, delay, initial, integrate, 1)
 
 
 @numba.njit(**_OPTIONS)
-def _rows2(breaks, coeffs, delay, initial, integrate):
-    return _filter_rows(breaks, coeffs, delay, initial, integrate, 2)
+def _rows2(breaks, lo, coeffs, delay, initial, integrate):
+    return _filter_rows(breaks, lo, coeffs, delay, initial, integrate, 2)
 
 
 @numba.njit(**_OPTIONS)
-def _rows3(breaks, coeffs, delay, initial, integrate):
-    return _filter_rows(breaks, coeffs, delay, initial, integrate, 3)
+def _rows3(breaks, lo, coeffs, delay, initial, integrate):
+    return _filter_rows(breaks, lo, coeffs, delay, initial, integrate, 3)
 
 
 @numba.njit(**_OPTIONS)
-def _rows6(breaks, coeffs, delay, initial, integrate):
-    return _filter_rows(breaks, coeffs, delay, initial, integrate, 6)
+def _rows6(breaks, lo, coeffs, delay, initial, integrate):
+    return _filter_rows(breaks, lo, coeffs, delay, initial, integrate, 6)
 
 
 @numba.njit(**_OPTIONS)
-def _rows7(breaks, coeffs, delay, initial, integrate):
-    return _filter_rows(breaks, coeffs, delay, initial, integrate, 7)
+def _rows7(breaks, lo, coeffs, delay, initial, integrate):
+    return _filter_rows(breaks, lo, coeffs, delay, initial, integrate, 7)
 
 
 @numba.njit(**_OPTIONS)
-def _rows8(breaks, coeffs, delay, initial, integrate):
-    return _filter_rows(breaks, coeffs, delay, initial, integrate, 8)
+def _rows8(breaks, lo, coeffs, delay, initial, integrate):
+    return _filter_rows(breaks, lo, coeffs, delay, initial, integrate, 8)
 
 
 _ROWS = {1: _rows1, 2: _rows2, 3: _rows3, 6: _rows6, 7: _rows7, 8: _rows8}
@@ -305,8 +328,33 @@ def _merge_step(breaks, delay, i, j, K):
     return breaks[j] + delay, i, j + 1
 
 
+@numba.njit(inline="always", **_OPTIONS)
+def _between(breaks, lo, delay, xs, x, ys, y):
+    """``(b_x + xs T) - (b_y + ys T)`` for series flags ``xs, ys`` in {0, 1}, with the breaks
+    ``b = breaks + lo`` (a double-double: ``breaks`` rounded, ``lo`` the rest): the difference of the
+    rounded breaks first (exact where they lie within a factor 2, Sterbenz), then of the rests,
+    then the delays. A piece's length and local time then carry no rounding of its absolute
+    time: after hours of motion ``b + T`` rounds by ~1e-11 s, and a local time off by that moves
+    every piece's value (hours of pieces: micrometres of drift at the path's end)."""
+    d = (breaks[x] - breaks[y]) + (lo[x] - lo[y])
+    if xs == ys:
+        return d
+    return d + delay if xs > ys else d - delay
+
+
+@numba.njit(inline="always", **_OPTIONS)
+def _rest(breaks, lo, delay, src, idx, b):
+    """The low part of the merged break ``b`` (rounded): ``breaks[idx] + lo[idx]``, plus ``T`` for
+    the series of ``C(t - T)`` (``src`` 1), less ``b`` (two-sum: exact)."""
+    if src == 0:
+        return lo[idx]
+    x = breaks[idx]
+    z = b - x
+    return ((x - (b - z)) + (delay - z)) + lo[idx]
+
+
 @numba.njit(**_OPTIONS)
-def _filter_rows(breaks, coeffs, delay, initial, integrate, D):
+def _filter_rows(breaks, lo, coeffs, delay, initial, integrate, D):
     """The moving average (Sencer 2015 eq 1, ``(C(t) - C(t - T)) / T``: breaks ``(K' + 1,)``, coefficients
     ``(K', D + 1, A)`` on the ``K' <= 2K + 1`` pieces of positive length of the merge of ``b`` and ``b + T``;
     the JAX form keeps the empty ones too), or with ``integrate`` its integral from the first break plus
@@ -317,7 +365,7 @@ def _filter_rows(breaks, coeffs, delay, initial, integrate, D):
     piece is built in scalars, one after the other (the axes never mix: the same operations in the
     same order as axis-innermost loops)."""
     K, _, A = coeffs.shape
-    consts = _constants(breaks, coeffs, D)
+    c_hi, c_lo = _constants(breaks, lo, coeffs, D)
     # one pass of the merge (no merged arrays kept) fills the new pieces of positive length into
     # arrays sized for all ``2 K + 1`` (a view of them returned). An empty piece is never evaluated
     # (a right search takes the next piece), integrates to 0, and the next filter's pieces that
@@ -329,29 +377,37 @@ def _filter_rows(breaks, coeffs, delay, initial, integrate, D):
     cap = 2 * K + 1
     out = np.empty((cap + 1, R, A)) if integrate else np.empty((cap, R, A))  # written up to the pieces kept
     out_breaks = np.empty(cap + 2) if integrate else np.empty(cap + 1)
-    c, w, hp, acc = np.empty(D + 1), np.empty(D + 1), np.empty(D + 1), np.zeros(A)
+    out_lo = np.zeros(out_breaks.size)  # the rest of each break (:func:`_between`)
+    c, w, hp, acc, rest = np.empty(D + 1), np.empty(D + 1), np.empty(D + 1), np.zeros(A), np.zeros(A)
     i, j, q = 0, 0, 0  # breaks of C(t) taken, breaks of C(t - T) taken (ties: C(t) first); pieces kept
     left, now, before = 0.0, -1, -1
+    lsrc, lidx = 0, 0  # ``left`` is ``breaks[lidx] + lsrc T``: a break of C(t) (0) or of C(t - T) (1)
     for p in range(2 * (K + 1)):
+        i0, j0 = i, j
         b, i, j = _merge_step(breaks, delay, i, j, K)
+        bsrc, bidx = (0, i0) if i > i0 else (1, j0)
         if p == 0:
-            out_breaks[0] = b
+            out_breaks[0], out_lo[0] = b, _rest(breaks, lo, delay, bsrc, bidx, b)
         elif b > left or (keep_first and p == 1):
             # the piece [left, b): piece ``now`` of C holds it at t, ``before`` at t - T (-1:
             # before breaks[0], where C is zero; K: after breaks[K], where C holds its end value)
-            out_breaks[q + 1] = b
-            h = b - left
+            out_breaks[q + 1], out_lo[q + 1] = b, _rest(breaks, lo, delay, bsrc, bidx, b)
+            h = _between(breaks, lo, delay, bsrc, bidx, lsrc, lidx)
             hp[0] = h
             for m in range(1, D + 1):
                 hp[m] = hp[m - 1] * h
             for a in range(A):
-                _shifted_c(coeffs, consts, now, a, left - breaks[now], c, D)
+                _shifted_c(coeffs, now, a, _between(breaks, lo, delay, lsrc, lidx, 0, now), c, D)
                 for m in range(D + 1):
                     w[m] = 0.0 + 1.0 * c[m]
                 if before >= 0:
-                    _shifted_c(coeffs, consts, before, a, (left - delay) - breaks[before], c, D)
+                    _shifted_c(coeffs, before, a, _between(breaks, lo, delay, lsrc, lidx, 1, before), c, D)
                     for m in range(D + 1):
                         w[m] += -1.0 * c[m]
+                    # C(t) - C(t - T): the constants' difference as double-doubles, then the local parts
+                    w[0] += (c_hi[now, a] - c_hi[before, a]) + (c_lo[now, a] - c_lo[before, a])
+                else:
+                    w[0] += c_hi[now, a] + c_lo[now, a]
                 if not integrate:
                     for m in range(D + 1):
                         out[q, m, a] = w[m] / delay
@@ -361,13 +417,14 @@ def _filter_rows(breaks, coeffs, delay, initial, integrate, D):
                         cm = _over(w[m] / delay, m + 1)
                         out[q, m + 1, a] = cm
                         s += cm * hp[m]
-                    acc[a] += s
-                    out[q, 0, a] = (acc[a] - s) + initial[a]
+                    out[q, 0, a] = (acc[a] + initial[a]) + rest[a]
+                    _add(acc, rest, a, s)  # the integral so far as a double-double
             q += 1
         left, now, before = b, i - 1, j - 1
+        lsrc, lidx = bsrc, bidx
     n_out = q
     if integrate:  # the closing rest piece: the end value (Horner on the last piece), v = a = j = 0
-        h = out_breaks[n_out] - out_breaks[n_out - 1]
+        h = (out_breaks[n_out] - out_breaks[n_out - 1]) + (out_lo[n_out] - out_lo[n_out - 1])
         for a in range(A):
             z = out[n_out - 1, R - 1, a]
             for m in range(R - 2, -1, -1):
@@ -375,40 +432,48 @@ def _filter_rows(breaks, coeffs, delay, initial, integrate, D):
             out[n_out, 0, a] = z
             for m in range(1, R):
                 out[n_out, m, a] = 0.0
-        out_breaks[n_out + 1] = out_breaks[n_out]
+        out_breaks[n_out + 1], out_lo[n_out + 1] = out_breaks[n_out], out_lo[n_out]
         n_out += 1
     if integrate and 8 * n_out < 7 * cap:  # many empty pieces (the raw pulses of one filter): the
         # profile kept is not held in a buffer sized for all
-        return out_breaks[: n_out + 1].copy(), out[:n_out].copy()
-    return out_breaks[: n_out + 1], out[:n_out]
+        return out_breaks[: n_out + 1].copy(), out_lo[: n_out + 1].copy(), out[:n_out].copy()
+    return out_breaks[: n_out + 1], out_lo[: n_out + 1], out[:n_out]
 
 
 @numba.njit(**_OPTIONS)
 def _input_pulses(geo, block, gap, fraction, piece_tv, gaps):
     """The input velocity pulses as a piecewise polynomial: breaks ``(P + 1,)`` (from 0, each piece
-    its share of its block's pulse or its gap) and coefficients ``(P, D, A)`` (``geo`` in ``u``
-    scaled to time)."""
+    its share of its block's pulse or its gap) with their low parts ``(P + 1,)`` (the running sum
+    of the pieces' lengths as a double-double, :func:`_between`: each piece keeps its own length
+    however long the motion before it) and coefficients ``(P, D, A)`` (``geo`` in ``u`` scaled
+    to time)."""
     P, D, A = geo.shape
     Mp = gaps.size
     breaks = np.empty(P + 1)
+    lo = np.zeros(P + 1)
     coeffs = np.empty((P, D, A))
     breaks[0] = 0.0
-    acc = 0.0
+    acc, rest = 0.0, 0.0
     for i in range(P):
         b = block[i]
         if gap[i]:
             dur = gaps[b] if b < Mp else 0.0
         else:
             dur = fraction[i] * piece_tv[i]
-        acc += dur
-        breaks[i + 1] = max(breaks[i], acc)  # cummax of the running sum
+        s = acc + dur  # two-sum of acc + dur, then renormalized: acc + rest to ~1e-32 relative
+        z = s - acc
+        rest += (acc - (s - z)) + (dur - z)
+        acc = s + rest
+        rest -= acc - s
+        breaks[i + 1] = acc  # never below breaks[i]: dur >= 0 and acc is the sum rounded
+        lo[i + 1] = rest
         inv = 1.0 / piece_tv[i]
         s = inv
         for m in range(D):  # d/dt = (1 / T_v) d/du: the u'^m coefficient over T_v^(m + 1)
             for a in range(A):
                 coeffs[i, m, a] = 0.0 if gap[i] else geo[i, m, a] * s
             s *= inv
-    return breaks, coeffs
+    return breaks, lo, coeffs
 
 
 @numba.njit(**_OPTIONS)

@@ -29,7 +29,7 @@ def test_moving_average_is_the_window_mean_of_the_steps():
     breaks = np.concatenate([[0.0], np.cumsum(widths)])
     values = rng.normal(size=(40, 2))
     T = 0.037
-    b, c = _fir_profile._moving_average(breaks, values[:, None, :], T)
+    b, _, c = _fir_profile._moving_average(breaks, np.zeros_like(breaks), values[:, None, :], T)
     t = rng.uniform(0.0, breaks[-1] + T, 300)
     got = NumpyPiecewise(b, c)(t)
     lo = np.clip(t[:, None] - T, breaks[None, :-1], breaks[None, 1:])
