@@ -72,7 +72,7 @@ class PiecePeaks:
         starting before ``hi_c`` (left), at least one. Windows in time order (``lo`` and ``hi``
         nondecreasing: the corner windows, the own spans) find their pieces by one merge with the
         breaks (:func:`_merged_windows`), others by binary search."""
-        lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+        lo, hi = window_interiors(lo, hi)
         if np.all(lo[1:] >= lo[:-1]) and np.all(hi[1:] >= hi[:-1]):
             first, last = _merged_windows(self.breaks, lo, hi)
         else:
@@ -113,6 +113,25 @@ def _cubic_ratios_at(coeffs, h, limit, pieces):
             best = max(best, max(abs(c30), abs(c30)) / limit[2, a])
         out[i] = best
     return out
+
+
+#: a window ``[lo, hi]`` reads the pieces that overlap it by more than this many spacings of its
+#: end times (``np.spacing``): a window's ends and the profile's breaks at the same instants come from
+#: different sums (a block's end, ``start + T_d``; the filters' ``b + T_i``) and differ by rounding,
+#: so a piece that ends an ulp past a window's start belongs to the window before it
+WINDOW_ULPS = 8
+
+
+def window_interiors(lo, hi) -> tuple[np.ndarray, np.ndarray]:
+    """``(lo, hi)`` moved inwards by :data:`WINDOW_ULPS` spacings of the larger end where the window
+    is wider than twice that (narrower ones as given): what :meth:`PiecePeaks.over` searches. Every
+    piece of more than ``2 WINDOW_ULPS`` spacings still lies more than that inside one of any
+    windows that tile the time (the corner windows and own spans do); shorter ones are below
+    :data:`DEGENERATE_PIECE` on plans of up to ~10^3 s, and rounding beyond."""
+    lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+    d = WINDOW_ULPS * np.spacing(np.maximum(np.abs(lo), np.abs(hi)))
+    wide = hi - lo > 2.0 * d
+    return np.where(wide, lo + d, lo), np.where(wide, hi - d, hi)
 
 
 @numba.njit(cache=True, nogil=True)

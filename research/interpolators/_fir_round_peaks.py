@@ -18,9 +18,11 @@ time offset, ~1e-13 relative), but for a window's end pieces (below). Every deci
 ``1 + LIMIT_RTOL``, and the ratios above it are used as values (the slow-downs of ``plan_fir``):
 so a kept ratio within ``THRESHOLD_GUARD`` of it, or next to a window that is, is recomputed too.
 The second condition covers a window's ends: a window and its neighbours in time share their end
-breaks, and where the profile's break lies an ulp beyond the window's end the window reads the
+breaks, and where the profile's break lay an ulp beyond the window's end the window read the
 neighbour's next piece as well, which a ratio kept from a round without that rounding lacks; that
-piece is within the neighbour's ratio. Then each comparison comes out as with every ratio
+piece is within the neighbour's ratio. (Windows now read only the pieces they overlap by more than
+``_fir_piece_peaks.WINDOW_ULPS`` spacings, so such a piece is no longer read; the condition stays
+as a guard.) Then each comparison comes out as with every ratio
 recomputed, and every ratio above the threshold is the recomputed one, to the bit.
 """
 
@@ -34,6 +36,7 @@ from research.interpolators._fir_piece_peaks import (
     PiecePeaks,
     piece_ratios_at,
     range_max,
+    window_interiors,
 )
 from research.limits import AxisLimits
 
@@ -138,6 +141,7 @@ class RoundPeaks:
         """``PiecePeaks(position).over(lo, hi)`` from the pieces these windows meet only (the same floats)."""
         if lo.size == 0:
             return np.zeros(0)
+        lo, hi = window_interiors(lo, hi)
         breaks = np.asarray(position.breaks, dtype=np.float64)
         coeffs = np.asarray(position.coeffs, dtype=np.float64)
         K = coeffs.shape[0]

@@ -138,3 +138,53 @@ def test_isolated_roots_are_the_polynomials_real_roots_in_the_piece(degree):
             np.testing.assert_allclose(found, want[k][a], rtol=0, atol=1e-6 * h[k])
             powers = found[:, None] ** np.arange(degree + 1)[None, :]
             assert np.all(np.abs(powers @ coeffs[k, :, a]) <= 1e-12 * (powers @ np.abs(coeffs[k, :, a])))
+
+
+def test_a_window_does_not_read_the_piece_before_its_start_by_rounding():
+    """Regression: a corner window starts at its block's end, computed as another sum than the
+    profile's break at that instant, so the two differ by an ulp; a window starting an ulp before
+    the break read the whole piece before it (the own span's), whose jerk then bisected the corner
+    (seed 12 of the limit-holding compare set: the ratio jumped from 0.99998 to 1.026 between two
+    builds that differ only by rounding). Independent: a two-piece profile, jerk 10 on the first
+    piece and 1 on the second, against a jerk limit of 2."""
+    from research.interpolators._fir_piece_peaks import window_interiors
+
+    coeffs = np.zeros((2, 4, 1))
+    coeffs[0, 3, 0] = 10.0 / 6.0  # q = 10 t^3 / 6: jerk 10
+    coeffs[1, 3, 0] = 1.0 / 6.0  # jerk 1 (values at the break are not what is tested)
+    position = NumpyPiecewise(np.array([0.0, 1.0, 2.0]), coeffs)
+    limits = AxisLimits.uniform(1, 1e9, 1e9, 2.0)
+    peaks = PiecePeaks(position, limits)
+    for lo in (1.0, np.nextafter(1.0, 0.0), 1.0 - 4 * np.spacing(1.0)):
+        assert peaks.over(np.array([lo]), np.array([2.0]))[0] == pytest.approx(0.5)
+    assert peaks.over(np.array([0.0]), np.array([np.nextafter(1.0, 2.0)]))[0] == pytest.approx(5.0)
+    lo, hi = window_interiors(np.array([1.0, 1.0]), np.array([2.0, 1.0 + np.spacing(1.0)]))
+    assert lo[1] == 1.0 and hi[1] == 1.0 + np.spacing(1.0)  # too narrow to move: as given
+
+
+def test_windows_that_tile_time_read_every_piece_despite_rounding():
+    """Random profiles (pieces of 1e-9 .. 1e-2 s, some of zero length) and random tilings of their
+    time by windows whose shared ends are moved by up to 4 ulps either way (as rounding moves a
+    window's end against the profile's break at the same instant): the largest ratio over the
+    windows is the largest over all pieces longer than ``DEGENERATE_PIECE`` (brute force), at
+    start times 0 and 20,000 s (an hour-long program's ulps)."""
+    from research.interpolators._fir_piece_peaks import DEGENERATE_PIECE
+
+    rng = np.random.default_rng(21)
+    limits = AxisLimits.uniform(2, 10.0, 100.0, 1000.0)
+    for t0 in (0.0, 20000.0):
+        for _ in range(30):
+            K = int(rng.integers(3, 40))
+            h = np.where(rng.random(K) < 0.15, 0.0, 10.0 ** rng.uniform(-9, -2, K))
+            breaks = t0 + np.concatenate([[0.0], np.cumsum(h)])
+            coeffs = rng.normal(size=(K, 4, 2)) * np.array([1.0, 10.0, 100.0, 1000.0])[None, :, None]
+            position = NumpyPiecewise(breaks, coeffs)
+            peaks = PiecePeaks(position, limits)
+            cuts = np.sort(rng.choice(breaks[1:-1], size=min(K - 1, int(rng.integers(1, 6))), replace=False))
+            ends = np.concatenate([[breaks[0]], cuts, [breaks[-1]]])
+            shift = rng.integers(-4, 5, ends.size) * np.spacing(ends)
+            shift[[0, -1]] = 0.0
+            ends = ends + shift
+            got = peaks.over(ends[:-1], ends[1:])
+            real = np.diff(breaks) > DEGENERATE_PIECE
+            assert np.max(got) == np.max(peaks.per_piece[real], initial=0.0)
