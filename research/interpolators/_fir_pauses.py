@@ -14,9 +14,11 @@ the pause's duration. The joined plan is the plan of the whole program with thos
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
+from research._device import device_array
 from research.piecewise import PiecewisePolynomial
 
 
@@ -53,36 +55,53 @@ def join(plans, ranges, pauses: np.ndarray):
     dwell = np.where(np.isnan(pauses), 0.0, pauses)
     M = pauses.size - 1
     D = max(p.position.coeffs.shape[1] for p in plans)  # parts with arcs carry higher degrees: pad with zeros
+    # concrete plans are joined in NumPy (JAX would compile each operation for each new size, every
+    # program anew) and handed to JAX by transfer; traced ones (gradients) in JAX
+    traced = any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves(plans))
+    xp = jnp if traced else np
+
+    def arrays(plan):
+        pos = plan.position
+        fields = (plan.start_times, plan.corner_times, plan.overlaps, pos.breaks, pos.coeffs)
+        return fields if traced else tuple(np.asarray(x) for x in fields)
 
     def hold(value):  # the coefficients of one constant piece at ``value`` (A,)
-        return jnp.zeros((1, D, value.shape[0])).at[0, 0].set(value)
+        return xp.concatenate([xp.reshape(value, (1, 1, -1)), xp.zeros((1, D - 1, value.shape[0]))], axis=1)
 
     starts, corners, overlaps, breaks, coeffs = [], [], [], [], []  # left breaks and pieces, in time order
-    t = jnp.asarray(0.0)
+    t = xp.asarray(0.0)
     if not np.isnan(pauses[0]):
-        breaks.append(jnp.zeros(1))
-        coeffs.append(hold(plans[0].position.coeffs[0, 0]))
+        breaks.append(xp.zeros(1))
+        coeffs.append(hold(arrays(plans[0])[4][0, 0]))
         t = t + dwell[0]
     for j, (plan, (first, stop)) in enumerate(zip(plans, ranges)):
-        pos = plan.position
-        shift = t - pos.breaks[0]
+        start_times, corner_times, plan_overlaps, pos_breaks, pos_coeffs = arrays(plan)
+        shift = t - pos_breaks[0]
         if j > 0:
-            corners.append(jnp.reshape(t - dwell[first], (1,)))  # the motion reached the cut's vertex, then held it
-            overlaps.append(jnp.zeros(1))
-        starts.append(plan.start_times + shift)
-        corners.append(plan.corner_times + shift)
-        overlaps.append(plan.overlaps)
-        breaks.append(pos.breaks[:-1] + shift)
-        coeffs.append(jnp.pad(pos.coeffs, ((0, 0), (0, D - pos.coeffs.shape[1]), (0, 0))))
-        t = pos.breaks[-1] + shift
+            corners.append(xp.reshape(t - dwell[first], (1,)))  # the motion reached the cut's vertex, then held it
+            overlaps.append(xp.zeros(1))
+        starts.append(start_times + shift)
+        corners.append(corner_times + shift)
+        overlaps.append(plan_overlaps)
+        breaks.append(pos_breaks[:-1] + shift)
+        coeffs.append(xp.pad(pos_coeffs, ((0, 0), (0, D - pos_coeffs.shape[1]), (0, 0))))
+        t = pos_breaks[-1] + shift
         if stop < M or not np.isnan(pauses[M]):  # the pause after this part
-            breaks.append(jnp.reshape(t, (1,)))
-            coeffs.append(hold(pos.end_values()))
+            breaks.append(xp.reshape(t, (1,)))
+            h = pos_breaks[-1] - pos_breaks[-2]  # the end value: Horner on the last piece
+            end = pos_coeffs[-1, -1]
+            for m in range(pos_coeffs.shape[1] - 2, -1, -1):
+                end = end * h + pos_coeffs[-1, m]
+            coeffs.append(hold(end))
             t = t + dwell[stop]
-    breaks.append(jnp.reshape(t, (1,)))
-    position = PiecewisePolynomial(jnp.concatenate(breaks), jnp.concatenate(coeffs))
+    breaks.append(xp.reshape(t, (1,)))
     deviations = [p.path_deviation for p in plans]
     deviation = float("nan") if np.any(np.isnan(deviations)) else float(max(deviations))
-    return (jnp.concatenate(starts), jnp.concatenate([p.pulse_times for p in plans]), jnp.concatenate(overlaps),
-            jnp.concatenate([p.feeds for p in plans]), position, jnp.concatenate(corners), deviation,
+    out = (xp.concatenate(starts), xp.concatenate([p.pulse_times for p in plans]), xp.concatenate(overlaps),
+           xp.concatenate([p.feeds for p in plans]), xp.concatenate(breaks), xp.concatenate(coeffs),
+           xp.concatenate(corners))
+    if not traced:
+        out = tuple(device_array(np.asarray(x)) for x in out)
+    starts, pulses, overlaps, feeds, breaks, coeffs, corners = out
+    return (starts, pulses, overlaps, feeds, PiecewisePolynomial(breaks, coeffs), corners, deviation,
             max(p.rounds for p in plans))

@@ -40,10 +40,13 @@ import numpy as np
 
 from research._device import device_array
 from research.interpolators._fir_overlap import overlap_time
-from research.piecewise import PiecewisePolynomial, bucket_size
+from research.piecewise import PiecewisePolynomial
 
 _OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
 _overlap_jit = jax.jit(overlap_time)  # three or more filters: the optimistix inversion of H2
+#: the array sizes :func:`overlaps` hands to ``_overlap_jit`` (one compilation each, at most once per
+#: process and install, whatever the programs): padded up to the next, the last one a chunk
+_OVERLAP_CHUNKS = (64, 256, 1024, 4096)
 
 
 class _PathPieces:
@@ -121,11 +124,15 @@ def overlaps(tolerance: np.ndarray, speed_change: np.ndarray, delays: np.ndarray
     d = np.sort(np.asarray(delays, dtype=np.float64))[::-1]
     dF = np.asarray(speed_change, dtype=np.float64)
     tol = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), dF.shape)
-    if d.size > 2:
-        m = dF.size
-        pad = bucket_size(m, 16) - m
-        out = _overlap_jit(np.pad(tol.ravel(), (0, pad), constant_values=1.0), np.pad(dF.ravel(), (0, pad), constant_values=1.0), d)
-        return np.asarray(out)[:m].reshape(dF.shape)
+    if d.size > 2:  # elementwise: in chunks of a few fixed sizes, so that any program reuses their compilations
+        flat_tol, flat_dF = tol.ravel(), dF.ravel()
+        out = np.empty(flat_dF.size)
+        for a in range(0, flat_dF.size, _OVERLAP_CHUNKS[-1]):
+            n = min(flat_dF.size - a, _OVERLAP_CHUNKS[-1])
+            size = next(c for c in _OVERLAP_CHUNKS if c >= n)
+            out[a:a + n] = np.asarray(_overlap_jit(np.pad(flat_tol[a:a + n], (0, size - n), constant_values=1.0),
+                                                   np.pad(flat_dF[a:a + n], (0, size - n), constant_values=1.0), d))[:n]
+        return out.reshape(dF.shape)
     Td = float(d.sum())
     turning = dF > 0
     h_full = _h_full(tuple(d.tolist()))
