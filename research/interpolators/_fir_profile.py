@@ -18,8 +18,8 @@ every piece's value, and the running integrals (``C`` and the position) lost the
 displacement, so the profile drifted off the path (6.4 um at the end of a 5.2 h plan; the checks
 took the drift as slack). Here the breaks carry their rests (``lo``: the input's running sum by
 two-sums, each merged ``b + T`` by one), lengths and local times are differences of breaks first
-(:func:`_between`), and ``C``'s constants and the position's are summed as double-doubles
-(:func:`_add`); the returned breaks are the rounded ones (a local time off by their rest,
+(:func:`_between`), ``C(t) - C(t - T)`` is a running double-double sum of the pieces between
+(:func:`_window_add`) and the position's constants one of all pieces (:func:`_add`); the returned breaks are the rounded ones (a local time off by their rest,
 < 1e-11 s, does not accumulate). The same 5.2 h plan ends 8.5e-14 mm from the path's end. The
 JAX form keeps plain sums (its plans are short: gradients of one plan).
 
@@ -224,32 +224,19 @@ def _add(hi, lo, a, s):
     lo[a] = r - (hi[a] - t)
 
 
-@numba.njit(**_OPTIONS)
-def _constants(breaks, lo, coeffs, D):
-    """Constant terms of ``C``, the integral of the function from ``breaks[0]``
-    (``PiecewisePolynomial.antiderivative``; the other coefficients of piece ``i`` are
-    ``coeffs[i, m] / (m + 1)``), and as row ``K`` its end value, as double-doubles ``(hi, lo)``
-    ``(K + 1, A)`` each: the moving average takes differences of two of them (``C(t) - C(t - T)``),
-    which at a large displacement from the start would lose the digits a rounded sum drops (the
-    breaks are ``breaks + lo``, :func:`_between`)."""
-    K, _, A = coeffs.shape
-    c_hi, c_lo = np.empty((K + 1, A)), np.empty((K + 1, A))
-    acc, rest = np.zeros(A), np.zeros(A)
-    hp = np.empty(D)
-    for i in range(K):
-        h = _between(breaks, lo, 0.0, 0, i + 1, 0, i)
-        hp[0] = h
-        for m in range(1, D):
-            hp[m] = hp[m - 1] * h  # h^(m + 1) by products (a C pow costs tens of ns)
-        for a in range(A):
-            s = 0.0
-            for m in range(D):
-                s += _over(coeffs[i, m, a], m + 1) * hp[m]
-            c_hi[i, a], c_lo[i, a] = acc[a], rest[a]
-            _add(acc, rest, a, s)
-    for a in range(A):
-        c_hi[K, a], c_lo[K, a] = acc[a], rest[a]
-    return c_hi, c_lo
+@numba.njit(inline="always", **_OPTIONS)
+def _window_add(breaks, lo, coeffs, k, sign, wh, wl, hq, D):
+    """``(wh, wl) += sign * integral of piece k`` on every axis (double-doubles, :func:`_add`): the
+    running integral of the input over the window ``[t - T, t]`` between the two pieces in use."""
+    h = _between(breaks, lo, 0.0, 0, k + 1, 0, k)
+    hq[0] = h
+    for m in range(1, D):
+        hq[m] = hq[m - 1] * h  # h^(m + 1) by products (a C pow costs tens of ns)
+    for a in range(coeffs.shape[2]):
+        s = 0.0
+        for m in range(D):
+            s += _over(coeffs[k, m, a], m + 1) * hq[m]
+        _add(wh, wl, a, sign * s)
 
 
 @numba.njit(inline="always", **_OPTIONS)
@@ -257,7 +244,8 @@ def _shifted_c(coeffs, k, a, delta, c, D):
     """Piece ``k`` of ``C`` on axis ``a`` less its constant term (ascending coefficients ``(D + 1,)``
     into ``c``; piece ``K`` the end value held after the last break, all 0), re-centred by
     ``delta``: the Taylor shift of ``research.piecewise._taylor_shift``. ``c[0]`` is then the
-    integral from the piece's break to ``delta``; the constant (:func:`_constants`) is added apart."""
+    integral from the piece's break to ``delta``; the integral up to that break is added apart
+    (:func:`_window_add`)."""
     K = coeffs.shape[0]
     c[0] = 0.0
     for m in range(D):
@@ -367,12 +355,13 @@ def _filter_rows(breaks, lo, coeffs, delay, initial, integrate, D):
     the JAX form keeps the empty ones too), or with ``integrate`` its integral from the first break plus
     ``initial`` ``(A,)`` (``(K' + 1, D + 2, A)`` coefficients on ``K' + 2`` breaks), built piece by
     piece as the average comes (no averaged profile kept), closed by a rest piece of zero length
-    whose value is the end value. ``C`` is never held: its constants (:func:`_constants`) and the
-    input coefficients give each of its pieces when needed (:func:`_shifted_c`). Each axis of a
+    whose value is the end value. ``C`` is never held: ``C(t) - C(t - T)`` is the integral of the
+    input between the breaks of the two pieces in use, kept as a running double-double sum as the
+    merge passes them (:func:`_window_add`; no large constants to cancel after hours of motion), plus
+    the local parts of the two pieces (:func:`_shifted_c`). Each axis of a
     piece is built in scalars, one after the other (the axes never mix: the same operations in the
     same order as axis-innermost loops)."""
     K, _, A = coeffs.shape
-    c_hi, c_lo = _constants(breaks, lo, coeffs, D)
     # one pass of the merge (no merged arrays kept) fills the new pieces of positive length into
     # arrays sized for all ``2 K + 1`` (a view of them returned). An empty piece is never evaluated
     # (a right search takes the next piece), integrates to 0, and the next filter's pieces that
@@ -386,6 +375,7 @@ def _filter_rows(breaks, lo, coeffs, delay, initial, integrate, D):
     out_breaks = np.empty(cap + 2) if integrate else np.empty(cap + 1)
     out_lo = np.zeros(out_breaks.size)  # the rest of each break (:func:`_between`)
     c, w, hp, acc, rest = np.empty(D + 1), np.empty(D + 1), np.empty(D + 1), np.zeros(A), np.zeros(A)
+    wh, wl, hq = np.zeros(A), np.zeros(A), np.empty(max(D, 1))  # C(break of now) - C(break of before)
     i, j, q = 0, 0, 0  # breaks of C(t) taken, breaks of C(t - T) taken (ties: C(t) first); pieces kept
     left, now, before = 0.0, -1, -1
     lsrc, lidx = 0, 0  # ``left`` is ``breaks[lidx] + lsrc T``: a break of C(t) (0) or of C(t - T) (1)
@@ -411,10 +401,7 @@ def _filter_rows(breaks, lo, coeffs, delay, initial, integrate, D):
                     _shifted_c(coeffs, before, a, _between(breaks, lo, delay, lsrc, lidx, 1, before), c, D)
                     for m in range(D + 1):
                         w[m] += -1.0 * c[m]
-                    # C(t) - C(t - T): the constants' difference as double-doubles, then the local parts
-                    w[0] += (c_hi[now, a] - c_hi[before, a]) + (c_lo[now, a] - c_lo[before, a])
-                else:
-                    w[0] += c_hi[now, a] + c_lo[now, a]
+                w[0] += wh[a] + wl[a]  # the input's integral between the two pieces' breaks
                 if not integrate:
                     for m in range(D + 1):
                         out[q, m, a] = w[m] / delay
@@ -427,6 +414,11 @@ def _filter_rows(breaks, lo, coeffs, delay, initial, integrate, D):
                     out[q, 0, a] = (acc[a] + initial[a]) + rest[a]
                     _add(acc, rest, a, s)  # the integral so far as a double-double
             q += 1
+        # the window's integral as its ends pass breaks: a piece of C(t) fully in, one of C(t - T) out
+        if i > i0 and i0 >= 1:
+            _window_add(breaks, lo, coeffs, i0 - 1, 1.0, wh, wl, hq, D)
+        if j > j0 and j0 >= 1:
+            _window_add(breaks, lo, coeffs, j0 - 1, -1.0, wh, wl, hq, D)
         left, now, before = b, i - 1, j - 1
         lsrc, lidx = bsrc, bidx
     n_out = q
