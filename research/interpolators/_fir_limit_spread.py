@@ -70,24 +70,32 @@ class CornerWindows:
         feed factors ``factor`` ``(M, 3)``, line shares ``head``, ``tail``, sub-arc factors
         ``arc_rel``, full-overlap flags ``full``, overlap multipliers ``shrink`` and tolerance
         shares ``others`` (``(M - 1,)``, as ``_fir_profile.timing``)."""
-        M = self.table.n_blocks
-        out = np.zeros(M, dtype=bool)
+        out = np.zeros(self.table.n_blocks, dtype=bool)
         corners = np.unique(np.asarray(corners, dtype=np.int64))
         if corners.size == 0:
             return out
-        lo_blk, hi_blk = np.maximum(corners - 1, 0), np.minimum(corners + 2, M - 1)
-        while True:
-            ratios, windows, covered = self._read(corners, lo_blk, hi_blk, head, tail, factor, arc_rel, full, shrink, others)
-            back, ahead = covered
-            if back.all() and ahead.all():
-                break
-            # a window whose input reaches past its blocks: twice as many blocks on that side
-            lo_blk = np.where(back, lo_blk, np.maximum(lo_blk - 2 * (corners - lo_blk + 1), 0))
-            hi_blk = np.where(ahead, hi_blk, np.minimum(hi_blk + 2 * (hi_blk - corners), M - 1))
-        blocks, first, last = windows
+        ratios, (blocks, first, last) = self._windows(corners, head, tail, factor, arc_rel, full, shrink, others)
         for c in np.flatnonzero(ratios > 1.0 + LIMIT_RTOL + THRESHOLD_GUARD):
             out[blocks[first[c]:last[c]]] = True
         return out
+
+    def ratios(self, corners: np.ndarray, head, tail, factor, arc_rel, full, shrink, others) -> np.ndarray:
+        """``(C,)`` largest ``peak / limit`` in the windows of ``corners`` (distinct, ascending) in
+        the plan of :meth:`breaking`'s arguments."""
+        return self._windows(np.asarray(corners, dtype=np.int64), head, tail, factor, arc_rel, full, shrink, others)[0]
+
+    def _windows(self, corners, *plan):
+        """The corners' window ratios and blocks (:meth:`_read`), their block ranges grown until
+        each window's input lies within them."""
+        M = self.table.n_blocks
+        lo_blk, hi_blk = np.maximum(corners - 1, 0), np.minimum(corners + 2, M - 1)
+        while True:
+            ratios, windows, (back, ahead) = self._read(corners, lo_blk, hi_blk, *plan)
+            if back.all() and ahead.all():
+                return ratios, windows
+            # a window whose input reaches past its blocks: twice as many blocks on that side
+            lo_blk = np.where(back, lo_blk, np.maximum(lo_blk - 2 * (corners - lo_blk + 1), 0))
+            hi_blk = np.where(ahead, hi_blk, np.minimum(hi_blk + 2 * (hi_blk - corners), M - 1))
 
     def _read(self, corners, lo_blk, hi_blk, head, tail, factor, arc_rel, full, shrink, others):
         """Ratios of the corners' windows, the blocks in each, and whether each window's input lies
@@ -135,9 +143,110 @@ class CornerWindows:
         return ratios, (blocks, first, last), (back, ahead)
 
 
+class FeedSteps:
+    """The largest feed of a line block whose velocity steps to its neighbours keep the limits.
+
+    An isolated step ``dV`` of the input velocity through the FIR chain ``T_1 >= T_2 >= ...``
+    peaks at ``|dV_i| / T_1`` in acceleration and ``|dV_i| / (T_1 T_2)`` in jerk on each axis (the
+    trapezoidal acceleration of Sencer 2015 §2.1, whose rest-to-rest pulse is a step from 0), so
+    a line at feed ``x`` along ``u`` next to a neighbour at velocity ``V`` keeps axis ``i`` where
+    ``|x u_i - V_i| <= min(A_i T_1, J_i T_1 T_2)``, and ``x |u_i| <= v_i``: an interval of ``x`` per
+    axis and neighbour. That is a staircase of feeds (a ramp from a slowed block back up to the
+    commanded feed) where phase 1 would slow each block to what it keeps alone (every block of a
+    chain at the feed of a start from rest). The bound is exact for isolated steps only (pulses of
+    ``T_d`` or more either side, full overlap): :func:`spread_slow_down` checks every proposal on
+    the exact profile and takes phase 1 where it fails.
+
+    Args:
+        feeds: ``(M,)`` commanded feeds [mm/s]; t_in: ``(M, d)`` block directions at their starts
+            (a line's direction); is_arc: ``(M,)``; delays: ``(n,)`` [s]; limits: the axis limits.
+    """
+
+    def __init__(self, feeds, t_in, is_arc, delays, limits: AxisLimits):
+        d = np.sort(np.asarray(delays, dtype=np.float64))[::-1]
+        jerk = limits.jerk * d[0] * d[1] if d.size > 1 else np.full(limits.n_axes, np.inf)
+        self.step = np.minimum(limits.acceleration * d[0], jerk)  # (A,) largest isolated step [mm/s]
+        self.velocity = np.asarray(limits.velocity, dtype=np.float64)
+        self.feeds, self.u, self.is_arc = np.asarray(feeds, dtype=np.float64), np.asarray(t_in), np.asarray(is_arc)
+
+    def __call__(self, factor: np.ndarray, which: np.ndarray, fixed: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(multipliers, within, unset)``: ``(M,)`` feed multipliers ``< 1`` of the blocks ``which``
+        whose steps to their ``fixed`` neighbours then keep the limits (NaN where there is none: an
+        arc, a block or neighbour of uneven feed factors, no fixed neighbour, no feasible feed);
+        ``(M,)`` True where a block's feed is already within the bound; ``(M,)`` True where a block
+        has no fixed neighbour yet. Blocks in path order, each one set counting as fixed for the
+        next (a ramp of several blocks in one call)."""
+        M = self.feeds.size
+        out, within, unset = np.full(M, np.nan), np.zeros(M, dtype=bool), np.zeros(M, dtype=bool)
+        feed, now_fixed = {}, set()  # feeds set and blocks fixed by this call (the arrays stay as given)
+
+        def even(k):
+            return not self.is_arc[k] and factor[k, 0] == factor[k, 1] == factor[k, 2]
+
+        for n in np.flatnonzero(which).tolist():
+            if not even(n):
+                continue
+            near = [k for k in (n - 1, n + 1) if 0 <= k < M and (fixed[k] or k in now_fixed)]
+            unset[n] = not near
+            if not near or not all(even(k) for k in near):
+                continue
+            u, now = self.u[n], self.feeds[n] * factor[n, 0]
+            moving = u != 0.0
+            lo, hi = 0.0, min(now, float(np.min(self.velocity[moving] / np.abs(u[moving]))))
+            for k in near:
+                V = feed.get(k, self.feeds[k] * factor[k, 0]) * self.u[k]
+                if np.any(np.abs(V[~moving]) > self.step[~moving]):
+                    lo = np.inf
+                    break
+                a, b = (V[moving] - self.step[moving]) / u[moving], (V[moving] + self.step[moving]) / u[moving]
+                lo, hi = max(lo, float(np.max(np.minimum(a, b)))), min(hi, float(np.min(np.maximum(a, b))))
+            if not (lo <= hi and hi > 0.0):
+                continue
+            if hi < now * (1.0 - 1e-12):
+                out[n], feed[n] = hi / now, hi
+            else:
+                within[n] = True
+            now_fixed.add(n)
+        return out, within, unset
+
+
+#: times one block's feed may be lowered by :class:`FeedSteps` within one spread (then phase 1)
+MAX_STEPS = 8
+
+
+def _checked_steps(ok, prop, factor, fixed, ratios, thr) -> np.ndarray:
+    """``ok`` less the proposals next to a corner whose window breaks a limit with every proposal
+    ``prop`` applied (the corners between a proposed block and a set or proposed neighbour)."""
+    M = ok.size
+    k = np.flatnonzero(ok)
+    set_ = fixed | ok
+    left = k[(k > 0) & set_[np.maximum(k - 1, 0)]] - 1
+    right = k[(k < M - 1) & set_[np.minimum(k + 1, M - 1)]]
+    cs = np.unique(np.concatenate([left, right]))
+    bad = cs[ratios(factor * np.where(ok, prop, 1.0)[:, None], cs) > thr]
+    out = ok.copy()
+    out[bad] = out[bad + 1] = False
+    return out
+
+
+def _levels(factor, feeds, which, fixed) -> np.ndarray:
+    """``(M,)`` multipliers that bring the blocks ``which`` to the feed of their slowest
+    ``fixed`` neighbour (NaN where that is not lower than their own)."""
+    M = which.size
+    now = feeds * factor[:, 0]
+    out = np.full(M, np.nan)
+    for n in np.flatnonzero(which):
+        level = min((now[k] for k in (n - 1, n + 1) if 0 <= k < M and fixed[k]), default=np.inf)
+        if level < now[n] * (1.0 - 1e-12):
+            out[n] = level / now[n]
+    return out
+
+
 def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray,
                      breaking: Callable[[np.ndarray, np.ndarray], np.ndarray],
-                     hold: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> np.ndarray:
+                     hold: Callable[[np.ndarray, np.ndarray], np.ndarray],
+                     steps: FeedSteps | None = None,
+                     ratios: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None) -> np.ndarray:
     """Follow the slow-down of the blocks ``slowed`` along the chain (module docstring).
 
     Args:
@@ -148,6 +257,10 @@ def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray
             that break a limit at those factors (:meth:`CornerWindows.breaking`).
         hold: ``(factor, which) -> (M,)`` feed multipliers under which the blocks ``which`` alone
             keep the limits at those factors (``_fir_limits.hold_block_limits``).
+        steps, ratios: with both, a block in such a window first takes the feed of
+            :class:`FeedSteps` (a step from its slowed neighbours), kept where ``ratios(factor,
+            corners)`` (:meth:`CornerWindows.ratios`) finds the windows of those steps within the
+            limits; phase 1 (``hold``) otherwise, and after :data:`MAX_STEPS` such feeds.
 
     Returns:
         The feed factors with every slow-down that the chain's windows call for applied.
@@ -156,6 +269,9 @@ def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray
     ahead = np.full(M, np.nan)  # multipliers of blocks checked ahead of the step that reaches them
     run = 1
     new = np.asarray(slowed, dtype=bool)
+    fixed = new.copy()  # the blocks whose feeds this spread has set
+    stepped = np.zeros(M, dtype=np.int64)
+    thr = 1.0 + LIMIT_RTOL + THRESHOLD_GUARD
     while True:
         ks = np.flatnonzero(new)
         corners = np.unique(np.concatenate([ks - 1, ks]))
@@ -163,18 +279,47 @@ def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray
         near = breaking(factor, corners) & ~checked if corners.size else np.zeros(M, dtype=bool)
         if not near.any():
             return factor
-        missing = near & np.isnan(ahead)
-        if missing.any():
-            # the blocks within ``run`` of each one not yet checked, checked alone in one call
-            mark = np.zeros(M + 1, dtype=np.int64)
-            m = np.flatnonzero(missing)
-            np.add.at(mark, np.maximum(m - run, 0), 1)
-            np.add.at(mark, np.minimum(m + run + 1, M), -1)
-            batch = (np.cumsum(mark)[:M] > 0) & ~checked & np.isnan(ahead)
-            ahead[batch] = hold(factor, batch)[batch]
-            run *= 2
-        checked |= near
-        g = np.where(near, ahead, 1.0)
+        g = np.ones(M)
+        alone = near
+        if steps is not None and ratios is not None:
+            prop, within, unset = steps(factor, near & (stepped < MAX_STEPS), fixed)
+            ok = np.isfinite(prop)
+            if ok.any():
+                ok = _checked_steps(ok, prop, factor, fixed, ratios, thr)
+                rejected = np.isfinite(prop) & ~ok
+                if rejected.any():
+                    # steps too close in time for the isolated-step bound (pulses shorter than
+                    # T_d): the rejected blocks keep the feed of their slowest set neighbour, a
+                    # plateau from which a later block steps
+                    trial = factor * np.where(ok, prop, 1.0)[:, None]
+                    level = _levels(trial, steps.feeds, rejected, fixed | ok)
+                    again = np.isfinite(level)
+                    if again.any():
+                        again = _checked_steps(again, level, trial, fixed | ok, ratios, thr)
+                        prop = np.where(again, level, prop)
+                        ok |= again
+                g[ok] = prop[ok]
+                stepped[ok] += 1
+                fixed |= ok
+                ahead[ok] = np.nan  # its factors change: an alone check made before no longer holds
+            # a block already within its steps' bound, or with no neighbour set yet, waits for its
+            # neighbours' new feeds, unless no block got one (then phase 1 for all)
+            alone = near & ~ok & ~within & ~unset if ok.any() else near
+            fixed |= within & ok.any()
+        if alone.any():
+            missing = alone & np.isnan(ahead)
+            if missing.any():
+                # the blocks within ``run`` of each one not yet checked, checked alone in one call
+                mark = np.zeros(M + 1, dtype=np.int64)
+                m = np.flatnonzero(missing)
+                np.add.at(mark, np.maximum(m - run, 0), 1)
+                np.add.at(mark, np.minimum(m + run + 1, M), -1)
+                batch = (np.cumsum(mark)[:M] > 0) & ~checked & np.isnan(ahead)
+                ahead[batch] = hold(factor, batch)[batch]
+                run = min(2 * run, M)
+            checked |= alone
+            fixed |= alone
+            g = np.where(alone, ahead, g)
         new = g < 1.0
         if not new.any():
             return factor

@@ -81,7 +81,7 @@ from research.interpolators._fir_limits import (
     feed_caps,
     hold_block_limits,
 )
-from research.interpolators._fir_limit_spread import CornerWindows, spread_slow_down
+from research.interpolators._fir_limit_spread import CornerWindows, FeedSteps, spread_slow_down
 from research.interpolators._fir_lookahead import look_ahead
 from research.interpolators import _fir_pauses, _fir_profile
 from research.interpolators._fir_overlap import overlap_time
@@ -279,6 +279,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     motion_ends_np = np.stack([np.pad(table.first_motion, (0, pad_b)), np.pad(table.last_motion, (0, pad_b))])
     tangents_np = np.stack([np.pad(t_in, ((0, pad_b), (0, 0))), np.pad(t_out, ((0, pad_b), (0, 0)))])
     windows = CornerWindows(table, tp.lengths, F_np, t_in, t_out, tv_np, d_np, limits) if limits is not None else None
+    steps = FeedSteps(F_np, t_in, tp.is_arc, d_np, limits) if limits is not None else None
 
     def timing(factor, head, tail, full, shrink, others, arc_rel, top=True):
         """Piece shares, pulse lengths, block top feeds (None unless ``top``) and overlaps of a
@@ -412,6 +413,9 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         def breaking(fac, corners):  # the blocks in the corners' windows above a limit at ``fac`` (_fir_limit_spread)
             return windows.breaking(corners, head, tail, fac, arc_rel, full, shrink * bisection.scale, others)
 
+        def corner_ratios(fac, corners):  # the corners' window ratios at ``fac`` (_fir_limit_spread)
+            return windows.ratios(corners, head, tail, fac, arc_rel, full, shrink * bisection.scale, others)
+
         if limits is not None and M == 1:
             g = hold(factor, np.ones(1, dtype=bool))
             factor, repaired = factor * g[:, None], bool(g[0] < 1.0)
@@ -449,7 +453,8 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                     if np.any(g < 1.0):  # slowed blocks: check the corners again before bisecting
                         factor = factor * np.reshape(g, (-1, 1))  # new array: the state's inputs are the old
                         # their feed steps' corners at once, along the chain (not one block a round)
-                        factor = spread_slow_down(np.reshape(g, -1) < 1.0, checked, factor, breaking, hold)
+                        factor = spread_slow_down(np.reshape(g, -1) < 1.0, checked, factor, breaking, hold, steps,
+                                                  corner_ratios)
                         too_fast = slowed = True
                     else:
                         too_fast = bisection.update(ratios)
