@@ -23,6 +23,19 @@ of the step that reaches them, in runs that double (1, 2, 4, ... blocks beyond t
 :func:`spread_slow_down`), and their results kept until reached: the alone checks of a chain of
 ``N`` blocks cost ``O(N)`` pieces in ``O(log N)`` calls, not ``N`` calls.
 
+Phase 1 alone slows every block of such a chain to the feed of a start from rest (a line cut
+into blocks under a jerk limit below ``F / (T_1 T_2)``: every block at ``J T_1 T_2``, 6x the time
+at the velocity limit). So a block in a breaking window first takes the largest feed whose velocity
+steps to its set neighbours keep the limits (:class:`FeedSteps`, closed form for isolated steps:
+a staircase of feeds back up to the commanded one), kept where the exact profile of the blocks
+around it confirms the steps' windows; where it does not (pulses shorter than ``T_d``: the steps
+interact), the feed of its slowest set neighbour (a plateau, from which a later block steps);
+phase 1 alone where neither holds, for blocks whose feed is not even over their pieces or whose
+step bound is infeasible, after :data:`MAX_STEPS` such feeds of one block (each only lowers it),
+and where phase 1 gives the block a higher feed (a block shorter than ``T_1`` peaks below its
+input's level alone: the step bound, at steady state, is then the lower one). Blocks set so are not marked as checked alone: a later round's window above a limit still
+checks them alone, as before.
+
 Nothing here decides the plan alone: a window is taken as breaking only ``THRESHOLD_GUARD`` above
 ``1 + LIMIT_RTOL`` (the rounding of the other time offset cannot flip it), and the next round reads
 every window of the whole profile as before.
@@ -279,10 +292,22 @@ def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray
         near = breaking(factor, corners) & ~checked if corners.size else np.zeros(M, dtype=bool)
         if not near.any():
             return factor
+        missing = near & np.isnan(ahead)
+        if missing.any():
+            # phase 1 for every block in such a window (a step's feed is kept only where it is
+            # higher), and ahead for the blocks within ``run`` of each one, in one call
+            mark = np.zeros(M + 1, dtype=np.int64)
+            m = np.flatnonzero(missing)
+            np.add.at(mark, np.maximum(m - run, 0), 1)
+            np.add.at(mark, np.minimum(m + run + 1, M), -1)
+            batch = (np.cumsum(mark)[:M] > 0) & ~checked & np.isnan(ahead)
+            ahead[batch] = hold(factor, batch)[batch]
+            run = min(2 * run, M)
         g = np.ones(M)
         alone = near
         if steps is not None and ratios is not None:
             prop, within, unset = steps(factor, near & (stepped < MAX_STEPS), fixed)
+            prop = np.where(prop > ahead, prop, np.nan)  # short blocks alone may run faster than a step allows
             ok = np.isfinite(prop)
             if ok.any():
                 ok = _checked_steps(ok, prop, factor, fixed, ratios, thr)
@@ -307,16 +332,6 @@ def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray
             alone = near & ~ok & ~within & ~unset if ok.any() else near
             fixed |= within & ok.any()
         if alone.any():
-            missing = alone & np.isnan(ahead)
-            if missing.any():
-                # the blocks within ``run`` of each one not yet checked, checked alone in one call
-                mark = np.zeros(M + 1, dtype=np.int64)
-                m = np.flatnonzero(missing)
-                np.add.at(mark, np.maximum(m - run, 0), 1)
-                np.add.at(mark, np.minimum(m + run + 1, M), -1)
-                batch = (np.cumsum(mark)[:M] > 0) & ~checked & np.isnan(ahead)
-                ahead[batch] = hold(factor, batch)[batch]
-                run = min(2 * run, M)
             checked |= alone
             fixed |= alone
             g = np.where(alone, ahead, g)
