@@ -33,7 +33,12 @@ interact), the feed of its slowest set neighbour (a plateau, from which a later 
 phase 1 alone where neither holds, for blocks whose feed is not even over their pieces or whose
 step bound is infeasible, after :data:`MAX_STEPS` such feeds of one block (each only lowers it),
 and where phase 1 gives the block a higher feed (a block shorter than ``T_1`` peaks below its
-input's level alone: the step bound, at steady state, is then the lower one). Blocks set so are not marked as checked alone: a later round's window above a limit still
+input's level alone: the step bound, at steady state, is then the lower one). A block whose walk goes on (a set neighbour on one side only) has the blocks beyond it proposed
+in the same step, in runs that double while every one takes a feed (:data:`MAX_WALK`), the rest
+of a run dropped after a proposal the exact profile rejects (:func:`_connected`): a walk around a
+4,000-chord circle takes about as many steps as its doublings, not one a block. Blocks whose feed
+factors differ over their pieces (the look-ahead's head and tail) get no step bound and go to
+phase 1 one block a step, as before. Blocks set so are not marked as checked alone: a later round's window above a limit still
 checks them alone, as before.
 
 Nothing here decides the plan alone: a window is taken as breaking only ``THRESHOLD_GUARD`` above
@@ -196,8 +201,9 @@ class FeedSteps:
         def even(k):
             return not self.is_arc[k] and factor[k, 0] == factor[k, 1] == factor[k, 2]
 
-        for n in np.flatnonzero(which).tolist():
-            if not even(n):
+        ks = np.flatnonzero(which).tolist()
+        for n in ks + ks[::-1]:  # path order, then back (a run walking left from its set block)
+            if n in now_fixed or not even(n):
                 continue
             near = [k for k in (n - 1, n + 1) if 0 <= k < M and (fixed[k] or k in now_fixed)]
             unset[n] = not near
@@ -220,11 +226,15 @@ class FeedSteps:
             else:
                 within[n] = True
             now_fixed.add(n)
+            unset[n] = False
         return out, within, unset
 
 
 #: times one block's feed may be lowered by :class:`FeedSteps` within one spread (then phase 1)
 MAX_STEPS = 8
+#: most blocks proposed in one step beyond a block whose walk goes on (its run doubles while every
+#: proposal holds on the exact profile, and starts again at 1 after a rejection)
+MAX_WALK = 256
 
 
 def _checked_steps(ok, prop, factor, fixed, ratios, thr) -> np.ndarray:
@@ -242,16 +252,32 @@ def _checked_steps(ok, prop, factor, fixed, ratios, thr) -> np.ndarray:
     return out
 
 
+def _connected(ok: np.ndarray, fixed: np.ndarray) -> np.ndarray:
+    """The blocks of ``ok`` joined to a ``fixed`` block through ``ok`` blocks (a run's proposals
+    rest on those before it: after a rejected one, the rest of its run is dropped too)."""
+    out = np.zeros(ok.size, dtype=bool)
+    for order, side in ((np.flatnonzero(ok), -1), (np.flatnonzero(ok)[::-1], 1)):
+        for k in order.tolist():
+            j = k + side
+            if 0 <= j < ok.size and (fixed[j] or (out[j] and ok[j])):
+                out[k] = True
+    return out & ok
+
+
 def _levels(factor, feeds, which, fixed) -> np.ndarray:
     """``(M,)`` multipliers that bring the blocks ``which`` to the feed of their slowest
     ``fixed`` neighbour (NaN where that is not lower than their own)."""
     M = which.size
     now = feeds * factor[:, 0]
     out = np.full(M, np.nan)
-    for n in np.flatnonzero(which):
+    fixed = np.array(fixed, dtype=bool)
+    ks = np.flatnonzero(which).tolist()
+    for n in ks + ks[::-1]:  # along runs walking right, then left
+        if np.isfinite(out[n]):
+            continue
         level = min((now[k] for k in (n - 1, n + 1) if 0 <= k < M and fixed[k]), default=np.inf)
         if level < now[n] * (1.0 - 1e-12):
-            out[n] = level / now[n]
+            out[n], now[n], fixed[n] = level / now[n], level, True
     return out
 
 
@@ -284,6 +310,7 @@ def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray
     new = np.asarray(slowed, dtype=bool)
     fixed = new.copy()  # the blocks whose feeds this spread has set
     stepped = np.zeros(M, dtype=np.int64)
+    span = 1  # blocks proposed beyond each walking block (doubled while every proposal holds)
     thr = 1.0 + LIMIT_RTOL + THRESHOLD_GUARD
     while True:
         ks = np.flatnonzero(new)
@@ -292,7 +319,19 @@ def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray
         near = breaking(factor, corners) & ~checked if corners.size else np.zeros(M, dtype=bool)
         if not near.any():
             return factor
-        missing = near & np.isnan(ahead)
+        walk = near.copy()
+        if steps is not None and ratios is not None and span > 1:
+            # the blocks beyond each one of a walk (set on one side only), proposed in the same step
+            for n in np.flatnonzero(near).tolist():
+                left, right = n > 0 and fixed[n - 1], n < M - 1 and fixed[n + 1]
+                if left != right:
+                    d = 1 if left else -1
+                    stop = min(max(n + d * span, -1), M)
+                    for k in range(n + d, stop, d):
+                        if checked[k] or fixed[k]:
+                            break
+                        walk[k] = True
+        missing = walk & np.isnan(ahead)
         if missing.any():
             # phase 1 for every block in such a window (a step's feed is kept only where it is
             # higher), and ahead for the blocks within ``run`` of each one, in one call
@@ -300,17 +339,17 @@ def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray
             m = np.flatnonzero(missing)
             np.add.at(mark, np.maximum(m - run, 0), 1)
             np.add.at(mark, np.minimum(m + run + 1, M), -1)
-            batch = (np.cumsum(mark)[:M] > 0) & ~checked & np.isnan(ahead)
+            batch = ((np.cumsum(mark)[:M] > 0) | walk) & ~checked & np.isnan(ahead)
             ahead[batch] = hold(factor, batch)[batch]
             run = min(2 * run, M)
         g = np.ones(M)
         alone = near
         if steps is not None and ratios is not None:
-            prop, within, unset = steps(factor, near & (stepped < MAX_STEPS), fixed)
+            prop, within, unset = steps(factor, walk & (stepped < MAX_STEPS), fixed)
             prop = np.where(prop > ahead, prop, np.nan)  # short blocks alone may run faster than a step allows
-            ok = np.isfinite(prop)
+            ok = _connected(np.isfinite(prop), fixed | within)
             if ok.any():
-                ok = _checked_steps(ok, prop, factor, fixed, ratios, thr)
+                ok = _connected(_checked_steps(ok, prop, factor, fixed, ratios, thr), fixed | within)
                 rejected = np.isfinite(prop) & ~ok
                 if rejected.any():
                     # steps too close in time for the isolated-step bound (pulses shorter than
@@ -320,9 +359,11 @@ def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray
                     level = _levels(trial, steps.feeds, rejected, fixed | ok)
                     again = np.isfinite(level)
                     if again.any():
-                        again = _checked_steps(again, level, trial, fixed | ok, ratios, thr)
+                        again = _connected(_checked_steps(again, level, trial, fixed | ok, ratios, thr), fixed | ok | within)
                         prop = np.where(again, level, prop)
                         ok |= again
+                # the run doubles while its blocks beyond the first all took a feed (step or plateau)
+                span = min(2 * span, MAX_WALK) if not np.any(walk & ~near & ~ok & ~within) else 1
                 g[ok] = prop[ok]
                 stepped[ok] += 1
                 fixed |= ok
