@@ -30,15 +30,14 @@ steps to its set neighbours keep the limits (:class:`FeedSteps`, closed form for
 a staircase of feeds back up to the commanded one), kept where the exact profile of the blocks
 around it confirms the steps' windows; where it does not (pulses shorter than ``T_d``: the steps
 interact), the feed of its slowest set neighbour (a plateau, from which a later block steps);
-phase 1 alone where neither holds, for blocks whose feed is not even over their pieces or whose
-step bound is infeasible, after :data:`MAX_STEPS` such feeds of one block (each only lowers it),
+phase 1 alone where neither holds, for arcs and blocks whose step bound is infeasible, after
+:data:`MAX_STEPS` such feeds of one block (each only lowers it),
 and where phase 1 gives the block a higher feed (a block shorter than ``T_1`` peaks below its
 input's level alone: the step bound, at steady state, is then the lower one). A block whose walk goes on (a set neighbour on one side only) has the blocks beyond it proposed
 in the same step, in runs that double while every one takes a feed (:data:`MAX_WALK`), the rest
 of a run dropped after a proposal the exact profile rejects (:func:`_connected`; a 4,000-chord
-circle under limits: 6.0 -> 2.9 s). Blocks whose feed factors differ over their pieces (the
-look-ahead's head and tail) get no step bound and go to phase 1 one block a step, as before
-(most of what is left of that circle's time: one of its candidates walks it so). Blocks set so are not marked as checked alone: a later round's window above a limit still
+circle under limits: 6.0 -> 2.9 s). A line whose pieces run at different feeds (the look-ahead's
+head and tail) is scaled as a whole, its step taken by the piece facing the neighbour. Blocks set so are not marked as checked alone: a later round's window above a limit still
 checks them alone, as before.
 
 Nothing here decides the plan alone: a window is taken as breaking only ``THRESHOLD_GUARD`` above
@@ -48,6 +47,7 @@ every window of the whole profile as before.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Callable
 
 import numpy as np
@@ -169,7 +169,8 @@ class FeedSteps:
     trapezoidal acceleration of Sencer 2015 §2.1, whose rest-to-rest pulse is a step from 0), so
     a line at feed ``x`` along ``u`` next to a neighbour at velocity ``V`` keeps axis ``i`` where
     ``|x u_i - V_i| <= min(A_i T_1, J_i T_1 T_2)``, and ``x |u_i| <= v_i``: an interval of ``x`` per
-    axis and neighbour. That is a staircase of feeds (a ramp from a slowed block back up to the
+    axis and neighbour (for a line in pieces, the piece facing the neighbour, the block's factors
+    scaled alike). That is a staircase of feeds (a ramp from a slowed block back up to the
     commanded feed) where phase 1 would slow each block to what it keeps alone (every block of a
     chain at the feed of a start from rest). The bound is exact for isolated steps only (pulses of
     ``T_d`` or more either side, full overlap): :func:`spread_slow_down` checks every proposal on
@@ -186,48 +187,86 @@ class FeedSteps:
         self.step = np.minimum(limits.acceleration * d[0], jerk)  # (A,) largest isolated step [mm/s]
         self.velocity = np.asarray(limits.velocity, dtype=np.float64)
         self.feeds, self.u, self.is_arc = np.asarray(feeds, dtype=np.float64), np.asarray(t_in), np.asarray(is_arc)
+        self.head = self.tail = np.zeros(self.feeds.size)
+
+    def of(self, head: np.ndarray, tail: np.ndarray) -> "FeedSteps":
+        """The same bounds for a candidate whose lines have head and tail shares ``head``, ``tail``
+        ``(M,)`` (its pieces of their own feed factors: the piece facing a neighbour takes the step)."""
+        out = copy.copy(self)
+        out.head, out.tail = np.asarray(head), np.asarray(tail)
+        return out
+
+    def _column(self, k: int, side: int) -> int:
+        """The feed-factor column of block ``k``'s piece facing its start (``side`` -1) or end (+1):
+        head / body / tail, the first of them that is not empty from that side."""
+        body = 1.0 - self.head[k] - self.tail[k]
+        if side < 0:
+            return 0 if self.head[k] > 0.0 else (1 if body > 0.0 else 2)
+        return 2 if self.tail[k] > 0.0 else (1 if body > 0.0 else 0)
 
     def __call__(self, factor: np.ndarray, which: np.ndarray, fixed: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(multipliers, within, unset)``: ``(M,)`` feed multipliers ``< 1`` of the blocks ``which``
-        whose steps to their ``fixed`` neighbours then keep the limits (NaN where there is none: an
-        arc, a block or neighbour of uneven feed factors, no fixed neighbour, no feasible feed);
-        ``(M,)`` True where a block's feed is already within the bound; ``(M,)`` True where a block
-        has no fixed neighbour yet. Blocks in path order, each one set counting as fixed for the
-        next (a ramp of several blocks in one call)."""
+        (each block's factors scaled alike) under which the steps between their pieces facing their
+        ``fixed`` neighbours and those neighbours' facing pieces keep the limits (NaN where there
+        is none: an arc or an arc neighbour, no fixed neighbour, no feasible multiplier); ``(M,)``
+        True where a block's feed is already within the bound; ``(M,)`` True where a block has no
+        fixed neighbour yet. Blocks in path order, then back, each one set counting as fixed for
+        the next (a ramp of several blocks in one call)."""
         M = self.feeds.size
         out, within, unset = np.full(M, np.nan), np.zeros(M, dtype=bool), np.zeros(M, dtype=bool)
-        feed, now_fixed = {}, set()  # feeds set and blocks fixed by this call (the arrays stay as given)
-
-        def even(k):
-            return not self.is_arc[k] and factor[k, 0] == factor[k, 1] == factor[k, 2]
+        g_set = {}  # multipliers set by this call (the arrays stay as given)
 
         ks = np.flatnonzero(which).tolist()
         for n in ks + ks[::-1]:  # path order, then back (a run walking left from its set block)
-            if n in now_fixed or not even(n):
+            if n in g_set or self.is_arc[n]:
                 continue
-            near = [k for k in (n - 1, n + 1) if 0 <= k < M and (fixed[k] or k in now_fixed)]
+            near = [k for k in (n - 1, n + 1) if 0 <= k < M and (fixed[k] or k in g_set)]
             unset[n] = not near
-            if not near or not all(even(k) for k in near):
+            if not near or any(self.is_arc[k] for k in near):
                 continue
-            u, now = self.u[n], self.feeds[n] * factor[n, 0]
+            u = self.u[n]
             moving = u != 0.0
-            lo, hi = 0.0, min(now, float(np.min(self.velocity[moving] / np.abs(u[moving]))))
+            top = self.feeds[n] * float(np.max(factor[n]))
+            lo, hi = 0.0, min(1.0, float(np.min(self.velocity[moving] / np.abs(u[moving]))) / top)
             for k in near:
-                V = feed.get(k, self.feeds[k] * factor[k, 0]) * self.u[k]
+                side = -1 if k < n else 1  # n's piece facing k; k's facing n is on the other side
+                x = self.feeds[n] * factor[n, self._column(n, side)]  # that piece's feed at multiplier 1
+                V = self.feeds[k] * factor[k, self._column(k, -side)] * g_set.get(k, 1.0) * self.u[k]
                 if np.any(np.abs(V[~moving]) > self.step[~moving]):
                     lo = np.inf
                     break
-                a, b = (V[moving] - self.step[moving]) / u[moving], (V[moving] + self.step[moving]) / u[moving]
+                a, b = (V[moving] - self.step[moving]) / (u[moving] * x), (V[moving] + self.step[moving]) / (u[moving] * x)
                 lo, hi = max(lo, float(np.max(np.minimum(a, b)))), min(hi, float(np.min(np.maximum(a, b))))
             if not (lo <= hi and hi > 0.0):
                 continue
-            if hi < now * (1.0 - 1e-12):
-                out[n], feed[n] = hi / now, hi
+            if hi < 1.0 - 1e-12:
+                out[n] = g_set[n] = hi
             else:
-                within[n] = True
-            now_fixed.add(n)
+                within[n], g_set[n] = True, 1.0
             unset[n] = False
         return out, within, unset
+
+    def levels(self, factor: np.ndarray, which: np.ndarray, fixed: np.ndarray) -> np.ndarray:
+        """``(M,)`` multipliers that bring the pieces of the blocks ``which`` facing their ``fixed``
+        neighbours to those neighbours' facing feeds, the lowest of them (NaN where that is not
+        lower); along runs walking right, then left, each one set counting as fixed for the next."""
+        M = which.size
+        out = np.full(M, np.nan)
+        g_set = {}
+        ks = np.flatnonzero(which).tolist()
+        for n in ks + ks[::-1]:
+            if n in g_set:
+                continue
+            g = np.inf
+            for k in (n - 1, n + 1):
+                if 0 <= k < M and (fixed[k] or k in g_set):
+                    side = -1 if k < n else 1
+                    own = self.feeds[n] * factor[n, self._column(n, side)]
+                    theirs = self.feeds[k] * factor[k, self._column(k, -side)] * g_set.get(k, 1.0)
+                    g = min(g, theirs / own)
+            if g < 1.0 - 1e-12:
+                out[n] = g_set[n] = g
+        return out
 
 
 #: times one block's feed may be lowered by :class:`FeedSteps` within one spread (then phase 1)
@@ -262,23 +301,6 @@ def _connected(ok: np.ndarray, fixed: np.ndarray) -> np.ndarray:
             if 0 <= j < ok.size and (fixed[j] or (out[j] and ok[j])):
                 out[k] = True
     return out & ok
-
-
-def _levels(factor, feeds, which, fixed) -> np.ndarray:
-    """``(M,)`` multipliers that bring the blocks ``which`` to the feed of their slowest
-    ``fixed`` neighbour (NaN where that is not lower than their own)."""
-    M = which.size
-    now = feeds * factor[:, 0]
-    out = np.full(M, np.nan)
-    fixed = np.array(fixed, dtype=bool)
-    ks = np.flatnonzero(which).tolist()
-    for n in ks + ks[::-1]:  # along runs walking right, then left
-        if np.isfinite(out[n]):
-            continue
-        level = min((now[k] for k in (n - 1, n + 1) if 0 <= k < M and fixed[k]), default=np.inf)
-        if level < now[n] * (1.0 - 1e-12):
-            out[n], now[n], fixed[n] = level / now[n], level, True
-    return out
 
 
 def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray,
@@ -356,7 +378,7 @@ def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray
                     # T_d): the rejected blocks keep the feed of their slowest set neighbour, a
                     # plateau from which a later block steps
                     trial = factor * np.where(ok, prop, 1.0)[:, None]
-                    level = _levels(trial, steps.feeds, rejected, fixed | ok)
+                    level = steps.levels(trial, rejected, fixed | ok)
                     again = np.isfinite(level)
                     if again.any():
                         again = _connected(_checked_steps(again, level, trial, fixed | ok, ratios, thr), fixed | ok | within)

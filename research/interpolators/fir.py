@@ -453,8 +453,8 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                     if np.any(g < 1.0):  # slowed blocks: check the corners again before bisecting
                         factor = factor * np.reshape(g, (-1, 1))  # new array: the state's inputs are the old
                         # their feed steps' corners at once, along the chain (not one block a round)
-                        factor = spread_slow_down(np.reshape(g, -1) < 1.0, checked, factor, breaking, hold, steps,
-                                                  corner_ratios)
+                        factor = spread_slow_down(np.reshape(g, -1) < 1.0, checked, factor, breaking, hold,
+                                                  steps.of(head, tail), corner_ratios)
                         too_fast = slowed = True
                     else:
                         too_fast = bisection.update(ratios)
