@@ -172,3 +172,30 @@ def test_slow_down_along_a_chain_costs_linear_time():
 
     cost(50)  # compiled kernels warm
     assert cost(1600) < 8.0 * cost(400)
+
+
+def test_feed_steps_is_the_isolated_step_bound():
+    """``FeedSteps`` on three collinear x-axis lines, the first slowed to 2 mm/s, the middle one in
+    pieces (head at 0.5 of the body's feed): the middle block's multiplier puts its head (the piece
+    facing the slowed block) at 2 + min(A T1, J T1 T2) mm/s (an isolated velocity step ``dV``
+    peaks at ``dV / T1`` and ``dV / (T1 T2)``, Sencer 2015 §2.1), here the jerk's 2 mm/s; the last
+    block, set from the middle one's new tail in the same call, by the same rule; a diagonal line's
+    bound per axis is the step over the direction's component."""
+    from research.interpolators._fir_limit_spread import FeedSteps
+
+    lim = AxisLimits.uniform(2, velocity=100.0, acceleration=500.0, jerk=1e4)
+    d = (0.02, 0.01)
+    step = min(500.0 * d[0], 1e4 * d[0] * d[1])  # 2 mm/s
+    F = np.full(3, 50.0)
+    u = np.array([[1.0, 0.0]] * 3)
+    factor = np.array([[0.04, 0.04, 0.04], [0.5, 1.0, 1.0], [1.0, 1.0, 1.0]])
+    steps = FeedSteps(F, u, np.zeros(3, dtype=bool), d, lim).of(np.array([0.0, 0.3, 0.0]), np.zeros(3))
+    g, within, unset = steps(factor, np.array([False, True, True]), np.array([True, False, False]))
+    assert g[1] * F[1] * factor[1, 0] == pytest.approx(2.0 + step)  # the head: 4 mm/s
+    assert g[2] * F[2] == pytest.approx(g[1] * F[1] * factor[1, 2] + step)  # 8 + 2 mm/s after the body at 8
+    assert not within.any() and not unset.any()
+    diag = np.array([[1.0, 0.0], [np.sqrt(0.5), np.sqrt(0.5)]])
+    steps = FeedSteps(F[:2], diag, np.zeros(2, dtype=bool), d, lim).of(np.zeros(2), np.zeros(2))
+    g, _, _ = steps(np.array([[0.04] * 3, [1.0] * 3]), np.array([False, True]), np.array([True, False]))
+    # |x u_x - 2| <= 2 and |x u_y| <= 2: x <= 2 / sqrt(0.5) from the y axis
+    assert g[1] * F[1] == pytest.approx(step / np.sqrt(0.5))
