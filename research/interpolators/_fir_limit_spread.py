@@ -305,9 +305,8 @@ def _connected(ok: np.ndarray, fixed: np.ndarray) -> np.ndarray:
 
 def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray,
                      breaking: Callable[[np.ndarray, np.ndarray], np.ndarray],
-                     hold: Callable[[np.ndarray, np.ndarray], np.ndarray],
-                     steps: FeedSteps | None = None,
-                     ratios: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None) -> np.ndarray:
+                     hold: Callable[[np.ndarray, np.ndarray], np.ndarray], steps: FeedSteps,
+                     ratios: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> np.ndarray:
     """Follow the slow-down of the blocks ``slowed`` along the chain (module docstring).
 
     Args:
@@ -318,10 +317,10 @@ def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray
             that break a limit at those factors (:meth:`CornerWindows.breaking`).
         hold: ``(factor, which) -> (M,)`` feed multipliers under which the blocks ``which`` alone
             keep the limits at those factors (``_fir_limits.hold_block_limits``).
-        steps, ratios: with both, a block in such a window first takes the feed of
-            :class:`FeedSteps` (a step from its slowed neighbours), kept where ``ratios(factor,
-            corners)`` (:meth:`CornerWindows.ratios`) finds the windows of those steps within the
-            limits; phase 1 (``hold``) otherwise, and after :data:`MAX_STEPS` such feeds.
+        steps, ratios: a block in such a window first takes the feed of :class:`FeedSteps` (a
+            step from its slowed neighbours), kept where ``ratios(factor, corners)``
+            (:meth:`CornerWindows.ratios`) finds the windows of those steps within the limits;
+            phase 1 (``hold``) otherwise, and after :data:`MAX_STEPS` such feeds.
 
     Returns:
         The feed factors with every slow-down that the chain's windows call for applied.
@@ -342,7 +341,7 @@ def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray
         if not near.any():
             return factor
         walk = near.copy()
-        if steps is not None and ratios is not None and span > 1:
+        if span > 1:
             # the blocks beyond each one of a walk (set on one side only), proposed in the same step
             for n in np.flatnonzero(near).tolist():
                 left, right = n > 0 and fixed[n - 1], n < M - 1 and fixed[n + 1]
@@ -365,35 +364,33 @@ def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray
             ahead[batch] = hold(factor, batch)[batch]
             run = min(2 * run, M)
         g = np.ones(M)
-        alone = near
-        if steps is not None and ratios is not None:
-            prop, within, unset = steps(factor, walk & (stepped < MAX_STEPS), fixed)
-            prop = np.where(prop > ahead, prop, np.nan)  # short blocks alone may run faster than a step allows
-            ok = _connected(np.isfinite(prop), fixed | within)
-            if ok.any():
-                ok = _connected(_checked_steps(ok, prop, factor, fixed, ratios, thr), fixed | within)
-                rejected = np.isfinite(prop) & ~ok
-                if rejected.any():
-                    # steps too close in time for the isolated-step bound (pulses shorter than
-                    # T_d): the rejected blocks keep the feed of their slowest set neighbour, a
-                    # plateau from which a later block steps
-                    trial = factor * np.where(ok, prop, 1.0)[:, None]
-                    level = steps.levels(trial, rejected, fixed | ok)
-                    again = np.isfinite(level)
-                    if again.any():
-                        again = _connected(_checked_steps(again, level, trial, fixed | ok, ratios, thr), fixed | ok | within)
-                        prop = np.where(again, level, prop)
-                        ok |= again
-                # the run doubles while its blocks beyond the first all took a feed (step or plateau)
-                span = min(2 * span, MAX_WALK) if not np.any(walk & ~near & ~ok & ~within) else 1
-                g[ok] = prop[ok]
-                stepped[ok] += 1
-                fixed |= ok
-                ahead[ok] = np.nan  # its factors change: an alone check made before no longer holds
-            # a block already within its steps' bound, or with no neighbour set yet, waits for its
-            # neighbours' new feeds, unless no block got one (then phase 1 for all)
-            alone = near & ~ok & ~within & ~unset if ok.any() else near
-            fixed |= within & ok.any()
+        prop, within, unset = steps(factor, walk & (stepped < MAX_STEPS), fixed)
+        prop = np.where(prop > ahead, prop, np.nan)  # short blocks alone may run faster than a step allows
+        ok = _connected(np.isfinite(prop), fixed | within)
+        if ok.any():
+            ok = _connected(_checked_steps(ok, prop, factor, fixed, ratios, thr), fixed | within)
+            rejected = np.isfinite(prop) & ~ok
+            if rejected.any():
+                # steps too close in time for the isolated-step bound (pulses shorter than
+                # T_d): the rejected blocks keep the feed of their slowest set neighbour, a
+                # plateau from which a later block steps
+                trial = factor * np.where(ok, prop, 1.0)[:, None]
+                level = steps.levels(trial, rejected, fixed | ok)
+                again = np.isfinite(level)
+                if again.any():
+                    again = _connected(_checked_steps(again, level, trial, fixed | ok, ratios, thr), fixed | ok | within)
+                    prop = np.where(again, level, prop)
+                    ok |= again
+            # the run doubles while its blocks beyond the first all took a feed (step or plateau)
+            span = min(2 * span, MAX_WALK) if not np.any(walk & ~near & ~ok & ~within) else 1
+            g[ok] = prop[ok]
+            stepped[ok] += 1
+            fixed |= ok
+            ahead[ok] = np.nan  # its factors change: an alone check made before no longer holds
+        # a block already within its steps' bound, or with no neighbour set yet, waits for its
+        # neighbours' new feeds, unless no block got one (then phase 1 for all)
+        alone = near & ~ok & ~within & ~unset if ok.any() else near
+        fixed |= within & ok.any()
         if alone.any():
             checked |= alone
             fixed |= alone

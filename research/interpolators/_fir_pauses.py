@@ -88,11 +88,7 @@ def join(plans, ranges, pauses: np.ndarray):
         t = pos_breaks[-1] + shift
         if stop < M or not np.isnan(pauses[M]):  # the pause after this part
             breaks.append(xp.reshape(t, (1,)))
-            h = pos_breaks[-1] - pos_breaks[-2]  # the end value: Horner on the last piece
-            end = pos_coeffs[-1, -1]
-            for m in range(pos_coeffs.shape[1] - 2, -1, -1):
-                end = end * h + pos_coeffs[-1, m]
-            coeffs.append(hold(end))
+            coeffs.append(hold(PiecewisePolynomial(pos_breaks, pos_coeffs).end_values()))  # NumPy in, NumPy out
             t = t + dwell[stop]
     breaks.append(xp.reshape(t, (1,)))
     deviations = [p.path_deviation for p in plans]
