@@ -6,7 +6,10 @@ Two measures of the distance between trajectory and programmed path, both on the
   searched around the instant the averaging window is centred on the corner's gap;
 * the **path deviation**: distance from the trajectory to the path (lines and arcs), on samples
   every ``check_period`` plus the corner instants. Between vertices of short blocks and along
-  arcs the trajectory can leave the path where no vertex sees it.
+  arcs the trajectory can leave the path where no vertex sees it. Where no sample's averaging
+  window holds an input break (a *steady span*, :func:`steady_spans`) the grid is thinned to
+  :data:`STEADY_SAMPLES` samples, so that a check costs in proportion to the program's blocks,
+  not its duration.
 """
 
 from __future__ import annotations
@@ -19,7 +22,8 @@ from jax import Array
 from research.paths.toolpath import ToolPath
 from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_verify_kernels import corner_distances as _corner_kernel
-from research.interpolators._fir_verify_kernels import charge_samples, grid_times, sampled_line_distances, scatter_max
+from research.interpolators._fir_verify_kernels import (charge_samples, grid_times, sampled_line_distances, scatter_max,
+                                                        thinned_runs)
 from research.piecewise import NumpyPiecewise, PiecewisePolynomial, bucket_size
 
 _GRID = 9  # grid points per corner window for the corner-error search
@@ -32,6 +36,13 @@ _CHUNK = 1 << 12  # path samples checked at once (about 0.25 MB of work arrays; 
 #: benchmarks/fir_plan_compare.py are identical but two, which are faster (-0.14 %, -1e-9).
 _NEWTON_STEPS = 6
 _BATCH = 1 << 10  # samples that wait for ToolPath.distance_bound together (:func:`_scan`)
+#: grid samples kept in a steady span (:func:`steady_spans`): its window averages one input piece
+#: only, a line's (on the line: distance 0 up to rounding) or one sub-arc's at one feed (a smooth
+#: deviation: ``_fir_blocks`` holds a sub-arc to at most ``SUB_ARC`` = pi/8 rad, so 64 samples
+#: are at most pi/512 rad apart on the arc, as close as the 1 ms grid at ``F = 6.1 R`` per second
+#: and closer below). Only spans longer than 64 grid steps are thinned: before this, a program at
+#: ``F0.001`` (mm/min) took one sample per ms of its 10^6 s and did not finish.
+STEADY_SAMPLES = 64
 
 
 def corner_distances(position: PiecewisePolynomial, vertices: Array, centre: Array, half_window: Array) -> Array:
@@ -159,7 +170,7 @@ def charged_repairs(j: int, deviation: float, stops: np.ndarray, centre: np.ndar
 
 
 def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray, centre: np.ndarray, Td: float,
-                    tol_block: np.ndarray, check_period: float):
+                    tol_block: np.ndarray, check_period: float, durations=None):
     """Largest sampled distance from the trajectory to ``path`` and where it breaks the tolerance.
 
     Args:
@@ -167,6 +178,8 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
         starts: ``(M,)`` pulse start of each block [s]; centre: ``(M - 1,)`` corner instants [s].
         Td: total filter delay [s]; tol_block: ``(M,)`` tolerance per block [mm].
         check_period: sample spacing [s].
+        durations: ``(P,)`` lengths [s] of the input pieces (gaps included) from ``starts[0]``,
+            to thin the grid over steady spans (:func:`steady_spans`); None: the full grid.
 
     Returns:
         ``(max_deviation [mm], {vertex: deviation}, {block: deviation})``; distances are upper
@@ -181,25 +194,60 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
     n = int(np.ceil((t1 - t0) / check_period)) + 1
     M = path.n_blocks
     worst, bad = np.full(2 * M - 1, -np.inf), np.full(2 * M - 1, -np.inf)
-    times = _sample_times(np.zeros(1, np.int64), np.array([n]), t0, t1, check_period, centre)
+    steady = None if durations is None else steady_spans(starts, durations, t0, Td, check_period)
+    _, times = _sample_times(np.zeros(1, np.int64), np.array([n - 1]), t0, t1, check_period, centre, steady)
     deviation = _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, None)
     at_vertex = {int(v): float(bad[v]) for v in np.flatnonzero(bad[: M - 1] > -np.inf)}
     at_block = {int(b): float(bad[M - 1 + b]) for b in np.flatnonzero(bad[M - 1:] > -np.inf)}
     return deviation, at_vertex, at_block
 
 
-def _sample_times(first: np.ndarray, count: np.ndarray, t0: float, t1: float, period: float, extra: np.ndarray):
+def steady_spans(starts: np.ndarray, durations: np.ndarray, t0: float, Td: float, period: float):
+    """The stretches of the sample grid ``t0 + i period`` where a check learns nothing new per
+    sample: grid-index spans ``(first, last, stride)`` (sorted, disjoint) over which only every
+    ``stride``-th index is sampled.
+
+    The output at ``t`` averages the input over ``[t - T_d, t]`` (nonnegative weights). The input
+    pieces follow one another from ``starts[0]`` (motion pieces and dwell gaps, ``durations``
+    ``(P,)`` [s]), so between two input breaks ``b_k < b_k+1`` every output time in ``[b_k + T_d,
+    b_k+1]`` averages a single piece: a line's points (the output lies on the line), a gap's (the
+    vertex) or one sub-arc's at one feed (a smooth deviation from the arc). Those spans, less one
+    period at each end for rounding, that hold more than :data:`STEADY_SAMPLES` grid points are
+    thinned to about that many (``stride = ceil(n / STEADY_SAMPLES)``); the grid next to them stays
+    dense, so every window that meets a break is sampled at the full rate."""
+    breaks = float(starts[0]) + np.concatenate([[0.0], np.cumsum(durations)])
+    first = np.ceil((breaks[:-1] + Td + period - t0) / period)
+    last = np.floor((breaks[1:] - period - t0) / period)
+    n = last - first + 1
+    keep = n > STEADY_SAMPLES
+    n = n[keep]
+    return (first[keep].astype(np.int64), last[keep].astype(np.int64),
+            np.ceil(n / STEADY_SAMPLES).astype(np.int64))
+
+
+def _sample_times(first: np.ndarray, last: np.ndarray, t0: float, t1: float, period: float, extra: np.ndarray,
+                  steady=None):
     """The check's sample times in chunks of at most :data:`_CHUNK` (bounded memory, never the
-    whole list at once): the grid points ``t0 + i period`` for ``i`` in ``first[r] .. first[r] +
-    count[r] - 1`` of each run ``r`` (in order), then the times ``extra`` and ``t1``, all clipped to
-    ``[t0, t1]``. The values are those of the full list, whatever the chunking."""
+    whole list at once): the grid points ``t0 + i period`` for ``i`` in ``first[r] .. last[r]`` of
+    each run ``r`` (sorted, disjoint), thinned over the ``steady`` spans (:func:`steady_spans`;
+    None: none), then the times ``extra`` and ``t1``, all clipped to ``[t0, t1]``. Returns the
+    number of samples and their chunks; the values are those of the full list, whatever the
+    chunking."""
+    if steady is None:
+        first, count, stride = first, np.maximum(last - first + 1, 0), np.ones(first.size, np.int64)
+    else:
+        first, count, stride = thinned_runs(first, last, *steady)
     ends = np.cumsum(count)  # sample index after each run
     n_grid = int(ends[-1]) if ends.size else 0
-    for i in range(0, n_grid, _CHUNK):
-        yield grid_times(i, min(i + _CHUNK, n_grid), first, count, ends, t0, t1, period)  # compiled
     tail = np.append(extra, t1)
-    for i in range(0, tail.size, _CHUNK):
-        yield np.clip(tail[i: i + _CHUNK], t0, t1)
+
+    def chunks():
+        for i in range(0, n_grid, _CHUNK):
+            yield grid_times(i, min(i + _CHUNK, n_grid), first, count, stride, ends, t0, t1, period)  # compiled
+        for i in range(0, tail.size, _CHUNK):
+            yield np.clip(tail[i: i + _CHUNK], t0, t1)
+
+    return n_grid + tail.size, chunks()
 
 
 def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo, slack: float = 0.0,
@@ -348,7 +396,7 @@ class RoundChecks:
         The planner looks at the vertex errors first: their repairs alone can already rule a
         candidate out, and the path samples cost more."""
         path, M, half = self.path, self.path.n_blocks, 0.5 * self.Td
-        self._pending = (position, starts, centre)
+        self._pending = (position, starts, centre, durations)
         if M == 1:
             return np.zeros(0)
         lo_v, hi_v, lo_b, hi_b = self._spans(position, starts, centre)
@@ -405,8 +453,8 @@ class RoundChecks:
         deviation})`` as :func:`path_deviations`."""
         path, M = self.path, self.path.n_blocks
         if M == 1:
-            position, starts, centre = self._pending
-            return path_deviations(position, path, starts, centre, self.Td, self.tol, self.period)
+            position, starts, centre, durations = self._pending
+            return path_deviations(position, path, starts, centre, self.Td, self.tol, self.period, durations)
         position, starts, centre, redo_v, redo_b = self._pending
         self._pending = None
         t0, t1 = float(position.breaks[0]), float(position.breaks[-1])
@@ -418,13 +466,12 @@ class RoundChecks:
             first = np.maximum(np.ceil((s_lo - t0) / self.period), 0).astype(np.int64)
             n = int(np.ceil((t1 - t0) / self.period)) + 1
             last = np.minimum(np.floor((s_hi - t0) / self.period).astype(np.int64), n - 1)
-            count = np.maximum(last - first + 1, 0)
             extra = centre[redo_v[: M - 1]]
-            self.samples = int(count.sum()) + extra.size + 1
+            steady = steady_spans(starts, self.durations, t0, self.Td, self.period)
+            self.samples, times = _sample_times(first, last, t0, t1, self.period, extra, steady)
             bad = np.full(2 * M - 1, -np.inf)  # dense while checking, its few entries kept between checks
             bad[self.bad[0]] = self.bad[1]
             self.worst[redo], bad[redo] = -np.inf, -np.inf
-            times = _sample_times(first, count, t0, t1, self.period, extra)
             _scan(position, path, times, starts, centre, self.Td, self.tol, self.worst, bad, redo, self.slack,
                   self.stops)
             keys = np.flatnonzero(bad > -np.inf)

@@ -293,19 +293,57 @@ def _left_from(a, v, hint):
 
 
 @numba.njit(**_OPTIONS)
-def grid_times(i, j, first, count, ends, t0, t1, period):
-    """Grid samples ``i .. j - 1`` of the runs ``r`` of ``count[r]`` grid points from ``t0 + first[r]
-    period`` on (``ends``: their cumulative counts), clipped to ``[t0, t1]`` (``_fir_verify._sample_times``):
-    the run of sample ``k`` is ``searchsorted(ends, k, "right")``, its time ``t0 + (first[run] + k -
-    (ends[run] - count[run])) period``, the integer converted to a float before the product, as
-    NumPy's ``int64 * float64``."""
+def grid_times(i, j, first, count, stride, ends, t0, t1, period):
+    """Grid samples ``i .. j - 1`` of the runs ``r`` of ``count[r]`` grid points ``t0 + (first[r] +
+    n stride[r]) period``, ``n = 0 .. count[r] - 1`` (``ends``: their cumulative counts), clipped to
+    ``[t0, t1]`` (``_fir_verify._sample_times``): the run of sample ``k`` is ``searchsorted(ends, k,
+    "right")``, its grid index ``first[run] + (k - (ends[run] - count[run])) stride[run]``, the
+    integer converted to a float before the product, as NumPy's ``int64 * float64``."""
     out = np.empty(max(j - i, 0))
     run = 0
     for k in range(i, j):
         while ends[run] <= k:
             run += 1
-        out[k - i] = min(max(t0 + (first[run] + (k - (ends[run] - count[run]))) * period, t0), t1)
+        out[k - i] = min(max(t0 + (first[run] + (k - (ends[run] - count[run])) * stride[run]) * period, t0), t1)
     return out
+
+
+@numba.njit(**_OPTIONS)
+def thinned_runs(first, last, s_first, s_last, s_stride):
+    """The grid-index runs ``[first[r], last[r]]`` (sorted, disjoint) cut by the steady spans
+    ``[s_first[s], s_last[s]]`` (sorted, disjoint; ``_fir_verify.steady_spans``): outside a span
+    every index is kept, inside it only ``s_first[s] + n s_stride[s]`` (the same indices whichever
+    runs meet the span). Returns ``(first', count', stride')`` of the runs kept, in order."""
+    R, S = first.size, s_first.size
+    cap = 2 * (R + S) + 1
+    out_first = np.empty(cap, np.int64)
+    out_count = np.empty(cap, np.int64)
+    out_stride = np.empty(cap, np.int64)
+    n, s = 0, 0
+    for r in range(R):
+        cur, end = first[r], last[r]
+        if cur > end:
+            continue
+        while s < S and s_last[s] < cur:
+            s += 1
+        k = s
+        while k < S and s_first[k] <= end:
+            if s_first[k] > cur:  # dense stretch before the span
+                out_first[n], out_count[n], out_stride[n] = cur, s_first[k] - cur, 1
+                n += 1
+            lo, hi = max(cur, s_first[k]), min(end, s_last[k])
+            a = s_first[k] + -((s_first[k] - lo) // s_stride[k]) * s_stride[k]  # first kept index >= lo
+            if a <= hi:
+                out_first[n], out_count[n], out_stride[n] = a, (hi - a) // s_stride[k] + 1, s_stride[k]
+                n += 1
+            cur = hi + 1
+            if s_last[k] > end:
+                break
+            k += 1
+        if cur <= end:
+            out_first[n], out_count[n], out_stride[n] = cur, end - cur + 1, 1
+            n += 1
+    return out_first[:n], out_count[:n], out_stride[:n]
 
 
 @numba.njit(**_OPTIONS)

@@ -447,7 +447,8 @@ def test_grid_times_are_the_numpy_runs():
     want = np.clip(t0 + (first[run] + (k - (ends[run] - count[run]))) * period, t0, t1)
     assert want[-1] == t1  # the last run reaches past the end: clipped
     for i, j in ((0, ends[-1]), (3, 20), (17, 17), (21, ends[-1])):
-        np.testing.assert_array_equal(grid_times(i, j, first, count, ends, t0, t1, period), want[i:j])
+        np.testing.assert_array_equal(grid_times(i, j, first, count, np.ones_like(count), ends, t0, t1, period),
+                                      want[i:j])
 
 
 def numpy_staircase_cut(r_h, f_h, r_t, f_t, length, cap):
