@@ -186,7 +186,28 @@ class ChainError:
         tol = np.ascontiguousarray(np.broadcast_to(np.asarray(tolerance, dtype=np.float64), hi.shape))
         e = self(s_query, hi) if error_max is None else np.array(error_max, dtype=np.float64).reshape(-1)
         q = np.asarray(s_query, dtype=np.float64).reshape(-1) - self.origin
-        return chain_largest_feeds(*self._args(q, hi), q, hi, tol, e, _BISECTION_STEPS, _CLOSE, _TINY)
+        out = chain_largest_feeds(*self._args(q, hi), q, hi, tol, e, _BISECTION_STEPS, _CLOSE, _TINY)
+        zero = tol <= 0
+        if zero.any():
+            out[zero] = self.reach_free_feed(q[zero], hi[zero])
+        return out
+
+    def reach_free_feed(self, q: np.ndarray, feed_max: np.ndarray) -> np.ndarray:
+        """The largest feed ``<= feed_max`` [mm/s] at which no direction change lies strictly
+        inside the window of the (re-centred) arc lengths ``q`` [mm]: ``|d_j| = 0`` exactly there
+        (every term of the module docstring's sum vanishes), and above it a turn enters and
+        ``|d_j| > 0``. The root of a zero tolerance in closed form: the window sums the turns with
+        ``|s_i - s_j| < F max(rho)`` (``rho``: the kernel's half-supports), so it is ``min |s_i -
+        s_j| / max(rho)`` over the turns with ``du_i != 0`` (0 where the query's own turn is one).
+        The Newton search cannot take it (its stopping band is relative to the tolerance)."""
+        turning = np.any(self.du != 0.0, axis=1)
+        s_t = self.s[turning]
+        if not s_t.size:
+            return np.array(feed_max, dtype=np.float64)
+        i = np.searchsorted(s_t, q)
+        right = np.abs(s_t[np.minimum(i, s_t.size - 1)] - q)
+        left = np.abs(q - s_t[np.maximum(i - 1, 0)])
+        return np.minimum(feed_max, np.minimum(left, right) / float(np.max(self.rho)))
 
     def feed_decisions(self, s_query: np.ndarray, feed_max: np.ndarray, tolerance: np.ndarray, error_max: np.ndarray,
                        stretch_cap: np.ndarray, Td: float, costs: np.ndarray) -> np.ndarray:
@@ -202,6 +223,10 @@ class ChainError:
         tol = np.ascontiguousarray(np.broadcast_to(np.asarray(tolerance, dtype=np.float64), hi.shape))
         e = np.array(error_max, dtype=np.float64).reshape(-1)
         q = np.asarray(s_query, dtype=np.float64).reshape(-1) - self.origin
-        return chain_feed_decisions(*self._args(q, hi), q, hi, tol, e, _BISECTION_STEPS, _CLOSE, _TINY,
-                                    np.ascontiguousarray(stretch_cap, dtype=np.float64), float(Td),
-                                    np.ascontiguousarray(costs, dtype=np.float64).reshape(hi.size, -1))
+        out = chain_feed_decisions(*self._args(q, hi), q, hi, tol, e, _BISECTION_STEPS, _CLOSE, _TINY,
+                                   np.ascontiguousarray(stretch_cap, dtype=np.float64), float(Td),
+                                   np.ascontiguousarray(costs, dtype=np.float64).reshape(hi.size, -1))
+        zero = tol <= 0
+        if zero.any():  # the root itself (:meth:`reach_free_feed`): the same decisions
+            out[zero] = self.reach_free_feed(q[zero], hi[zero])
+        return out

@@ -90,6 +90,7 @@ import numpy as np
 
 from research.interpolators._fir_blocks import PulseTable
 from research.interpolators._fir_feed import ChainError
+from research.interpolators._fir_kernels import VERIFY_ATOL
 from research.interpolators._fir_candidate_kernels import candidate_pieces, line_piece_feeds, staircase_cuts
 from research.interpolators._fir_profile import kernel_second_integral, overlaps
 from research.paths.toolpath import ToolPath
@@ -150,6 +151,12 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     Fv = np.minimum(F[:-1], F[1:])
     dF = np.linalg.norm(F[1:, None] * t_in[1:] - F[:-1, None] * t_out[:-1], axis=1)
     h_full = float(kernel_second_integral(0.5 * Td, delays))
+    # a vertex held to tolerance 0 whose own turn moves its full-overlap window by at most the
+    # verification's absolute slack (VERIFY_ATOL, 1 pm) at its feed is straight to the planner (a
+    # line split at a point rounded off it): its turn is left out of the chain, and it is not stopped
+    # for it -- only where a window's other turns reach it, and then by the dwell decisions, not always
+    straight = (tol_v <= 0) & (Fv * np.linalg.norm(du, axis=1) * h_full <= VERIFY_ATOL)
+    du = np.where(straight[:, None], 0.0, du)
     arc_turns = _arc_turns(tp, float(np.min(tol_v, initial=np.inf))) if tp.is_arc.any() else (np.zeros(0), np.zeros((0, tp.dim)))
 
     if arc_turns[0].size:  # every turn in arc-length order, vertices first where equal (a stable sort)
@@ -257,7 +264,7 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
                 continue
             # the dwell set and rule define the candidate; at tol_v a vertex that needs a slow-down
             # and has no feed (zero tolerance) stops exactly whatever the set
-            gap = gap | (need_0 & ((f_w <= 0) | (tol_v <= 0)))
+            gap = gap | (need_0 & ((f_w <= 0) | ((tol_v <= 0) & ~straight)))
             key = (rule if gap.any() else 1, gap.tobytes())
             if key not in seen:
                 seen.add(key)
