@@ -35,6 +35,14 @@ _CHUNK = 1 << 12  # path samples checked at once (about 0.25 MB of work arrays; 
 #: before the Gauss-Newton fallback). Swept 4 / 5 / 6 / 8 on that vertex; with 6 the 83 plans of
 #: benchmarks/fir_plan_compare.py are identical but two, which are faster (-0.14 %, -1e-9).
 _NEWTON_STEPS = 6
+#: at most this many further Newton steps of a corner search whose distance is above the tolerance
+#: it is checked against (:func:`vertex_distances`); it stops earlier once a step leaves its time
+#: where it is. The 6 steps of the grid's basin left a vertex 5.5 um before an exact stop, which the
+#: trajectory passes at a crawl, 0.37 um from it at tolerance 0 (``G61``; a line split there): the
+#: planner stopped it, and its neighbours in turn (+27 % on that program). Swept (benchmarks/README.md,
+#: "Corner search near exact stops"): 3, 6, 12 and 24 all settle the sweep's cases at no measurable
+#: cost (only searches above their bound take them); 24 keeps a margin for slower approaches.
+_MORE_STEPS = 24
 _BATCH = 1 << 10  # samples that wait for ToolPath.distance_bound together (:func:`_scan`)
 #: grid samples kept in a steady span (:func:`steady_spans`): its window averages one input piece
 #: only, a line's (on the line: distance 0 up to rounding) or one sub-arc's at one feed (a smooth
@@ -93,15 +101,21 @@ def _corner_distances(position, vertices, centre, half_window, real):
     return jnp.where(real & positive, jnp.sqrt(jnp.where(positive, squared, 1.0)), 0.0)
 
 
-def vertex_distances(position: NumpyPiecewise, vertices: np.ndarray, centre: np.ndarray, half_window: float) -> np.ndarray:
+def vertex_distances(position: NumpyPiecewise, vertices: np.ndarray, centre: np.ndarray, half_window: float,
+                     bound=None) -> np.ndarray:
     """:func:`corner_distances` on concrete arrays, compiled (``_fir_verify_kernels.corner_distances``): the
     same grid and Newton steps without JAX dispatch, for the planner's checks (the JAX form stays
-    the differentiable one). Agrees with it to rounding."""
+    the differentiable one), and agreeing with it to rounding where a distance is within its
+    ``bound`` [mm] (scalar or ``(C,)``; None: no bound, no further step). A distance above it is
+    refined by up to :data:`_MORE_STEPS` further Newton steps, until one leaves its time where it
+    is (the least distance met: an upper bound still)."""
     if vertices.shape[0] == 0:
         return np.zeros(0)
+    C = vertices.shape[0]
+    bound = np.full(C, np.inf) if bound is None else np.ascontiguousarray(np.broadcast_to(bound, (C,)), dtype=np.float64)
     return _corner_kernel(np.ascontiguousarray(position.breaks), np.ascontiguousarray(position.coeffs),
                           np.ascontiguousarray(vertices, dtype=np.float64), np.ascontiguousarray(centre, dtype=np.float64),
-                          float(half_window), _GRID, _NEWTON_STEPS)
+                          float(half_window), _GRID, _NEWTON_STEPS, bound, _MORE_STEPS)
 
 
 def profile_rounding(position: NumpyPiecewise, end: np.ndarray) -> float:
@@ -413,7 +427,9 @@ class RoundChecks:
             redo_b = _meets(lo_b, hi_b, r_lo, r_hi)
         self.durations = durations  # kept, not copied: the planner builds a new array every round
         if vertex_errors and err_v.any():
-            self.errors[err_v] = vertex_distances(position, path.vertices[err_v], centre[err_v], half)
+            tol_v = np.minimum(self.tol[: M - 1], self.tol[1:M])[err_v]
+            self.errors[err_v] = vertex_distances(position, path.vertices[err_v], centre[err_v], half,
+                                                  verified_bound(tol_v) + self.slack)
         self._pending = (position, starts, centre, redo_v, redo_b)
         return self.errors.copy() if vertex_errors else np.zeros(M - 1)
 

@@ -147,12 +147,15 @@ def _squared_distance(coeffs, piece, tau, vertices, c, D, A):
     return d2
 
 
-def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
+def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, bound, more_steps):
     """Distance [mm] from each vertex ``(C, A)`` to the profile near ``centre`` ``(C,)`` [s]: the best
     of ``grid`` points evenly spread over ``centre +- half_window``, refined by ``newton_steps``
     safeguarded Newton steps on ``|p(t) - V|^2`` (Gauss-Newton where Newton's curvature is not
     positive) kept within one grid step (the compiled form of
-    ``_fir_verify._corner_distances``; never above the best grid point's distance).
+    ``_fir_verify._corner_distances``; never above the best grid point's distance). A vertex whose
+    distance is still above its ``bound`` ``(C,)`` [mm] then takes up to ``more_steps`` further
+    steps, until one leaves its time where it is; it keeps the least distance met (each is the
+    distance to a point of the trajectory: never optimistic).
 
     The profile is evaluated as :class:`research.piecewise.NumpyPiecewise` (clipped time, piece
     ``searchsorted(breaks, t, "right") - 1``, Horner's rule; derivatives 0 outside the breaks), each
@@ -160,39 +163,89 @@ def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton
     of the last corner, the first Newton step's from the best grid point, the others' from the
     last step. Compiled for the same row and axis counts as constants as
     :func:`sampled_line_distances`."""
-    return _CORNER_FORMS.get(coeffs.shape[1:], _corner_any)(breaks, coeffs, vertices, centre, half_window, grid, newton_steps)
+    return _CORNER_FORMS.get(coeffs.shape[1:], _corner_any)(breaks, coeffs, vertices, centre, half_window, grid,
+                                                            newton_steps, bound, more_steps)
 
 
 @numba.njit(**_OPTIONS)
-def _corner_4_3(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
-    return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 4, 3)
+def _corner_4_3(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, bound, more_steps):
+    return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, bound, more_steps, 4, 3)
 
 
 @numba.njit(**_OPTIONS)
-def _corner_9_3(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
-    return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 9, 3)
+def _corner_9_3(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, bound, more_steps):
+    return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, bound, more_steps, 9, 3)
 
 
 @numba.njit(**_OPTIONS)
-def _corner_4_2(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
-    return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 4, 2)
+def _corner_4_2(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, bound, more_steps):
+    return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, bound, more_steps, 4, 2)
 
 
 @numba.njit(**_OPTIONS)
-def _corner_9_2(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
-    return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 9, 2)
+def _corner_9_2(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, bound, more_steps):
+    return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, bound, more_steps, 9, 2)
 
 
 @numba.njit(**_OPTIONS)
-def _corner_any(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
-    return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, coeffs.shape[1], coeffs.shape[2])
+def _corner_any(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, bound, more_steps):
+    return _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, bound, more_steps,
+                        coeffs.shape[1], coeffs.shape[2])
 
 
 _CORNER_FORMS = {(4, 3): _corner_4_3, (9, 3): _corner_9_3, (4, 2): _corner_4_2, (9, 2): _corner_9_2}
 
 
+@numba.njit(inline="always", **_OPTIONS)
+def _newton_time(breaks, coeffs, vertices, c, t, found, t_lo, t_hi, lo, hi, D, A):
+    """One safeguarded Newton step of the corner search (:func:`corner_distances`) from ``t``:
+    ``(next time within [lo, hi], its piece search index)``."""
+    K = coeffs.shape[0]
+    tc = min(max(t, t_lo), t_hi)
+    found = _right_next(breaks, tc, found)
+    piece = min(max(found - 1, 0), K - 1)
+    tau = tc - breaks[piece]
+    inside = t_lo <= t <= t_hi
+    slope, curvature, speed2 = 0.0, 0.0, 0.0
+    for a in range(A):
+        v = coeffs[piece, D - 1, a]
+        for m in range(D - 2, -1, -1):
+            v = v * tau + coeffs[piece, m, a]
+        v1 = 0.0
+        if D > 1:
+            v1 = coeffs[piece, D - 1, a] * (D - 1)
+            for m in range(D - 2, 0, -1):
+                v1 = v1 * tau + coeffs[piece, m, a] * m
+        v2 = 0.0
+        if D > 2:
+            v2 = coeffs[piece, D - 1, a] * (D - 1) * (D - 2)
+            for m in range(D - 2, 1, -1):
+                v2 = v2 * tau + coeffs[piece, m, a] * m * (m - 1)
+        if not inside:
+            v1, v2 = 0.0, 0.0
+        e = v - vertices[c, a]
+        slope += e * v1
+        curvature += v1 * v1 + e * v2
+        speed2 += v1 * v1
+    if curvature > 0:
+        t = t - slope / curvature
+    elif speed2 > 0:  # Gauss-Newton where Newton's model has no minimum (_fir_verify._corner_distances)
+        t = t - slope / speed2
+    return min(max(t, lo), hi), found
+
+
+@numba.njit(inline="always", **_OPTIONS)
+def _distance_at(breaks, coeffs, vertices, c, t, found, t_lo, t_hi, D, A):
+    """``(|p(t) - V_c|^2, piece search index)`` at the clipped time ``t``."""
+    K = coeffs.shape[0]
+    tc = min(max(t, t_lo), t_hi)
+    found = _right_next(breaks, tc, found)
+    piece = min(max(found - 1, 0), K - 1)
+    return _squared_distance(coeffs, piece, tc - breaks[piece], vertices, c, D, A), found
+
+
 @numba.njit(**_OPTIONS)
-def _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, D, A):
+def _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, bound, more_steps, D, A):
     """:func:`corner_distances` with the coefficient rows ``D`` and axes ``A`` of ``coeffs`` passed
     apart, as :func:`_line_distances`."""
     C = vertices.shape[0]
@@ -217,43 +270,19 @@ def _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_ste
         lo, hi = best - step, best + step
         t = best
         for _ in range(newton_steps):
-            tc = min(max(t, t_lo), t_hi)
-            found = _right_next(breaks, tc, found)
-            piece = min(max(found - 1, 0), K - 1)
-            tau = tc - breaks[piece]
-            inside = t_lo <= t <= t_hi
-            slope, curvature, speed2 = 0.0, 0.0, 0.0
-            for a in range(A):
-                v = coeffs[piece, D - 1, a]
-                for m in range(D - 2, -1, -1):
-                    v = v * tau + coeffs[piece, m, a]
-                v1 = 0.0
-                if D > 1:
-                    v1 = coeffs[piece, D - 1, a] * (D - 1)
-                    for m in range(D - 2, 0, -1):
-                        v1 = v1 * tau + coeffs[piece, m, a] * m
-                v2 = 0.0
-                if D > 2:
-                    v2 = coeffs[piece, D - 1, a] * (D - 1) * (D - 2)
-                    for m in range(D - 2, 1, -1):
-                        v2 = v2 * tau + coeffs[piece, m, a] * m * (m - 1)
-                if not inside:
-                    v1, v2 = 0.0, 0.0
-                e = v - vertices[c, a]
-                slope += e * v1
-                curvature += v1 * v1 + e * v2
-                speed2 += v1 * v1
-            if curvature > 0:
-                t = t - slope / curvature
-            elif speed2 > 0:  # Gauss-Newton where Newton's model has no minimum (_fir_verify._corner_distances)
-                t = t - slope / speed2
-            t = min(max(t, lo), hi)
-        tc = min(max(t, t_lo), t_hi)
-        found = _right_next(breaks, tc, found)
-        piece = min(max(found - 1, 0), K - 1)
-        tau = tc - breaks[piece]
-        d2 = _squared_distance(coeffs, piece, tau, vertices, c, D, A)
-        out[c] = math.sqrt(min(d2, best_d2))
+            t, found = _newton_time(breaks, coeffs, vertices, c, t, found, t_lo, t_hi, lo, hi, D, A)
+        d2, found = _distance_at(breaks, coeffs, vertices, c, t, found, t_lo, t_hi, D, A)
+        least = min(d2, best_d2)
+        for _ in range(more_steps):
+            if math.sqrt(least) <= bound[c]:
+                break
+            t_next, found = _newton_time(breaks, coeffs, vertices, c, t, found, t_lo, t_hi, lo, hi, D, A)
+            if t_next == t:
+                break
+            t = t_next
+            d2, found = _distance_at(breaks, coeffs, vertices, c, t, found, t_lo, t_hi, D, A)
+            least = min(least, d2)
+        out[c] = math.sqrt(least)
     return out
 
 

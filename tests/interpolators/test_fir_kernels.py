@@ -313,8 +313,33 @@ def test_corner_distances_match_a_numpy_search_on_random_profiles(D, A):
     lo, hi = float(pos.breaks[0]), float(pos.breaks[-1])
     centre = np.concatenate([np.sort(rng.uniform(lo - 0.02, hi + 0.02, 150)), rng.uniform(lo, hi, 20)])
     vertices = pos(centre + rng.normal(0.0, 0.01, centre.size)) + rng.normal(0.0, 0.05, (centre.size, A))
-    got = kernel(pos.breaks, pos.coeffs, vertices, centre, 0.04, 9, 4)
+    got = kernel(pos.breaks, pos.coeffs, vertices, centre, 0.04, 9, 4, np.full(centre.size, np.inf), 24)
     np.testing.assert_allclose(got, numpy_corner_distances(pos, vertices, centre, 0.04), rtol=1e-9, atol=1e-12)
+
+
+def test_corner_search_refined_above_its_bound_is_closer_and_still_a_distance_to_the_trajectory():
+    """With a bound of 0 every search takes up to 24 further Newton steps: each distance is at most
+    the 4-step one, and at least the least distance to the trajectory over its search window
+    sampled every 1e-6 s, less what the trajectory can move in half a sample (an upper bound is
+    never below the true least distance). Distances within their bound are the 4-step ones."""
+    from research.interpolators._fir_verify_kernels import corner_distances as kernel
+
+    rng = np.random.default_rng(17)
+    pos = random_profile(rng, 200, 4, 3)
+    lo, hi = float(pos.breaks[0]), float(pos.breaks[-1])
+    centre = np.sort(rng.uniform(lo + 0.05, hi - 0.05, 40))
+    vertices = pos(centre + rng.normal(0.0, 0.01, centre.size)) + rng.normal(0.0, 0.002, (centre.size, 3))
+    plain = kernel(pos.breaks, pos.coeffs, vertices, centre, 0.04, 9, 4, np.full(centre.size, np.inf), 24)
+    refined = kernel(pos.breaks, pos.coeffs, vertices, centre, 0.04, 9, 4, np.zeros(centre.size), 24)
+    assert np.all(refined <= plain)
+    within = kernel(pos.breaks, pos.coeffs, vertices, centre, 0.04, 9, 4, plain + 1e-12, 24)
+    np.testing.assert_array_equal(within, plain)
+    for c in range(centre.size):
+        t = np.arange(centre[c] - 0.04, centre[c] + 0.04, 1e-6)
+        q = pos(t)
+        speed = float(np.max(np.linalg.norm(np.diff(q, axis=0), axis=1))) / 1e-6
+        least = float(np.min(np.linalg.norm(q - vertices[c], axis=1)))
+        assert refined[c] >= least - 0.5e-6 * speed - 1e-12
 
 
 def test_hinted_search_is_searchsorted_right():

@@ -14,6 +14,7 @@ import pytest
 from research.interpolators import _fir_profile
 from research.interpolators._fir_blocks import PulseTable, build_profile
 from research.interpolators._fir_overlap import overlap_time
+from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_verify import RoundChecks, path_deviations, vertex_distances
 from research.paths import Polyline
 from research.paths.library import random_program
@@ -115,14 +116,15 @@ def test_round_checks_redo_only_the_changed_stretch_and_agree_with_full_checks()
     tol = np.full(80, 0.02)
     checks = RoundChecks(tp, tol, table.block, Td, 1e-3)
     errors, dev, at_v, at_b = checks(pos, starts, centre, durations, True)
-    np.testing.assert_array_equal(errors, vertex_distances(pos, tp.vertices, centre, 0.5 * Td))
+    np.testing.assert_array_equal(errors, vertex_distances(pos, tp.vertices, centre, 0.5 * Td, verified_bound(0.02)))
     assert (dev, at_v, at_b) == path_deviations(pos, tp, starts, centre, Td, tol, 1e-3)
     assert len(at_v) > 5  # the tolerance is broken at some corners: a real check
     full_samples = checks.samples
     scale[[30, 31]] = 0.5
     tp, table, pos, starts, centre, durations, Td = _zigzag_profile(scale)
     errors, dev, at_v, _ = checks(pos, starts, centre, durations, True)
-    np.testing.assert_allclose(errors, vertex_distances(pos, tp.vertices, centre, 0.5 * Td), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(errors, vertex_distances(pos, tp.vertices, centre, 0.5 * Td, verified_bound(0.02)),
+                               rtol=0, atol=1e-9)
     assert checks.samples < 0.5 * full_samples
     dev_full, at_full, _ = path_deviations(pos, tp, starts, centre, Td, tol, 1e-3)
     bound = 0.5 * 1e-3 * np.max(np.linalg.norm(pos(np.linspace(0.0, pos.breaks[-1], 20001), 1), axis=1))
