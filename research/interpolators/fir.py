@@ -87,6 +87,7 @@ from research.interpolators import _fir_pauses, _fir_profile
 from research.interpolators._fir_overlap import overlap_time
 from research.interpolators._fir_repair import Repairs
 from research.interpolators._fir_round_peaks import RoundPeaks
+from research.interpolators._fir_straight import merged_path, split_plan, straight_runs
 from research.interpolators._fir_verify import (RoundChecks, charged_repairs, corner_distances, profile_rounding,
                                                 stop_rounding, vertex_distances)
 from research.limits import AxisLimits
@@ -248,11 +249,34 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             starts, pulse, overlaps, feeds, position, centre, deviation, rounds = _fir_pauses.join(plans, ranges, pauses)
             return FIRPlan(starts, pulse, overlaps, feeds, plans[0].delays, position, centre, device_array(tp.vertices),
                            deviation, rounds, tp.axes)
+    traced = any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves((delays, feed, tolerance)))
+    if not traced:  # runs of collinear line blocks planned as one block each (_fir_straight)
+        feeds_all = np.broadcast_to(np.asarray(feed, dtype=np.float64), (M,))
+        tol_all = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), (M,))
+        run = straight_runs(tp, feeds_all, tol_all)
+        if run is not None:
+            first = np.concatenate([[0], np.flatnonzero(np.diff(run)) + 1])
+            merged_tp = merged_path(tp, run)
+            merged = split_plan(_plan_blocks(merged_tp, feeds_all[first], delays, tol_all[first], refine, limits,
+                                             check_period, traced), tp, merged_tp, run, FIRPlan)
+            if limits is None:
+                return merged
+            # under limits the pieces can also be the steps of a staircase ramp (_fir_limit_spread),
+            # which one block cannot: both are plans of this path, the faster one is returned
+            own = _plan_blocks(tp, feed, delays, tolerance, refine, limits, check_period, traced)
+            return merged if float(merged.cycle_time) <= float(own.cycle_time) else own
+    return _plan_blocks(tp, feed, delays, tolerance, refine, limits, check_period, traced)
+
+
+def _plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, check_period: float,
+                 traced: bool) -> FIRPlan:
+    """:func:`plan_fir` on a path without pauses, block by block (its inputs checked; ``traced``:
+    an input is a JAX tracer)."""
+    M = tp.n_blocks
     table = _pulse_table(tp)
     Mp = table.m_pad
     # the rounds decide on concrete arrays (``_fir_profile``: NumPy and Numba, no JAX dispatch); the
     # plan returned is rebuilt with JAX only where an input is a tracer (its differentiable form)
-    traced = any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves((delays, feed, tolerance)))
     xp = jnp if traced else np
     delays = xp.asarray(delays, dtype=np.float64).reshape(-1)
     feeds_cmd = xp.broadcast_to(xp.asarray(feed, dtype=np.float64), (M,))

@@ -97,3 +97,94 @@ def test_split_points_microns_before_an_exact_stop_do_not_stop(gaps):
     split = plan_fir(Polyline(np.array([A] + [B - g * u for g in gaps] + [B, C])), 18.74, (0.06, 0.03), 0.0)
     assert float(split.cycle_time) == pytest.approx(float(whole.cycle_time), rel=1e-9)
     assert np.all(np.asarray(split.corner_errors) <= verified_bound(0.0))
+
+
+def _with_splits(rng, pts, exact: bool):
+    """``pts`` with 1-3 points inserted on some segments: on axis-aligned or 45 deg segments at
+    decimal fractions (``exact``: the same direction to the last bit) or at random fractions
+    (off the line by rounding)."""
+    out = [pts[0]]
+    for a, b in zip(pts[:-1], pts[1:]):
+        for u in np.sort(rng.choice([0.25, 0.5, 0.75] if exact else rng.uniform(0.02, 0.98, 3), int(rng.integers(0, 4)),
+                                    replace=False)):
+            out.append(a + u * (b - a))
+        out.append(b)
+    return np.array(out)
+
+
+def _grid_zigzag(rng, n):
+    """``n`` segments of 1-8 mm along the axes and diagonals (exact in binary at quarters)."""
+    dirs = np.array([[1, 0], [0, 1], [-1, 0], [0, -1], [1, 1], [1, -1], [-1, 1], [-1, -1]], dtype=float)
+    steps = dirs[rng.integers(0, 8, n)] * rng.integers(1, 9, n)[:, None]
+    return np.vstack([[0.0, 0.0], np.cumsum(steps, axis=0)])
+
+
+def test_straight_runs_merge_collinear_lines_of_one_feed_and_tolerance_only():
+    """``straight_runs`` on hand-made paths: collinear pieces merge; a turn, a change of feed or
+    tolerance, a point 2 pm off the line (above ``VERIFY_ATOL``) or a reversal do not; 0.5 pm off
+    does."""
+    from research.interpolators._fir_straight import straight_runs
+    from research.paths.toolpath import ToolPath
+
+    def runs(points, feeds=None, tol=None):
+        tp = ToolPath.from_polyline(Polyline(np.asarray(points, dtype=float)))
+        M = tp.n_blocks
+        return straight_runs(tp, np.full(M, 100.0) if feeds is None else np.asarray(feeds, float),
+                             np.full(M, 0.01) if tol is None else np.asarray(tol, float))
+
+    assert runs([[0, 0], [1, 0], [2, 0], [3, 1]]).tolist() == [0, 0, 1]
+    assert runs([[0, 0], [1, 0], [2, 0], [3, 0]]).tolist() == [0, 0, 0]
+    assert runs([[0, 0], [1, 0], [2, 1]]) is None
+    assert runs([[0, 0], [1, 0], [2, 0]], feeds=[100, 50]) is None
+    assert runs([[0, 0], [1, 0], [2, 0]], tol=[0.01, 0.0]) is None
+    assert runs([[0, 0], [1, 2e-9], [2, 0]]) is None
+    assert runs([[0, 0], [1, 0.5e-9], [2, 0]]).tolist() == [0, 0]
+    assert runs([[0, 0], [2, 0], [1, 0]]) is None  # a reversal: the vertex is off the chord
+
+
+@pytest.mark.parametrize("exact", [True, False])
+def test_a_program_with_straight_pieces_plans_as_the_program_without_them(exact):
+    """Random axis-and-diagonal zigzags (seeds 0-11) with collinear points inserted, tolerance 0
+    or 1-100 um, F 20-300 mm/s, two or three filters: the same cycle time as the program without
+    the points (1e-9 relative), every vertex within the verification's bound of its tolerance, and
+    the timing of the pieces consistent: each next pulse starts ``T_d - T_k`` after the last ends
+    (eq 11), and no piece runs faster on average than its reported feed."""
+    for seed in range(12):
+        rng = np.random.default_rng(seed)
+        pts = _grid_zigzag(rng, int(rng.integers(2, 6)))
+        split = _with_splits(rng, pts, exact)
+        if len(split) == len(pts):
+            continue
+        tol = 0.0 if rng.random() < 0.5 else float(np.exp(rng.uniform(np.log(1e-3), np.log(0.1))))
+        feed = float(rng.uniform(20.0, 300.0))
+        delays = (0.06, 0.03) if rng.random() < 0.6 else (0.05, 0.03, 0.02)
+        whole = plan_fir(Polyline(pts), feed, delays, tol)
+        plan = plan_fir(Polyline(split), feed, delays, tol)
+        assert float(plan.cycle_time) == pytest.approx(float(whole.cycle_time), rel=1e-9), (seed, tol)
+        assert np.all(np.asarray(plan.corner_errors) <= verified_bound(tol)), seed
+        start, pulse, ov = (np.asarray(x) for x in (plan.start_times, plan.pulse_times, plan.overlaps))
+        np.testing.assert_allclose(start[1:] - (start[:-1] + pulse[:-1]), sum(delays) - ov, rtol=0, atol=1e-12)
+        lengths = np.linalg.norm(np.diff(split, axis=0), axis=1)
+        assert np.all(lengths / pulse <= np.asarray(plan.feeds) * (1 + 1e-9)), seed
+
+
+def test_under_limits_a_split_line_is_never_slower_than_the_line():
+    """Regression (stress sweep, 2026-12-04: 73 programs with split lines under limits slower than
+    without the splits, up to 25 %): a 3-D line of 3.3 mm at F 284.9 mm/s split at two thirds,
+    then a corner (tolerance 0), under per-axis limits. Each piece was checked alone between exact
+    stops, where the 2.2 mm piece doubles its jerk (a pulse shorter than ``T1 + T2``), and both
+    pieces were slowed to 24-26 mm/s where the line keeps 36.5. Now the line's plan is a plan of the
+    split program too: the same cycle time, and the same feed on both pieces."""
+    from research.limits import AxisLimits
+
+    P = np.array([[1293.8305501061616, 94.63045702679835, 204.7837026428307],
+                  [1295.3914953652463, 97.32973325217489, 205.80439216625547],
+                  [1297.5342806517579, 94.94667267061924, 202.57615694190073]])
+    S = np.insert(P, 1, [1294.9317908053577, 96.53478571510855, 205.50379505984307], axis=0)
+    lim = AxisLimits.uniform(3, 147.49652921271905, 505.94103410581585, 22066.381616880168)
+    whole = plan_fir(Polyline(P), [284.89806036528256, 26.716836686196014], (0.06, 0.03), 0.0, limits=lim)
+    split = plan_fir(Polyline(S), [284.89806036528256, 284.89806036528256, 26.716836686196014], (0.06, 0.03), 0.0,
+                     limits=lim)
+    assert float(split.cycle_time) <= float(whole.cycle_time) * (1 + 1e-9)
+    feeds = np.asarray(split.feeds)
+    assert feeds[0] == pytest.approx(float(np.asarray(whole.feeds)[0]), rel=1e-9) == feeds[1]

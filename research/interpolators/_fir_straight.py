@@ -1,0 +1,149 @@
+"""Straight vertices: consecutive line blocks that make one line, planned as one block (beyond Sencer 2015).
+
+CAM post-processors and hand-written programs cut straight lines into several moves (a long
+facing pass written in pieces, a move split where a tool-path segment ends). Two collinear line
+blocks at one feed, at full overlap, give the FIR chain the same input as the single line: one
+rectangular velocity pulse (Sencer 2015 eq 5), so the same exact profile. Planned block by block,
+though, the split point is a vertex like any other: under axis limits each piece is checked
+*alone* between exact stops (``_fir_limits``), where a short piece peaks higher than the line it
+belongs to (a pulse shorter than ``T1 + T2`` doubles its jerk), and the pieces were slowed below
+what the whole line keeps (a stress sweep of ``G61`` programs with split lines: up to 25 % slower
+than the unsplit program); at tolerance 0 every point a rounding puts off the line was a turn.
+LinuxCNC's ``G61`` (exact path) reads the same way: "If two sequential moves are exactly co-linear
+movement will not stop".
+
+So :func:`straight_runs` finds the runs of line blocks with one feed and one tolerance whose inner
+vertices all lie within ``VERIFY_ATOL`` (1 pm, the verification's absolute slack) of the run's
+chord, :func:`merged_path` makes each run one block, the planner plans that path, and
+:func:`split_plan` gives each original block its share of the merged plan: its pulse start and
+length where the input passes its ends, full overlap at the inner vertices (corner instant ``T_d /
+2`` after the block's end, eq 11 with ``T_k = T_d``), the fastest piece feed over its stretch, and
+the same profile. A trajectory that follows the chord passes within 1 pm of every inner vertex and
+of the programmed segments, which is what the verification accepts at any tolerance.
+
+Under axis limits the pieces of a line can also help: they are the steps of a staircase ramp
+(``_fir_limit_spread``) that one block, starting from rest at its full feed, cannot take (a
+1,000 mm line in 300 pieces under limits below the FIR's own envelope: 82.8 s in pieces, 500 s as
+one block). There ``plan_fir`` plans both and returns the faster, so a split program is never
+slower than its merged form.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from research._device import device_array
+from research.interpolators._fir_kernels import VERIFY_ATOL
+from research.paths.toolpath import ToolPath
+
+#: longest run merged into one block (blocks): a run is checked against its chord once per block
+#: it takes (``O(run^2)`` distances), so a straight line in 10^4 pieces becomes 10 blocks in about
+#: 5 million distances, not one block in 50 million; the vertex between two capped runs is straight
+#: and the look-ahead runs it at full overlap like any straight vertex
+MAX_RUN = 1024
+
+
+def _segment_distances(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance [mm] from each of ``points`` ``(N, d)`` to the segment ``a -> b``."""
+    ab = b - a
+    ab2 = float(ab @ ab)
+    if ab2 == 0.0:
+        return np.linalg.norm(points - a, axis=1)
+    u = np.clip((points - a) @ ab / ab2, 0.0, 1.0)
+    return np.linalg.norm(points - a - u[:, None] * ab, axis=1)
+
+
+def straight_runs(tp: ToolPath, feeds: np.ndarray, tol_block: np.ndarray) -> np.ndarray | None:
+    """The run of every block ``(M,)`` (non-decreasing run indices), or None where no two blocks merge.
+
+    Blocks ``j`` and ``j + 1`` may share a run where both are lines of nonzero length with equal
+    commanded feed ``feeds`` ``(M,)`` [mm/s] and tolerance ``tol_block`` ``(M,)`` [mm] and the
+    vertex between them lies within ``VERIFY_ATOL`` of the segment from ``j``'s start to ``j + 1``'s
+    end; a run grows while every inner vertex lies that close to the run's own chord (start of its
+    first block to end of its last), up to :data:`MAX_RUN` blocks."""
+    M = tp.n_blocks
+    if M < 2:
+        return None
+    V = np.vstack([tp.start, tp.ends])
+    line = ~tp.is_arc & (tp.lengths > 0)
+    local = line[:-1] & line[1:] & (feeds[:-1] == feeds[1:]) & (tol_block[:-1] == tol_block[1:])
+    j = np.flatnonzero(local)
+    if j.size:
+        ab = V[j + 2] - V[j]
+        ab2 = np.einsum("kd,kd->k", ab, ab)  # 0 where the path returns to its point: a reversal
+        u = np.clip(np.einsum("kd,kd->k", V[j + 1] - V[j], ab) / np.where(ab2 > 0, ab2, 1.0), 0.0, 1.0)
+        local[j] = np.linalg.norm(V[j + 1] - V[j] - u[:, None] * ab, axis=1) <= VERIFY_ATOL
+    if not local.any():
+        return None
+    run = np.zeros(M, dtype=np.int64)
+    r, a = 0, 0  # current run and its first block
+    for k in range(1, M):  # may block k join the run of blocks a .. k - 1?
+        joins = bool(local[k - 1]) and k - a < MAX_RUN
+        if joins and k - a >= 2:  # the inner vertices a + 1 .. k against the chord V[a] -> V[k + 1]
+            joins = bool(np.all(_segment_distances(V[a + 1: k + 1], V[a], V[k + 1]) <= VERIFY_ATOL))
+        if not joins:
+            r, a = r + 1, k
+        run[k] = r
+    return run if run[-1] < M - 1 else None
+
+
+def merged_path(tp: ToolPath, run: np.ndarray) -> ToolPath:
+    """``tp`` with each run of :func:`straight_runs` one line block (a block alone: itself)."""
+    last = np.append(np.flatnonzero(np.diff(run)), run.size - 1)  # the last block of each run
+    return ToolPath(tp.start, tp.ends[last], tp.centers[last], tp.normals[last], tp.sweeps[last])
+
+
+def split_plan(merged, tp: ToolPath, merged_tp: ToolPath, run: np.ndarray, plan_type):
+    """The plan of ``tp`` from the plan ``merged`` of ``merged_tp`` (:func:`merged_path` of ``run``;
+    ``plan_type``: the planner's ``FIRPlan``). A block alone in its run keeps its merged values. In
+    a run of several, each block's pulse starts and ends where the input passes its ends along the
+    run's line pieces (head, body, tail: lengths ``fraction L``, durations ``fraction T_v``;
+    ``_fir_profile.ProfileInputs``), its arc length scaled to the run's chord; its feed is the
+    fastest piece's over its stretch; the run's inner vertices take full overlap ``T_d`` and the
+    corner instant ``T_d / 2`` after the block's end (eq 11, ``T_k = T_d``). The vertices between
+    runs keep the merged overlaps and corner instants; the profile, deviation and rounds are the
+    merged plan's."""
+    inputs = merged.profile
+    table = inputs.pieces.table
+    M = tp.n_blocks
+    first = np.concatenate([[0], np.flatnonzero(np.diff(run)) + 1])  # the first block of each run
+    last = np.append(first[1:] - 1, M - 1)
+    Td = 0.0
+    for d in np.asarray(merged.delays).tolist():  # summed in order, as the planner's T_d
+        Td += d
+    run_start, run_pulse = np.asarray(merged.start_times), np.asarray(merged.pulse_times)
+    t0, t1 = run_start[run].copy(), (run_start + run_pulse)[run]
+    feeds = np.asarray(merged.feeds)[run].copy()
+    several = (last - first)[run] > 0  # blocks in runs of two or more (lines)
+    if several.any():
+        k = np.flatnonzero(several)
+        m = run[k]
+        L = merged_tp.lengths[m]  # the run's chord [mm]
+        cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
+        scale = L / (cum[last + 1] - cum[first])[m]
+        c0 = (cum[k] - cum[first[m]]) * scale
+        c1 = np.where(k == last[m], L, (cum[k + 1] - cum[first[m]]) * scale)
+        p = table.first_motion[m][:, None] + np.arange(3)[None, :]  # (K, 3) head, body, tail
+        frac, tv = np.asarray(inputs.fraction)[p], np.asarray(inputs.piece_tv)[p]
+        length, duration = frac * L[:, None], frac * tv
+        lo = np.concatenate([np.zeros((k.size, 1)), np.cumsum(length, axis=1)[:, :2]], axis=1)
+        hi = lo + length
+
+        def time_at(c):  # time [s] after the run's pulse start at which the input passes arc length c
+            pos = length > 0
+            share = np.where(pos, np.clip((c[:, None] - lo) / np.where(pos, length, 1.0), 0.0, 1.0), 0.0)
+            return np.sum(share * duration, axis=1)
+
+        t0[k] = run_start[m] + np.where(k == first[m], 0.0, time_at(c0))
+        t1[k] = np.where(k == last[m], t1[k], run_start[m] + time_at(c1))
+        covers = (hi > c0[:, None]) & (lo < c1[:, None]) & (length > 0)
+        speed = L[:, None] / tv
+        feeds[k] = np.where(covers.any(axis=1), np.max(np.where(covers, speed, 0.0), axis=1), feeds[k])
+    inner = run[:-1] == run[1:]  # vertices inside a run
+    overlaps, centre = np.full(M - 1, Td), t1[:-1] + 0.5 * Td
+    outer = np.flatnonzero(~inner)
+    overlaps[outer] = np.asarray(merged.overlaps)
+    centre[outer] = np.asarray(merged.corner_times)
+    return plan_type(device_array(t0), device_array(t1 - t0), device_array(overlaps), device_array(feeds),
+                     merged.delays, merged.profile, device_array(centre), device_array(tp.vertices),
+                     merged.path_deviation, merged.rounds, tp.axes)
