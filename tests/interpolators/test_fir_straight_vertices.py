@@ -188,3 +188,21 @@ def test_under_limits_a_split_line_is_never_slower_than_the_line():
     assert float(split.cycle_time) <= float(whole.cycle_time) * (1 + 1e-9)
     feeds = np.asarray(split.feeds)
     assert feeds[0] == pytest.approx(float(np.asarray(whole.feeds)[0]), rel=1e-9) == feeds[1]
+
+
+def test_collinear_moves_around_a_dwell_plan_as_the_moves_without_their_split_points():
+    """``G61`` with ``G4``: two collinear moves, a dwell, two collinear moves and a corner take the
+    time of one move, the dwell, one move and the corner; the pieces' pulses follow each other
+    without a gap inside each straight run (full overlap, eq 11), and the trajectory samples."""
+    split = "G21 G90 G61\nG1 X10 F3000\nG1 X20\nG4 P0.5\nG1 X30\nG1 X40\nG1 X40 Y10\nM2\n"
+    whole = "G21 G90 G61\nG1 X20 F3000\nG4 P0.5\nG1 X40\nG1 X40 Y10\nM2\n"
+    plans = []
+    for text in (split, whole):
+        p = parse_gcode(text)
+        plans.append(plan_fir(p.blocks, np.asarray(p.block_feeds), (0.06, 0.03), np.asarray(p.block_tolerance),
+                              pauses=p.block_pauses))
+    assert float(plans[0].cycle_time) == pytest.approx(float(plans[1].cycle_time), rel=1e-12)
+    np.testing.assert_allclose(np.asarray(plans[0].overlaps)[[0, 2]], 0.09, rtol=1e-12)
+    start, pulse = np.asarray(plans[0].start_times), np.asarray(plans[0].pulse_times)
+    np.testing.assert_allclose(start[[1, 3]], (start + pulse)[[0, 2]], rtol=0, atol=1e-12)
+    assert plans[0].trajectory(1e-3).q.shape[0] == int(round(float(plans[0].cycle_time) / 1e-3)) + 1
