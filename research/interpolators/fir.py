@@ -87,7 +87,7 @@ from research.interpolators import _fir_pauses, _fir_profile
 from research.interpolators._fir_overlap import overlap_time
 from research.interpolators._fir_repair import Repairs
 from research.interpolators._fir_round_peaks import RoundPeaks
-from research.interpolators._fir_straight import merged_path, split_plan, straight_runs
+from research.interpolators._fir_straight import join_plan, merged_path, ramp_pieces, split_plan, straight_runs
 from research.interpolators._fir_verify import (RoundChecks, charged_repairs, corner_distances, profile_rounding,
                                                 stop_rounding, vertex_distances)
 from research.limits import AxisLimits
@@ -261,10 +261,20 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                                              check_period, traced), tp, merged_tp, run, FIRPlan)
             if limits is None:
                 return merged
-            # under limits the pieces can also be the steps of a staircase ramp (_fir_limit_spread),
-            # which one block cannot: both are plans of this path, the faster one is returned
-            own = _plan_blocks(tp, feed, delays, tolerance, refine, limits, check_period, traced)
-            return merged if float(merged.cycle_time) <= float(own.cycle_time) else own
+        if limits is not None:
+            # under limits the pieces of a line can be the steps of a staircase ramp
+            # (_fir_limit_spread), which one block cannot take: the plans of the path as written,
+            # with its straight runs as one block each, and with its lines cut into ramp steps are
+            # plans of this path alike; the fastest is returned (ties: in that order)
+            plans = [_plan_blocks(tp, feed, delays, tolerance, refine, limits, check_period, traced)]
+            if run is not None:
+                plans.append(merged)
+            cut = ramp_pieces(tp, run, feeds_all, np.asarray(_primal(delays), dtype=np.float64), limits)
+            if cut is not None:
+                pieces_tp, block, piece_feeds = cut
+                plans.append(join_plan(_plan_blocks(pieces_tp, piece_feeds, delays, tol_all[block], refine, limits,
+                                                    check_period, traced), tp, block, FIRPlan))
+            return min(plans, key=lambda p: float(p.cycle_time))
     return _plan_blocks(tp, feed, delays, tolerance, refine, limits, check_period, traced)
 
 

@@ -113,28 +113,28 @@ def test_pieces_at_are_the_pieces_of_the_whole_table():
         np.testing.assert_array_equal(got_pf, pf[idx])
 
 
-def test_limits_below_the_envelope_on_a_line_cut_into_blocks_regression():
+@pytest.mark.parametrize("blocks", [1, 2, 5, 300])
+def test_limits_below_the_envelope_on_a_line_cut_into_blocks_regression(blocks):
     """Regression: a 1,000 mm line cut into 300 collinear blocks, under limits below the FIR
     envelope (jerk 1e4 mm/s^3 with T1 T2 = 2e-4 s^2: a block starting from rest at most at
     2 mm/s, Sencer 2015 §2.1, a pulse peaks at F / (T1 T2)), was slowed one block a round from
     each end (151 rounds; 2,000 blocks: 1,001 rounds, 4.2 s) down to 2 mm/s on every block: 500.03 s,
-    6.1x the time at the velocity limit. Now the slow-down follows the chain within the round as a
-    staircase of feed steps of at most ``J T1 T2`` = 2 mm/s (an isolated velocity step ``dV``
-    peaks at ``dV / (T1 T2)`` in jerk and ``dV / T1`` in acceleration): a few rounds, feeds that
-    rise and fall by at most 2 mm/s a block, the limits held on the sampled trajectory, and a cycle
-    between ``L / v + T_d`` (the velocity limit all the way) and 10 % above it (model prediction:
-    the ramps cost about 4 s at each end)."""
+    6.1x the time at the velocity limit; as one or two blocks it stayed at 500.03 s (a block runs at
+    the feed of its own start all the way), as 5 at 333.36 s. Now the feed rises in steps of at most
+    ``J T1 T2`` = 2 mm/s (an isolated velocity step ``dV`` peaks at ``dV / (T1 T2)`` in jerk and
+    ``dV / T1`` in acceleration), within the line or along its blocks (``_fir_straight.ramp_pieces``,
+    ``_fir_limit_spread``): few rounds, the limits held on the sampled trajectory, the velocity
+    limit reached, and a cycle between ``L / v + T_d`` (the velocity limit all the way) and 1 %
+    above it (model prediction: the ramps cost ``(n - 1) T_d / 2`` each for ``n = 7`` steps, 0.09 s
+    together), whatever the cut."""
     lim = AxisLimits.uniform(2, velocity=12.2, acceleration=500.0, jerk=1e4)
     d = (0.02, 0.01)
-    x = np.linspace(0.0, 1000.0, 301)
+    x = np.linspace(0.0, 1000.0, blocks + 1)
     plan = plan_fir(Polyline(np.column_stack([x, 0.0 * x])), 12.2, d, 1e-4, limits=lim)
     assert plan.rounds <= 3
-    step = min(500.0 * d[0], 1e4 * d[0] * d[1])  # = 2 mm/s, the jerk's
-    feeds = np.asarray(plan.feeds)
-    assert feeds[0] <= step * (1 + 1e-9) and feeds[-1] <= step * (1 + 1e-9)  # from and to rest
-    assert np.max(np.abs(np.diff(feeds))) <= step * (1 + 1e-9)
+    assert float(np.max(plan.feeds)) == pytest.approx(12.2, rel=1e-9)
     bound = 1000.0 / 12.2 + sum(d)
-    assert bound <= float(plan.cycle_time) <= 1.10 * bound
+    assert bound <= float(plan.cycle_time) <= 1.01 * bound
     assert within_limits(plan.trajectory(1e-3), lim)
 
 

@@ -206,3 +206,43 @@ def test_collinear_moves_around_a_dwell_plan_as_the_moves_without_their_split_po
     start, pulse = np.asarray(plans[0].start_times), np.asarray(plans[0].pulse_times)
     np.testing.assert_allclose(start[[1, 3]], (start + pulse)[[0, 2]], rtol=0, atol=1e-12)
     assert plans[0].trajectory(1e-3).q.shape[0] == int(round(float(plans[0].cycle_time) / 1e-3)) + 1
+
+
+def test_ramp_pieces_are_steps_the_axes_allow_each_lasting_the_filter_delay():
+    """``ramp_pieces`` on a raster of long lines split into pieces (straight runs), under limits
+    below the FIR envelope: each run's ends are cut into pieces whose commanded feeds rise by at most
+    ``dV = min(A T1, J T1 T2)`` (per axis along the line) from rest to the feed and back, each ramp
+    piece ``feed T_d`` long, the program's own vertices kept, and every piece on its block."""
+    from research.interpolators._fir_straight import ramp_pieces, straight_runs
+    from research.limits import AxisLimits
+    from research.paths.toolpath import ToolPath
+
+    pts = [[0.0, 0.0]]
+    for row in range(4):
+        xs = np.arange(5.0, 105.0, 5.0) if row % 2 == 0 else np.arange(95.0, -5.0, -5.0)
+        pts += [[x, float(row)] for x in xs] + [[xs[-1], row + 1.0]]
+    tp = ToolPath.from_polyline(Polyline(np.array(pts)))
+    M = tp.n_blocks
+    feeds, delays = np.full(M, 25.0), np.array([0.06, 0.03])
+    lim = AxisLimits.uniform(2, 100.0, 500.0, 5000.0)  # jerk below the envelope's 25 / (T1 T2) = 13,900
+    run = straight_runs(tp, feeds, np.full(M, 0.01))
+    pieces, block, piece_feeds = ramp_pieces(tp, run, feeds, delays, lim)
+    dV = min(500.0 * 0.06, 5000.0 * 0.06 * 0.03)  # axis-aligned lines: 9 mm/s
+    assert np.all(np.diff(block) >= 0) and np.all(piece_feeds <= 25.0 + 1e-12)
+    V = np.vstack([tp.start, tp.ends])
+    P = np.vstack([pieces.start, pieces.ends])
+    for k in range(M):  # every original vertex is a piece vertex, and the pieces lie on their block
+        assert np.any(np.all(np.abs(P - V[k + 1]) < 1e-12, axis=1))
+        seg, ab = P[1:][block == k] - V[k], V[k + 1] - V[k]
+        assert np.allclose(seg[:, 0] * ab[1] - seg[:, 1] * ab[0], 0.0, atol=1e-9)
+    same_run = run[block][1:] == run[block][:-1]
+    ramp = piece_feeds < 25.0
+    assert ramp.any()
+    assert np.all(np.abs(np.diff(piece_feeds))[same_run] <= dV * (1 + 1e-12))  # steps along a line
+    starts = np.concatenate([[True], ~same_run])  # first piece of each run
+    ends = np.concatenate([~same_run, [True]])
+    ramped = np.unique(run[block][ramp])
+    assert np.all(piece_feeds[starts & np.isin(run[block], ramped)] <= dV * (1 + 1e-12))  # from rest
+    assert np.all(piece_feeds[ends & np.isin(run[block], ramped)] <= dV * (1 + 1e-12))  # to rest
+    lengths = np.linalg.norm(np.diff(P, axis=0), axis=1)
+    assert np.all(lengths[ramp] <= piece_feeds[ramp] * delays.sum() * (1 + 1e-9))
