@@ -38,13 +38,6 @@ from research._device import device_array
 from research.interpolators._fir_kernels import VERIFY_ATOL
 from research.paths.toolpath import ToolPath
 
-#: longest run merged into one block (blocks): a run is checked against its chord once per block
-#: it takes (``O(run^2)`` distances), so a straight line in 10^4 pieces becomes 10 blocks in about
-#: 5 million distances, not one block in 50 million; the vertex between two capped runs is straight
-#: and the look-ahead runs it at full overlap like any straight vertex
-MAX_RUN = 1024
-
-
 def _segment_distances(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Distance [mm] from each of ``points`` ``(N, d)`` to the segment ``a -> b``."""
     ab = b - a
@@ -61,8 +54,10 @@ def straight_runs(tp: ToolPath, feeds: np.ndarray, tol_block: np.ndarray) -> np.
     Blocks ``j`` and ``j + 1`` may share a run where both are lines of nonzero length with equal
     commanded feed ``feeds`` ``(M,)`` [mm/s] and tolerance ``tol_block`` ``(M,)`` [mm] and the
     vertex between them lies within ``VERIFY_ATOL`` of the segment from ``j``'s start to ``j + 1``'s
-    end; a run grows while every inner vertex lies that close to the run's own chord (start of its
-    first block to end of its last), up to :data:`MAX_RUN` blocks."""
+    end. A stretch of such vertices is one run where every inner vertex lies that close to the
+    run's own chord (start of its first block to end of its last); otherwise it is split at its
+    farthest vertex and each side is tried again (as Douglas and Peucker simplify a polyline): one
+    pass over a straight stretch, ``O(n log n)`` at worst."""
     M = tp.n_blocks
     if M < 2:
         return None
@@ -77,16 +72,23 @@ def straight_runs(tp: ToolPath, feeds: np.ndarray, tol_block: np.ndarray) -> np.
         local[j] = np.linalg.norm(V[j + 1] - V[j] - u[:, None] * ab, axis=1) <= VERIFY_ATOL
     if not local.any():
         return None
-    run = np.zeros(M, dtype=np.int64)
-    r, a = 0, 0  # current run and its first block
-    for k in range(1, M):  # may block k join the run of blocks a .. k - 1?
-        joins = bool(local[k - 1]) and k - a < MAX_RUN
-        if joins and k - a >= 2:  # the inner vertices a + 1 .. k against the chord V[a] -> V[k + 1]
-            joins = bool(np.all(_segment_distances(V[a + 1: k + 1], V[a], V[k + 1]) <= VERIFY_ATOL))
-        if not joins:
-            r, a = r + 1, k
-        run[k] = r
-    return run if run[-1] < M - 1 else None
+    joined = np.zeros(M - 1, dtype=bool)  # vertex j inside a run
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], local.astype(np.int8), [0]])))
+    stack = [(int(a), int(b)) for a, b in zip(edges[0::2], edges[1::2])]  # vertex ranges [a, b)
+    while stack:
+        a, b = stack.pop()  # blocks a .. b, inner vertices a .. b - 1 (vertex j ends block j)
+        dist = _segment_distances(V[a + 1: b + 1], V[a], V[b + 1])
+        if np.all(dist <= VERIFY_ATOL):
+            joined[a:b] = True
+            continue
+        far = a + int(np.argmax(dist))  # split at the farthest vertex: blocks a .. far, far + 1 .. b
+        if far > a:
+            stack.append((a, far))
+        if b > far + 1:
+            stack.append((far + 1, b))
+    if not joined.any():
+        return None
+    return np.concatenate([[0], np.cumsum(~joined)])
 
 
 def merged_path(tp: ToolPath, run: np.ndarray) -> ToolPath:
