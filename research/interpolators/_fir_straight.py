@@ -194,47 +194,45 @@ def ramp_pieces(tp: ToolPath, run, feeds: np.ndarray, delays: np.ndarray, limits
         dV = np.min(np.where(u > 0, step_axis[None, :] / u, np.inf), axis=1)
         v_cap = np.min(np.where(u > 0, limits.velocity[None, :] / u, np.inf), axis=1)
     top = np.minimum(feeds[first], v_cap)
-    ramp = line & (feed_caps(L, u, d, limits) < top) & np.isfinite(dV) & (dV > 0)
+    n = np.where(np.isfinite(dV) & (dV > 0), np.minimum(np.ceil(top / np.where(dV > 0, dV, 1.0)), MAX_RAMP_STEPS + 1), 1)
+    # a ramp of at least one step whose first piece fits in half the line
+    ramp = line & (feed_caps(L, u, d, limits) < top) & (n >= 2) & (top / n * Td < 0.5 * L)
     if not ramp.any():
         return None
     cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
-    ends, block, piece_feed, is_cut = [], [], [], []
-    for m in range(first.size):
+    end_feed = np.asarray(feeds, dtype=np.float64).copy()  # feed of the piece ending at each block's end
+    cut_block, cut_frac, cut_feed = [], [], []
+    for m in np.flatnonzero(ramp):
         a, b = first[m], last[m]
-        steps = np.zeros(0)
-        if ramp[m]:
-            n = min(int(np.ceil(top[m] / dV[m])), MAX_RAMP_STEPS + 1)
-            steps = top[m] / n * np.arange(1, n)  # the feeds of the ramp pieces [mm/s]
-            at = np.cumsum(steps * Td)  # where each ends, from the run's end [mm]
-            keep = at < 0.5 * L[m]
-            steps, at = steps[keep], at[keep]
-        if not steps.size:
-            for k in range(a, b + 1):
-                ends.append(tp.ends[k]), block.append(k), piece_feed.append(feeds[k]), is_cut.append(False)
-            continue
-        # cut positions along the run [mm] and the feed of the stretch each one ends
+        steps = top[m] / n[m] * np.arange(1, int(n[m]))  # the feeds of the ramp pieces [mm/s]
+        at = np.cumsum(steps * Td)  # where each ends, from the run's end [mm]
+        keep = at < 0.5 * L[m]
+        steps, at = steps[keep], at[keep]
         span = cum[b + 1] - cum[a]
-        s_cut = np.concatenate([at, L[m] - at[::-1]]) * (span / L[m])
-        f_cut = np.concatenate([steps, [feeds[a]]])  # the stretch before cut i; the last: the middle
-        f_after = np.concatenate([[feeds[a]], steps[::-1]])  # after the middle: back down
-        f_stretch = np.concatenate([f_cut, f_after[1:]])  # (2 n' + 1,): stretches between cuts
-        s_vertex = cum[a + 1: b + 2] - cum[a]  # each block's end along the run
-        for k in range(a, b + 1):
-            lo, hi = cum[k] - cum[a], s_vertex[k - a]
-            inside = s_cut[(s_cut > lo + 1e-9 * span) & (s_cut < hi - 1e-9 * span)]
-            for c in inside:
-                ends.append(V[k] + (c - lo) / tp.lengths[k] * (V[k + 1] - V[k]))
-                block.append(k), is_cut.append(True)
-                piece_feed.append(f_stretch[np.searchsorted(s_cut, c, side="left")])
-            ends.append(tp.ends[k]), block.append(k), is_cut.append(False)
-            piece_feed.append(f_stretch[np.searchsorted(s_cut, hi - 1e-9 * span, side="left")])
-    block, is_cut = np.asarray(block, dtype=np.int64), np.asarray(is_cut)
-    if block.size == M:
+        s_cut = np.concatenate([at, L[m] - at[::-1]]) * (span / L[m])  # along the run's blocks [mm]
+        f_stretch = np.concatenate([steps, [feeds[a]], steps[::-1]])  # stretches before, between, after cuts
+        s_end = cum[a + 1: b + 2] - cum[a]  # each block's end along the run
+        k = a + np.searchsorted(s_end[:-1], s_cut, side="right")  # the block each cut falls on
+        frac = (s_cut - (cum[k] - cum[a])) / tp.lengths[k]
+        keep = (frac > 1e-9) & (frac < 1.0 - 1e-9)  # not on a vertex of the run
+        cut_block.append(k[keep]), cut_frac.append(frac[keep])
+        cut_feed.append(f_stretch[np.searchsorted(s_cut, s_cut[keep], side="left")])
+        end_feed[a: b + 1] = f_stretch[np.searchsorted(s_cut, s_end * (1.0 - 1e-12), side="left")]
+    cut_block, cut_frac, cut_feed = np.concatenate(cut_block), np.concatenate(cut_frac), np.concatenate(cut_feed)
+    if not cut_block.size:
         return None
+    # the pieces in path order: each block's cut points, then its own end
+    block = np.concatenate([cut_block, np.arange(M)])
+    order = np.lexsort((np.concatenate([cut_frac, np.full(M, 2.0)]), block))
+    is_cut = np.concatenate([np.ones(cut_block.size, bool), np.zeros(M, bool)])[order]
+    points = V[cut_block] + cut_frac[:, None] * (V[cut_block + 1] - V[cut_block])
+    ends = np.vstack([points, tp.ends])[order]
+    piece_feed = np.concatenate([cut_feed, end_feed])[order]
+    block = block[order]
     centers = np.where(is_cut[:, None], np.nan, tp.centers[block])
     normals = np.where(is_cut[:, None], np.nan, tp.normals[block])
     sweeps = np.where(is_cut, 0.0, tp.sweeps[block])
-    return ToolPath(tp.start, np.asarray(ends), centers, normals, sweeps), block, np.asarray(piece_feed)
+    return ToolPath(tp.start, ends, centers, normals, sweeps), block, piece_feed
 
 
 def join_plan(pieces, tp: ToolPath, block: np.ndarray, plan_type):
