@@ -246,3 +246,29 @@ def test_ramp_pieces_are_steps_the_axes_allow_each_lasting_the_filter_delay():
     assert np.all(piece_feeds[ends & np.isin(run[block], ramped)] <= dV * (1 + 1e-12))  # to rest
     lengths = np.linalg.norm(np.diff(P, axis=0), axis=1)
     assert np.all(lengths[ramp] <= piece_feeds[ramp] * delays.sum() * (1 + 1e-9))
+
+
+def test_plans_under_limits_below_the_envelope_hold_limits_tolerance_and_timing():
+    """Seeded random programs (lines, lines and arcs; two and three filters; tolerance 0 on some)
+    under limits at 5-60 % of the FIR envelope's acceleration and jerk, where the plan is the
+    fastest of the path as written, merged and cut into ramp pieces: the limits hold on the sampled
+    trajectory (``research.metrics.within_limits``), every vertex is within the verification's
+    bound of its tolerance, and each pulse starts ``T_d - T_k`` after the previous one ends (eq 11)."""
+    from research.limits import AxisLimits
+    from research.metrics import within_limits
+    from research.paths.library import random_program
+
+    for seed in range(16):
+        rng = np.random.default_rng(900 + seed)
+        tp = random_program(rng, arcs=seed % 2 == 1)
+        feed = float(rng.uniform(20.0, 200.0))
+        delays = (0.06, 0.03) if seed % 3 else (0.05, 0.03, 0.02)
+        tol = float(rng.choice([0.0, 0.01, 0.1])) if seed % 2 == 0 else float(rng.choice([0.01, 0.1]))
+        env = AxisLimits.fir_envelope(tp.dim, feed, delays)
+        s = float(rng.uniform(0.05, 0.6))
+        lim = AxisLimits(env.velocity, env.acceleration * s, env.jerk * s)
+        plan = plan_fir(tp, feed, delays, tol, limits=lim)
+        assert within_limits(plan.trajectory(1e-3), lim), seed
+        assert np.all(np.asarray(plan.corner_errors) <= verified_bound(tol) + 1e-8), seed
+        start, pulse, ov = (np.asarray(x) for x in (plan.start_times, plan.pulse_times, plan.overlaps))
+        np.testing.assert_allclose(start[1:] - (start[:-1] + pulse[:-1]), sum(delays) - ov, rtol=0, atol=1e-9)
