@@ -36,7 +36,15 @@ import numpy as np
 
 from research._device import device_array
 from research.interpolators._fir_kernels import VERIFY_ATOL
+from research.interpolators._fir_limits import feed_caps
 from research.paths.toolpath import ToolPath
+
+
+def run_bounds(run: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The first and the last block of each run of the non-decreasing labels ``run`` ``(M,)``."""
+    first = np.concatenate([[0], np.flatnonzero(np.diff(run)) + 1])
+    return first, np.append(first[1:] - 1, run.size - 1)
+
 
 def _segment_distances(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Distance [mm] from each of ``points`` ``(N, d)`` to the segment ``a -> b``."""
@@ -93,7 +101,7 @@ def straight_runs(tp: ToolPath, feeds: np.ndarray, tol_block: np.ndarray) -> np.
 
 def merged_path(tp: ToolPath, run: np.ndarray) -> ToolPath:
     """``tp`` with each run of :func:`straight_runs` one line block (a block alone: itself)."""
-    last = np.append(np.flatnonzero(np.diff(run)), run.size - 1)  # the last block of each run
+    _, last = run_bounds(run)
     return ToolPath(tp.start, tp.ends[last], tp.centers[last], tp.normals[last], tp.sweeps[last])
 
 
@@ -110,8 +118,7 @@ def split_plan(merged, tp: ToolPath, merged_tp: ToolPath, run: np.ndarray, plan_
     inputs = merged.profile
     table = inputs.pieces.table
     M = tp.n_blocks
-    first = np.concatenate([[0], np.flatnonzero(np.diff(run)) + 1])  # the first block of each run
-    last = np.append(first[1:] - 1, M - 1)
+    first, last = run_bounds(run)
     Td = 0.0
     for d in np.asarray(merged.delays).tolist():  # summed in order, as the planner's T_d
         Td += d
@@ -174,12 +181,8 @@ def ramp_pieces(tp: ToolPath, run, feeds: np.ndarray, delays: np.ndarray, limits
     Returns:
         ``(piece path, block of every piece (P,), commanded feed of every piece (P,))``, or None.
     """
-    from research.interpolators._fir_limits import feed_caps
-
     M = tp.n_blocks
-    run = np.arange(M) if run is None else run
-    first = np.concatenate([[0], np.flatnonzero(np.diff(run)) + 1])
-    last = np.append(first[1:] - 1, M - 1)
+    first, last = run_bounds(np.arange(M) if run is None else run)
     d = np.sort(np.asarray(delays, dtype=np.float64))[::-1]
     Td = float(d.sum())
     V = np.vstack([tp.start, tp.ends])
@@ -240,8 +243,7 @@ def join_plan(pieces, tp: ToolPath, block: np.ndarray, plan_type):
     block of every piece): a block's pulse runs from its first piece's start to its last piece's
     end, its feed is its fastest piece's, and each vertex of ``tp`` keeps the overlap and corner
     instant of the piece vertex it is; the profile, deviation and rounds are the pieces' plan's."""
-    first = np.concatenate([[0], np.flatnonzero(np.diff(block)) + 1])
-    last = np.append(first[1:] - 1, block.size - 1)
+    first, last = run_bounds(block)
     start, pulse = np.asarray(pieces.start_times), np.asarray(pieces.pulse_times)
     feeds = np.maximum.reduceat(np.asarray(pieces.feeds), first)
     return plan_type(device_array(start[first]), device_array(start[last] + pulse[last] - start[first]),

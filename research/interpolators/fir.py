@@ -87,7 +87,8 @@ from research.interpolators import _fir_pauses, _fir_profile
 from research.interpolators._fir_overlap import overlap_time
 from research.interpolators._fir_repair import Repairs
 from research.interpolators._fir_round_peaks import RoundPeaks
-from research.interpolators._fir_straight import join_plan, merged_path, ramp_pieces, split_plan, straight_runs
+from research.interpolators._fir_straight import (join_plan, merged_path, ramp_pieces, run_bounds, split_plan,
+                                                  straight_runs)
 from research.interpolators._fir_verify import (RoundChecks, charged_repairs, corner_distances, profile_rounding,
                                                 stop_rounding, vertex_distances)
 from research.limits import AxisLimits
@@ -255,7 +256,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         tol_all = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), (M,))
         run = straight_runs(tp, feeds_all, tol_all)
         if run is not None:
-            first = np.concatenate([[0], np.flatnonzero(np.diff(run)) + 1])
+            first, _ = run_bounds(run)
             merged_tp = merged_path(tp, run)
             merged = split_plan(_plan_blocks(merged_tp, feeds_all[first], delays, tol_all[first], refine, limits,
                                              check_period, traced), tp, merged_tp, run, FIRPlan)
