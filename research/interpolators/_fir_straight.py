@@ -32,6 +32,10 @@ block, 82.22 s with ramp pieces, for ``L / v + T_d`` = 81.99 s, in 1, 2, 5 or 30
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
 import numpy as np
 
 from research._device import device_array
@@ -105,26 +109,28 @@ def merged_path(tp: ToolPath, run: np.ndarray) -> ToolPath:
     return ToolPath(tp.start, tp.ends[last], tp.centers[last], tp.normals[last], tp.sweeps[last])
 
 
-def split_plan(merged, tp: ToolPath, merged_tp: ToolPath, run: np.ndarray, plan_type):
+def split_plan(merged, pieces, first_motion, tp: ToolPath, merged_tp: ToolPath, run: np.ndarray, plan_type):
     """The plan of ``tp`` from the plan ``merged`` of ``merged_tp`` (:func:`merged_path` of ``run``;
     ``plan_type``: the planner's ``FIRPlan``). A block alone in its run keeps its merged values. In
     a run of several, each block's pulse starts and ends where the input passes its ends along the
     run's line pieces (head, body, tail: lengths ``fraction L``, durations ``fraction T_v``;
-    ``_fir_profile.ProfileInputs``), its arc length scaled to the run's chord; its feed is the
-    fastest piece's over its stretch; the run's inner vertices take full overlap ``T_d`` and the
-    corner instant ``T_d / 2`` after the block's end (eq 11, ``T_k = T_d``). The vertices between
-    runs keep the merged overlaps and corner instants; the profile, deviation and rounds are the
-    merged plan's."""
-    inputs = merged.profile
-    table = inputs.pieces.table
+    ``pieces = (fraction, piece_tv)`` ``(P,)`` each of the merged plan, ``first_motion`` ``(M_merged,)``
+    the first motion piece of each merged block), its arc length scaled to the run's chord; its
+    feed is the fastest piece's over its stretch; the run's inner vertices take full overlap ``T_d``
+    and the corner instant ``T_d / 2`` after the block's end (eq 11, ``T_k = T_d``). The vertices
+    between runs keep the merged overlaps and corner instants; the profile, deviation and rounds are
+    the merged plan's. NumPy or JAX alike (a traced plan maps to a traced plan: the same values,
+    differentiable through the merged plan's timing)."""
+    xp = _xp(merged.start_times, merged.delays, pieces[1])
     M = tp.n_blocks
     first, last = run_bounds(run)
+    delays = merged.delays if xp is jnp else np.asarray(merged.delays)
     Td = 0.0
-    for d in np.asarray(merged.delays).tolist():  # summed in order, as the planner's T_d
-        Td += d
-    run_start, run_pulse = np.asarray(merged.start_times), np.asarray(merged.pulse_times)
-    t0, t1 = run_start[run].copy(), (run_start + run_pulse)[run]
-    feeds = np.asarray(merged.feeds)[run].copy()
+    for i in range(delays.shape[0]):  # summed in order, as the planner's T_d
+        Td = Td + delays[i]
+    run_start, run_pulse = xp.asarray(merged.start_times), xp.asarray(merged.pulse_times)
+    t0, t1 = run_start[run], (run_start + run_pulse)[run]
+    feeds = xp.asarray(merged.feeds)[run]
     several = (last - first)[run] > 0  # blocks in runs of two or more (lines)
     if several.any():
         k = np.flatnonzero(several)
@@ -134,8 +140,8 @@ def split_plan(merged, tp: ToolPath, merged_tp: ToolPath, run: np.ndarray, plan_
         scale = L / (cum[last + 1] - cum[first])[m]
         c0 = (cum[k] - cum[first[m]]) * scale
         c1 = np.where(k == last[m], L, (cum[k + 1] - cum[first[m]]) * scale)
-        p = table.first_motion[m][:, None] + np.arange(3)[None, :]  # (K, 3) head, body, tail
-        frac, tv = np.asarray(inputs.fraction)[p], np.asarray(inputs.piece_tv)[p]
+        p = first_motion[m][:, None] + np.arange(3)[None, :]  # (K, 3) head, body, tail
+        frac, tv = np.asarray(pieces[0])[p], pieces[1][p]
         length, duration = frac * L[:, None], frac * tv
         lo = np.concatenate([np.zeros((k.size, 1)), np.cumsum(length, axis=1)[:, :2]], axis=1)
         hi = lo + length
@@ -143,21 +149,34 @@ def split_plan(merged, tp: ToolPath, merged_tp: ToolPath, run: np.ndarray, plan_
         def time_at(c):  # time [s] after the run's pulse start at which the input passes arc length c
             pos = length > 0
             share = np.where(pos, np.clip((c[:, None] - lo) / np.where(pos, length, 1.0), 0.0, 1.0), 0.0)
-            return np.sum(share * duration, axis=1)
+            return xp.sum(share * duration, axis=1)
 
-        t0[k] = run_start[m] + np.where(k == first[m], 0.0, time_at(c0))
-        t1[k] = np.where(k == last[m], t1[k], run_start[m] + time_at(c1))
+        t0 = _set(t0, k, run_start[m] + xp.where(k == first[m], 0.0, time_at(c0)))
+        t1 = _set(t1, k, xp.where(k == last[m], t1[k], run_start[m] + time_at(c1)))
         covers = (hi > c0[:, None]) & (lo < c1[:, None]) & (length > 0)
         speed = L[:, None] / tv
-        feeds[k] = np.where(covers.any(axis=1), np.max(np.where(covers, speed, 0.0), axis=1), feeds[k])
+        feeds = _set(feeds, k, xp.where(covers.any(axis=1), xp.max(xp.where(covers, speed, 0.0), axis=1), feeds[k]))
     inner = run[:-1] == run[1:]  # vertices inside a run
-    overlaps, centre = np.full(M - 1, Td), t1[:-1] + 0.5 * Td
+    overlaps, centre = xp.full(M - 1, 1.0) * Td, t1[:-1] + 0.5 * Td
     outer = np.flatnonzero(~inner)
-    overlaps[outer] = np.asarray(merged.overlaps)
-    centre[outer] = np.asarray(merged.corner_times)
+    overlaps = _set(overlaps, outer, xp.asarray(merged.overlaps))
+    centre = _set(centre, outer, xp.asarray(merged.corner_times))
     return plan_type(device_array(t0), device_array(t1 - t0), device_array(overlaps), device_array(feeds),
                      merged.delays, merged.profile, device_array(centre), device_array(tp.vertices),
                      merged.path_deviation, merged.rounds, tp.axes)
+
+
+def _xp(*arrays):
+    """``jax.numpy`` where one of ``arrays`` is a JAX tracer (a traced plan), NumPy otherwise."""
+    return jnp if any(isinstance(a, jax.core.Tracer) for a in arrays) else np
+
+
+def _set(a, idx, values):
+    """``a`` with ``a[idx] = values``: in place on a NumPy array, a new array on a JAX one."""
+    if isinstance(a, np.ndarray):
+        a[idx] = values
+        return a
+    return a.at[idx].set(values)
 
 
 #: most ramp steps cut at each end of one line (:func:`ramp_pieces`)
@@ -179,7 +198,8 @@ def ramp_pieces(tp: ToolPath, run, feeds: np.ndarray, delays: np.ndarray, limits
     stay apart. The run's own vertices stay: a piece they cut keeps its feed on both sides.
 
     Returns:
-        ``(piece path, block of every piece (P,), commanded feed of every piece (P,))``, or None.
+        ``(piece path, block of every piece (P,), PieceFeeds)``, or None; ``PieceFeeds.of(feeds)``
+        gives the commanded feed of every piece (its recipe holds, so that a traced feed stays traced).
     """
     M = tp.n_blocks
     first, last = run_bounds(np.arange(M) if run is None else run)
@@ -203,25 +223,30 @@ def ramp_pieces(tp: ToolPath, run, feeds: np.ndarray, delays: np.ndarray, limits
     if not ramp.any():
         return None
     cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
-    end_feed = np.asarray(feeds, dtype=np.float64).copy()  # feed of the piece ending at each block's end
-    cut_block, cut_frac, cut_feed = [], [], []
+    # the feed of every piece as min(feeds[src], cap) / den * num (PieceFeeds); first the piece
+    # ending at each block's end (its own feed unless a ramp covers it), then the cut pieces
+    end_rec = np.stack([np.arange(M, dtype=np.float64), np.full(M, np.inf), np.ones(M), np.ones(M)], axis=1)
+    cut_block, cut_frac, cut_rec = [], [], []
     for m in np.flatnonzero(ramp):
         a, b = first[m], last[m]
-        steps = top[m] / n[m] * np.arange(1, int(n[m]))  # the feeds of the ramp pieces [mm/s]
+        k_step = np.arange(1, int(n[m]), dtype=np.float64)
+        steps = top[m] / n[m] * k_step  # the feeds of the ramp pieces [mm/s]
         at = np.cumsum(steps * Td)  # where each ends, from the run's end [mm]
         keep = at < 0.5 * L[m]
-        steps, at = steps[keep], at[keep]
+        steps, at, k_step = steps[keep], at[keep], k_step[keep]
+        ones = np.ones_like(k_step)
+        rec = np.stack([a * ones, v_cap[m] * ones, n[m] * ones, k_step], axis=1)  # (src, cap, den, num) of steps
+        rec_stretch = np.concatenate([rec, [[a, np.inf, 1.0, 1.0]], rec[::-1]])
         span = cum[b + 1] - cum[a]
         s_cut = np.concatenate([at, L[m] - at[::-1]]) * (span / L[m])  # along the run's blocks [mm]
-        f_stretch = np.concatenate([steps, [feeds[a]], steps[::-1]])  # stretches before, between, after cuts
         s_end = cum[a + 1: b + 2] - cum[a]  # each block's end along the run
         k = a + np.searchsorted(s_end[:-1], s_cut, side="right")  # the block each cut falls on
         frac = (s_cut - (cum[k] - cum[a])) / tp.lengths[k]
         keep = (frac > 1e-9) & (frac < 1.0 - 1e-9)  # not on a vertex of the run
         cut_block.append(k[keep]), cut_frac.append(frac[keep])
-        cut_feed.append(f_stretch[np.searchsorted(s_cut, s_cut[keep], side="left")])
-        end_feed[a: b + 1] = f_stretch[np.searchsorted(s_cut, s_end * (1.0 - 1e-12), side="left")]
-    cut_block, cut_frac, cut_feed = np.concatenate(cut_block), np.concatenate(cut_frac), np.concatenate(cut_feed)
+        cut_rec.append(rec_stretch[np.searchsorted(s_cut, s_cut[keep], side="left")])
+        end_rec[a: b + 1] = rec_stretch[np.searchsorted(s_cut, s_end * (1.0 - 1e-12), side="left")]
+    cut_block, cut_frac, cut_rec = np.concatenate(cut_block), np.concatenate(cut_frac), np.concatenate(cut_rec)
     if not cut_block.size:
         return None
     # the pieces in path order: each block's cut points, then its own end
@@ -230,23 +255,46 @@ def ramp_pieces(tp: ToolPath, run, feeds: np.ndarray, delays: np.ndarray, limits
     is_cut = np.concatenate([np.ones(cut_block.size, bool), np.zeros(M, bool)])[order]
     points = V[cut_block] + cut_frac[:, None] * (V[cut_block + 1] - V[cut_block])
     ends = np.vstack([points, tp.ends])[order]
-    piece_feed = np.concatenate([cut_feed, end_feed])[order]
+    rec = np.concatenate([cut_rec, end_rec])[order]
     block = block[order]
     centers = np.where(is_cut[:, None], np.nan, tp.centers[block])
     normals = np.where(is_cut[:, None], np.nan, tp.normals[block])
     sweeps = np.where(is_cut, 0.0, tp.sweeps[block])
-    return ToolPath(tp.start, ends, centers, normals, sweeps), block, piece_feed
+    recipe = PieceFeeds(rec[:, 0].astype(np.int64), rec[:, 1], rec[:, 2], rec[:, 3])
+    return ToolPath(tp.start, ends, centers, normals, sweeps), block, recipe
+
+
+class PieceFeeds(NamedTuple):
+    """The commanded feed of every piece of a :func:`ramp_pieces` path, ``min(feeds[src], cap) /
+    den * num`` from the blocks' commanded feeds (a ramp step ``k top / n`` with ``top`` the run's
+    feed capped at its velocity limit; a piece no ramp covers: its block's feed). Held as this
+    recipe so that the feeds of a traced plan stay traced (``jax.grad`` through the ramp)."""
+
+    src: np.ndarray  # (P,) block whose commanded feed the piece takes
+    cap: np.ndarray  # (P,) velocity cap along the line [mm/s] (inf: none)
+    den: np.ndarray  # (P,) steps n of the ramp (1 off the ramp)
+    num: np.ndarray  # (P,) step k of the ramp (1 off the ramp)
+
+    def of(self, feeds):
+        """``(P,)`` feeds [mm/s] of the pieces from the blocks' ``(M,)`` (NumPy, or JAX if traced)."""
+        xp = _xp(feeds)
+        return xp.minimum(xp.asarray(feeds)[self.src], self.cap) / self.den * self.num
 
 
 def join_plan(pieces, tp: ToolPath, block: np.ndarray, plan_type):
     """The plan of ``tp`` from the plan ``pieces`` of its :func:`ramp_pieces` path (``block``: the
     block of every piece): a block's pulse runs from its first piece's start to its last piece's
     end, its feed is its fastest piece's, and each vertex of ``tp`` keeps the overlap and corner
-    instant of the piece vertex it is; the profile, deviation and rounds are the pieces' plan's."""
+    instant of the piece vertex it is; the profile, deviation and rounds are the pieces' plan's.
+    NumPy or JAX alike (a traced plan maps to a traced plan)."""
+    xp = _xp(pieces.start_times, pieces.feeds)
     first, last = run_bounds(block)
-    start, pulse = np.asarray(pieces.start_times), np.asarray(pieces.pulse_times)
-    feeds = np.maximum.reduceat(np.asarray(pieces.feeds), first)
+    start, pulse = xp.asarray(pieces.start_times), xp.asarray(pieces.pulse_times)
+    if xp is np:
+        feeds = np.maximum.reduceat(np.asarray(pieces.feeds), first)
+    else:
+        feeds = jax.ops.segment_max(pieces.feeds, jnp.asarray(block), num_segments=tp.n_blocks, indices_are_sorted=True)
     return plan_type(device_array(start[first]), device_array(start[last] + pulse[last] - start[first]),
-                     device_array(np.asarray(pieces.overlaps)[last[:-1]]), device_array(feeds), pieces.delays,
-                     pieces.profile, device_array(np.asarray(pieces.corner_times)[last[:-1]]),
+                     device_array(xp.asarray(pieces.overlaps)[last[:-1]]), device_array(feeds), pieces.delays,
+                     pieces.profile, device_array(xp.asarray(pieces.corner_times)[last[:-1]]),
                      device_array(tp.vertices), pieces.path_deviation, pieces.rounds, tp.axes)

@@ -230,8 +230,13 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
 
     Differentiable with ``jax.grad`` / ``jax.jacfwd`` with respect to ``feed``, ``delays`` and
     ``tolerance``: the discrete choices (which corners dwell, which feeds a window lowers, which
-    corners stop) are made on the primal values and held fixed. Not under ``jax.jit`` with
-    ``refine`` or ``limits``, which decide on concrete values.
+    corners stop, whether straight runs merge and lines are cut into ramp steps) are made on the
+    primal values and held fixed, so a traced call returns the traced form of the plan an untraced
+    call returns (the same values). Held fixed as well: the feed factors the look-ahead and the
+    limits set (relative to the commanded feed) and the ramp pieces' cut points, so under
+    ``limits`` the derivative is that of the plan at fixed decisions, not of the limit-holding
+    cycle time where a limit binds (there the planned feed does not follow the commanded one).
+    Not under ``jax.jit`` with ``refine`` or ``limits``, which decide on concrete values.
 
     Raises:
         ParameterError: a bad feed, delay or tolerance (naming which), a tolerance of 0 on an arc.
@@ -251,43 +256,63 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             return FIRPlan(starts, pulse, overlaps, feeds, plans[0].delays, position, centre, device_array(tp.vertices),
                            deviation, rounds, tp.axes)
     traced = any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves((delays, feed, tolerance)))
-    if not traced:  # runs of collinear line blocks planned as one block each (_fir_straight)
-        feeds_all = np.broadcast_to(np.asarray(feed, dtype=np.float64), (M,))
-        tol_all = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), (M,))
-        run = straight_runs(tp, feeds_all, tol_all)
+    xp = jnp if traced else np
+    # the variants below are decided on primal values and built from the inputs as given, so a
+    # traced call returns the traced form of the very plan an untraced call returns
+    feeds_all = xp.broadcast_to(xp.asarray(feed, dtype=np.float64), (M,))
+    tol_all = xp.broadcast_to(xp.asarray(tolerance, dtype=np.float64), (M,))
+    feeds_np = np.broadcast_to(np.asarray(_primal(feed), dtype=np.float64), (M,))
+    tol_np = np.broadcast_to(np.asarray(_primal(tolerance), dtype=np.float64), (M,))
+    run = straight_runs(tp, feeds_np, tol_np)  # runs of collinear line blocks planned as one block each (_fir_straight)
+    if run is not None:
+        first, _ = run_bounds(run)
+        merged_tp = merged_path(tp, run)
+        plan, pieces = _plan_blocks(merged_tp, _run_value(feeds_all, run, first), delays,
+                                    _run_value(tol_all, run, first), refine, limits, check_period, traced)
+        merged = split_plan(plan, pieces, _pulse_table(merged_tp).first_motion, tp, merged_tp, run, FIRPlan)
+        if limits is None:
+            return merged
+    plans = [_plan_blocks(tp, feed, delays, tolerance, refine, limits, check_period, traced)[0]]
+    if limits is not None:
+        # under limits the pieces of a line can be the steps of a staircase ramp
+        # (_fir_limit_spread), which one block cannot take: the plans of the path as written,
+        # with its straight runs as one block each, and with its lines cut into ramp steps are
+        # plans of this path alike; the fastest is returned (ties: in that order)
         if run is not None:
-            first, _ = run_bounds(run)
-            merged_tp = merged_path(tp, run)
-            merged = split_plan(_plan_blocks(merged_tp, feeds_all[first], delays, tol_all[first], refine, limits,
-                                             check_period, traced), tp, merged_tp, run, FIRPlan)
-            if limits is None:
-                return merged
-        if limits is not None:
-            # under limits the pieces of a line can be the steps of a staircase ramp
-            # (_fir_limit_spread), which one block cannot take: the plans of the path as written,
-            # with its straight runs as one block each, and with its lines cut into ramp steps are
-            # plans of this path alike; the fastest is returned (ties: in that order)
-            plans = [_plan_blocks(tp, feed, delays, tolerance, refine, limits, check_period, traced)]
-            if run is not None:
-                plans.append(merged)
-            cut = ramp_pieces(tp, run, feeds_all, np.asarray(_primal(delays), dtype=np.float64), limits)
-            if cut is not None:
-                pieces_tp, block, piece_feeds = cut
-                # a plan runs no piece faster than commanded and ends T_d after its input: a lower
-                # bound on the cut plan's cycle, which the plans at hand may already meet (a chain
-                # of chords that ramps through its own blocks: a circle in 4,000 chords)
-                bound = float(np.sum(pieces_tp.lengths / piece_feeds)) + float(np.sum(_primal(delays)))
-                if min(float(p.cycle_time) for p in plans) > bound:
-                    plans.append(join_plan(_plan_blocks(pieces_tp, piece_feeds, delays, tol_all[block], refine,
-                                                        limits, check_period, traced), tp, block, FIRPlan))
-            return min(plans, key=lambda p: float(p.cycle_time))
-    return _plan_blocks(tp, feed, delays, tolerance, refine, limits, check_period, traced)
+            plans.append(merged)
+        cut = ramp_pieces(tp, run, feeds_np, np.asarray(_primal(delays), dtype=np.float64), limits)
+        if cut is not None:
+            pieces_tp, block, recipe = cut
+            # a plan runs no piece faster than commanded and ends T_d after its input: a lower
+            # bound on the cut plan's cycle, which the plans at hand may already meet (a chain
+            # of chords that ramps through its own blocks: a circle in 4,000 chords)
+            bound = float(np.sum(pieces_tp.lengths / recipe.of(feeds_np))) + float(np.sum(_primal(delays)))
+            if min(float(_primal(p.cycle_time)) for p in plans) > bound:
+                plan, _ = _plan_blocks(pieces_tp, recipe.of(feeds_all), delays, tol_all[block], refine, limits,
+                                       check_period, traced)
+                plans.append(join_plan(plan, tp, block, FIRPlan))
+    return min(plans, key=lambda p: float(_primal(p.cycle_time)))
+
+
+def _run_value(x, run: np.ndarray, first: np.ndarray):
+    """The value ``x`` ``(M,)`` of the first block of each run ``run`` ``(M,)`` (the blocks of a run
+    share it). Traced, its derivative is spread evenly over the run's blocks (the run's mean minus
+    its own primal), so that each block's commanded value gets its share of the merged block's
+    sensitivity rather than the first block all of it."""
+    if not isinstance(x, jax.core.Tracer):
+        return x[first]
+    n = int(run[-1]) + 1
+    mean = jax.ops.segment_sum(x, jnp.asarray(run), num_segments=n) / np.bincount(run, minlength=n)
+    return jax.lax.stop_gradient(x[first]) + (mean - jax.lax.stop_gradient(mean))
 
 
 def _plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, check_period: float,
-                 traced: bool) -> FIRPlan:
+                 traced: bool):
     """:func:`plan_fir` on a path without pauses, block by block (its inputs checked; ``traced``:
-    an input is a JAX tracer)."""
+    an input is a JAX tracer). Returns ``(FIRPlan, (fraction, piece_tv))``: the plan and the share of
+    its block's pulse and the pulse length [s] of each input piece ``(P,)`` (``_fir_profile.ProfileInputs``;
+    the pulse lengths traced where the plan is), which map a merged plan back to its blocks
+    (``_fir_straight.split_plan``)."""
     M = tp.n_blocks
     table = _pulse_table(tp)
     Mp = table.m_pad
@@ -377,12 +402,12 @@ def _plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, ch
         lengths_p = jnp.asarray(lengths_np)
         feeds_p = jnp.concatenate([feeds_cmd, jnp.ones(Mp - M + 1)])
         blk = jnp.asarray(table.block)
-        overlaps, starts, ends, position, centre = _traced_build(
+        overlaps, starts, ends, position, centre, piece_tv = _traced_build(
             lengths_p, feeds_p, blk, jnp.asarray(piece_factor), jnp.asarray(motion_ends_np), jnp.asarray(tangents_np),
             jnp.asarray(corner), tol_vertex_p, delays, jnp.asarray(tp.start), jnp.asarray(table.geo),
             jnp.asarray(table.gap), jnp.asarray(frac), jnp.arange(Mp - 1) < M - 1)
         return (feeds_cmd * jnp.asarray(cruise), overlaps[: M - 1], ends[:M] - starts[:M], starts[:M], position,
-                centre[: M - 1])
+                centre[: M - 1]), (frac, piece_tv)
 
     def prefix_bound(factor, head, tail, full, shrink, others, arc_rel, K, limit_v, repairs):
         """Lower bound on a candidate's first repaired prediction from the vertex errors of its
@@ -624,14 +649,15 @@ def _plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, ch
         capped = lambda: plans(np.minimum(base, safe_feed / F_np))  # noqa: E731
     state, rounds, deviation = verify(plans(base), capped)
     if traced:
-        feeds, overlaps, pulse, starts, profile, centre = traced_plan(*state[6])
+        (feeds, overlaps, pulse, starts, profile, centre), pieces = traced_plan(*state[6])
     else:
         feeds, overlaps, pulse, starts, centre = (device_array(state[i]) for i in (0, 1, 2, 3, 5))
         # the profile's inputs, not its coefficients (the same arrays when rebuilt: ``settle``'s release)
         frac, piece_tv, _, _, gaps = timing_gaps(*state[6])
         profile = _fir_profile.ProfileInputs(table, frac, piece_tv, gaps, d_np, tp.start, np.array(state[4]))
+        pieces = (frac, piece_tv)
     return FIRPlan(starts, pulse, overlaps, feeds, device_array(delays), profile, centre, device_array(tp.vertices),
-                   float(deviation), int(rounds), tp.axes)
+                   float(deviation), int(rounds), tp.axes), pieces
 
 
 def plan_fir_sweep(path, feed, delays, tolerances, *, limits: AxisLimits | None = None,
@@ -670,12 +696,12 @@ def _traced_build(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, 
     """:func:`_timing_kernel` and ``build_profile`` in one compiled dispatch (the plan returned when
     an input is a tracer). ``real_corner``: ``(M_pad - 1,)`` True on the path's corners (the others
     are padding and get no gap). Returns ``(overlaps, block starts, block ends, position, centre)``
-    on the padded shapes."""
+    on the padded shapes, and the pulse length [s] of every piece ``(P,)``."""
     piece_tv, overlaps = _timing_kernel(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, corner, tol_vertex,
                                         delays)
     gaps = jnp.concatenate([jnp.where(real_corner, jnp.sum(delays) - overlaps, 0.0), jnp.zeros(1)])
     starts, ends, position, centre = build_profile(start, geo, blk, gap, frac, piece_tv, gaps, delays)
-    return overlaps, starts, ends, position, centre
+    return overlaps, starts, ends, position, centre, piece_tv
 
 
 @jax.jit

@@ -226,7 +226,8 @@ def test_ramp_pieces_are_steps_the_axes_allow_each_lasting_the_filter_delay():
     feeds, delays = np.full(M, 25.0), np.array([0.06, 0.03])
     lim = AxisLimits.uniform(2, 100.0, 500.0, 5000.0)  # jerk below the envelope's 25 / (T1 T2) = 13,900
     run = straight_runs(tp, feeds, np.full(M, 0.01))
-    pieces, block, piece_feeds = ramp_pieces(tp, run, feeds, delays, lim)
+    pieces, block, recipe = ramp_pieces(tp, run, feeds, delays, lim)
+    piece_feeds = recipe.of(feeds)
     dV = min(500.0 * 0.06, 5000.0 * 0.06 * 0.03)  # axis-aligned lines: 9 mm/s
     assert np.all(np.diff(block) >= 0) and np.all(piece_feeds <= 25.0 + 1e-12)
     V = np.vstack([tp.start, tp.ends])
