@@ -144,7 +144,10 @@ def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: 
     modes = mode_tuples(modes)
     t_wall = time.perf_counter()
     problem = _Problem(path, float(feed), d_np, float(tolerance), limits, sample_period)
-    x_safe, t_safe, x_start, held = problem.start(check_period)
+    if modes and residual_vibration is None:
+        residual_vibration = profile_residuals(plan_fir(path, float(feed), d_np, float(tolerance)).position, modes)
+    residual = None if not modes else np.broadcast_to(np.asarray(residual_vibration, dtype=np.float64), (len(modes),))
+    x_safe, t_safe, x_start, held, other_starts = problem.start(check_period, modes, residual)
     n_c, M = problem.M - 1, problem.M
     bounds = [(0.0, 1.0)] * n_c + [(_FEED_FLOOR, 1.0)] * (3 * M) + [(0.0, 1.0)] * (2 * M)
     lower, upper = np.array([b[0] for b in bounds]), np.array([b[1] for b in bounds])
@@ -152,9 +155,6 @@ def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: 
     shares = np.zeros((M, n_c + 5 * M))  # h_k + t_k <= 1
     shares[np.arange(M), n_c + 3 * M + np.arange(M)] = shares[np.arange(M), n_c + 4 * M + np.arange(M)] = -1.0
     x_best, t_best, runs = x_safe, t_safe, []
-    if modes and residual_vibration is None:
-        residual_vibration = profile_residuals(plan_fir(path, float(feed), d_np, float(tolerance)).position, modes)
-    residual = None if not modes else np.broadcast_to(np.asarray(residual_vibration, dtype=np.float64), (len(modes),))
     if modes and not problem.holds(problem.plan(x_safe, check_period), modes, residual):
         t_best = np.inf  # the start plan rings more than allowed: any quiet answer beats it
     for name in starts:
@@ -163,6 +163,13 @@ def optimize_fir(path: Polyline, feed: float, delays, tolerance: float, limits: 
         if name == "smooth":
             sh = piece_shares if piece_shares is not None else ((0.25, 0.5, 0.25) if M <= _PIECED else (1.0,))
             x_s, log = smooth_search(problem, x_safe, check_period, modes=modes, residual=residual, rounds=rounds, shares=sh)
+            for x0 in other_starts if modes and x_s is None and not np.isfinite(t_best) else ():
+                # no quiet plan from a start that rings: the other feasible starts, fastest first
+                x_s, more = smooth_search(problem, x0, check_period, modes=modes, residual=residual, rounds=rounds,
+                                          shares=sh)
+                log += more
+                if x_s is not None:
+                    break
             run = {"start": name, "iterations": sum(r["iterations"] for r in log), "status": log[-1]["status"] if log else "",
                    "solver_time": min((r["time"] for r in log), default=np.nan), "backtrack": np.nan, "time": t_safe,
                    "rounds": log}
@@ -345,14 +352,18 @@ class _Problem:
                 return False
         return not modes or bool(np.all(profile_residuals(plan.position, modes) <= np.asarray(residual) * (1 + 1e-6) + 1e-9))
 
-    def start(self, check_period: float) -> tuple[np.ndarray, float, np.ndarray, FIRPlan]:
-        """``(x_safe, its cycle time, x_start, held)``: the fastest feasible of the limit-holding
+    def start(self, check_period: float, modes=(), residual=None):
+        """``(x_safe, its cycle time, x_start, held, others)``: the fastest feasible of the limit-holding
         ``plan_fir`` plans mapped onto ``x`` (overlaps, and each block's mean feed ``L / T_v``) and
         exact stops at the closed-form safe feeds (``_fir_limits.feed_caps``; feasible by
-        construction); and the solver's start, the paper's plan (eq 13/14 overlaps at ``F``),
+        construction), with ``modes`` the fastest of those whose residual vibration is within
+        ``residual`` if any is (a faster start that rings more would leave the search no quiet
+        plan to fall back on); and the solver's start, the paper's plan (eq 13/14 overlaps at ``F``),
         feasible or not: SLSQP starts from infeasible points, and exact stops would trap it (a
         limit broken at any overlap > 0 has no gradient at ``T_k = 0``); and the limit-holding
-        ``plan_fir`` plan itself (its head and tail pieces need not fit ``x``)."""
+        ``plan_fir`` plan itself (its head and tail pieces need not fit ``x``); ``others``: the
+        other feasible points, fastest first (further starts for a search that finds no quiet plan
+        from ``x_safe``)."""
         M = self.M
         safe = np.full(M, self.F)
         if self.limits is not None:
@@ -368,9 +379,11 @@ class _Problem:
             x = point(np.asarray(p.overlaps), self.L / np.asarray(p.pulse_times))
             if self.feasible(x, check_period):
                 best.append(x)
-        x = min(best, key=self.time)
+        quiet = [x for x in best if self.holds(self.plan(x, check_period), modes, residual)] if modes else best
+        x = min(quiet or best, key=self.time)
+        others = sorted((y for y in best if y is not x), key=self.time)
         paper = plan_fir(self.path, self.F, np.asarray(self.delays), self.eps, refine=False)
-        return x, self.time(x), point(np.asarray(paper.overlaps), np.full(M, self.F)), held
+        return x, self.time(x), point(np.asarray(paper.overlaps), np.full(M, self.F)), held, others
 
 
 def _pieces(x, data, M: int):

@@ -55,6 +55,7 @@ plan of every tighter tolerance, which is (``_fir_candidates``).
 from __future__ import annotations
 
 import heapq
+import itertools
 from types import SimpleNamespace
 
 import equinox as eqx
@@ -79,7 +80,9 @@ from research.interpolators._fir_limits import (
     arc_limit_caps,
     blocks_in_windows,
     feed_caps,
+    futile_stops,
     hold_block_limits,
+    window_slow_down,
 )
 from research.interpolators._fir_limit_spread import CornerWindows, FeedSteps, spread_slow_down
 from research.interpolators._fir_lookahead import look_ahead
@@ -445,7 +448,7 @@ def _plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, ch
 
     last_check = None  # the last complete check of any candidate (RoundChecks.snapshot)
 
-    def settle(candidate, several=False):
+    def settle(candidate, several=False, slow_futile=False, on_futile=None):
         """Verify and repair one candidate plan (``candidate()`` builds its new arrays ``(factor,
         head, tail, full, others, arc_rel)`` when it starts), one round per step: a generator that yields the
         ``(predicted time, limit repaired so far, holds its profile)`` after each failed round and
@@ -455,7 +458,13 @@ def _plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, ch
         repairs only shrink overlaps and lower feeds, and a bisecting corner is predicted at its
         bracket's upper end (:attr:`CornerBisection.bound_scale`), above which it never ends.
         ``several``: other candidates compete (worth a first bound from the first blocks,
-        :func:`prefix_bound`, before the whole profile)."""
+        :func:`prefix_bound`, before the whole profile). ``slow_futile``: a corner above a limit
+        whose exact stop is predicted to lower nothing (``_fir_limits.futile_stops``) has its
+        window's blocks slowed instead of its overlap bisected; without it, ``on_futile(bound)`` is
+        called once when the first such corner is bisected, with a lower bound on the time of the
+        settle that slows instead (the planner then settles the same
+        candidate the other way as well and keeps the faster plan: the prediction rests on
+        isolated steps, and on random programs the bisection was faster about as often)."""
         nonlocal last_check
         factor, head, tail, full, others, arc_rel = candidate()  # ``factor``: its own, repaired in place
         candidate, shrink = None, np.ones(M - 1)
@@ -476,6 +485,15 @@ def _plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, ch
                 frac[idx], piece_factor[idx] = table.pieces_at(idx, head, tail, fac, arc_rel, g)
                 return alone_block_ratios(table, blocks, frac, piece_factor, lengths_np, feeds_np, tp.start, d_np, limits)
             return hold_block_limits(alone, safe_feed / (F_np * fac.max(axis=1)), which)
+
+        def futile(fac, corners):
+            """``_fir_limits.futile_stops`` of ``corners`` at feed factors ``fac`` (each block's piece
+            facing the corner: its tail at its end, its head at its start, else its body)."""
+            body = 1.0 - head - tail
+            a, b = corners, corners + 1
+            f_end = F_np[a] * fac[a, np.where(tail[a] > 0.0, 2, np.where(body[a] > 0.0, 1, 0))]
+            f_start = F_np[b] * fac[b, np.where(head[b] > 0.0, 0, np.where(body[b] > 0.0, 1, 2))]
+            return futile_stops(f_end[:, None] * t_out[a], f_start[:, None] * t_in[b], steps.step)
 
         def breaking(fac, corners):  # the blocks in the corners' windows above a limit at ``fac`` (_fir_limit_spread)
             return windows.breaking(corners, head, tail, fac, arc_rel, full, shrink * bisection.scale, others)
@@ -511,10 +529,24 @@ def _plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, ch
                     near = (blocks_in_windows(bad, starts_np, pulse_np, Td_np) | own_bad) & ~checked
                     g = hold(factor, near) if near.any() else 1.0
                     checked |= near
-                    if bad.any() and not near.any() and np.all(bisection.scale[bad] == 0.0):
+                    c = np.flatnonzero(bad & (bisection.scale > 0.0))  # corners bisection may still repair
+                    c = c[futile(factor, c)] if c.size and (slow_futile or on_futile is not None) else c[:0]
+                    if slow_futile and c.size and not np.any(g < 1.0):
+                        # corners whose stop is predicted to lower nothing: slow every block their
+                        # windows cover (peaks scale with feed), each by its corner's ratio; until
+                        # the first such corner the rounds are those of the plain settle
+                        g = window_slow_down(c, 0.98 / ratios[c], starts_np, pulse_np, Td_np)
+                    elif bad.any() and not near.any() and np.all(bisection.scale[bad] == 0.0):
                         # exact stops still above a limit (blocks checked alone before, in other
                         # windows): slow every block those windows cover, as peaks scale with feed
                         g = np.where(blocks_in_windows(bad, starts_np, pulse_np, Td_np), 0.98 / np.max(ratios[bad]), 1.0)
+                    if c.size and on_futile is not None:
+                        # the other way's first repair: its predicted time bounds that settle (repairs
+                        # only lower feeds and shrink overlaps; phase 1 and the chain's steps come on top)
+                        g_c = window_slow_down(c, 0.98 / ratios[c], starts_np, pulse_np, Td_np)
+                        on_futile(predicted_time((factor * g_c[:, None], head, tail, full, others, arc_rel),
+                                                 shrink * bisection.bound_scale))
+                        on_futile = None
                     if own_bad.any() and not near.any():  # checked alone before, above a limit again
                         g = np.where(own_bad, 0.98 / np.maximum(own, 1.0), g)
                     if np.any(g < 1.0):  # slowed blocks: check the corners again before bisecting
@@ -609,14 +641,26 @@ def _plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, ch
         state without its profile (its first and last break in its place)."""
         best, best_time = None, np.inf
         several = len(candidates) > 1
-        queue = [(bound if several else 0.0, i, settle(c, several=several)) for i, (c, bound) in enumerate(candidates)]
+        # candidates to settle with slow_futile as well (settle's on_futile), each from its start;
+        # its rounds are the plain settle's until the one that called on_futile, so the bound its
+        # plain settle had before that round bounds it too, and so does the bound on_futile gives
+        forks = []
+        fork_index = itertools.count(1 << 40)
+
+        def settled(c, several):  # a candidate's settle generator (limits: forked on futile stops)
+            if limits is None:
+                return settle(c, several=several)
+            return settle(c, several=several, on_futile=lambda low: forks.append((c, low)))
+
+        queue = [(bound if several else 0.0, i, settled(c, several)) for i, (c, bound) in enumerate(candidates)]
         heapq.heapify(queue)
         extra, n_first = capped is not None, len(candidates)
         candidates = None  # the generators hold the candidates (their arrays are built when started)
 
         def add_capped():
             for i, (c, bound) in enumerate(capped(), start=n_first):
-                heapq.heappush(queue, (predicted_time(c()) if bound is None else bound, i, settle(c)))
+                bound = predicted_time(c()) if bound is None else bound
+                heapq.heappush(queue, (bound, i, settled(c, False)))
 
         held = {}  # index -> (bound, steps) of the candidates suspended with their profiles
         while queue and queue[0][0] < best_time:
@@ -636,6 +680,9 @@ def _plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, ch
             if extra and repaired:
                 extra = False
                 add_capped()
+            while forks:  # the same candidate settled with slow_futile, from its start
+                c, low = forks.pop()
+                heapq.heappush(queue, (max(bound, low), next(fork_index), settle(c, several=several, slow_futile=True)))
             if holds and queue[0][1] != i:  # suspended with its profile while another goes next:
                 # the _HELD_PROFILES of least bound among such keep theirs (the likeliest to resume)
                 held[i] = (max(bound, step), steps)
