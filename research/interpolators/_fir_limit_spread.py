@@ -100,7 +100,10 @@ class CornerWindows:
     def ratios(self, corners: np.ndarray, head, tail, factor, arc_rel, full, shrink, others) -> np.ndarray:
         """``(C,)`` largest ``peak / limit`` in the windows of ``corners`` (distinct, ascending) in
         the plan of :meth:`breaking`'s arguments."""
-        return self._windows(np.asarray(corners, dtype=np.int64), head, tail, factor, arc_rel, full, shrink, others)[0]
+        corners = np.asarray(corners, dtype=np.int64)
+        if not corners.size:
+            return np.zeros(0)
+        return self._windows(corners, head, tail, factor, arc_rel, full, shrink, others)[0]
 
     def _windows(self, corners, *plan):
         """The corners' window ratios and blocks (:meth:`_read`), their block ranges grown until

@@ -526,26 +526,42 @@ def _plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, ch
                     # recomputed where the input changed since the last round (_fir_round_peaks)
                     ratios, own = round_peaks(pos_np, starts_np, pulse_np, state[1], *state[6][:3], state[6][6])
                     bad, own_bad = ratios > 1.0 + LIMIT_RTOL, own > 1.0 + LIMIT_RTOL
-                    near = (blocks_in_windows(bad, starts_np, pulse_np, Td_np) | own_bad) & ~checked
+                    # corners above a limit that bisection may still repair and whose exact stop is
+                    # predicted to lower nothing (futile_stops): the slow_futile settle slows their
+                    # windows' blocks instead, and checks no block alone for them (phase 1)
+                    c = np.flatnonzero(bad & (bisection.scale > 0.0))
+                    c = c[futile(factor, c)] if c.size and (slow_futile or on_futile is not None) else c[:0]
+                    windows_of = bad
+                    if slow_futile and c.size:
+                        windows_of = bad.copy()
+                        windows_of[c] = False
+                    near = (blocks_in_windows(windows_of, starts_np, pulse_np, Td_np) | own_bad) & ~checked
                     g = hold(factor, near) if near.any() else 1.0
                     checked |= near
-                    c = np.flatnonzero(bad & (bisection.scale > 0.0))  # corners bisection may still repair
-                    c = c[futile(factor, c)] if c.size and (slow_futile or on_futile is not None) else c[:0]
-                    if slow_futile and c.size and not np.any(g < 1.0):
-                        # corners whose stop is predicted to lower nothing: slow every block their
-                        # windows cover (peaks scale with feed), each by its corner's ratio; until
-                        # the first such corner the rounds are those of the plain settle
-                        g = window_slow_down(c, 0.98 / ratios[c], starts_np, pulse_np, Td_np)
+                    # the slow_futile settle's window slow-down this round (where no block alone is slowed)
+                    g_fork = None if not c.size or np.any(g < 1.0) else \
+                        window_slow_down(c, 0.98 / ratios[c], starts_np, pulse_np, Td_np)
+                    if slow_futile and g_fork is not None:
+                        # slow every block those corners' windows cover (peaks scale with feed),
+                        # each by its corner's ratio; until the first such corner the rounds are
+                        # those of the plain settle
+                        g = g_fork
                     elif bad.any() and not near.any() and np.all(bisection.scale[bad] == 0.0):
                         # exact stops still above a limit (blocks checked alone before, in other
                         # windows): slow every block those windows cover, as peaks scale with feed
                         g = np.where(blocks_in_windows(bad, starts_np, pulse_np, Td_np), 0.98 / np.max(ratios[bad]), 1.0)
                     if c.size and on_futile is not None:
-                        # the other way's first repair: its predicted time bounds that settle (repairs
-                        # only lower feeds and shrink overlaps; phase 1 and the chain's steps come on top)
-                        g_c = window_slow_down(c, 0.98 / ratios[c], starts_np, pulse_np, Td_np)
-                        on_futile(predicted_time((factor * g_c[:, None], head, tail, full, others, arc_rel),
-                                                 shrink * bisection.bound_scale))
+                        # the rounds so far are the slow_futile settle's too. Where it slows the
+                        # windows this round (it checks alone a subset of the blocks checked here, so
+                        # none is slowed alone there either), its next prediction bounds it: repairs
+                        # only lower feeds and shrink overlaps, and a block above a limit of its own
+                        # takes 0.98 / ratio at most. Else the bound before this round does.
+                        low = -np.inf
+                        if g_fork is not None:
+                            g_low = np.where(own_bad, np.maximum(g_fork, 0.98 / np.maximum(own, 1.0)), g_fork)
+                            low = predicted_time((factor * g_low[:, None], head, tail, full, others, arc_rel),
+                                                 shrink * bisection.bound_scale)
+                        on_futile(low)
                         on_futile = None
                     if own_bad.any() and not near.any():  # checked alone before, above a limit again
                         g = np.where(own_bad, 0.98 / np.maximum(own, 1.0), g)
@@ -677,12 +693,12 @@ def _plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, ch
                 if t < best_time:  # kept without its profile (rebuilt from the inputs when used)
                     best, best_time = (state[:4] + ((breaks[0], breaks[-1]), state[5], state[6]), rounds, deviation), t
                 state = breaks = done = None
-            if extra and repaired:
-                extra = False
-                add_capped()
             while forks:  # the same candidate settled with slow_futile, from its start
                 c, low = forks.pop()
                 heapq.heappush(queue, (max(bound, low), next(fork_index), settle(c, several=several, slow_futile=True)))
+            if extra and repaired:
+                extra = False
+                add_capped()
             if holds and queue[0][1] != i:  # suspended with its profile while another goes next:
                 # the _HELD_PROFILES of least bound among such keep theirs (the likeliest to resume)
                 held[i] = (max(bound, step), steps)
