@@ -198,6 +198,32 @@ class NumpyPiecewise:
                 value = np.where(((flat >= breaks[0]) & (flat <= breaks[-1]))[:, None], value, 0.0)
         return value.reshape(t.shape + (coeffs.shape[2],))
 
+    def realized(self) -> "NumpyPiecewise":
+        """The same profile without its pieces shorter than :data:`DEGENERATE_PIECE`: each is
+        dropped and the next piece starts at its start (the previous one runs on, for the last),
+        a shift of at most that much time. Their continuous derivatives are the neighbours' end
+        values; only the discontinuous highest one differs, for a time no motion realizes.
+
+        Example:
+            >>> import numpy as np
+            >>> p = NumpyPiecewise(np.array([0.0, 1.0, 1.0 + 2e-16, 2.0]), np.array([[[0.0]], [[1e9]], [[0.0]]]))
+            >>> float(np.abs(p.realized()(np.linspace(0.0, 2.0, 5))).max())
+            0.0
+        """
+        short = np.diff(self.breaks) < DEGENERATE_PIECE
+        if not short.any() or short.all():
+            return self
+        K = short.size
+        drop_break = np.flatnonzero(short) + 1  # the next piece starts at the dropped one's start
+        drop_break[drop_break == K] = K - 1  # the last piece: the previous one runs on to the end
+        return NumpyPiecewise(np.delete(self.breaks, drop_break), self.coeffs[~short])
+
+
+#: pieces shorter than this [s] are rounding, not motion: two breaks that coincide up to rounding
+#: leave a piece of ~1e-16 s whose highest (discontinuous) derivative carries both neighbours'
+#: jumps, which no motion realizes (``_fir_piece_peaks``, :meth:`NumpyPiecewise.realized`)
+DEGENERATE_PIECE = 1e-12
+
 
 def bucket_size(n: int, minimum: int = 4) -> int:
     """``n`` rounded up to one of 16 sizes per octave (at most 6.25 % padding), so that arrays of

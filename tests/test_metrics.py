@@ -63,3 +63,26 @@ def test_limit_ratios_against_fir_envelope():
     np.testing.assert_allclose([r[0] for r in ratios.values()], [1.0, 1.0, 1.0], rtol=1e-9)
     assert within_limits(traj, env)
     assert not within_limits(traj, AxisLimits.uniform(2, 100.0, 1000.0, 1e5))
+
+
+def test_limit_holding_plan_measured_within_its_limits():
+    """Regression: on a limit-holding plan (random program 16 of a limits stress run, at 0.099x its
+    FIR envelope) the golden-section refinement of ``peak_axis_values`` landed in a 1.1e-16 s piece
+    (two breaks equal up to rounding) and reported 1.71x the jerk limit, where dense samples of the
+    exact profile and its finite differences gave 1.000. Pieces of rounding length are not motion
+    (``NumpyPiecewise.realized``): the plan re-measured independently (``limit_ratios`` on the
+    sampled trajectory with its exact profile) is within its limits (1e-6)."""
+    from research.interpolators import plan_fir
+    from research.limits import AxisLimits
+    from research.metrics import limit_ratios
+    from research.paths.library import random_program
+
+    rng = np.random.default_rng(16)
+    tp = random_program(rng, arcs=True)
+    eps, feed = float(np.exp(rng.uniform(np.log(0.005), np.log(0.5)))), float(rng.uniform(20.0, 300.0))
+    delays = (0.06, 0.03)
+    env = AxisLimits.fir_envelope(tp.dim, feed, delays)
+    limits = AxisLimits(env.velocity, 0.09899058947396322 * env.acceleration, 0.09899058947396322 * env.jerk)
+    plan = plan_fir(tp, feed, delays, eps, limits=limits)
+    ratios = limit_ratios(plan.trajectory(1e-3), limits)
+    assert max(float(np.max(v)) for v in ratios.values()) <= 1.0 + 1e-6

@@ -59,14 +59,14 @@ from research.interpolators._fir_blocks import build_profile
 from research.interpolators._fir_chain import check_delays
 from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_limits import LIMIT_RTOL, feed_caps
-from research.interpolators._fir_piece_peaks import DEGENERATE_PIECE, corner_peak_ratios
+from research.interpolators._fir_piece_peaks import corner_peak_ratios
 from research.interpolators._fir_polish import polish
 from research.interpolators._fir_reorder import mode_tuples, profile_residuals, smooth_search
 from research.interpolators._fir_verify import corner_distances, path_deviations
 from research.interpolators.fir import CHECK_PERIOD, FIRPlan, _as_toolpath, _pulse_table, plan_fir
 from research.limits import AxisLimits
 from research.paths.polyline import Polyline
-from research.piecewise import NumpyPiecewise
+from research.piecewise import DEGENERATE_PIECE, NumpyPiecewise
 
 #: constraint samples (peak pieces, deviation samples) merged into one row by their maximum
 _GROUP = 4
@@ -459,7 +459,7 @@ def _polyline_distance(q, P0, P1):
 
 def _piece_peak_ratios(position, lim):
     """Largest ``|q^(nu)_a| / limit_a,nu`` (``nu`` = 1..3, all axes) on every piece of the exact
-    profile; pieces shorter than ``_fir_piece_peaks.DEGENERATE_PIECE`` give 0 (as in the exact check).
+    profile; pieces shorter than ``piecewise.DEGENERATE_PIECE`` give 0 (as in the exact check).
     Candidates: both ends and the real roots of the next derivative inside the piece (degree <= 2,
     closed form), the root held fixed under differentiation (envelope theorem)."""
     c = position.coeffs  # (K, D + 1, A) ascending local

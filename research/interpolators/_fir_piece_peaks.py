@@ -16,11 +16,9 @@ import numba
 import numpy as np
 
 from research.limits import AxisLimits
+from research.piecewise import DEGENERATE_PIECE
 
 
-#: pieces shorter than this [s] are ignored by :func:`corner_peak_ratios`: two breaks that coincide up
-#: to rounding leave a piece of ~1e-16 s carrying both neighbours' jerk, which no motion realizes
-DEGENERATE_PIECE = 1e-12
 
 
 def corner_peak_ratios(position, lo: np.ndarray, hi: np.ndarray, limits: AxisLimits) -> np.ndarray:
