@@ -29,11 +29,11 @@ import numpy as np
 sys.path.insert(0, "benchmarks")
 import bench_cam  # noqa: E402
 import bench_fir  # noqa: E402
-from research.interpolators import _fir_lookahead, _fir_profile, _fir_verify, fir, plan_fir  # noqa: E402
+from research.interpolators import _fir_lookahead, _fir_profile, _fir_settle, _fir_verify, plan_fir  # noqa: E402
 from research.paths import toolpath  # noqa: E402
 
 STAGES = [  # (owner, attribute, label)
-    (fir, "look_ahead", "look-ahead (candidates)"),
+    (_fir_settle, "look_ahead", "look-ahead (candidates)"),
     (_fir_lookahead, "_candidate", "  one candidate's arrays"),
     (_fir_profile, "profile", "exact profile build"),
     (_fir_verify.RoundChecks, "__call__", "round checks"),

@@ -3,9 +3,9 @@
 ``plan_fir`` decides on primal values: which corners dwell, which feeds a window lowers, which
 corners a verification round repairs. Those rounds need the timing of a candidate (eq 5 pulse
 lengths, eq 13/14 overlaps) and its exact filtered profile, many times per plan; built with JAX
-(``fir._timing_kernel``, ``_fir_blocks.build_profile``) each costs a dispatch and a device sync,
+(``_fir_settle._timing_kernel``, ``_fir_blocks.build_profile``) each costs a dispatch and a device sync,
 and XLA's moving average (a general merge by two searches and a gather) dominates long paths. Here
-the same formulas run on NumPy arrays: :func:`timing` mirrors ``fir._timing_kernel`` and
+the same formulas run on NumPy arrays: :func:`timing` mirrors ``_fir_settle._timing_kernel`` and
 :func:`profile` mirrors ``build_profile`` (the same pieces, padding included, so a plan built here
 has the same arrays as the JAX one up to rounding). The moving average of a piecewise polynomial
 (Sencer 2015 eq 1-4: ``y(t) = (C(t) - C(t - T)) / T`` with ``C`` the antiderivative) is one linear
@@ -34,7 +34,6 @@ import math
 
 import equinox as eqx
 import jax
-import jax.numpy as jnp
 import numba
 import numpy as np
 
@@ -149,7 +148,7 @@ def overlaps(tolerance: np.ndarray, speed_change: np.ndarray, delays: np.ndarray
 
 
 def timing(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, full, shrink, others, tol_vertex, delays):
-    """``fir._timing_kernel`` on the real corners (``M - 1``), NumPy: the pulse length of every
+    """``_fir_settle._timing_kernel`` on the real corners (``M - 1``), NumPy: the pulse length of every
     piece ``(P,)`` [s] (eq 5 at its feed) and the overlap of every corner ``(M - 1,)`` [s] (eq 13/14,
     or ``T_d`` at full overlap, times its shrink factor). Elementwise for one or two filters: the
     pieces up to a block's first motion piece and the corners before it (``plan_fir``'s

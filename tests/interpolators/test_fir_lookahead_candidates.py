@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import research.interpolators._fir_lookahead as lookahead
-from research.interpolators import fir, plan_fir
+from research.interpolators import _fir_settle, plan_fir
 from research.interpolators._fir_profile import overlaps
 from research.interpolators.fir import _as_toolpath, _pulse_table
 from research.paths.library import random_program
@@ -77,7 +77,7 @@ def test_plans_equal_those_of_candidates_built_once(arcs, delays, monkeypatch):
     """``plan_fir`` with the candidates built when started equals, bit for bit, ``plan_fir`` with
     every candidate's arrays built once by the look-ahead and held to the end (each start given
     its own copy of the feed factors), on seeds 0-3 (two and three filters)."""
-    look = fir.look_ahead
+    look = _fir_settle.look_ahead
 
     def held(*args, **kwargs):
         out = []
@@ -90,7 +90,7 @@ def test_plans_equal_those_of_candidates_built_once(arcs, delays, monkeypatch):
         tp, eps, feed = _program(seed, arcs)
         lazy = plan_fir(tp, feed, delays, eps)
         with monkeypatch.context() as m:
-            m.setattr(fir, "look_ahead", held)
+            m.setattr(_fir_settle, "look_ahead", held)
             once = plan_fir(tp, feed, delays, eps)
         assert lazy.rounds == once.rounds and lazy.path_deviation == once.path_deviation
         for name in ("start_times", "pulse_times", "overlaps", "feeds", "corner_times"):

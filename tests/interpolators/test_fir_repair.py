@@ -14,7 +14,7 @@ that keeps it (the same arrays, bit for bit).
 import numpy as np
 import pytest
 
-import research.interpolators.fir as fir
+import research.interpolators._fir_settle as settle
 from research.interpolators import plan_fir
 from research.interpolators._fir_repair import Repairs
 from research.paths import Polyline
@@ -109,18 +109,18 @@ def test_branch_and_bound_returns_the_least_verified_candidate(seed, monkeypatch
     blocks' or a round's first half) drops the winner on these programs."""
     args = (_closed_curve(seed), 200.0, (0.06, 0.03), 0.05)
     found = []
-    look_ahead = fir.look_ahead
+    look_ahead = settle.look_ahead
 
     def grab(*a, **k):
         found.extend(look_ahead(*a, **k))
         return found
 
-    monkeypatch.setattr(fir, "look_ahead", grab)
+    monkeypatch.setattr(settle, "look_ahead", grab)
     whole = float(plan_fir(*args).cycle_time)
     assert len(found) > 5
     alone = []
     for c in list(found):
-        monkeypatch.setattr(fir, "look_ahead", lambda *a, c=c, **k: [c])
+        monkeypatch.setattr(settle, "look_ahead", lambda *a, c=c, **k: [c])
         alone.append(float(plan_fir(*args).cycle_time))
     assert whole == min(alone)
 
@@ -140,10 +140,10 @@ def test_released_profiles_rebuild_the_same_plan(seed, monkeypatch):
         return swap(self, position, *resumed)
 
     monkeypatch.setattr(RoundChecks, "swap_profile", counted)
-    monkeypatch.setattr(fir, "_HELD_PROFILES", 10**6)
+    monkeypatch.setattr(settle, "_HELD_PROFILES", 10**6)
     keep = plan_fir(*args)
     assert not released
-    monkeypatch.setattr(fir, "_HELD_PROFILES", 0)
+    monkeypatch.setattr(settle, "_HELD_PROFILES", 0)
     rebuilt = plan_fir(*args)
     assert any(released)
     for name in ("start_times", "pulse_times", "overlaps", "feeds", "corner_times"):
