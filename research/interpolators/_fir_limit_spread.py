@@ -207,6 +207,13 @@ class FeedSteps:
             return 0 if self.head[k] > 0.0 else (1 if body > 0.0 else 2)
         return 2 if self.tail[k] > 0.0 else (1 if body > 0.0 else 0)
 
+    def facing_feeds(self, factor: np.ndarray, blocks: np.ndarray, side: int) -> np.ndarray:
+        """``(B,)`` feeds [mm/s] of the pieces of ``blocks`` facing their start (``side`` -1) or end
+        (+1) at feed factors ``factor`` ``(M, 3)`` (:meth:`_column`)."""
+        blocks = np.asarray(blocks, dtype=np.int64)
+        cols = np.array([self._column(k, side) for k in blocks.tolist()], dtype=np.int64)
+        return self.feeds[blocks] * factor[blocks, cols]
+
     def __call__(self, factor: np.ndarray, which: np.ndarray, fixed: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(multipliers, within, unset)``: ``(M,)`` feed multipliers ``< 1`` of the blocks ``which``
         (each block's factors scaled alike) under which the steps between their pieces facing their

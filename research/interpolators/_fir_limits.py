@@ -359,18 +359,24 @@ class CornerBisection:
 def blocks_in_windows(flags: np.ndarray, starts: np.ndarray, pulse_times: np.ndarray, total_delay: float) -> np.ndarray:
     """``(M,)`` True for the blocks whose filtered span ``[start, end + T_d]`` meets the window of a
     flagged corner (``flags`` ``(M - 1,)``, windows as in :func:`corner_limit_ratios`)."""
-    starts = np.asarray(starts, dtype=np.float64)
-    M = starts.size
+    M = np.asarray(starts).size
     out = np.zeros(M + 1, dtype=np.int64)
     c = np.flatnonzero(flags)
     if c.size:
-        ends = starts + np.asarray(pulse_times)
-        lo, hi = ends[c], starts[c + 1] + total_delay
-        first = np.searchsorted(ends + total_delay, lo, side="right")
-        last = np.searchsorted(starts, hi, side="left")
+        first, last = _window_blocks(c, starts, pulse_times, total_delay)
         np.add.at(out, first, 1)
         np.add.at(out, last, -1)
     return np.cumsum(out)[:M] > 0
+
+
+def _window_blocks(corners: np.ndarray, starts, pulse_times, total_delay: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(first, last)``: the blocks ``first .. last - 1`` whose filtered span ``[start, end + T_d]``
+    meets the window ``[end_c, start_(c+1) + T_d]`` of each of ``corners`` (indices)."""
+    starts = np.asarray(starts, dtype=np.float64)
+    ends = starts + np.asarray(pulse_times)
+    first = np.searchsorted(ends + total_delay, ends[corners], side="right")
+    last = np.searchsorted(starts, starts[corners + 1] + total_delay, side="left")
+    return first, last
 
 
 def window_slow_down(corners: np.ndarray, scale: np.ndarray, starts: np.ndarray, pulse_times: np.ndarray,
@@ -378,14 +384,10 @@ def window_slow_down(corners: np.ndarray, scale: np.ndarray, starts: np.ndarray,
     """``(M,)`` feed multipliers: each block whose filtered span meets the window of one of
     ``corners`` (indices, windows as in :func:`blocks_in_windows`) takes the least ``scale`` ``(C,)``
     of those corners (1 where none reaches it)."""
-    starts = np.asarray(starts, dtype=np.float64)
-    M = starts.size
-    g = np.ones(M)
+    g = np.ones(np.asarray(starts).size)
     c = np.asarray(corners, dtype=np.int64)
     if c.size:
-        ends = starts + np.asarray(pulse_times)
-        first = np.searchsorted(ends + total_delay, ends[c], side="right")
-        last = np.searchsorted(starts, starts[c + 1] + total_delay, side="left")
+        first, last = _window_blocks(c, starts, pulse_times, total_delay)
         count = np.maximum(last - first, 0)
         blocks = np.repeat(first - np.cumsum(count) + count, count) + np.arange(int(count.sum()))
         np.minimum.at(g, blocks, np.repeat(np.asarray(scale, dtype=np.float64), count))

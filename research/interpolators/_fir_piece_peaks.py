@@ -19,8 +19,6 @@ from research.limits import AxisLimits
 from research.piecewise import DEGENERATE_PIECE
 
 
-
-
 def corner_peak_ratios(position, lo: np.ndarray, hi: np.ndarray, limits: AxisLimits) -> np.ndarray:
     """Largest ``peak / limit`` over axes and over velocity, acceleration, jerk, in each window
     ``[lo_c, hi_c]`` [s]; exact (roots of the next derivative) for pieces of any degree.

@@ -251,12 +251,11 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
 
         def futile(fac, corners):
             """``_fir_limits.futile_stops`` of ``corners`` at feed factors ``fac`` (each block's piece
-            facing the corner: its tail at its end, its head at its start, else its body)."""
-            body = 1.0 - head - tail
+            facing the corner, ``FeedSteps.facing_feeds``)."""
+            facing = steps.of(head, tail)
             a, b = corners, corners + 1
-            f_end = F_np[a] * fac[a, np.where(tail[a] > 0.0, 2, np.where(body[a] > 0.0, 1, 0))]
-            f_start = F_np[b] * fac[b, np.where(head[b] > 0.0, 0, np.where(body[b] > 0.0, 1, 2))]
-            return futile_stops(f_end[:, None] * t_out[a], f_start[:, None] * t_in[b], steps.step)
+            return futile_stops(facing.facing_feeds(fac, a, 1)[:, None] * t_out[a],
+                                facing.facing_feeds(fac, b, -1)[:, None] * t_in[b], steps.step)
 
         def breaking(fac, corners):  # the blocks in the corners' windows above a limit at ``fac`` (_fir_limit_spread)
             return windows.breaking(corners, head, tail, fac, arc_rel, full, shrink * bisection.scale, others)
@@ -422,9 +421,8 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         state without its profile (its first and last break in its place)."""
         best, best_time = None, np.inf
         several = len(candidates) > 1
-        # candidates to settle with slow_futile as well (settle's on_futile), each from its start;
-        # its rounds are the plain settle's until the one that called on_futile, so the bound its
-        # plain settle had before that round bounds it too, and so does the bound on_futile gives
+        # candidates to settle with slow_futile as well (settle's on_futile), each from its start,
+        # queued at the larger of its plain settle's bound and the one on_futile gives
         forks = []
         fork_index = itertools.count(1 << 40)
 
@@ -440,8 +438,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
 
         def add_capped():
             for i, (c, bound) in enumerate(capped(), start=n_first):
-                bound = predicted_time(c()) if bound is None else bound
-                heapq.heappush(queue, (bound, i, settled(c, False)))
+                heapq.heappush(queue, (predicted_time(c()) if bound is None else bound, i, settled(c, False)))
 
         held = {}  # index -> (bound, steps) of the candidates suspended with their profiles
         while queue and queue[0][0] < best_time:
