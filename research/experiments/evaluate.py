@@ -124,7 +124,7 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
         if cfg.path.gcode is not None:  # one read: chords for the metrics, blocks for the FIR planner
             program = read_program(cfg.path, base)
             path, program_feeds = program.polyline, program.feeds
-            blocks = program.blocks, program.block_feeds, program.block_tolerance, program.block_pauses
+            blocks = program  # the FIR planner takes its blocks, feeds, G64 P tolerances and pauses
             pauses = _pauses_planned(cfg, program)
             # the program's own blocks (moves and arcs kept as arcs), for the summary: the chords are its polyline view
             path_counts = {"path_blocks": program.n_blocks, "path_arcs": int(np.count_nonzero(program.blocks.is_arc))}

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from research.errors import GCodeError
 from research.experiments.config_drive import PER_AXIS_DRIVES
 from research.trajectory import Trajectory
 
@@ -51,11 +52,13 @@ def _optimized_fir(ic, target, feed, tolerance, limits):
 def interpolate(ic, path, program_feeds, blocks=None, pauses=None):
     """``(trajectory, details, plan or None)`` of one interpolator config.
 
-    The FIR planner gets a G-code program's blocks (arcs as arcs), its F words unless the config
-    sets a feed, its ``G64 P`` tolerances where the program gives them (the config's
-    ``tolerance_um`` elsewhere) and its pauses (``G4``/``M0``/``M1``); the S-curve and sigmoid
-    moves, which stop at every vertex, hold ``pauses`` ``(M + 1,)`` [s] on the chords' vertices;
-    metrics are taken against the chords (``chord_tolerance_um``)."""
+    The FIR planner gets the blocks of the G-code program ``blocks`` (a ``GCodeProgram``; arcs as
+    arcs), its F words unless the config sets a feed, its ``G64 P`` tolerances where the program
+    gives them (the config's ``tolerance_um`` elsewhere) and its pauses (``G4``/``M0``/``M1``); an
+    arc under ``G61``/``G61.1`` (tolerance 0) is refused with its file and line, as an FIR chain
+    cannot run any arc exactly (Sencer 2015 eq 8). The S-curve and sigmoid moves, which stop at
+    every vertex, hold ``pauses`` ``(M + 1,)`` [s] on the chords' vertices; metrics are taken
+    against the chords (``chord_tolerance_um``)."""
     Ts = ic.sample_period_ms * 1e-3
     explicit = "feed_mm_per_s" in ic.model_fields_set
     feed = program_feeds if (program_feeds is not None and not explicit) else ic.feed_mm_per_s
@@ -66,9 +69,16 @@ def interpolate(ic, path, program_feeds, blocks=None, pauses=None):
         target = path
         block_pauses = None  # the FIR plans blocks: the pauses on their vertices
         if blocks is not None:
-            target, feeds, g64, block_pauses = blocks
-            feed = ic.feed_mm_per_s if explicit else feeds
+            target, g64, block_pauses = blocks.blocks, blocks.block_tolerance, blocks.block_pauses
+            feed = ic.feed_mm_per_s if explicit else blocks.block_feeds
             tolerance = np.where(np.isfinite(g64), g64, tolerance)
+            exact_arcs = np.flatnonzero(target.is_arc & (tolerance <= 0.0))
+            if exact_arcs.size:
+                raise GCodeError(f"arc under G61/G61.1 (exact path, tolerance 0) planned by the FIR interpolator "
+                                 f"'{ic.label or ic.kind}': an FIR chain shrinks every arc it averages (Sencer 2015 "
+                                 f"eq 8), so it cannot run an arc exactly ({exact_arcs.size} such arc(s)); expected "
+                                 "a G64 P<tolerance> in force at the arc", source=blocks.source,
+                                 line=int(blocks.block_lines[exact_arcs[0]]), column=1)
         limits = None if ic.limits is None else ic.limits.axis_limits(path.dim)
         if ic.optimized:
             plan = _optimized_fir(ic, target, feed, tolerance, limits)

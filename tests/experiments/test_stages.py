@@ -241,3 +241,25 @@ def test_optimized_fir_from_a_config_holds_eps_and_limits_and_is_no_slower(tmp_p
                     "interpolator": ic | {"feed_mm_per_s": 100.0}}, tmp_path / "t.toml")
     with pytest.raises(ConfigError, match="optimize_fir takes G01 blocks"):
         evaluate(cfg, tmp_path)
+
+
+def test_arc_under_g61_is_refused_with_its_line_and_runs_under_g64_p(tmp_path):
+    """An FIR chain shrinks every arc it averages (Sencer 2015 eq 8: radius ``R prod sinc(Omega T_i / 2)``),
+    so an arc under ``G61`` (exact path, tolerance 0) cannot be run by the FIR planner: the config run
+    names the program's file and the arc's line (line 4 here, the ``G3`` after ``G61``), not a block
+    index of the planner. The same program with ``G64 P0.05`` in force at the arc runs, and the arc
+    block's samples stay within 0.05 mm of its circle (distance computed here)."""
+    from research.errors import GCodeError
+
+    (tmp_path / "g61.ngc").write_text("G21 G90\nG1 X0 Y0 F6000\nG61 G1 X40\nG3 X60 Y20 I0 J20\nG1 Y60\nM2\n")
+    (tmp_path / "g64.ngc").write_text("G21 G90\nG1 X0 Y0 F6000\nG61 G1 X40\nG64 P0.05\nG3 X60 Y20 I0 J20\nG1 Y60\nM2\n")
+    ic = {"kind": "fir", "delays_ms": [20.0, 10.0], "tolerance_um": 50.0, "sample_period_ms": 1.0}
+    cfg = validate({"name": "t", "reproduces": "-", "path": {"gcode": "g61.ngc"}, "interpolator": ic}, tmp_path / "t.toml")
+    with pytest.raises(GCodeError, match=r"g61\.ngc:4:1: arc under G61/G61\.1 .*eq 8.*G64 P<tolerance>"):
+        evaluate(cfg, tmp_path)
+    cfg = validate({"name": "t", "reproduces": "-", "path": {"gcode": "g64.ngc"}, "interpolator": ic}, tmp_path / "t.toml")
+    ev = evaluate(cfg, tmp_path)
+    q = np.asarray(ev.arrays["fir.q"])[:, :2]
+    near_arc = (q[:, 0] > 41.0) & (q[:, 1] < 19.0)  # away from the arc's ends
+    r = np.linalg.norm(q[near_arc] - np.array([40.0, 20.0]), axis=1)
+    assert near_arc.sum() > 10 and np.all(np.abs(r - 20.0) <= 0.05 * (1 + 1e-6))
