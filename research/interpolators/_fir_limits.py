@@ -46,7 +46,10 @@ against the tolerance (the plan that is returned always is; see ``plan_fir``), a
 corner bounds its candidate's cycle time by its bracket's upper end
 (:attr:`CornerBisection.bound_scale`), so the branch and bound drops a candidate as soon as that
 bound passes the best verified plan; the closed-form capped candidates join the same queue once
-any candidate needs a limit repair. On a seeded 400-segment CAM-like path under the FIR envelope
+any candidate needs a limit repair, with one candidate of the whole path at its feeds scaled to
+what its start and end ramps allow (:func:`end_ramp_scale`): on chains of short chords far below
+the envelope, phase 1 takes blocks to their safe feeds alone, which a block inside one continuous
+motion never needed (a 1 deg chord circle at 0.1x: 20.13 s against 12.66 s at that scale). On a seeded 400-segment CAM-like path under the FIR envelope
 this took planning from 2.6-4.3 s to 0.56-0.96 s at the same cycle time (benchmarks/README.md);
 phase 1's profiles of only the blocks it checks took ``hold_block_limits`` from 26-29 % of a
 limit-holding plan of the quick CAM file to 5-6 %, and the bound, which proves all 2,246 blocks
@@ -103,6 +106,29 @@ def feed_caps(lengths: np.ndarray, directions: np.ndarray, delays: np.ndarray, l
         short_block = np.maximum(0.5 * long_block, np.minimum(long_block, np.asarray(lengths) / (d[0] + d[1])))
         jerk_cap = np.where(np.asarray(lengths) / long_block >= d[0] + d[1], long_block, short_block)
     return np.minimum(va, jerk_cap)
+
+
+def end_ramp_scale(tp, feeds: np.ndarray, t_in: np.ndarray, t_out: np.ndarray, delays: np.ndarray,
+                   limits: AxisLimits) -> float:
+    """Largest factor ``<= 1`` on every feed under which the path's start from rest and its stop
+    at the end keep the limits as the edges of a long block: a velocity step ``F u`` through the
+    FIR chain peaks at ``F |u_i|``, ``F |u_i| / T_1`` and ``F |u_i| / (T_1 T_2)`` (Sencer 2015 §2.1;
+    :func:`feed_caps` of an infinitely long block), and an arc at its end by :func:`arc_limit_caps`.
+    Every plan of the path makes these two steps; where the first and last blocks are long, a
+    uniform scaling of the feeds by more than this breaks a limit at them (a short end block that
+    turns into the next one can peak lower: the factor is a candidate's, not a bound).
+
+    Args:
+        tp: the path (``ToolPath``); feeds: ``(M,)`` feeds of its blocks [mm/s];
+        t_in, t_out: ``(M, d)`` block tangents at start and end; delays: FIR delays [s].
+
+    Returns:
+        The factor, in ``(0, 1]``.
+    """
+    ends = np.array([0, tp.n_blocks - 1])
+    caps = np.where(tp.is_arc[ends], arc_limit_caps(tp.radii[ends], delays, limits),
+                    feed_caps(np.full(2, np.inf), np.stack([t_in[0], t_out[-1]]), delays, limits))
+    return float(min(1.0, np.min(caps / feeds[ends])))
 
 
 def arc_limit_caps(radii: np.ndarray, delays: np.ndarray, limits: AxisLimits) -> np.ndarray:

@@ -33,6 +33,7 @@ from research.interpolators._fir_limits import (
     alone_block_ratios,
     arc_limit_caps,
     blocks_in_windows,
+    end_ramp_scale,
     feed_caps,
     futile_stops,
     hold_block_limits,
@@ -417,7 +418,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         whose repairs push its bound past the best verified plan is dropped without rebuilding its
         profile. Once a candidate needs a limit repair, the candidates ``capped()`` (every block at
         its closed-form safe feed up front: slower blocks whose corners keep their overlap can beat
-        exact stops) join the same queue. Returns the best settled ``(state, rounds, deviation)``, the
+        exact stops; and one at the feeds the path's end ramps allow) join the same queue. Returns the best settled ``(state, rounds, deviation)``, the
         state without its profile (its first and last break in its place)."""
         best, best_time = None, np.inf
         several = len(candidates) > 1
@@ -433,12 +434,15 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
 
         queue = [(bound if several else 0.0, i, settled(c, several)) for i, (c, bound) in enumerate(candidates)]
         heapq.heapify(queue)
-        extra, n_first = capped is not None, len(candidates)
+        extra, index = capped is not None, itertools.count(len(candidates))
         candidates = None  # the generators hold the candidates (their arrays are built when started)
 
         def add_capped():
-            for i, (c, bound) in enumerate(capped(), start=n_first):
-                heapq.heappush(queue, (predicted_time(c()) if bound is None else bound, i, settled(c, False)))
+            for c, bound, uniform in capped():
+                bound = predicted_time(c()) if bound is None else bound
+                heapq.heappush(queue, (bound, next(index), settled(c, False)))
+                if uniform:  # and settled with slow_futile from its start (see capped)
+                    heapq.heappush(queue, (bound, next(index), settle(c, slow_futile=True)))
 
         held = {}  # index -> (bound, steps) of the candidates suspended with their profiles
         while queue and queue[0][0] < best_time:
@@ -471,7 +475,25 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
 
     capped = None
     if limits is not None and np.any(safe_feed < F_np * base):
-        capped = lambda: plans(np.minimum(base, safe_feed / F_np))  # noqa: E731
+        scale = end_ramp_scale(tp, F_np * base, t_in, t_out, d_np, limits)
+
+        def capped():
+            """``[(candidate, bound, uniform)]``: the candidates with every block at its safe feed
+            alone (``uniform`` False), and where the path's start and end ramps break a limit, the
+            one of least bound among those of the whole path at its feeds scaled by
+            ``end_ramp_scale`` (True). A chain of short blocks runs inside one motion, where a
+            block peaks far below its own start and stop (its safe feed alone), and the ramps at
+            the path's ends are what a uniform feed must keep. That candidate is also settled with
+            ``slow_futile`` from its start: its corners sit just above a limit, where a window
+            slow-down of ``0.98 / ratio`` costs ~2 % and phase 1 would take the blocks down to
+            their safe feeds alone. One candidate, not all: on the quick CAM file at 0.5x the
+            envelope all of them cost 3.6x the planning time for the same plan
+            (benchmarks/README.md)."""
+            out = [(c, b, False) for c, b in plans(np.minimum(base, safe_feed / F_np))]
+            if scale < 1.0 - LIMIT_RTOL:
+                uniform = [(c, predicted_time(c()) if b is None else b) for c, b in plans(base * scale)]
+                out.append(min(uniform, key=lambda cb: cb[1]) + (True,))
+            return out
     state, rounds, deviation = verify(plans(base), capped)
     if traced:
         (feeds, overlaps, pulse, starts, profile, centre), pieces = traced_plan(*state[6])
