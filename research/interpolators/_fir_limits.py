@@ -108,6 +108,38 @@ def feed_caps(lengths: np.ndarray, directions: np.ndarray, delays: np.ndarray, l
     return np.minimum(va, jerk_cap)
 
 
+def steps_within_limits(tp, feeds: np.ndarray, t_in: np.ndarray, t_out: np.ndarray, delays: np.ndarray,
+                        limits: AxisLimits) -> bool:
+    """Whether every velocity step of the path at the feeds ``feeds`` keeps the limits taken alone
+    through the FIR chain: each block's start and stop as the edges of a long block
+    (:func:`feed_caps` of an infinitely long block, :func:`arc_limit_caps` on arcs) and each
+    corner's step at full overlap ``dV = F_k+1 u_in,k+1 - F_k u_out,k``, which peaks at
+    ``|dV_i| / T_1`` and ``|dV_i| / (T_1 T_2)`` (Sencer 2015 §2.1). A cheap prediction that the
+    plan without limits keeps them (``plan_fir`` then checks its exact peaks): steps closer than
+    ``T_d`` add or cancel, so it is no proof either way.
+
+    Args:
+        tp: the path (``ToolPath``); feeds: ``(M,)`` commanded feeds [mm/s];
+        t_in, t_out: ``(M, d)`` block tangents at start and end; delays: FIR delays [s].
+    """
+    d = np.sort(np.asarray(delays, dtype=np.float64))[::-1]
+    caps = np.where(tp.is_arc, arc_limit_caps(tp.radii, d, limits),
+                    feed_caps(np.full(tp.n_blocks, np.inf), t_in, d, limits))
+    if np.any(feeds > caps * (1.0 + LIMIT_RTOL)):
+        return False
+    step = np.abs(feeds[1:, None] * t_in[1:] - feeds[:-1, None] * t_out[:-1])
+    T2 = d[1] if d.size > 1 else np.inf  # one filter: jerk limits are refused by feed_caps above
+    bound = np.minimum(limits.acceleration * d[0], np.where(np.isfinite(limits.jerk), limits.jerk * d[0] * T2, np.inf))
+    return bool(np.all(step <= bound * (1.0 + LIMIT_RTOL)))
+
+
+def profile_within_limits(position, limits: AxisLimits) -> bool:
+    """Whether a whole profile (``PiecewisePolynomial`` or its NumPy evaluator) keeps the limits up
+    to :data:`LIMIT_RTOL`, on its exact peaks (``_fir_piece_peaks.PiecePeaks``)."""
+    peaks = PiecePeaks(position, limits).per_piece
+    return bool(np.max(peaks, initial=0.0) <= 1.0 + LIMIT_RTOL)
+
+
 def end_ramp_scale(tp, feeds: np.ndarray, t_in: np.ndarray, t_out: np.ndarray, delays: np.ndarray,
                    limits: AxisLimits) -> float:
     """Largest factor ``<= 1`` on every feed under which the path's start from rest and its stop

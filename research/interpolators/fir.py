@@ -65,6 +65,7 @@ from research._device import device_array
 from research.errors import ParameterError
 from research.interpolators._fir_candidates import FIRSweep, envelope
 from research.interpolators._fir_chain import check_delays
+from research.interpolators._fir_limits import profile_within_limits, steps_within_limits
 from research.interpolators import _fir_pauses
 from research.interpolators._fir_settle import _primal, _pulse_table, plan_blocks
 from research.interpolators._fir_straight import (join_plan, merged_path, ramp_pieces, run_bounds, split_plan,
@@ -181,7 +182,10 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         limits: per-axis limits to hold as well (beyond the paper, see ``_fir_limits``): a block
             whose own exact peaks break them is slowed, and the overlap of any corner whose exact
             peaks break them is bisected, down to an exact stop if need be; a plan that holds them
-            is returned unchanged.
+            is returned unchanged. Where every velocity step of the path alone keeps them
+            (``_fir_limits.steps_within_limits``), the plan without limits is made first and
+            returned as it is if its exact peaks keep them (the limit-holding search, 2-3x its
+            planning time, is then not run).
         check_period: spacing [s] of the trajectory samples whose distance to the path is checked.
         pauses: ``(M + 1,)`` pause at each vertex [s] (index 0 the start, ``M`` the end; NaN: none),
             e.g. a G-code program's ``block_pauses`` (``G4 P`` dwells, ``M0``/``M1`` stops as 0 s):
@@ -216,6 +220,18 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             return FIRPlan(starts, pulse, overlaps, feeds, plans[0].delays, position, centre, device_array(tp.vertices),
                            deviation, rounds, tp.axes)
     traced = any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves((delays, feed, tolerance)))
+    if limits is not None:
+        # where every velocity step alone keeps the limits, the plan without limits is tried first
+        # and returned if its exact peaks keep them (decided on primal values, as below)
+        d_np = np.asarray(_primal(delays), dtype=np.float64).reshape(-1)
+        f_np = np.broadcast_to(np.asarray(_primal(feed), dtype=np.float64), (M,))
+        if steps_within_limits(tp, f_np, *tp.tangents(), d_np, limits):
+            primal = plan_fir(tp, f_np if traced else feed, d_np if traced else delays,
+                              np.asarray(_primal(tolerance), dtype=np.float64) if traced else tolerance,
+                              refine=refine, check_period=check_period)
+            if profile_within_limits(primal.position, limits):
+                return primal if not traced else plan_fir(tp, feed, delays, tolerance, refine=refine,
+                                                          check_period=check_period)
     xp = jnp if traced else np
     # the variants below are decided on primal values and built from the inputs as given, so a
     # traced call returns the traced form of the very plan an untraced call returns

@@ -42,6 +42,47 @@ def test_never_slower_than_plain_where_plain_holds_zigzag():
     np.testing.assert_allclose(np.asarray(held.overlaps), np.asarray(plain.overlaps), rtol=1e-12)
 
 
+@pytest.mark.parametrize("points,factor,expected", [
+    ([[0.0, 0.0], [10.0, 0.0]], 1.0, True),  # start and stop: F / T1 and F / (T1 T2), at the envelope
+    ([[0.0, 0.0], [10.0, 0.0]], 0.99, False),  # the same ramps, 1 % above
+    ([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]], 1.0, True),  # 90 deg: |dV_x| = |dV_y| = F
+    ([[0.0, 0.0], [10.0, 0.0], [0.0, 0.0]], 1.0, False),  # reversal: |dV_x| = 2 F
+    ([[0.0, 0.0], [10.0, 0.0], [0.0, 0.0]], 2.0, True),
+])
+def test_steps_within_limits_closed_form(points, factor, expected):
+    """Each velocity step alone through the FIR chain peaks at ``|dV_i| / T1`` and ``|dV_i| / (T1 T2)``
+    (Sencer 2015 §2.1: "the acceleration and jerk of a step are F / T1 and F / (T1 T2)"): against
+    acceleration and jerk limits ``factor`` times the envelope ``F / T1``, ``F / (T1 T2)`` at F = 200."""
+    from research.interpolators._fir_limits import steps_within_limits
+    from research.paths.toolpath import ToolPath
+
+    tp = ToolPath.from_polyline(Polyline(points))
+    env = AxisLimits.fir_envelope(2, 200.0, (0.06, 0.03))
+    limits = AxisLimits(env.velocity, factor * env.acceleration, factor * env.jerk)
+    assert steps_within_limits(tp, np.full(tp.n_blocks, 200.0), *tp.tangents(), np.array([0.06, 0.03]), limits) is expected
+
+
+def test_plain_plan_returned_where_it_holds_the_limits():
+    """Where every velocity step alone keeps the limits and the plan without limits keeps them
+    (sampled check here), the limit-holding call returns that very plan: a circle of 1 deg chords
+    (R 40 mm, F 200 mm/s, T 60/30 ms) under its FIR envelope. Where the steps alone keep them but
+    two of them add (a U-turn of two right angles 5 ms apart: ``|dV_x| = F`` each, 2.0x the
+    acceleration limit in the plain plan), the limits are repaired as before."""
+    th = np.radians(np.arange(0.0, 360.0 + 1e-9, 1.0))
+    circle = Polyline(40.0 * np.column_stack([np.cos(th), np.sin(th)]))
+    env = AxisLimits.fir_envelope(2, 200.0, (0.06, 0.03))
+    plain = plan_fir(circle, 200.0, (0.06, 0.03), 0.05)
+    assert max(float(np.max(r)) for r in limit_ratios(plain.trajectory(1e-3), env).values()) <= 1.0
+    held = plan_fir(circle, 200.0, (0.06, 0.03), 0.05, limits=env)
+    for a, b in ((held.feeds, plain.feeds), (held.overlaps, plain.overlaps), (held.start_times, plain.start_times)):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    u_turn = Polyline([[0.0, 0.0], [10.0, 0.0], [10.0, 1.0], [0.0, 1.0]])
+    plain = plan_fir(u_turn, 200.0, (0.06, 0.03), 0.5)
+    assert max(float(np.max(r)) for r in limit_ratios(plain.trajectory(1e-3), env).values()) > 1.9
+    held = plan_fir(u_turn, 200.0, (0.06, 0.03), 0.5, limits=env)
+    assert all(np.all(r <= 1 + 1e-6) for r in limit_ratios(held.trajectory(1e-3), env).values())
+
+
 @pytest.mark.parametrize("seed", [0, 1])
 def test_own_peaks_as_limits_change_nothing(seed):
     """Limits equal to the plain plan's own peaks (measured by sampling) are held by it, so the
