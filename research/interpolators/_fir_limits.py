@@ -136,8 +136,9 @@ def steps_within_limits(tp, feeds: np.ndarray, t_in: np.ndarray, t_out: np.ndarr
 def profile_within_limits(position, limits: AxisLimits) -> bool:
     """Whether a whole profile (``PiecewisePolynomial`` or its NumPy evaluator) keeps the limits up
     to :data:`LIMIT_RTOL`, on its exact peaks (``_fir_piece_peaks.PiecePeaks``)."""
-    peaks = PiecePeaks(position, limits).per_piece
-    return bool(np.max(peaks, initial=0.0) <= 1.0 + LIMIT_RTOL)
+    breaks = np.asarray(position.breaks, dtype=np.float64)
+    worst = PiecePeaks(position, limits).over(breaks[:1], breaks[-1:])
+    return bool(worst[0] <= 1.0 + LIMIT_RTOL)
 
 
 def end_ramp_scale(tp, feeds: np.ndarray, t_in: np.ndarray, t_out: np.ndarray, delays: np.ndarray,

@@ -37,6 +37,7 @@ from research.interpolators._fir_piece_peaks import (
     piece_ratios_at,
     range_max,
     window_interiors,
+    window_maxima,
 )
 from research.limits import AxisLimits
 
@@ -147,11 +148,13 @@ class RoundPeaks:
         K = coeffs.shape[0]
         first = np.clip(np.searchsorted(breaks, lo, side="right") - 1, 0, K - 1)
         last = np.clip(np.searchsorted(breaks, hi, side="left"), first + 1, K)
+        h = np.diff(breaks)
+        if coeffs.shape[1] != 4:  # above cubic degree: roots only where a window's largest may be
+            return window_maxima(np.ascontiguousarray(coeffs), h, self._limit, first, last)
         mark = np.zeros(K + 1, dtype=np.int64)
         np.add.at(mark, first, 1)
         np.add.at(mark, last, -1)
         pieces = np.flatnonzero(np.cumsum(mark[:K]) > 0)
-        h = np.diff(breaks)
         ratio = piece_ratios_at(coeffs, h, self._limit, pieces)
         per_piece = np.zeros(K)
         per_piece[pieces] = np.where(h[pieces] > DEGENERATE_PIECE, ratio, 0.0)

@@ -245,6 +245,38 @@ def test_piece_peaks_match_per_piece_polynomial_roots(degree):
     np.testing.assert_array_equal(peaks.over(lo, hi), [np.max(peaks.per_piece[a:b]) for a, b in zip(first, last)])
 
 
+@pytest.mark.parametrize("degree", [4, 5, 7, 8])
+def test_window_maxima_equal_the_largest_exact_piece_ratio(degree):
+    """``PiecePeaks.over`` above cubic degree seeks roots only in the pieces whose bound
+    ``sum |c_m| h^m / limit`` exceeds the largest end value in the window
+    (``_fir_piece_peaks.window_maxima``); the result must be, bit for bit, the largest exact ratio
+    of the pieces each window meets (every piece's ratio computed, ``piece_ratios_at``), on seeded
+    random profiles with zero coefficients, a jerk limit of inf, a degenerate piece, and windows
+    from one piece to the whole profile, overlapping and in any order."""
+    from research.interpolators._fir_piece_peaks import PiecePeaks, piece_ratios_at, window_interiors
+    from research.piecewise import NumpyPiecewise
+
+    rng = np.random.default_rng(80 + degree)
+    K, A = 400, 3
+    h = rng.uniform(1e-4, 0.02, K)
+    h[11] = 1e-14
+    breaks = np.concatenate([[0.0], np.cumsum(h)])
+    coeffs = rng.normal(size=(K, degree + 1, A)) * (10.0 ** rng.uniform(-2, 4, (K, 1, A)))
+    coeffs[rng.random((K, degree + 1, A)) < 0.2] = 0.0
+    limits = AxisLimits(velocity=np.array([50.0, 80.0, 30.0]), acceleration=np.array([2e3, 5e3, 1e3]),
+                        jerk=np.array([1e5, np.inf, 5e4]))
+    limit = np.stack([limits.velocity, limits.acceleration, limits.jerk])
+    h = np.diff(breaks)  # the piece lengths PiecePeaks reads
+    exact = np.where(h > 1e-12, piece_ratios_at(coeffs, h, limit, np.arange(K)), 0.0)
+    lo = np.concatenate([rng.uniform(0.0, breaks[-1], 60), [0.0, breaks[5]]])
+    hi = np.concatenate([lo[:60] + rng.uniform(0.0, 0.3, 60) ** 2, [breaks[-1], breaks[5] + 1e-6]])
+    got = PiecePeaks(NumpyPiecewise(breaks, coeffs), limits).over(lo, hi)  # lazy: no per_piece read before
+    lo_i, hi_i = window_interiors(lo, hi)
+    first = np.clip(np.searchsorted(breaks, lo_i, side="right") - 1, 0, K - 1)
+    last = np.clip(np.searchsorted(breaks, hi_i, side="left"), first + 1, K)
+    np.testing.assert_array_equal(got, [np.max(exact[a:b]) for a, b in zip(first, last)])
+
+
 @pytest.mark.parametrize("degree", [1, 2, 3, 4, 5, 6, 8])
 def test_compiled_piece_peaks_equal_the_numpy_form(degree):
     """The compiled pass of ``PiecePeaks`` against its whole-array NumPy form
