@@ -418,8 +418,9 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         whose repairs push its bound past the best verified plan is dropped without rebuilding its
         profile. Once a candidate needs a limit repair, the candidates ``capped()`` (every block at
         its closed-form safe feed up front: slower blocks whose corners keep their overlap can beat
-        exact stops; and one at the feeds the path's end ramps allow) join the same queue. Returns the best settled ``(state, rounds, deviation)``, the
-        state without its profile (its first and last break in its place)."""
+        exact stops; and one at the feeds the path's end ramps allow) join the same queue. Returns
+        the best settled ``(state, rounds, deviation)``, the state without its profile (its first
+        and last break in its place)."""
         best, best_time = None, np.inf
         several = len(candidates) > 1
         # candidates to settle with slow_futile as well (settle's on_futile), each from its start,

@@ -90,3 +90,23 @@ def test_gradients_through_merged_runs_match_central_differences(seed):
     hd = 1e-7
     fd_d = [(float(cycle(feed, d0.at[i].add(hd))) - float(cycle(feed, d0.at[i].add(-hd)))) / (2 * hd) for i in range(2)]
     np.testing.assert_allclose(np.asarray(jax.grad(cycle, argnums=1)(feed, d0)), fd_d, rtol=1e-6)
+
+
+def test_traced_plain_plan_first_under_loose_limits():
+    """Where the plan without limits keeps the limits (a 2 deg chord circle, R 20 mm, at F 200 mm/s
+    under its FIR envelope: every step alone within them), ``plan_fir(..., limits=...)`` returns that
+    plan; traced, it is the same plan with the same derivatives: ``jax.jvp`` through the feed, the
+    tolerance and the delays gives the primal outputs and tangents of the call without limits
+    (T 60/30 ms: the plan is tolerance-bound, its peaks 0.36-0.37 of the envelope's)."""
+    th = np.radians(np.arange(0.0, 360.0 + 1e-9, 2.0))
+    circle = Polyline(20.0 * np.column_stack([np.cos(th), np.sin(th)]))
+    delays = (0.06, 0.03)
+    env = AxisLimits.fir_envelope(2, 200.0, delays)
+
+    def arrays(F, eps, d, lim):
+        return _plan_arrays(plan_fir(circle, F, d, eps, limits=lim))
+
+    args, dirs = (200.0, 0.05, jnp.array(delays)), (1.0, 1.0, jnp.ones(2))
+    (p0, t0), (p1, t1) = (jax.jvp(lambda *a: arrays(*a, lim), args, dirs) for lim in (None, env))
+    for a, b in zip(p0 + t0, p1 + t1):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
