@@ -38,14 +38,9 @@ import numba
 import numpy as np
 
 from research._device import device_array
-from research.interpolators._fir_overlap import overlap_time
 from research.piecewise import PiecewisePolynomial
 
 _OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
-_overlap_jit = jax.jit(overlap_time)  # three or more filters: the optimistix inversion of H2
-#: the array sizes :func:`overlaps` hands to ``_overlap_jit`` (one compilation each, at most once per
-#: process and install, whatever the programs): padded up to the next, the last one a chunk
-_OVERLAP_CHUNKS = (64, 256, 1024, 4096)
 
 
 class _PathPieces:
@@ -119,22 +114,21 @@ def _h_full(delays: tuple) -> np.ndarray:
 
 def overlaps(tolerance: np.ndarray, speed_change: np.ndarray, delays: np.ndarray) -> np.ndarray:
     """``_fir_overlap.overlap_time`` (eq 13/14) on concrete arrays: the closed forms of one and two
-    filters in NumPy; three or more filters through the jitted JAX inversion (padded shapes)."""
+    filters in NumPy; three or more filters by a compiled root search of ``H2(T_k / 2) = eps /
+    |dF|`` (:func:`_invert_h2`; the JAX form's optimistix bisection stops at 1e-13 relative, this
+    one at the float resolution, so the two agree to about that)."""
     d = np.sort(np.asarray(delays, dtype=np.float64))[::-1]
     dF = np.asarray(speed_change, dtype=np.float64)
     tol = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), dF.shape)
-    if d.size > 2:  # elementwise: in chunks of a few fixed sizes, so that any program reuses their compilations
-        flat_tol, flat_dF = tol.ravel(), dF.ravel()
-        out = np.empty(flat_dF.size)
-        for a in range(0, flat_dF.size, _OVERLAP_CHUNKS[-1]):
-            n = min(flat_dF.size - a, _OVERLAP_CHUNKS[-1])
-            size = next(c for c in _OVERLAP_CHUNKS if c >= n)
-            out[a:a + n] = np.asarray(_overlap_jit(np.pad(flat_tol[a:a + n], (0, size - n), constant_values=1.0),
-                                                   np.pad(flat_dF[a:a + n], (0, size - n), constant_values=1.0), d))[:n]
-        return out.reshape(dF.shape)
     Td = float(d.sum())
     turning = dF > 0
     h_full = _h_full(tuple(d.tolist()))
+    if d.size > 2:
+        shifts, signs = _subsets(tuple(d.tolist()))
+        denom = math.factorial(d.size + 1) * float(np.prod(d))
+        h = np.minimum(tol / np.where(turning, dF, 1.0), h_full)
+        Tk = 2.0 * _invert_h2(np.ascontiguousarray(h.ravel()), shifts, signs, d.size + 1, denom, 0.5 * Td).reshape(h.shape)
+        return np.where(turning & (h < h_full), np.clip(Tk, 0.0, Td), Td)
     h = np.minimum(tol / np.where(turning, dF, 1.0), h_full)
     if d.size == 1:
         Tk = np.sqrt(8.0 * d[0] * h)  # eq 13
@@ -145,6 +139,70 @@ def overlaps(tolerance: np.ndarray, speed_change: np.ndarray, delays: np.ndarray
         second = T2 + np.sqrt(np.where(in_first, 1.0, 8.0 * T1 * h - T2**2 / 3.0))  # eq 14, second branch
         Tk = np.where(in_first, first, second)
     return np.where(turning & (h < h_full), np.clip(Tk, 0.0, Td), Td)
+
+
+@functools.lru_cache(maxsize=64)
+def _subsets(delays: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """Shift ``sum_{i in S} T_i`` and sign ``(-1)^|S|`` of every subset ``S`` of the filters, in the
+    order of :func:`kernel_second_integral` (read-only arrays, once per chain)."""
+    d = np.asarray(delays, dtype=np.float64)
+    n = d.size
+    shifts, signs = np.empty(1 << n), np.empty(1 << n)
+    for bits in range(1 << n):
+        subset = np.array([(bits >> (n - 1 - i)) & 1 for i in range(n)], dtype=np.float64)
+        shifts[bits], signs[bits] = np.sum(subset * d), (-1.0) ** int(subset.sum())
+    shifts.setflags(write=False)
+    signs.setflags(write=False)
+    return shifts, signs
+
+
+@numba.njit(**_OPTIONS)
+def _invert_h2(target, shifts, signs, power, denom, half):
+    """``r`` in ``[0, half]`` with ``H2(r) = target[i]`` for every ``i`` (``H2`` of
+    :func:`kernel_second_integral`: ``sum_S sign_S (r - shift_S)_+^power / denom``, increasing on
+    ``[0, T_d / 2]`` as ``H2' = H1 >= 0``): 0 for a target of 0 or less, ``half`` for one at or
+    above ``H2(half)``; otherwise false position with the Illinois modification (Dowell & Jarratt
+    1971) on the bracket ``[0, half]``, to the float resolution of ``half``."""
+    out = np.empty(target.size)
+    f_half = 0.0
+    for k in range(shifts.size):
+        f_half += signs[k] * max(half - shifts[k], 0.0) ** power
+    f_half /= denom
+    for i in range(target.size):
+        y = target[i]
+        if y <= 0.0:
+            out[i] = 0.0
+            continue
+        if y >= f_half:
+            out[i] = half
+            continue
+        x0, x1, f0, f1 = 0.0, half, -y, f_half - y
+        side = 0
+        for _ in range(200):
+            x = x1 - f1 * (x1 - x0) / (f1 - f0)
+            if not (x0 < x < x1):
+                x = 0.5 * (x0 + x1)
+            if x <= x0 or x >= x1:
+                break
+            fx = 0.0
+            for k in range(shifts.size):
+                fx += signs[k] * max(x - shifts[k], 0.0) ** power
+            fx = fx / denom - y
+            if fx == 0.0:
+                x0 = x1 = x
+                break
+            if fx < 0.0:
+                x0, f0 = x, fx
+                if side == -1:
+                    f1 *= 0.5
+                side = -1
+            else:
+                x1, f1 = x, fx
+                if side == 1:
+                    f0 *= 0.5
+                side = 1
+        out[i] = 0.5 * (x0 + x1)
+    return out
 
 
 def timing(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, full, shrink, others, tol_vertex, delays):

@@ -70,7 +70,10 @@ def test_profile_matches_the_jax_build(delays):
 def test_overlaps_follow_eq14_and_the_jax_inversion():
     """Two filters: eq 14's branches, ``(24 T1 T2 eps / (F sin(b/2)))^(1/3)`` up to ``2 T2`` and
     ``T2 + sqrt(4 T1 eps / (F sin(b/2)) - T2^2 / 3)`` beyond (with ``|dF| = 2 F sin(b/2)``); full
-    overlap where even ``T_d`` keeps the tolerance. Three filters: the JAX inversion of ``H2``."""
+    overlap where even ``T_d`` keeps the tolerance. Three and four filters: the JAX inversion of
+    ``H2`` (an optimistix bisection stopped at 1e-13 relative) to 1e-12, and the corner error of
+    the overlap found, ``|dF| H2(T_k / 2)`` by the JAX form of ``H2`` (``_fir_chain``), equal to
+    the tolerance to 1e-14 relative (the compiled search runs to the float resolution)."""
     T1, T2 = 0.06, 0.03
     F, eps = 200.0, np.array([1e-4, 5e-3, 0.05, 1.0, 2.0, 10.0])
     sin_half = np.full(eps.size, np.sin(np.radians(45.0)))
@@ -81,10 +84,16 @@ def test_overlaps_follow_eq14_and_the_jax_inversion():
     assert np.any(first <= 2 * T2) and np.any((first > 2 * T2) & (second < T1 + T2))  # both branches
     np.testing.assert_allclose(got, want, rtol=1e-12)
     assert got[-1] == T1 + T2
-    three = np.array([0.05, 0.03, 0.02])
+    from research.interpolators._fir_chain import kernel_second_integral
+
     dF = np.linspace(1.0, 300.0, 7)
-    np.testing.assert_allclose(_fir_profile.overlaps(0.01, dF, three), np.asarray(overlap_time(0.01, dF, three)),
-                               rtol=1e-14)
+    for delays in (np.array([0.05, 0.03, 0.02]), np.array([0.02, 0.05, 0.011, 0.03])):
+        Tk = _fir_profile.overlaps(0.01, dF, delays)
+        np.testing.assert_allclose(Tk, np.asarray(overlap_time(0.01, dF, delays)), rtol=1e-12)
+        inside = Tk < delays.sum()
+        assert inside.sum() >= 5
+        error = dF[inside] * np.asarray(kernel_second_integral(0.5 * Tk[inside], delays))
+        np.testing.assert_allclose(error, 0.01, rtol=1e-14)
 
 
 def _zigzag_profile(feed_scale):
