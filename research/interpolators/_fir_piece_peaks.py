@@ -18,6 +18,7 @@ import math
 import numba
 import numpy as np
 
+from research.interpolators._illinois import narrowed, secant_point
 from research.limits import AxisLimits
 from research.piecewise import DEGENERATE_PIECE
 
@@ -265,25 +266,14 @@ def _isolated_roots(p, n, hk, d, lev, nlev):
                 continue  # no sign change inside (a zero at x1 is the next interval's start)
             side = 0
             for _ in range(200):
-                x = x1 - f1 * (x1 - x0) / (f1 - f0)
-                if not (x0 < x < x1):
-                    x = 0.5 * (x0 + x1)
+                x = secant_point(x0, f0, x1, f1)
                 if x <= x0 or x >= x1:
                     break
                 fx = _horner(d, j, deg, x)
                 if fx == 0.0:
                     x0 = x1 = x
                     break
-                if (fx < 0.0) == (f0 < 0.0):
-                    x0, f0 = x, fx
-                    if side == -1:
-                        f1 *= 0.5
-                    side = -1
-                else:
-                    x1, f1 = x, fx
-                    if side == 1:
-                        f0 *= 0.5
-                    side = 1
+                x0, f0, x1, f1, side = narrowed(x0, f0, x1, f1, side, x, fx)
             lev[j, nr] = 0.5 * (x0 + x1)
             nr += 1
         nlev[j] = nr

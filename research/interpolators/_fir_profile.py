@@ -38,6 +38,7 @@ import numba
 import numpy as np
 
 from research._device import device_array
+from research.interpolators._illinois import narrowed, secant_point
 from research.piecewise import PiecewisePolynomial
 
 _OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
@@ -179,9 +180,7 @@ def _invert_h2(target, shifts, signs, power, denom, half):
         x0, x1, f0, f1 = 0.0, half, -y, f_half - y
         side = 0
         for _ in range(200):
-            x = x1 - f1 * (x1 - x0) / (f1 - f0)
-            if not (x0 < x < x1):
-                x = 0.5 * (x0 + x1)
+            x = secant_point(x0, f0, x1, f1)
             if x <= x0 or x >= x1:
                 break
             fx = 0.0
@@ -191,16 +190,7 @@ def _invert_h2(target, shifts, signs, power, denom, half):
             if fx == 0.0:
                 x0 = x1 = x
                 break
-            if fx < 0.0:
-                x0, f0 = x, fx
-                if side == -1:
-                    f1 *= 0.5
-                side = -1
-            else:
-                x1, f1 = x, fx
-                if side == 1:
-                    f0 *= 0.5
-                side = 1
+            x0, f0, x1, f1, side = narrowed(x0, f0, x1, f1, side, x, fx)
         out[i] = 0.5 * (x0 + x1)
     return out
 
