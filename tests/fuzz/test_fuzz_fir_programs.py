@@ -11,7 +11,7 @@ independent computations: every sample of the 0.5 ms trajectory within the large
 the program of the path (``ToolPath.distance``), the end point reached (1e-8 mm) and, with limits,
 the sampled peaks within them (``metrics.limit_ratios``, 1e-6).
 
-Examples: ``RESEARCH_FUZZ_EXAMPLES`` (default 6 here, the file runs in about ten seconds); a session
+Examples: ``RESEARCH_FUZZ_EXAMPLES_FIR`` (default 6 here, the file runs in about 20 seconds); a session
 ran 830 programs of 3-300 blocks with no failure (README, 2026-12-04 fifth).
 """
 
