@@ -52,7 +52,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from research.interpolators._fir_limits import LIMIT_RTOL, THRESHOLD_GUARD
+from research.interpolators._fir_limits import LIMIT_RTOL, THRESHOLD_GUARD, isolated_step
 from research.interpolators._fir_piece_peaks import PiecePeaks
 from research.interpolators._fir_profile import profile, timing
 from research.limits import AxisLimits
@@ -185,9 +185,7 @@ class FeedSteps:
     """
 
     def __init__(self, feeds, t_in, is_arc, delays, limits: AxisLimits):
-        d = np.sort(np.asarray(delays, dtype=np.float64))[::-1]
-        jerk = limits.jerk * d[0] * d[1] if d.size > 1 else np.full(limits.n_axes, np.inf)
-        self.step = np.minimum(limits.acceleration * d[0], jerk)  # (A,) largest isolated step [mm/s]
+        self.step = isolated_step(delays, limits)  # (A,) largest isolated step [mm/s]
         self.velocity = np.asarray(limits.velocity, dtype=np.float64)
         self.feeds, self.u, self.is_arc = np.asarray(feeds, dtype=np.float64), np.asarray(t_in), np.asarray(is_arc)
         self.head = self.tail = np.zeros(self.feeds.size)

@@ -122,15 +122,28 @@ def steps_within_limits(tp, feeds: np.ndarray, t_in: np.ndarray, t_out: np.ndarr
         tp: the path (``ToolPath``); feeds: ``(M,)`` commanded feeds [mm/s];
         t_in, t_out: ``(M, d)`` block tangents at start and end; delays: FIR delays [s].
     """
-    d = np.sort(np.asarray(delays, dtype=np.float64))[::-1]
-    caps = np.where(tp.is_arc, arc_limit_caps(tp.radii, d, limits),
-                    feed_caps(np.full(tp.n_blocks, np.inf), t_in, d, limits))
-    if np.any(feeds > caps * (1.0 + LIMIT_RTOL)):
+    if np.any(feeds > _ramp_caps(tp.is_arc, tp.radii, t_in, delays, limits) * (1.0 + LIMIT_RTOL)):
         return False
     step = np.abs(feeds[1:, None] * t_in[1:] - feeds[:-1, None] * t_out[:-1])
-    T2 = d[1] if d.size > 1 else np.inf  # one filter: jerk limits are refused by feed_caps above
-    bound = np.minimum(limits.acceleration * d[0], np.where(np.isfinite(limits.jerk), limits.jerk * d[0] * T2, np.inf))
-    return bool(np.all(step <= bound * (1.0 + LIMIT_RTOL)))
+    return bool(np.all(step <= isolated_step(delays, limits) * (1.0 + LIMIT_RTOL)))
+
+
+def isolated_step(delays: np.ndarray, limits: AxisLimits) -> np.ndarray:
+    """``(A,)`` largest velocity step [mm/s] per axis that keeps the limits alone through the FIR
+    chain: ``min(A_i T_1, J_i T_1 T_2)`` (a step ``dV`` peaks at ``|dV_i| / T_1`` and
+    ``|dV_i| / (T_1 T_2)``, Sencer 2015 §2.1; no jerk bound with one filter)."""
+    d = np.sort(np.asarray(delays, dtype=np.float64))[::-1]
+    jerk = limits.jerk * d[0] * d[1] if d.size > 1 else np.full(limits.n_axes, np.inf)
+    return np.minimum(limits.acceleration * d[0], jerk)
+
+
+def _ramp_caps(is_arc: np.ndarray, radii: np.ndarray, directions: np.ndarray, delays: np.ndarray,
+               limits: AxisLimits) -> np.ndarray:
+    """Largest feed [mm/s] per block whose start and stop, as the edges of a long block, keep the
+    limits: :func:`feed_caps` of an infinitely long line along ``directions``, :func:`arc_limit_caps`
+    on arcs."""
+    return np.where(is_arc, arc_limit_caps(radii, delays, limits),
+                    feed_caps(np.full(is_arc.size, np.inf), directions, delays, limits))
 
 
 def profile_within_limits(position, limits: AxisLimits) -> bool:
@@ -159,8 +172,7 @@ def end_ramp_scale(tp, feeds: np.ndarray, t_in: np.ndarray, t_out: np.ndarray, d
         The factor, in ``(0, 1]``.
     """
     ends = np.array([0, tp.n_blocks - 1])
-    caps = np.where(tp.is_arc[ends], arc_limit_caps(tp.radii[ends], delays, limits),
-                    feed_caps(np.full(2, np.inf), np.stack([t_in[0], t_out[-1]]), delays, limits))
+    caps = _ramp_caps(tp.is_arc[ends], tp.radii[ends], np.stack([t_in[0], t_out[-1]]), delays, limits)
     return float(min(1.0, np.min(caps / feeds[ends])))
 
 

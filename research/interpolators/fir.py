@@ -220,25 +220,21 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             return FIRPlan(starts, pulse, overlaps, feeds, plans[0].delays, position, centre, device_array(tp.vertices),
                            deviation, rounds, tp.axes)
     traced = any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves((delays, feed, tolerance)))
-    if limits is not None:
-        # where every velocity step alone keeps the limits, the plan without limits is tried first
-        # and returned if its exact peaks keep them (decided on primal values, as below)
-        d_np = np.asarray(_primal(delays), dtype=np.float64).reshape(-1)
-        f_np = np.broadcast_to(np.asarray(_primal(feed), dtype=np.float64), (M,))
-        if steps_within_limits(tp, f_np, *tp.tangents(), d_np, limits):
-            primal = plan_fir(tp, f_np if traced else feed, d_np if traced else delays,
-                              np.asarray(_primal(tolerance), dtype=np.float64) if traced else tolerance,
-                              refine=refine, check_period=check_period)
-            if profile_within_limits(primal.position, limits):
-                return primal if not traced else plan_fir(tp, feed, delays, tolerance, refine=refine,
-                                                          check_period=check_period)
     xp = jnp if traced else np
     # the variants below are decided on primal values and built from the inputs as given, so a
     # traced call returns the traced form of the very plan an untraced call returns
-    feeds_all = xp.broadcast_to(xp.asarray(feed, dtype=np.float64), (M,))
-    tol_all = xp.broadcast_to(xp.asarray(tolerance, dtype=np.float64), (M,))
     feeds_np = np.broadcast_to(np.asarray(_primal(feed), dtype=np.float64), (M,))
     tol_np = np.broadcast_to(np.asarray(_primal(tolerance), dtype=np.float64), (M,))
+    delays_np = np.asarray(_primal(delays), dtype=np.float64).reshape(-1)
+    if limits is not None and steps_within_limits(tp, feeds_np, *tp.tangents(), delays_np, limits):
+        # every velocity step alone keeps the limits: the plan without limits is made first and
+        # returned if its exact peaks keep them
+        primal = plan_fir(tp, *((feeds_np, delays_np, tol_np) if traced else (feed, delays, tolerance)),
+                          refine=refine, check_period=check_period)
+        if profile_within_limits(primal.position, limits):
+            return plan_fir(tp, feed, delays, tolerance, refine=refine, check_period=check_period) if traced else primal
+    feeds_all = xp.broadcast_to(xp.asarray(feed, dtype=np.float64), (M,))
+    tol_all = xp.broadcast_to(xp.asarray(tolerance, dtype=np.float64), (M,))
     run = straight_runs(tp, feeds_np, tol_np)  # runs of collinear line blocks planned as one block each (_fir_straight)
     if run is not None:
         first, _ = run_bounds(run)
@@ -256,13 +252,13 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         # plans of this path alike; the fastest is returned (ties: in that order)
         if run is not None:
             plans.append(merged)
-        cut = ramp_pieces(tp, run, feeds_np, np.asarray(_primal(delays), dtype=np.float64), limits)
+        cut = ramp_pieces(tp, run, feeds_np, delays_np, limits)
         if cut is not None:
             pieces_tp, block, recipe = cut
             # a plan runs no piece faster than commanded and ends T_d after its input: a lower
             # bound on the cut plan's cycle, which the plans at hand may already meet (a chain
             # of chords that ramps through its own blocks: a circle in 4,000 chords)
-            bound = float(np.sum(pieces_tp.lengths / recipe.of(feeds_np))) + float(np.sum(_primal(delays)))
+            bound = float(np.sum(pieces_tp.lengths / recipe.of(feeds_np))) + float(np.sum(delays_np))
             if min(float(_primal(p.cycle_time)) for p in plans) > bound:
                 plan, _ = _plan_blocks(pieces_tp, recipe.of(feeds_all), delays, tol_all[block], refine, limits,
                                        check_period, traced)
