@@ -32,6 +32,9 @@ from research.piecewise import PiecewisePolynomial, bucket_size
 SUB_ARC = np.pi / 8
 #: degree of the polynomial velocity of an arc piece
 DEGREE = 5
+#: a sub-arc is cut (:meth:`PulseTable.cut_arcs`) only more than this share of its length from
+#: either end (no piece of a few ulps of the path's arc length)
+MIN_CUT = 1e-9
 
 
 @dataclass(frozen=True)
@@ -49,6 +52,9 @@ class PulseTable:
         arc_pieces: ``(A,)`` the sub-arc pieces of all arc blocks, in path order.
         arc_span: ``(A, 2)`` arc length [mm] along the path at which each sub-arc starts and ends.
         n_blocks: real blocks ``M``; ``m_pad``: padded block count.
+        joins: ``(P,)`` True for a piece that goes on with the polynomial of the piece before it
+            (a sub-arc cut by :meth:`cut_arcs`): at one feed the two are one input piece; None
+            where no piece does.
     """
 
     block: np.ndarray
@@ -62,6 +68,7 @@ class PulseTable:
     arc_span: np.ndarray
     n_blocks: int
     m_pad: int
+    joins: np.ndarray | None = None
 
     @staticmethod
     def from_path(path: ToolPath) -> "PulseTable":
@@ -99,6 +106,76 @@ class PulseTable:
             np.concatenate([block, np.full(pad, Mp)]), np.concatenate([gap, np.ones(pad, bool)]),
             np.concatenate([fraction, np.zeros(pad)]), np.concatenate([geo, np.zeros((pad,) + geo.shape[1:])]),
             np.concatenate([role, np.full(pad, -1)]), first, first + n_sub - 1, arc_pieces, arc_span, M, Mp,
+        )
+
+    def cut_arcs(self, path: ToolPath, at: np.ndarray) -> "PulseTable":
+        """The table with its sub-arcs cut at the path arc lengths ``at`` [mm] (any order; those not
+        inside a sub-arc are ignored): the planner cuts the sub-arcs where its windows end, so that
+        a window reaching into an arc slows the stretch it covers, not the whole sub-arc it ends in
+        (``_fir_lookahead.arc_cuts``). No cut is made within :data:`MIN_CUT` of a sub-arc's length
+        of either of its ends or of the cut before it.
+
+        The pieces of a cut sub-arc take its own polynomial, each re-centred on its start (a Taylor
+        shift; ``joins`` marks them): the input path is the same function as before the cut, only
+        its pieces may now run at different feeds, and the first piece keeps the sub-arc's
+        coefficients as they are. Their spans are the cut values themselves (a window ending at a
+        cut overlaps the piece before it, not the one after); the sub-arcs not cut keep their rows."""
+        A = self.arc_pieces.size
+        at = np.unique(np.asarray(at, dtype=np.float64))
+        if not A or not at.size:
+            return self
+        lo, hi = self.arc_span[:, 0], self.arc_span[:, 1]
+        margin = MIN_CUT * (hi - lo)
+        owner = np.minimum(np.searchsorted(hi, at, side="left"), A - 1)  # the sub-arc each may be inside
+        inside = (at > lo[owner] + margin[owner]) & (at < hi[owner] - margin[owner])
+        at, owner = at[inside], owner[inside]
+        # and none within the margin of the cut before it in its sub-arc
+        near = np.zeros(at.size, dtype=bool)
+        near[1:] = (owner[1:] == owner[:-1]) & (np.diff(at) <= margin[owner[1:]])
+        at, owner = at[~near], owner[~near]
+        if not at.size:
+            return self
+        M, Mp = self.n_blocks, self.m_pad
+        n_cut = np.bincount(owner, minlength=A)  # cuts inside each sub-arc
+        P_real = int(np.searchsorted(self.block, M, side="left"))
+        rows = np.ones(P_real, dtype=np.int64)
+        rows[self.arc_pieces] += n_cut  # each sub-arc becomes 1 + its cuts pieces
+        new_of = np.concatenate([[0], np.cumsum(rows)[:-1]])  # first new row of each old row
+        src = np.repeat(np.arange(P_real), rows)
+        block, gap, role, fraction = self.block[src], self.gap[src], self.role[src], self.fraction[src]
+        geo = self.geo[src]
+        joins = np.zeros(src.size, dtype=bool) if self.joins is None else self.joins[src]
+        # the pieces of the cut sub-arcs, in order: offsets (block fractions) from the sub-arc's start
+        cut = np.flatnonzero(n_cut)
+        k = self.block[self.arc_pieces[cut]]  # their blocks
+        parts = n_cut[cut] + 1
+        own = np.repeat(np.arange(cut.size), parts)  # cut sub-arc of each piece
+        j = np.arange(own.size) - np.repeat(np.cumsum(parts) - parts, parts)  # index within it
+        share = self.fraction[self.arc_pieces[cut]]  # the sub-arc's block fraction
+        inner = np.flatnonzero(j < parts[own] - 1)  # every piece but the last of its sub-arc ends at a cut
+        # the cut's offset from its sub-arc's start, as a block fraction (arc length over the block's)
+        offset = (at - lo[cut][own[inner]]) / path.lengths[k[own[inner]]]
+        u0 = np.zeros(own.size)
+        u1 = share[own].copy()
+        u1[inner], u0[inner + 1] = offset, offset
+        s0, s1 = lo[cut][own], hi[cut][own]
+        s1[inner], s0[inner + 1] = at, at
+        target = new_of[self.arc_pieces[cut]][own] + j
+        fraction[target] = u1 - u0
+        geo[target] = _taylor_shift(self.geo[self.arc_pieces[cut]][own], u0)
+        joins[target] = j > 0
+        span = np.repeat(self.arc_span, 1 + n_cut, axis=0)
+        at_cut = np.repeat(n_cut > 0, 1 + n_cut)
+        span[at_cut, 0], span[at_cut, 1] = s0, s1
+        arc_pieces = np.flatnonzero(np.repeat(np.isin(np.arange(P_real), self.arc_pieces), rows))
+        P = src.size
+        pad = bucket_size(P, 64) - P
+        return PulseTable(
+            np.concatenate([block, np.full(pad, Mp)]), np.concatenate([gap, np.ones(pad, bool)]),
+            np.concatenate([fraction, np.zeros(pad)]), np.concatenate([geo, np.zeros((pad,) + geo.shape[1:])]),
+            np.concatenate([role, np.full(pad, -1)]), new_of[self.first_motion],
+            new_of[self.last_motion] + rows[self.last_motion] - 1, arc_pieces, span, M, Mp,
+            np.concatenate([joins, np.zeros(pad, bool)]),
         )
 
     def pieces(self, head: np.ndarray, tail: np.ndarray, factor: np.ndarray,
@@ -152,6 +229,18 @@ class PulseTable:
         blk = np.minimum(self.block, self.n_blocks - 1)
         rows = tuple((i, blk[i]) for i in (np.flatnonzero(self.role == k) for k in range(3)))
         return rows + (blk, np.where(self.role < 0, 1, self.role), self.block < self.n_blocks)
+
+
+def _taylor_shift(c: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """Coefficients ``(S, D, d)`` of ``p(a + x)`` in ascending powers of ``x`` from those ``c`` of
+    ``p(x)``, for shifts ``a`` ``(S,)`` (repeated synthetic division; exact where ``a`` is 0)."""
+    c = c.copy()
+    D = c.shape[1]
+    a = a[:, None]
+    for i in range(D - 1):
+        for m in range(D - 2, i - 1, -1):
+            c[:, m] += a * c[:, m + 1]
+    return c
 
 
 def _ranks(n: np.ndarray) -> np.ndarray:

@@ -330,15 +330,13 @@ def _search(a, v, right, hint):
 
 
 @numba.njit(**_OPTIONS)
-def candidate_pieces(cum, L, F, s_v, full, f_full, hold, arc, span_start, span_end, arc_F):
-    """``_fir_lookahead._candidate``'s windows, block pieces and sub-arc feeds in one compiled pass
-    (the same operations per window, so bit for bit): the windows of the full-overlap vertices
-    ``full`` ``(M - 1,)`` whose feed ``f_full`` (one per such vertex) is below the faster block at
-    the vertex, held ``hold`` [s] each side, slow the blocks they cover (``body``, a minimum) and
-    the head or tail of the blocks they reach into (:func:`line_piece_feeds`), and the sub-arcs
-    ``[span_start, span_end]`` they overlap. Returns ``(head, tail, feeds (M, 3), arc_rel (A,))``,
-    ``arc_rel`` the sub-arcs' feeds over ``arc_F``, at most 1."""
-    M, V = L.size, full.size
+def slowing_windows(F, s_v, full, f_full, hold):
+    """The windows of :func:`candidate_pieces` that slow the path: those of the full-overlap
+    vertices ``full`` ``(M - 1,)`` whose feed ``f_full`` (one per such vertex) is below the faster
+    block at the vertex (``F`` ``(M,)`` [mm/s]), each ``[s_v - hold f, s_v + hold f]`` [mm] about
+    its vertex's arc length ``s_v``. Returns ``(vertex, feed, lo, hi)``, one entry per window in
+    path order (also ``_fir_lookahead.arc_cuts``: the same floats)."""
+    V = full.size
     js, fs = np.empty(V, np.int64), np.empty(V)
     n, q = 0, 0
     for v in range(V):
@@ -348,13 +346,32 @@ def candidate_pieces(cum, L, F, s_v, full, f_full, hold, arc, span_start, span_e
             if fv < max(F[v], F[v + 1]) * (1 - 1e-12):
                 js[n], fs[n] = v, fv
                 n += 1
-    lo, hi, half = np.empty(n), np.empty(n), np.empty(n)
+    lo, hi = np.empty(n), np.empty(n)
+    for w in range(n):
+        j, fw = js[w], fs[w]
+        half = hold[j]
+        lo[w], hi[w] = s_v[j] - half * fw, s_v[j] + half * fw
+    return js[:n], fs[:n], lo, hi
+
+
+@numba.njit(**_OPTIONS)
+def candidate_pieces(cum, L, F, s_v, full, f_full, hold, arc, span_start, span_end, arc_F):
+    """``_fir_lookahead._candidate``'s windows, block pieces and sub-arc feeds in one compiled pass
+    (the same operations per window, so bit for bit): the windows of the full-overlap vertices
+    ``full`` ``(M - 1,)`` whose feed ``f_full`` (one per such vertex) is below the faster block at
+    the vertex, held ``hold`` [s] each side, slow the blocks they cover (``body``, a minimum) and
+    the head or tail of the blocks they reach into (:func:`line_piece_feeds`), and the sub-arcs
+    ``[span_start, span_end]`` they overlap. Returns ``(head, tail, feeds (M, 3), arc_rel (A,))``,
+    ``arc_rel`` the sub-arcs' feeds over ``arc_F``, at most 1."""
+    M = L.size
+    js, fs, lo, hi = slowing_windows(F, s_v, full, f_full, hold)
+    n = js.size
+    half = np.empty(n)
     first, last = np.empty(n, np.int64), np.empty(n, np.int64)
     k_r, k_l = np.empty(n, np.int64), np.empty(n, np.int64)
     for w in range(n):
-        j, fw = js[w], fs[w]
+        j = js[w]
         half[w] = hold[j]
-        lo[w], hi[w] = s_v[j] - half[w] * fw, s_v[j] + half[w] * fw
         right = _search(cum, hi[w], True, j + 1)
         first[w], last[w] = _search(cum, lo[w], False, j + 1), right - 2
         k_r[w] = min(max(right - 1, 0), M - 1)

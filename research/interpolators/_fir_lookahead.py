@@ -91,7 +91,7 @@ import numpy as np
 from research.interpolators._fir_blocks import PulseTable
 from research.interpolators._fir_feed import ChainError
 from research.interpolators._fir_kernels import VERIFY_ATOL
-from research.interpolators._fir_candidate_kernels import candidate_pieces, line_piece_feeds, staircase_cuts
+from research.interpolators._fir_candidate_kernels import candidate_pieces, line_piece_feeds, slowing_windows, staircase_cuts
 from research.interpolators._fir_profile import kernel_second_integral, overlaps
 from research.paths.toolpath import ToolPath
 from research.piecewise import bucket_size
@@ -274,9 +274,7 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     # window_half_width as well (module docstring, "Window reach": neither is faster on every
     # program), but "every vertex that can dwell", which few windows hold a feed in
     support = np.full(M - 1, 0.5 * Td)
-    span = table.arc_span
-    arcs = (np.ascontiguousarray(span[:, 0]), np.ascontiguousarray(span[:, 1]), F[table.block[table.arc_pieces]])
-    context = (tp, F_cmd, F, s_v, np.concatenate([[0.0], np.cumsum(tp.lengths)]), arcs)
+    context = (tp, F_cmd, F, s_v, np.concatenate([[0.0], np.cumsum(tp.lengths)]), _arcs(table, F))
     out, shared, kept = [], {}, {}
     for rule, gap, every_can, deep in sets:
         reaches = (hold,) if deep else (hold, support) if not every_can else (support,)
@@ -293,6 +291,47 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
                 kept.setdefault(key, []).append(c)
                 out.append((c, None if measure is None else measure(arrays)))
             arrays = None
+    return out
+
+
+def _arcs(table: PulseTable, F: np.ndarray):
+    """The sub-arcs' start and end arc lengths [mm] and the feeds [mm/s] of their blocks ``(A,)``."""
+    span = table.arc_span
+    return np.ascontiguousarray(span[:, 0]), np.ascontiguousarray(span[:, 1]), F[table.block[table.arc_pieces]]
+
+
+def arc_cuts(candidates) -> np.ndarray:
+    """Arc lengths [mm] at which the windows of the candidates of :func:`look_ahead` end, ascending:
+    where ``PulseTable.cut_arcs`` cuts the sub-arcs they end in.
+
+    A window slows every piece it overlaps over the whole piece (one feed per piece); a line has
+    head and tail pieces cut at its windows' reach, but a sub-arc (at most ``SUB_ARC`` of its arc)
+    was slowed whole, so a window reaching a little further (at a looser tolerance: a higher
+    window feed) could slow a whole further sub-arc and make the plan slower (measured:
+    benchmarks/README.md, "Sub-arcs cut where windows end"). Cut at the windows' ends, the
+    sub-arcs a window ends in are slowed over the stretch it covers (the value it ends at is the
+    cut's: the piece after a cut does not overlap a window that ends there)."""
+    ends = []
+    for c, _ in candidates:
+        _, _, F, s_v, _, (a0, a1, arc_F) = c._context
+        _, fw, lo, hi = slowing_windows(F, s_v, c.full, c._feeds, c._hold)
+        for x in (lo, hi):  # only where a window ends inside a sub-arc it slows
+            a = np.minimum(np.searchsorted(a1, x, side="right"), a1.size - 1)
+            ends.append(x[(a0[a] < x) & (x < a1[a]) & (fw < arc_F[a])])
+    return np.unique(np.concatenate(ends)) if ends else np.zeros(0)
+
+
+def with_table(candidates, table: PulseTable, measure=None):
+    """The candidates of :func:`look_ahead` on ``table`` (a table of the same path whose sub-arcs
+    are cut, ``PulseTable.cut_arcs``): the same dwell sets, feeds and reaches, their sub-arc
+    slow-downs on the new pieces, each with ``measure`` of its arrays (or None)."""
+    out, contexts = [], {}
+    for c, _ in candidates:
+        old = c._context
+        if id(old) not in contexts:
+            contexts[id(old)] = old[:5] + (_arcs(table, old[2]),)
+        c._context = contexts[id(old)]
+        out.append((c, None if measure is None else measure(c())))
     return out
 
 

@@ -87,7 +87,7 @@ class ProfileInputs(eqx.Module):
         if self.pieces.built is None:
             t = self.pieces.table
             _, _, breaks, coeffs, _ = profile(self.start, t.geo, t.block, t.gap, self.fraction, self.piece_tv, self.gaps,
-                                              self.delays)
+                                              self.delays, t.joins)
             self.pieces.built = PiecewisePolynomial(device_array(breaks), device_array(coeffs))
         return self.pieces.built
 
@@ -220,7 +220,7 @@ def timing(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, full, s
     return piece_tv, ov * shrink
 
 
-def profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
+def profile(start, geo, block, gap, fraction, piece_tv, gaps, delays, joins=None):
     """``_fir_blocks.build_profile`` on concrete arrays (same arguments and results, NumPy):
     ``(block_starts, block_ends, breaks, coeffs, centre)`` with the position profile as its breaks
     ``(K + 1,)`` and ascending local coefficients ``(K, D, d)``.
@@ -228,12 +228,15 @@ def profile(start, geo, block, gap, fraction, piece_tv, gaps, delays):
     The input pulses (:func:`_input_pulses`), each filter in turn (:func:`_moving_average`, the last one
     integrated: the position) and the blocks' times (:func:`_block_times`) are compiled apart, the
     filters once per coefficient row count ``D`` met (:func:`_filter`): a path of lines (``D = 1``)
-    through two filters compiles the forms of 1 and 2 rows, a path with arcs (``D = 6``) of 6 and 7."""
+    through two filters compiles the forms of 1 and 2 rows, a path with arcs (``D = 6``) of 6 and 7.
+    ``joins``: ``PulseTable.joins`` (None: no piece goes on with the one before it), whose pieces
+    at their predecessor's feed lengthen it (:func:`_input_pulses`)."""
     delays = np.ascontiguousarray(delays, dtype=np.float64)
     block, gaps = np.ascontiguousarray(block), np.ascontiguousarray(gaps, dtype=np.float64)
-    breaks, lo, coeffs = _input_pulses(np.ascontiguousarray(geo, dtype=np.float64), block, np.ascontiguousarray(gap),
-                                       np.ascontiguousarray(fraction, dtype=np.float64),
-                                       np.ascontiguousarray(piece_tv, dtype=np.float64), gaps)
+    joins = np.zeros(block.size, dtype=bool) if joins is None else np.ascontiguousarray(joins)
+    breaks, lo, coeffs, block = _input_pulses(np.ascontiguousarray(geo, dtype=np.float64), block,
+                                              np.ascontiguousarray(gap), np.ascontiguousarray(fraction, dtype=np.float64),
+                                              np.ascontiguousarray(piece_tv, dtype=np.float64), gaps, joins)
     vb, vl, vc = breaks, lo, coeffs
     for k in range(delays.size - 1):
         vb, vl, vc = _moving_average(vb, vl, vc, delays[k])
@@ -487,19 +490,24 @@ def _filter_rows(breaks, lo, coeffs, delay, initial, integrate, D):
 
 
 @numba.njit(**_OPTIONS)
-def _input_pulses(geo, block, gap, fraction, piece_tv, gaps):
-    """The input velocity pulses as a piecewise polynomial: breaks ``(P + 1,)`` (from 0, each piece
-    its share of its block's pulse or its gap) with their low parts ``(P + 1,)`` (the running sum
+def _input_pulses(geo, block, gap, fraction, piece_tv, gaps, joins):
+    """The input velocity pulses as a piecewise polynomial: breaks ``(K + 1,)`` (from 0, each piece
+    its share of its block's pulse or its gap) with their low parts ``(K + 1,)`` (the running sum
     of the pieces' lengths as a double-double, :func:`_between`: each piece keeps its own length
-    however long the motion before it) and coefficients ``(P, D, A)`` (``geo`` in ``u`` scaled
-    to time)."""
+    however long the motion before it), coefficients ``(K, D, A)`` (``geo`` in ``u`` scaled to
+    time) and the block of each piece ``(K,)``. A piece that ``joins`` its predecessor (it goes
+    on with its polynomial, ``PulseTable.joins``) at the same pulse length (feed) lengthens that
+    piece instead of starting one (``K <= P``; the breaks where pieces start are those of the
+    pieces one by one: every length is added to the running sum as it was)."""
     P, D, A = geo.shape
     Mp = gaps.size
     breaks = np.empty(P + 1)
     lo = np.zeros(P + 1)
     coeffs = np.empty((P, D, A))
+    out_block = np.empty(P, block.dtype)
     breaks[0] = 0.0
     acc, rest = 0.0, 0.0
+    k = -1  # the last piece made
     for i in range(P):
         b = block[i]
         if gap[i]:
@@ -511,15 +519,21 @@ def _input_pulses(geo, block, gap, fraction, piece_tv, gaps):
         rest += (acc - (s - z)) + (dur - z)
         acc = s + rest
         rest -= acc - s
-        breaks[i + 1] = acc  # never below breaks[i]: dur >= 0 and acc is the sum rounded
-        lo[i + 1] = rest
+        if k >= 0 and joins[i] and not gap[i] and piece_tv[i] == piece_tv[i - 1]:
+            breaks[k + 1] = acc  # the piece before goes on
+            lo[k + 1] = rest
+            continue
+        k += 1
+        breaks[k + 1] = acc  # never below breaks[k]: dur >= 0 and acc is the sum rounded
+        lo[k + 1] = rest
+        out_block[k] = b
         inv = 1.0 / piece_tv[i]
         s = inv
         for m in range(D):  # d/dt = (1 / T_v) d/du: the u'^m coefficient over T_v^(m + 1)
             for a in range(A):
-                coeffs[i, m, a] = 0.0 if gap[i] else geo[i, m, a] * s
+                coeffs[k, m, a] = 0.0 if gap[i] else geo[i, m, a] * s
             s *= inv
-    return breaks, lo, coeffs
+    return breaks[: k + 2], lo[: k + 2], coeffs[: k + 1], out_block[: k + 1]
 
 
 @numba.njit(**_OPTIONS)

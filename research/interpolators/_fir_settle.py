@@ -40,7 +40,7 @@ from research.interpolators._fir_limits import (
     window_slow_down,
 )
 from research.interpolators._fir_limit_spread import CornerWindows, FeedSteps, spread_slow_down
-from research.interpolators._fir_lookahead import look_ahead
+from research.interpolators._fir_lookahead import arc_cuts, look_ahead, with_table
 from research.interpolators import _fir_profile
 from research.interpolators._fir_overlap import overlap_time
 from research.interpolators._fir_repair import Repairs
@@ -74,11 +74,11 @@ _NO_BISECTION = SimpleNamespace(scale=1.0, bound_scale=1.0)  # plan_fir's Corner
 def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, check_period: float,
                 traced: bool):
     """:func:`plan_fir` on a path without pauses, block by block (its inputs checked; ``traced``:
-    an input is a JAX tracer). Returns ``(fields, (fraction, piece_tv))``: the arguments of
-    ``fir.FIRPlan`` in order (the plan) and the share of
-    its block's pulse and the pulse length [s] of each input piece ``(P,)`` (``_fir_profile.ProfileInputs``;
-    the pulse lengths traced where the plan is), which map a merged plan back to its blocks
-    (``_fir_straight.split_plan``)."""
+    an input is a JAX tracer). Returns ``(fields, (fraction, piece_tv, first_motion))``: the
+    arguments of ``fir.FIRPlan`` in order (the plan), the share of its block's pulse and the pulse
+    length [s] of each input piece ``(P,)`` (``_fir_profile.ProfileInputs``; the pulse lengths
+    traced where the plan is) and the first piece of each block ``(M,)`` (of the plan's table: its
+    sub-arcs may be cut), which map a merged plan back to its blocks (``_fir_straight.split_plan``)."""
     M = tp.n_blocks
     table = _pulse_table(tp)
     Mp = table.m_pad
@@ -101,6 +101,12 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         if limits.n_axes != tp.dim:
             raise ParameterError(f"limits have {limits.n_axes} axes but the path has {tp.dim}")
         safe_feed = np.where(tp.is_arc, arc_limit_caps(tp.radii, d_np, limits), feed_caps(tp.lengths, t_in, d_np, limits))
+    ahead = None  # the look-ahead's candidates at ``base``, made on the table before its sub-arcs are cut
+    if refine and M > 1 and tp.is_arc.any() and limits is None:
+        # sub-arcs cut where the candidates' windows end (``_fir_lookahead.arc_cuts``): a window
+        # reaching into an arc slows the stretch it covers, not the whole sub-arc it ends in
+        ahead = look_ahead(tp, table, F_np, base, d_np, tv_np, t_in, t_out)
+        table = table.cut_arcs(tp, arc_cuts(ahead))
     head, tail = np.zeros(M), np.zeros(M)
     full = np.zeros(M - 1, dtype=bool)
     others = np.zeros(M - 1)  # tolerance taken by the other direction changes of a dwell corner's window
@@ -153,7 +159,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         concrete arrays (the position a :class:`NumpyPiecewise`)."""
         frac, piece_tv, cruise, overlaps, gaps = timing_gaps(factor, head, tail, full, shrink, others, arc_rel)
         starts, ends, breaks, coeffs, centre = _fir_profile.profile(tp.start, table.geo, table.block, table.gap, frac,
-                                                                    piece_tv, gaps, d_np)
+                                                                    piece_tv, gaps, d_np, table.joins)
         durations = np.where(table.gap, np.append(gaps, 0.0)[table.block], frac * piece_tv)  # of the input pieces
         return (F_np * cruise, overlaps, ends[:M] - starts[:M], starts[:M], NumpyPiecewise(breaks, coeffs),
                 centre[: M - 1], (factor, head, tail, full, shrink, others, arc_rel), durations)
@@ -197,7 +203,8 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
                                                      shrink[:K], others[:K], tv_np[:K], d_np)
             gaps = np.concatenate([Td_np - overlaps, np.zeros(Mp - K)])
         starts, _, breaks, coeffs, centre = _fir_profile.profile(tp.start, table.geo[:c], table.block[:c],
-                                                                 table.gap[:c], frac[:c], piece_tv[:c], gaps, d_np)
+                                                                 table.gap[:c], frac[:c], piece_tv[:c], gaps, d_np,
+                                                                 None if table.joins is None else table.joins[:c])
         j = np.flatnonzero(centre[: K - 1] + 0.5 * Td_np <= starts[K])
         errors = np.zeros(M - 1)
         prefix = NumpyPiecewise(breaks, coeffs)
@@ -236,7 +243,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         bisection = CornerBisection(M - 1) if limits is not None else _NO_BISECTION
         round_peaks = RoundPeaks(table, limits, Td_np) if limits is not None else None
         checked, repaired = np.zeros(M, dtype=bool), False
-        checks = RoundChecks(tp, tb_np, table.block, Td_np, check_period)  # redone only where the profile changed
+        checks = RoundChecks(tp, tb_np, table.block, Td_np, check_period, table.fraction, table.joins)  # redone only where the profile changed
         checks.adopt(last_check)  # from another candidate's last complete check: redone where they differ
         repairs = Repairs(full, head, tail, tv_np, tb_np, F_np, tp.lengths, Td_np, d_np.size, cum_np)
 
@@ -405,12 +412,16 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
                 state = schedule(factor, head, tail, full, shrink * bisection.scale, others, arc_rel)
         return state, rounds, deviation, repaired
 
-    def plans(base):
-        """The candidates at feed factors ``base``, each ``(build, bound)``: ``build()`` makes its
+    def plans(factors):
+        """The candidates at feed factors ``factors``, each ``(build, bound)``: ``build()`` makes its
         arrays (new ones on every call), ``bound`` its :func:`predicted_time` (None: not computed)."""
+        nonlocal ahead
         if refine and M > 1:
-            return look_ahead(tp, table, F_np, base, d_np, tv_np, t_in, t_out, measure=predicted_time)
-        return [(lambda: (np.repeat(base[:, None], 3, axis=1), head, tail, full, others, None), None)]
+            if ahead is not None and factors is base:  # made before the table was cut
+                out, ahead = with_table(ahead, table, measure=predicted_time), None
+                return out
+            return look_ahead(tp, table, F_np, factors, d_np, tv_np, t_in, t_out, measure=predicted_time)
+        return [(lambda: (np.repeat(factors[:, None], 3, axis=1), head, tail, full, others, None), None)]
 
     def verify(candidates, capped):
         """Branch and bound, one verification round at a time: the candidate (or repaired candidate)
@@ -505,7 +516,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         profile = _fir_profile.ProfileInputs(table, frac, piece_tv, gaps, d_np, tp.start, np.array(state[4]))
         pieces = (frac, piece_tv)
     return (starts, pulse, overlaps, feeds, device_array(delays), profile, centre, device_array(tp.vertices),
-            float(deviation), int(rounds), tp.axes), pieces
+            float(deviation), int(rounds), tp.axes), pieces + (table.first_motion,)
 
 
 @jax.jit

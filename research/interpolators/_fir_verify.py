@@ -216,7 +216,8 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
     return deviation, at_vertex, at_block
 
 
-def steady_spans(starts: np.ndarray, durations: np.ndarray, t0: float, Td: float, period: float):
+def steady_spans(starts: np.ndarray, durations: np.ndarray, t0: float, Td: float, period: float,
+                 joined: np.ndarray | None = None):
     """The stretches of the sample grid ``t0 + i period`` where a check learns nothing new per
     sample: grid-index spans ``(first, last, stride)`` (sorted, disjoint) over which only every
     ``stride``-th index is sampled.
@@ -228,8 +229,12 @@ def steady_spans(starts: np.ndarray, durations: np.ndarray, t0: float, Td: float
     vertex) or one sub-arc's at one feed (a smooth deviation from the arc). Those spans, less one
     period at each end for rounding, that hold more than :data:`STEADY_SAMPLES` grid points are
     thinned to about that many (``stride = ceil(n / STEADY_SAMPLES)``); the grid next to them stays
-    dense, so every window that meets a break is sampled at the full rate."""
+    dense, so every window that meets a break is sampled at the full rate. ``joined``: indices of
+    pieces that go on with the polynomial of the piece before them at its feed (a cut sub-arc's
+    pieces, ``PulseTable.joins``): the two are one input piece, and the break between them is none."""
     breaks = float(starts[0]) + np.concatenate([[0.0], np.cumsum(durations)])
+    if joined is not None and joined.size:
+        breaks = np.delete(breaks, joined)
     first = np.ceil((breaks[:-1] + Td + period - t0) / period)
     last = np.floor((breaks[1:] - period - t0) / period)
     n = last - first + 1
@@ -379,12 +384,17 @@ class RoundChecks:
     Args:
         path: the programmed path; tol_block: ``(M,)`` tolerance per block [mm];
         piece_block: ``(P,)`` block of each input piece (``PulseTable.block``); Td: total delay [s];
-        check_period: sample spacing [s].
+        check_period: sample spacing [s]; fraction, joins: ``(P,)`` the table's piece shares and
+        ``PulseTable.joins`` (None: no piece goes on with the one before it), whose pieces at
+        their predecessor's feed the sample grid's thinning takes as one (:func:`steady_spans`).
     """
 
-    def __init__(self, path: ToolPath, tol_block: np.ndarray, piece_block: np.ndarray, Td: float, check_period: float):
+    def __init__(self, path: ToolPath, tol_block: np.ndarray, piece_block: np.ndarray, Td: float, check_period: float,
+                 fraction: np.ndarray | None = None, joins: np.ndarray | None = None):
         self.path, self.tol, self.Td, self.period = path, tol_block, Td, check_period
         self.piece_block = piece_block  # padding pieces (block M_pad) count as the last block's
+        self.joins = None if joins is None else np.flatnonzero(joins)
+        self.fraction = fraction
         self.durations, self.samples, self._pending = None, 0, None
         self.slack = 0.0  # [mm] added to the tolerance of the path samples: the profile's rounding
         self.stops = None  # (M - 1,) exact stops of the profile checked (charge_samples), None: none
@@ -463,6 +473,15 @@ class RoundChecks:
         ``starts`` and ``centre`` to resume it."""
         self._pending = (position, starts, centre) + self._pending[3:]
 
+    def _joined(self):
+        """The pieces of :attr:`joins` whose feed is their predecessor's (pulse lengths
+        ``durations / fraction`` equal to 1e-14: the same feed up to the division's rounding)."""
+        j = self.joins
+        if j is None or not j.size:
+            return None
+        tv = self.durations[j] / self.fraction[j]
+        return j[np.abs(tv - self.durations[j - 1] / self.fraction[j - 1]) <= 1e-14 * tv]
+
     def samples_check(self):
         """Second half of a check (after :meth:`vertices`, on its profile): the path samples of
         the charge keys it marked. Returns ``(max deviation, {vertex: deviation}, {block:
@@ -483,7 +502,7 @@ class RoundChecks:
             n = int(np.ceil((t1 - t0) / self.period)) + 1
             last = np.minimum(np.floor((s_hi - t0) / self.period).astype(np.int64), n - 1)
             extra = centre[redo_v[: M - 1]]
-            steady = steady_spans(starts, self.durations, t0, self.Td, self.period)
+            steady = steady_spans(starts, self.durations, t0, self.Td, self.period, self._joined())
             self.samples, times = _sample_times(first, last, t0, t1, self.period, extra, steady)
             bad = np.full(2 * M - 1, -np.inf)  # dense while checking, its few entries kept between checks
             bad[self.bad[0]] = self.bad[1]

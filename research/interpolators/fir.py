@@ -241,7 +241,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         merged_tp = merged_path(tp, run)
         plan, pieces = _plan_blocks(merged_tp, _run_value(feeds_all, run, first), delays,
                                     _run_value(tol_all, run, first), refine, limits, check_period, traced)
-        merged = split_plan(plan, pieces, _pulse_table(merged_tp).first_motion, tp, merged_tp, run, FIRPlan)
+        merged = split_plan(plan, pieces[:2], pieces[2], tp, merged_tp, run, FIRPlan)
         if limits is None:
             return merged
     plans = [_plan_blocks(tp, feed, delays, tolerance, refine, limits, check_period, traced)[0]]
@@ -280,7 +280,8 @@ def _run_value(x, run: np.ndarray, first: np.ndarray):
 
 def _plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, check_period: float,
                  traced: bool):
-    """``(FIRPlan, (fraction, piece_tv))`` of ``_fir_settle.plan_blocks`` (a path without pauses)."""
+    """``(FIRPlan, (fraction, piece_tv, first_motion))`` of ``_fir_settle.plan_blocks`` (a path
+    without pauses)."""
     fields, pieces = plan_blocks(tp, feed, delays, tolerance, refine, limits, check_period, traced)
     return FIRPlan(*fields), pieces
 

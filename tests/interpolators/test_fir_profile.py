@@ -226,7 +226,8 @@ def test_plan_holds_its_profile_inputs_within_their_float_count(arcs):
     + (M - 1) d + n`` for the schedule (starts, pulses, feeds; overlaps, corner instants; vertices;
     delays) and ``2 P + M_pad + n + d + 2`` for the profile's inputs (piece shares and pulse
     lengths, gaps, delays, start point, first and last break), the pieces' geometry being the
-    path's own table (not copied). The coefficients that ``position`` builds are more than that
+    path's own table (not copied; on arcs, the table whose sub-arcs the planner cut where its
+    windows end). The coefficients that ``position`` builds are more than that
     whole bound (so a plan holding them fails), and the built profile agrees with the plan: its
     span is the cycle time, bit for bit, it ends on the path's end point, at rest, and matches the
     JAX build of the same inputs."""
@@ -242,12 +243,17 @@ def test_plan_holds_its_profile_inputs_within_their_float_count(arcs):
         tp = ToolPath.from_polyline(Polyline(np.cumsum(np.vstack([[0.0, 0.0], steps]), axis=0)))
     delays = (0.06, 0.03)
     plan = fir.plan_fir(tp, 150.0, delays, 0.05)
-    table = fir._pulse_table(tp)
+    table = plan.profile.pieces.table
+    own = fir._pulse_table(tp)
+    if arcs:  # the path's table with its sub-arcs cut where the look-ahead's windows end
+        assert table.arc_pieces.size > own.arc_pieces.size
+        np.testing.assert_array_equal(table.block[table.first_motion], np.arange(tp.n_blocks))
+    else:
+        assert table is own
     M, d, n, P, Mp = tp.n_blocks, tp.dim, len(delays), table.block.size, table.m_pad
     bound = 8 * (3 * M + 2 * (M - 1) + (M - 1) * d + n + 2 * P + Mp + n + d + 2)
     held = sum(np.asarray(x).nbytes for x in jax.tree_util.tree_leaves(plan))
     assert held <= bound
-    assert plan.profile.pieces.table is table
     pos = plan.position
     assert plan.position is pos  # built once, kept
     assert np.asarray(pos.coeffs).nbytes > bound
