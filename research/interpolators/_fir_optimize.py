@@ -63,7 +63,8 @@ from research.interpolators._fir_piece_peaks import corner_peak_ratios
 from research.interpolators._fir_polish import polish
 from research.interpolators._fir_reorder import mode_tuples, profile_residuals, smooth_search
 from research.interpolators._fir_verify import corner_distances, path_deviations
-from research.interpolators.fir import CHECK_PERIOD, FIRPlan, _as_toolpath, _pulse_table, plan_fir
+from research.interpolators._fir_settle import _pulse_table
+from research.interpolators.fir import CHECK_PERIOD, FIRPlan, _as_toolpath, plan_fir
 from research.limits import AxisLimits
 from research.paths.polyline import Polyline
 from research.piecewise import DEGENERATE_PIECE, NumpyPiecewise

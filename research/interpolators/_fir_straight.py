@@ -40,7 +40,7 @@ import numpy as np
 
 from research._device import device_array
 from research.interpolators._fir_kernels import VERIFY_ATOL
-from research.interpolators._fir_limits import feed_caps
+from research.interpolators._fir_limits import arc_limit_caps, feed_caps
 from research.paths.toolpath import ToolPath
 
 
@@ -183,8 +183,9 @@ def _set(a, idx, values):
 MAX_RAMP_STEPS = 32
 
 
-def ramp_pieces(tp: ToolPath, run, feeds: np.ndarray, delays: np.ndarray, limits):
-    """Lines that cannot start or stop at their feed under axis limits, cut into the steps of a ramp.
+def ramp_pieces(tp: ToolPath, run, feeds: np.ndarray, delays: np.ndarray, limits, arcs: bool = False):
+    """Lines (and with ``arcs``, arcs: :func:`_arc_ramps`) that cannot start or stop at their feed
+    under axis limits, cut into the steps of a ramp.
 
     With fixed delays a line starting from rest at feed ``F`` peaks at ``F / T1`` in acceleration
     and ``F / (T1 T2)`` in jerk (Sencer 2015 §2.1); under limits below those one block runs at the
@@ -198,7 +199,8 @@ def ramp_pieces(tp: ToolPath, run, feeds: np.ndarray, delays: np.ndarray, limits
     stay apart. The run's own vertices stay: a piece they cut keeps its feed on both sides.
 
     Returns:
-        ``(piece path, block of every piece (P,), PieceFeeds)``, or None; ``PieceFeeds.of(feeds)``
+        ``(piece path, block of every piece (P,), PieceFeeds)``, or None (nothing to cut; with
+        ``arcs``, no arc to cut: the path would be the one without); ``PieceFeeds.of(feeds)``
         gives the commanded feed of every piece (its recipe holds, so that a traced feed stays traced).
     """
     M = tp.n_blocks
@@ -220,8 +222,14 @@ def ramp_pieces(tp: ToolPath, run, feeds: np.ndarray, delays: np.ndarray, limits
     n = np.where(np.isfinite(dV) & (dV > 0), np.minimum(np.ceil(top / np.where(dV > 0, dV, 1.0)), MAX_RAMP_STEPS + 1), 1)
     # a ramp of at least one step whose first piece fits in half the line
     ramp = line & (feed_caps(L, u, d, limits) < top) & (n >= 2) & (top / n * Td < 0.5 * L)
-    if not ramp.any():
-        return None
+    if arcs:
+        arcs = _arc_ramps(tp, feeds, d, limits, arc_limit_caps(tp.radii, d, limits))
+        if not arcs[0].size:
+            return None
+    else:
+        arcs = (np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int64))
+        if not ramp.any():
+            return None
     cum = np.concatenate([[0.0], np.cumsum(tp.lengths)])
     # the feed of every piece as min(feeds[src], cap) / den * num (PieceFeeds); first the piece
     # ending at each block's end (its own feed unless a ramp covers it), then the cut pieces
@@ -246,22 +254,87 @@ def ramp_pieces(tp: ToolPath, run, feeds: np.ndarray, delays: np.ndarray, limits
         cut_block.append(k[keep]), cut_frac.append(frac[keep])
         cut_rec.append(rec_stretch[np.searchsorted(s_cut, s_cut[keep], side="left")])
         end_rec[a: b + 1] = rec_stretch[np.searchsorted(s_cut, s_end * (1.0 - 1e-12), side="left")]
+    for b, top_b, n_b in zip(*arcs):  # an arc's ramp: the same steps along its arc length
+        k_step = np.arange(1, n_b, dtype=np.float64)
+        at = np.cumsum(top_b / n_b * k_step * Td)  # where each step ends, from the arc's end [mm]
+        ones = np.ones_like(k_step)
+        rec = np.stack([b * ones, top_b * ones, n_b * ones, k_step], axis=1)
+        rec_stretch = np.concatenate([rec, [[b, top_b, 1.0, 1.0]], rec[::-1]])
+        cut_block.append(np.full(2 * at.size, b)), cut_frac.append(np.concatenate([at, tp.lengths[b] - at[::-1]]) / tp.lengths[b])
+        cut_rec.append(rec_stretch[:-1])  # the piece ending at each cut
+        end_rec[b] = rec_stretch[-1]
     cut_block, cut_frac, cut_rec = np.concatenate(cut_block), np.concatenate(cut_frac), np.concatenate(cut_rec)
     if not cut_block.size:
         return None
-    # the pieces in path order: each block's cut points, then its own end
+    # the pieces in path order: each block's cut points, then its own end; an arc's pieces are
+    # arcs about its centre and axis (the same curve, helical or spiral alike), a line's lines
     block = np.concatenate([cut_block, np.arange(M)])
     order = np.lexsort((np.concatenate([cut_frac, np.full(M, 2.0)]), block))
-    is_cut = np.concatenate([np.ones(cut_block.size, bool), np.zeros(M, bool)])[order]
+    on_arc = tp.is_arc[cut_block]
     points = V[cut_block] + cut_frac[:, None] * (V[cut_block + 1] - V[cut_block])
+    if on_arc.any():
+        k = cut_block[on_arc]
+        points[on_arc] = tp.arc_points(k, cut_frac[on_arc] * tp.sweeps[k])
     ends = np.vstack([points, tp.ends])[order]
     rec = np.concatenate([cut_rec, end_rec])[order]
+    f_end = np.concatenate([cut_frac, np.ones(M)])[order]
     block = block[order]
-    centers = np.where(is_cut[:, None], np.nan, tp.centers[block])
-    normals = np.where(is_cut[:, None], np.nan, tp.normals[block])
-    sweeps = np.where(is_cut, 0.0, tp.sweeps[block])
+    f_start = np.where(np.concatenate([[False], block[1:] == block[:-1]]), np.concatenate([[0.0], f_end[:-1]]), 0.0)
+    arc = tp.is_arc[block]
+    centers = np.where(arc[:, None], tp.centers[block], np.nan)
+    normals = np.where(arc[:, None], tp.normals[block], np.nan)
+    sweeps = np.where(arc, (f_end - f_start) * tp.sweeps[block], 0.0)
     recipe = PieceFeeds(rec[:, 0].astype(np.int64), rec[:, 1], rec[:, 2], rec[:, 3])
     return ToolPath(tp.start, ends, centers, normals, sweeps), block, recipe
+
+
+def _arc_ramps(tp: ToolPath, feeds: np.ndarray, d: np.ndarray, limits, safe: np.ndarray):
+    """Ramps of the arc blocks that cannot start or stop at their feed under axis limits:
+    ``(block (B,), top feed (B,) [mm/s], steps n (B,))`` of each arc that ramps.
+
+    An arc alone runs at ``safe`` (``_fir_limits.arc_limit_caps``: its start and stop edges on top
+    of its centripetal acceleration and its rotation). In motion at a feed ``F`` it needs only the
+    steady parts, ``F^2 / R`` and ``F^3 / R^2``; a step ``dV`` at feeds up to ``F`` adds ``dV / T1`` in
+    acceleration and ``dV / (T1 T2) + 2 F dV / (R T2)`` in jerk (the step's own edge and the
+    centripetal change ``2 F dV / R`` switched on through ``T2``), each bound by the smallest limit
+    over the axes (the tangent sweeps the plane). So the arc can ramp to ``F`` in steps of ``F / n``
+    where ``F / n <= dV(F)``; for each ``n = 2 .. MAX_RAMP_STEPS + 1`` the largest such ``F`` (at most
+    the commanded feed and the velocity limit) is found by bisection, and the ``n`` of least arc time
+    ``2 (n - 1) T_d + (L - F T_d (n - 1)) / F`` whose two ramps fit in the arc is kept, where it
+    beats the whole arc at ``safe``. A bound, not a guarantee: the planner's exact peaks decide."""
+    arc = np.flatnonzero(tp.is_arc)
+    if not arc.size:
+        return np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int64)
+    T1 = d[0]
+    T2 = d[1] if d.size > 1 else d[0]
+    Td = float(d.sum())
+    v, a, j = float(np.min(limits.velocity)), float(np.min(limits.acceleration)), float(np.min(limits.jerk))
+    R, L = tp.radii[arc], tp.lengths[arc]
+    cap = np.minimum(feeds[arc], v)
+    n = np.arange(2, MAX_RAMP_STEPS + 2, dtype=np.float64)[None, :]
+
+    def short(F):  # step F / n above what the limits allow at feed F (per arc, per n)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            acc = T1 * (a - F**2 / R[:, None])
+            jerk = (j - F**3 / R[:, None] ** 2) / (1.0 / (T1 * T2) + 2.0 * F / (R[:, None] * T2)) if np.isfinite(j) else np.inf
+        return F / n > np.minimum(acc, jerk)
+
+    lo, hi = np.zeros((arc.size, n.size)), np.broadcast_to(cap[:, None], (arc.size, n.size)).copy()
+    fits = ~short(hi)
+    lo = np.where(fits, hi, lo)
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        bad = short(mid)
+        lo, hi = np.where(fits | bad, lo, mid), np.where(fits | ~bad, hi, mid)
+    top = lo
+    ramp_len = top * Td * (n - 1)  # both ends
+    with np.errstate(divide="ignore", invalid="ignore"):
+        time = np.where((top > 0) & (ramp_len < L[:, None]), 2 * (n - 1) * Td + (L[:, None] - ramp_len) / top, np.inf)
+    best = np.argmin(time, axis=1)
+    t_best = time[np.arange(arc.size), best]
+    with np.errstate(divide="ignore"):
+        keep = np.isfinite(t_best) & (t_best < L / safe[arc])
+    return arc[keep], top[np.arange(arc.size), best][keep], (best + 2)[keep].astype(np.int64)
 
 
 class PieceFeeds(NamedTuple):

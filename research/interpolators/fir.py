@@ -67,7 +67,7 @@ from research.interpolators._fir_candidates import FIRSweep, envelope
 from research.interpolators._fir_chain import check_delays
 from research.interpolators._fir_limits import profile_within_limits, steps_within_limits
 from research.interpolators import _fir_pauses
-from research.interpolators._fir_settle import _primal, _pulse_table, plan_blocks
+from research.interpolators._fir_settle import _primal, plan_blocks
 from research.interpolators._fir_straight import (join_plan, merged_path, ramp_pieces, run_bounds, split_plan,
                                                   straight_runs)
 from research.interpolators._fir_verify import (corner_distances, vertex_distances)
@@ -248,12 +248,17 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     if limits is not None:
         # under limits the pieces of a line can be the steps of a staircase ramp
         # (_fir_limit_spread), which one block cannot take: the plans of the path as written,
-        # with its straight runs as one block each, and with its lines cut into ramp steps are
-        # plans of this path alike; the fastest is returned (ties: in that order)
+        # with its straight runs as one block each, with its lines cut into ramp steps, and with
+        # its arcs cut so as well are plans of this path alike; the fastest is returned (ties: in
+        # that order). The arcs' ramps are a plan apart: in a chain of blocks in motion an arc
+        # need not start from rest, and its ramp can cost more than it saves (3 of 150 stress
+        # plans 4-6 % slower with one plan for both, benchmarks/README.md)
         if run is not None:
             plans.append(merged)
-        cut = ramp_pieces(tp, run, feeds_np, delays_np, limits)
-        if cut is not None:
+        for arcs in (False, True):
+            cut = ramp_pieces(tp, run, feeds_np, delays_np, limits, arcs=arcs)
+            if cut is None:
+                continue
             pieces_tp, block, recipe = cut
             # a plan runs no piece faster than commanded and ends T_d after its input: a lower
             # bound on the cut plan's cycle, which the plans at hand may already meet (a chain

@@ -168,3 +168,30 @@ def test_cycle_time_along_the_eps_ladder_with_arcs_regression(seed):
     eps, feed = float(np.exp(rng.uniform(np.log(0.005), np.log(0.5)))), float(rng.uniform(20.0, 300.0))
     times = np.array([float(plan_fir(tp, feed, DELAYS, f * eps).cycle_time) for f in FACTORS])
     assert np.all(np.diff(times) <= 1e-9 * times[:-1]), times
+
+
+def test_arc_from_rest_under_tight_limits_ramps_along_its_arc():
+    """Regression (``benchmarks/fir_limits_stress.py``, program 7: arcs of R 22.6 and 39.6 mm after
+    exact stops, limits at 6.2 % of the FIR envelope's acceleration and jerk): an arc ran at the
+    feed of its own start and stop all the way (``_fir_limits.arc_limit_caps``, 1.9 mm/s of 30),
+    64.13 s for the program. Now its ends ramp in steps the limits allow (``_fir_straight``'s
+    arc ramps). A half circle of R 20 mm from rest to rest under those limits: the limits and the
+    tolerance hold on the sampled trajectory (independent of the planner's peaks), and the cycle
+    is below ``L / F_safe``, the least a plan at the arc's safe feed could take (34.06 s before,
+    5.87 s now; model prediction: the ramps' steps, ``n - 1`` of ``T_d`` at each end, and the rest
+    at the top feed)."""
+    from research.interpolators._fir_limits import arc_limit_caps
+    from research.limits import AxisLimits
+    from research.metrics import within_limits
+
+    tp = parse_gcode("G21 G90 G17\nG3 X40 Y0 I20 J0 F1800\n", source="half.ngc").blocks
+    assert tp.n_blocks == 1 and tp.is_arc[0]
+    feed, eps = 30.0, 0.01
+    env = AxisLimits.fir_envelope(tp.dim, feed, DELAYS)
+    lim = AxisLimits(env.velocity, 0.062 * env.acceleration, 0.062 * env.jerk)
+    safe = float(arc_limit_caps(tp.radii, np.array(DELAYS), lim)[0])
+    plan = plan_fir(tp, feed, DELAYS, eps, limits=lim)
+    tr = plan.trajectory(1e-3)
+    assert within_limits(tr, lim)
+    assert float(plan.path_deviation) <= eps * (1 + 1e-9) + 1e-9
+    assert float(plan.cycle_time) < float(tp.lengths[0]) / safe

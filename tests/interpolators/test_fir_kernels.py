@@ -527,7 +527,8 @@ def test_staircase_kernel_is_the_numpy_form_bit_for_bit():
 def _lookahead_candidates(seed, arcs, delays):
     """The look-ahead's candidates of a seeded random program, with what ``plan_fir`` times them by."""
     from research.interpolators._fir_lookahead import look_ahead
-    from research.interpolators.fir import _as_toolpath, _pulse_table
+    from research.interpolators._fir_settle import _pulse_table
+    from research.interpolators.fir import _as_toolpath
     from research.paths.library import random_program
 
     rng = np.random.default_rng(seed)

@@ -25,7 +25,7 @@ def _plan_inputs(tp, rng):
     """Random plan inputs of ``tp`` as the rounds hold them: feeds, line shares, feed factors (a few
     blocks slowed hard: the feed steps this module follows), sub-arc factors, full-overlap flags,
     overlap multipliers and tolerance shares."""
-    from research.interpolators.fir import _pulse_table
+    from research.interpolators._fir_settle import _pulse_table
 
     table, M = _pulse_table(tp), tp.n_blocks
     F = rng.uniform(50.0, 300.0, M)
@@ -97,7 +97,7 @@ def test_corner_windows_decide_as_the_whole_profile(delays):
 def test_pieces_at_are_the_pieces_of_the_whole_table():
     """``PulseTable.pieces_at`` (a few blocks' pieces, with multipliers ``g``) against
     ``PulseTable.pieces`` of the whole table at ``factor * g``: the same floats."""
-    from research.interpolators.fir import _pulse_table
+    from research.interpolators._fir_settle import _pulse_table
 
     for seed in range(10):
         rng = np.random.default_rng(900 + seed)

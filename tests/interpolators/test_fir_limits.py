@@ -317,7 +317,7 @@ def test_alone_block_ratios_match_the_whole_exact_stop_profile(delays):
     from research.interpolators._fir_blocks import build_profile
     from research.interpolators._fir_limits import alone_block_ratios, block_peak_ratios
     from research.interpolators._fir_piece_peaks import PiecePeaks, corner_peak_ratios
-    from research.interpolators.fir import _pulse_table
+    from research.interpolators._fir_settle import _pulse_table
     from research.paths.library import random_program
     from research.piecewise import NumpyPiecewise
 
@@ -355,7 +355,7 @@ def test_alone_block_ratios_match_the_whole_exact_stop_profile(delays):
 def _alone_inputs(tp, rng, feed, head=None, tail=None, factor=None):
     """The phase-1 inputs of ``alone_block_ratios`` for a program at feeds ``feed`` (random shares
     and factors unless given)."""
-    from research.interpolators.fir import _pulse_table
+    from research.interpolators._fir_settle import _pulse_table
 
     table, M = _pulse_table(tp), tp.n_blocks
     Mp = table.m_pad

@@ -10,7 +10,8 @@ import pytest
 import research.interpolators._fir_lookahead as lookahead
 from research.interpolators import _fir_settle, plan_fir
 from research.interpolators._fir_profile import overlaps
-from research.interpolators.fir import _as_toolpath, _pulse_table
+from research.interpolators._fir_settle import _pulse_table
+from research.interpolators.fir import _as_toolpath
 from research.paths.library import random_program
 
 DELAYS = (0.06, 0.03)

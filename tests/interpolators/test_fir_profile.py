@@ -233,7 +233,7 @@ def test_plan_holds_its_profile_inputs_within_their_float_count(arcs):
     JAX build of the same inputs."""
     import jax
 
-    from research.interpolators import fir
+    from research.interpolators import _fir_settle, fir
 
     if arcs:
         tp = random_program(np.random.default_rng(2), arcs=True)
@@ -244,7 +244,7 @@ def test_plan_holds_its_profile_inputs_within_their_float_count(arcs):
     delays = (0.06, 0.03)
     plan = fir.plan_fir(tp, 150.0, delays, 0.05)
     table = plan.profile.pieces.table
-    own = fir._pulse_table(tp)
+    own = _fir_settle._pulse_table(tp)
     if arcs:  # the path's table with its sub-arcs cut where the look-ahead's windows end
         assert table.arc_pieces.size > own.arc_pieces.size
         np.testing.assert_array_equal(table.block[table.first_motion], np.arange(tp.n_blocks))

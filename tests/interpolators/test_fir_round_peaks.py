@@ -60,7 +60,7 @@ def test_round_peaks_decide_as_the_whole_profile(delays):
     and a few overlaps (as repairs and bisections do): every ratio's comparison with the
     threshold as on the whole profile (``PiecePeaks``, every window), and the ratios above it
     equal to the bit; in most rounds after the first, most ratios are kept."""
-    from research.interpolators.fir import _pulse_table
+    from research.interpolators._fir_settle import _pulse_table
 
     d = np.array(delays)
     Td = float(np.sum(d))
