@@ -448,7 +448,8 @@ def _candidate(tp, F_cmd, F, s_v, cum, arcs, full, f, hold):
     window run at its feed; a window reaching into a block slows its head or tail
     (:func:`line_pieces`); the window holds its feed for ``hold`` of *time* each side of its
     vertex: through the blocks it covers, which run at their (lower) body feeds, it reaches less
-    far into the end block than ``f hold``; a window ``[lo, hi]`` slows the sub-arcs it overlaps.
+    far into the end block than ``f hold``; a window ``[lo, hi]`` slows the sub-arcs it overlaps
+    (on a table whose sub-arcs are cut where the windows end, :func:`arc_cuts`: the stretch it covers).
     One compiled pass (``_fir_candidate_kernels.candidate_pieces``); ``cum`` ``(M + 1,)``: the arc length [mm]
     at each block start and the path's end; ``arcs``: the sub-arcs' start and end arc lengths and
     the feeds of their blocks ``(A,)`` each."""

@@ -28,6 +28,10 @@ and :func:`join_plan` gives each original block its pieces' plan. Under limits `
 the path as written, with its straight runs merged, and with its lines cut into ramps, and
 returns the fastest (a 1,000 mm line under limits below the FIR's own envelope: 500.03 s as one
 block, 82.22 s with ramp pieces, for ``L / v + T_d`` = 81.99 s, in 1, 2, 5 or 300 blocks alike).
+An arc that cannot start or stop at its feed is cut the same way along its arc length, into arcs
+about its centre (:func:`_arc_ramps`: the steps also carry its centripetal acceleration), as a
+plan of its own (a half circle of R 20 mm at 6.2 % of the envelope: 34.06 s at the arc's safe
+feed, 5.87 s ramped).
 """
 
 from __future__ import annotations
