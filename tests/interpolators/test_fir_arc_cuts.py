@@ -195,3 +195,47 @@ def test_arc_from_rest_under_tight_limits_ramps_along_its_arc():
     assert within_limits(tr, lim)
     assert float(plan.path_deviation) <= eps * (1 + 1e-9) + 1e-9
     assert float(plan.cycle_time) < float(tp.lengths[0]) / safe
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_arc_ramp_pieces_are_arcs_of_the_block_at_steps_the_limits_allow(seed):
+    """``ramp_pieces(..., arcs=True)`` on seeded random programs with arcs under limits at 3-20 % of
+    the envelope: the pieces of every ramped arc are arcs about its centre and axis whose ends lie
+    on it (``ToolPath.arc_points`` at the pieces' summed angles, 1e-9 mm) and whose sweeps add up to
+    the block's; the commanded feeds rise from rest in equal steps ``F / n`` to ``F`` and back, each
+    step piece ``T_d`` long at its feed, and ``F``, the steps and the arc's radius meet the bound
+    the ramp is built on, recomputed here from the limits: ``dV / T1 + F^2 / R <= a`` and
+    ``dV / (T1 T2) + 2 F dV / (R T2) + F^3 / R^2 <= j`` (smallest limit over the axes)."""
+    from research.interpolators._fir_straight import ramp_pieces
+    from research.limits import AxisLimits
+
+    rng = np.random.default_rng(40 + seed)
+    tp = _as_toolpath(random_program(rng, arcs=True))
+    feed, d = float(rng.uniform(50.0, 300.0)), np.array(DELAYS)
+    env = AxisLimits.fir_envelope(tp.dim, feed, DELAYS)
+    s = float(rng.uniform(0.03, 0.2))
+    lim = AxisLimits(env.velocity, s * env.acceleration, s * env.jerk)
+    feeds = np.full(tp.n_blocks, feed)
+    cut = ramp_pieces(tp, None, feeds, d, lim, arcs=True)
+    assert cut is not None
+    pieces, block, recipe = cut
+    f = recipe.of(feeds)
+    a, j = float(np.min(lim.acceleration)), float(np.min(lim.jerk))
+    T1, T2, Td = d[0], d[1], float(d.sum())
+    ramped = [k for k in np.flatnonzero(tp.is_arc) if np.sum(block == k) > 1]
+    assert ramped
+    for k in ramped:
+        idx = np.flatnonzero(block == k)
+        assert np.all(pieces.is_arc[idx])
+        np.testing.assert_allclose(pieces.centers[idx], np.broadcast_to(tp.centers[k], (idx.size, tp.dim)), atol=0)
+        assert float(np.sum(pieces.sweeps[idx])) == pytest.approx(float(tp.sweeps[k]), rel=1e-12)
+        angle = np.cumsum(pieces.sweeps[idx])
+        np.testing.assert_allclose(pieces.ends[idx], tp.arc_points(k, angle), rtol=0, atol=1e-9)
+        fk = f[idx]
+        top, n = float(fk.max()), (idx.size + 1) // 2
+        steps = top / n * np.arange(1, n)
+        np.testing.assert_allclose(fk, np.concatenate([steps, [top], steps[::-1]]), rtol=1e-12)
+        np.testing.assert_allclose(pieces.lengths[idx][: n - 1], steps * Td, rtol=1e-9)
+        R, dV = float(tp.radii[k]), top / n
+        assert dV / T1 + top**2 / R <= a * (1 + 1e-9)
+        assert dV / (T1 * T2) + 2 * top * dV / (R * T2) + top**3 / R**2 <= j * (1 + 1e-9)
