@@ -121,7 +121,9 @@ class ToolPath:
         object.__setattr__(self, "axes", axes)
         arc_row = np.full(starts.shape[0], -1, dtype=np.int64)  # row of each arc block in ``geo``, -1: a line
         arc_row[geo["index"] if geo else []] = np.arange(geo["index"].size if geo else 0)
-        self._cache.update(geo=geo, lengths=lengths, starts=starts, arc_row=arc_row)
+        is_arc = arc.copy()
+        is_arc.setflags(write=False)
+        self._cache.update(geo=geo, lengths=lengths, starts=starts, arc_row=arc_row, is_arc=is_arc)
 
     # -- construction ------------------------------------------------------------------------
     @staticmethod
@@ -176,8 +178,8 @@ class ToolPath:
 
     @property
     def is_arc(self) -> np.ndarray:
-        """``(M,)`` True for arc blocks."""
-        return self.sweeps > 0
+        """``(M,)`` True for arc blocks (read-only; made once: the planner reads it per candidate)."""
+        return self._cache["is_arc"]
 
     @property
     def starts(self) -> np.ndarray:
