@@ -268,15 +268,18 @@ def _horner(coeffs: Array, tau: Array) -> Array:
     return out
 
 
-def _taylor_shift(coeffs: Array, delta: Array) -> Array:
-    """Re-centre ascending coefficients ``(N, d + 1, A)`` by ``delta`` ``(N,)`` (exact in O(d^2))."""
+def taylor_shift(coeffs: Array, delta: Array) -> Array:
+    """Re-centre ascending coefficients ``(N, d + 1, A)`` by ``delta`` ``(N,)``: those of ``p(delta + x)``
+    from those of ``p(x)`` (repeated synthetic division, O(d^2); a zero shift returns the same
+    values). NumPy arrays in, a NumPy array out; JAX otherwise (traceable)."""
     c = [coeffs[:, m, :] for m in range(coeffs.shape[1])]
     d = len(c) - 1
     dl = delta[:, None]
     for i in range(d):
         for m in range(d - 1, i - 1, -1):
             c[m] = c[m] + dl * c[m + 1]
-    return jnp.stack(c, axis=1)
+    stack = np.stack if isinstance(coeffs, np.ndarray) and isinstance(delta, np.ndarray) else jnp.stack
+    return stack(c, axis=1)
 
 
 def _recentred(C: PiecewisePolynomial, piece: Array, origin: Array) -> Array:
@@ -291,4 +294,4 @@ def _recentred(C: PiecewisePolynomial, piece: Array, origin: Array) -> Array:
     table = jnp.concatenate([zero, C.coeffs, hold], axis=0)
     table_origin = jnp.concatenate([C.breaks[:1], C.breaks[:K], C.breaks[-1:]])
     j = jnp.clip(piece + 1, 0, K + 1)
-    return _taylor_shift(table[j], origin - table_origin[j])
+    return taylor_shift(table[j], origin - table_origin[j])

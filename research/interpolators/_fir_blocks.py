@@ -26,7 +26,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from research.paths.toolpath import ToolPath
-from research.piecewise import PiecewisePolynomial, bucket_size
+from research.piecewise import PiecewisePolynomial, bucket_size, taylor_shift
 
 #: largest sub-arc angle of one polynomial velocity piece [rad]
 SUB_ARC = np.pi / 8
@@ -162,7 +162,7 @@ class PulseTable:
         s1[inner], s0[inner + 1] = at, at
         target = new_of[self.arc_pieces[cut]][own] + j
         fraction[target] = u1 - u0
-        geo[target] = _taylor_shift(self.geo[self.arc_pieces[cut]][own], u0)
+        geo[target] = taylor_shift(self.geo[self.arc_pieces[cut]][own], u0)
         joins[target] = j > 0
         span = np.repeat(self.arc_span, 1 + n_cut, axis=0)
         at_cut = np.repeat(n_cut > 0, 1 + n_cut)
@@ -229,18 +229,6 @@ class PulseTable:
         blk = np.minimum(self.block, self.n_blocks - 1)
         rows = tuple((i, blk[i]) for i in (np.flatnonzero(self.role == k) for k in range(3)))
         return rows + (blk, np.where(self.role < 0, 1, self.role), self.block < self.n_blocks)
-
-
-def _taylor_shift(c: np.ndarray, a: np.ndarray) -> np.ndarray:
-    """Coefficients ``(S, D, d)`` of ``p(a + x)`` in ascending powers of ``x`` from those ``c`` of
-    ``p(x)``, for shifts ``a`` ``(S,)`` (repeated synthetic division; exact where ``a`` is 0)."""
-    c = c.copy()
-    D = c.shape[1]
-    a = a[:, None]
-    for i in range(D - 1):
-        for m in range(D - 2, i - 1, -1):
-            c[:, m] += a * c[:, m + 1]
-    return c
 
 
 def _ranks(n: np.ndarray) -> np.ndarray:

@@ -293,7 +293,7 @@ def _window_add(breaks, lo, coeffs, k, sign, wh, wl, hq, D):
 def _shifted_c(coeffs, k, a, delta, c, D):
     """Piece ``k`` of ``C`` on axis ``a`` less its constant term (ascending coefficients ``(D + 1,)``
     into ``c``; piece ``K`` the end value held after the last break, all 0), re-centred by
-    ``delta``: the Taylor shift of ``research.piecewise._taylor_shift``. ``c[0]`` is then the
+    ``delta``: the Taylor shift of ``research.piecewise.taylor_shift``. ``c[0]`` is then the
     integral from the piece's break to ``delta``; the integral up to that break is added apart
     (:func:`_window_add`)."""
     K = coeffs.shape[0]

@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 
 from research.interpolators import _fir_profile, plan_fir
-from research.interpolators._fir_blocks import MIN_CUT, PulseTable, _taylor_shift
+from research.interpolators._fir_blocks import MIN_CUT, PulseTable
 from research.interpolators._fir_lookahead import arc_cuts, look_ahead
 from research.interpolators.fir import _as_toolpath
 from research.paths.gcode import parse_gcode
 from research.paths.library import random_program
-from research.piecewise import NumpyPiecewise
+from research.piecewise import NumpyPiecewise, taylor_shift
 
 DELAYS = (0.06, 0.03)
 FACTORS = (1.0, 1.1, 1.25, 1.5, 2.0, 3.0)  # test_fir_monotone's eps ladder
@@ -58,11 +58,11 @@ def test_taylor_shift_re_centres_a_polynomial():
     """``p(a + x)`` from ``p``'s coefficients, against evaluating ``p`` at ``a + x`` directly."""
     rng = np.random.default_rng(0)
     c, a, x = rng.normal(size=(5, 6, 3)), rng.uniform(-1.0, 1.0, 5), 0.3
-    shifted = _taylor_shift(c, a)
+    shifted = taylor_shift(c, a)
     want = np.stack([sum(c[i, m] * (a[i] + x) ** m for m in range(6)) for i in range(5)])
     got = np.stack([sum(shifted[i, m] * x**m for m in range(6)) for i in range(5)])
     np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-13)
-    np.testing.assert_array_equal(_taylor_shift(c, np.zeros(5)), c)  # a zero shift is exact
+    np.testing.assert_array_equal(taylor_shift(c, np.zeros(5)), c)  # a zero shift is exact
 
 
 def test_cut_table_is_the_same_input_path():
