@@ -38,6 +38,9 @@ class SweepConfig(_Strict):
         "auto", description="auto: vmap when every swept field is an FIR/mode parameter, else dask")
     sensitivities: bool = Field(True, description="autodiff d(metric)/d(T_i, eps, F) on the vmap path")
     chunk: int = Field(2048, ge=1, description="points per compiled vmap call (one store entry each)")
+    tolerance_envelope: bool = Field(True, description="a swept interpolator.tolerance_um keeps at each point the "
+                                                       "fastest verified plan of a tolerance <= its own "
+                                                       "(research.experiments.sweep_envelope; false: each point's own plan)")
 
     def values(self) -> dict[str, list]:
         return {k: v.values() if isinstance(v, Range) else list(v) for k, v in self.parameters.items()}

@@ -34,6 +34,7 @@ from research.errors import ConfigError
 from research.experiments.config import ExperimentConfig, load_config
 from research.experiments.runner import DEFAULT_CACHE, DEFAULT_FIGURES, config_key, hashed_config
 from research.experiments.store import ResultStore, atomic_write
+from research.experiments.sweep_envelope import OWN_CYCLE_TIME, PLANNED_AT, envelope_field, tolerance_envelope
 from research.experiments.sweep_general import run_general
 from research.experiments.sweep_points import expand
 from research.experiments.sweep_vmap import eligible, run_fast, split
@@ -149,6 +150,12 @@ def run_sweep(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_CACHE,
         stats["sensitivities"] = (f"unavailable for the {stats['general']} general-path points (autodiff runs on the "
                                   "vmap fast path only" + (f"; {reason}" if reason else "") + ")")
     table = [{"index": p.index} | p.values | rows[p.index] for p in points]
+    tol_field = envelope_field(cfg)
+    if tol_field is not None:
+        table, moved = tolerance_envelope(table, tol_field, list(cfg.sweep.parameters))
+        stats["tolerance_envelope"] = {"field": tol_field, "moved": moved}
+        log(f"tolerance envelope over {tol_field}: {moved} of {len(table)} points run the faster plan of a tighter "
+            "tolerance (own plans in column own_cycle_time; sweep.tolerance_envelope = false to keep them)")
     stats |= {"ok": sum(r["status"] == "ok" for r in table), "failed": sum(r["status"] != "ok" for r in table),
               "seconds": time.perf_counter() - t0}
     out = (Path(cache_dir) / "sweeps" if results_dir is None else Path(results_dir)) / cfg.name
@@ -245,6 +252,10 @@ def format_sweep(result: SweepResult) -> str:
                      "this sweep has no point there)")
     if s.get("sensitivities") and s["fast"]:
         lines.append(f"sensitivities: {s['sensitivities']}")
+    env = s.get("tolerance_envelope")
+    if env:
+        lines.append(f"tolerance envelope over {env['field']}: {env['moved']} points run the faster plan of a tighter "
+                     "tolerance (planned_at_tolerance_um; their own plans' times in own_cycle_time)")
     failed = [r for r in result.rows if r["status"] != "ok"]
     for r in failed[:5]:
         lines.append(f"  failed point {r['index']} {_at(result, r['index'])}: {r['error'].splitlines()[0]}")
@@ -260,6 +271,10 @@ def metric_unit(column: str) -> str:
         num, den = column[2:].split("/d_", 1)
         den_unit = {"eps": "mm", "F": "mm/s"}.get(den, "s" if den.startswith("T") else "-")
         return f"{metric_unit(num)}/({den_unit})"
+    if column == PLANNED_AT:
+        return "um"
+    if column == OWN_CYCLE_TIME:
+        return "s"
     return METRIC_UNITS.get(column.split(".")[0], "-")
 
 

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from research.experiments.store import atomic_write
+from research.experiments.sweep_envelope import OWN_CYCLE_TIME, PLANNED_AT
 
 _SCALE = {"s": (1.0, "s"), "mm": (1e3, "um"), "mm/s": (1.0, "mm/s"), "-": (1.0, "-")}
 _UNITS = {"cycle_time": "s", "residual_vibration": "mm", "max_corner_error": "mm", "max_contour_error": "mm",
@@ -134,7 +135,7 @@ def plot_sweep(result, target: Path) -> Path:
 
     fields, cfg = result.fields, result.config
     ok = [r for r in result.rows if r["status"] == "ok"]
-    metrics = [k for k in ok[0] if k not in fields and not k.startswith("d_") and k != "index"
+    metrics = [k for k in ok[0] if k not in fields and not k.startswith("d_") and k not in ("index", PLANNED_AT, OWN_CYCLE_TIME)
                and isinstance(ok[0][k], float)][:6]
     n = len(metrics)
     cols = min(n, 3)
@@ -184,6 +185,11 @@ def plot_sweep(result, target: Path) -> Path:
         else:
             order = np.argsort(x[0])
             ax.plot(x[0][order], y[order], ".-" if len(fields) == 1 else ".", ms=3)
+            own = result.column(OWN_CYCLE_TIME) * scale if m == "cycle_time" else y
+            if len(fields) == 1 and np.any(np.abs(own - y) > 0):  # the tolerance envelope took a tighter plan
+                ax.plot(x[0][order], own[order], "x", ms=4, color="0.5", label="own plan (envelope: the faster "
+                                                                               "plan of a tighter tolerance)")
+                ax.legend(fontsize=6)
             if base[0] is not None and len(fields) == 1:
                 ax.axvline(base[0], color="r", ls=":", lw=0.8, label="base config")
                 ax.legend(fontsize=6)
