@@ -401,7 +401,7 @@ class _Interpreter:
         k = groups["home"][1]
         if self.home is None:
             raise _LineError("G28 (return to home) needs the machine home position; expected home=(x, y, z) "
-                             "[mm, program frame] given to parse_gcode / read_gcode", k)
+                             "[mm, program frame] given to parse_gcode / read_gcode ([path] home_mm in a config)", k)
         if "motion" in groups and not _AXIS_LETTERS.isdisjoint(vals):
             raise _LineError(f"G28 and G{_fmt_key(groups['motion'][0])} on one line with axis words; expected "
                              "the motion code on a line of its own (both would use the axis words)", k)
