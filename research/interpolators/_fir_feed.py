@@ -38,7 +38,7 @@ import math
 
 import numpy as np
 
-from research.interpolators._fir_kernels import chain_displacements, chain_feed_decisions, chain_largest_feeds
+from research.interpolators._fir_kernels import chain_displacements, chain_largest_feeds
 
 
 _ARC_STEPS = 60  # arc feeds to machine precision (cheap: one evaluation per arc and step)
@@ -208,25 +208,3 @@ class ChainError:
         right = np.abs(s_t[np.minimum(i, s_t.size - 1)] - q)
         left = np.abs(q - s_t[np.maximum(i - 1, 0)])
         return np.minimum(feed_max, np.minimum(left, right) / float(np.max(self.rho)))
-
-    def feed_decisions(self, s_query: np.ndarray, feed_max: np.ndarray, tolerance: np.ndarray, error_max: np.ndarray,
-                       stretch_cap: np.ndarray, Td: float, costs: np.ndarray) -> np.ndarray:
-        """Feeds ``f`` whose decisions ``costs <= min(f Td, stretch_cap) (1 / f - 1 / feed_max)``
-        are those of :meth:`largest_feed`'s feeds, exactly, from a search stopped as soon as its
-        bracket settles them (``_fir_kernels.chain_feed_decisions``; the feed itself is not the root).
-
-        Args:
-            s_query, feed_max, tolerance, error_max: as :meth:`largest_feed` (``error_max`` required).
-            stretch_cap: ``(J,)`` [mm]; Td: [s]; costs: ``(J, C)`` [s], NaN where a decision is not read.
-        """
-        hi = np.array(feed_max, dtype=np.float64).reshape(-1)
-        tol = np.ascontiguousarray(np.broadcast_to(np.asarray(tolerance, dtype=np.float64), hi.shape))
-        e = np.array(error_max, dtype=np.float64).reshape(-1)
-        q = np.asarray(s_query, dtype=np.float64).reshape(-1) - self.origin
-        out = chain_feed_decisions(*self._args(q, hi), q, hi, tol, e, _BISECTION_STEPS, _CLOSE, _TINY,
-                                   np.ascontiguousarray(stretch_cap, dtype=np.float64), float(Td),
-                                   np.ascontiguousarray(costs, dtype=np.float64).reshape(hi.size, -1))
-        zero = tol <= 0
-        if zero.any():  # the root itself (:meth:`reach_free_feed`): the same decisions
-            out[zero] = self.reach_free_feed(q[zero], hi[zero])
-        return out

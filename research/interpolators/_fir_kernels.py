@@ -14,8 +14,8 @@ search runs to its own end. The truncated powers ``(r)_+^(n+1)`` are products (n
 the Newton search takes 3-5 evaluations per vertex where the false-position search before it took
 6-8, so the feeds agree with that search's to its resolution (~1e-9 relative), not bit for bit
 (benchmarks/README.md, bench_cam section); ``tests/interpolators/test_fir_kernels.py`` checks the
-kernels against slow independent computations. :func:`chain_feed_decisions` runs the same search
-only as far as a dwell decision of the look-ahead's tighter levels needs it (exact decisions).
+kernels against slow independent computations. The look-ahead's dwell decisions need no search:
+one evaluation of ``|d_j|`` at a break-even feed (``_fir_lookahead._dwell_cheaper``).
 
 The other kernels: ``_fir_candidate_kernels`` (a candidate's windows, line pieces, range minima
 and predicted cycle time) and ``_fir_verify_kernels`` (the sampled path check and the
@@ -386,76 +386,20 @@ def chain_largest_feeds(s, du, rho, sign, p, norm, prefix, binom, direct, q, hi,
     dbuf = np.zeros(du.shape[1])
     w, wd = np.empty(max(direct, 0)), np.empty(max(direct, 0))
     out = np.empty(J)
-    none = np.empty(0)
     for j in range(J):
         out[j] = _feed_search(s, du, rho, sign, p, norm, prefix, binom, direct, q[j], hi[j], tol[j], e_hi[j], steps,
-                              close, tiny, buf, dbuf, w, wd, False, 0.0, 0.0, none)
+                              close, tiny, buf, dbuf, w, wd)
     return out
 
 
 @numba.njit(**_OPTIONS)
-def chain_feed_decisions(s, du, rho, sign, p, norm, prefix, binom, direct, q, hi, tol, e_hi, steps, close, tiny,
-                         stretch_cap, Td, costs):
-    """:func:`chain_largest_feeds` run only as far as the look-ahead's dwell decisions need it.
-
-    A nested level of ``_fir_lookahead`` reads its window feed ``f`` only through the decisions
-    ``cost <= slow_cost(f)`` (``_fir_lookahead._slow_cost``: ``min(f T_d, cap) (1 / f - 1 / hi)``,
-    non-increasing in ``f``), one per dwell rule. The search's bracket ``[l, h]`` only shrinks, and
-    the feed it would return lies in ``{l} U [l + w / 2, h - w / 2]`` (``w`` its resolution: every
-    later point is evaluated there). So once the bracket is wider than ``w`` and no cost lies in
-    ``(slow_cost(h), slow_cost(l)]`` (and ``l > 0``: the search may end at 0), every decision at
-    the search's own result is the one at ``h``, and ``h`` is returned: the same decisions, exactly
-    (the two ends are ``>= w / 2 ~ 7e-12`` relative apart, far above the rounding of
-    ``slow_cost``). A query decides at once where every cost is NaN (no decision read).
-
-    Args:
-        As :func:`chain_largest_feeds`; stretch_cap: ``(J,)`` the ``cap`` of ``slow_cost`` [mm];
-        Td: the window ``T_d`` [s]; costs: ``(J, C)`` dwell costs [s] (NaN: not read).
-
-    Returns:
-        ``(J,)`` feeds [mm/s] whose decisions ``cost <= slow_cost(feed)`` are those of the full search.
-    """
-    J = q.size
-    buf = np.zeros(du.shape[1])
-    dbuf = np.zeros(du.shape[1])
-    w, wd = np.empty(max(direct, 0)), np.empty(max(direct, 0))
-    out = np.empty(J)
-    for j in range(J):
-        out[j] = _feed_search(s, du, rho, sign, p, norm, prefix, binom, direct, q[j], hi[j], tol[j], e_hi[j], steps,
-                              close, tiny, buf, dbuf, w, wd, True, stretch_cap[j], Td, costs[j])
-    return out
-
-
-@numba.njit(**_OPTIONS)
-def _slow_cost(f, cap, Td, F):
-    """``_fir_lookahead._slow_cost`` of one feed (the same operations, so the same rounding)."""
-    return min(f * Td, cap) * (1.0 / max(f, 1e-300) - 1.0 / F)
-
-
-@numba.njit(**_OPTIONS)
-def _decided(l, h, F, cap, Td, costs):
-    """No cost lies in ``(slow_cost(h), slow_cost(l)]`` (:func:`chain_feed_decisions`); while
-    ``l = 0`` only a query without costs is (the search may still end at 0, whose ``slow_cost``
-    rounds to 0)."""
-    s_h = _slow_cost(h, cap, Td, F)
-    s_l = _slow_cost(l, cap, Td, F)
-    for c in costs:
-        if c == c and (l == 0.0 or s_h < c <= s_l):
-            return False
-    return True
-
-
-@numba.njit(**_OPTIONS)
-def _feed_search(s, du, rho, sign, p, norm, prefix, binom, direct, qj, hj, t, e, steps, close, tiny, buf, dbuf, w, wd,
-                 decide, cap, Td, costs):
-    """One query of :func:`chain_largest_feeds` (``decide``: stopped as :func:`chain_feed_decisions`)."""
+def _feed_search(s, du, rho, sign, p, norm, prefix, binom, direct, qj, hj, t, e, steps, close, tiny, buf, dbuf, w, wd):
+    """One query of :func:`chain_largest_feeds`."""
     h = hj
     if e <= t:
         return h
     if not t > 0:
         return 0.0
-    if decide and _decided(0.0, h, hj, cap, Td, costs):
-        return h
     resolution = 0.5 ** steps
     target = -0.5 * close
     g_h = math.log(e / t)
@@ -480,8 +424,6 @@ def _feed_search(s, du, rho, sign, p, norm, prefix, binom, direct, qj, hj, t, e,
             side = 1
         if not (h - l > width and g_low < -close):
             break
-        if decide and _decided(l, h, hj, cap, Td, costs):
-            return h
         guard = 0.5 * width
         nxt = math.exp(math.log(x) - (gx - target) / slope) if slope > 0 else np.nan
         if not (l + guard <= nxt <= h - guard):  # no slope, or a step out of the bracket

@@ -20,11 +20,12 @@ So a call at ``eps`` also offers the dwell sets its rules decide at ``eps q^k``,
 What is exact:
 
 1. The candidates at ``eps`` hold every dwell set that a call at ``eps q^k`` (``k <= NEST_STEPS``)
-   decides at its own tolerance: the decision at a level uses the same quantities as that call's
-   own (the whole-chain window feeds by the same root search, eq 13/14 at the level's tolerance,
-   the tolerance-free displacement of the other turns). Lines exactly (up to the rounding of
-   ``eps q^k``); with arcs, the levels keep ``eps``'s arc feeds (eq 8) and sampled arc turns, so
-   there the sets are those of the level's rules on ``eps``'s feeds, not the call's own.
+   decides at its own tolerance: a decision is one function of the level's tolerance, the same at
+   every level and in every call (:func:`_dwell_cheaper`: the whole chain's window error at the
+   break-even feed, eq 13/14 at the level's tolerance, the tolerance-free displacement of the
+   other turns). Lines exactly (up to the rounding of ``eps q^k``); with arcs, the levels keep
+   ``eps``'s arc feeds (eq 8) and sampled arc turns, so there the sets are those of the level's
+   rules on ``eps``'s feeds, not the call's own.
 2. ``plan_fir`` returns the least verified cycle time over its candidates (its branch and bound
    drops a candidate only on a lower bound of that candidate's verified time, and each
    candidate's verification is independent of the others), so offering more candidates never
@@ -232,9 +233,9 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
         both = np.pad(both, ((0, 0), (0, pad)), constant_values=1.0)
         Tk = overlaps(both, np.tile(np.pad(dF, (0, pad), constant_values=1.0), (2 * K1, 1)), delays)[:, : M - 1]
         both = None
-    # the tighter levels read their window feeds only through the dwell decisions of _dwell_sets
-    # (cost <= _slow_cost(f), where a rule can dwell; the deep levels only the "isolated" rule's):
-    # a search stopped once its bracket settles them gives the same decisions (ChainError.feed_decisions)
+    # every level reads the window error only through the dwell decisions of _dwell_sets: one
+    # evaluation per rule at the break-even feed (_dwell_cheaper), the same function of the level's
+    # tolerance at every level and in every call; level 0 also searches the plans' window feeds
     L = tp.lengths
     cap = 0.5 * (L[:-1] + L[1:])
     sets, seen = [], set()
@@ -245,21 +246,19 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
             Tk_budget, Tk_whole = overlaps(np.maximum(budget, 0.0), dF, delays), overlaps(tol_k, dF, delays)
         else:
             Tk_budget, Tk_whole = Tk[k], Tk[K1 + k]
-        f_k = Fv.copy()
         if k == 0:  # window feeds on the whole chain at the tolerance itself: the feeds of the plans
+            f_w = Fv.copy()
             j_q = np.flatnonzero(need)
             if j_q.size:
-                f_k[j_q] = every.largest_feed(s_v[j_q], Fv[j_q], tol_k[j_q], e_all[j_q])
-            f_w, need_0, budget_0 = f_k, need, budget
-        else:
-            cost_b = np.where(_can_dwell(need, budget, Tk_budget, Td) & (k <= NEST_STEPS), Td - Tk_budget, np.nan)
-            cost_w = np.where(_can_dwell(need, tol_k, Tk_whole, Td), Td - Tk_whole, np.nan)
-            j_q = np.flatnonzero(~(np.isnan(cost_b) & np.isnan(cost_w)))
-            if j_q.size:
-                f_k[j_q] = every.feed_decisions(s_v[j_q], Fv[j_q], tol_k[j_q], e_all[j_q], cap[j_q], Td,
-                                                np.stack([cost_b[j_q], cost_w[j_q]], axis=1))
-            cost_b = cost_w = None
-        for i, (rule, gap) in enumerate(_dwell_sets(L, Td, Fv, f_k, need, tol_k, budget, Tk_budget, Tk_whole)):
+                f_w[j_q] = every.largest_feed(s_v[j_q], Fv[j_q], tol_k[j_q], e_all[j_q])
+            need_0, budget_0 = need, budget
+        # the dwell costs of the two rules where the vertex can dwell under them (NaN: it cannot;
+        # the deep levels only the "isolated" rule's)
+        cost_b = np.where(_can_dwell(need, budget, Tk_budget, Td) & (k <= NEST_STEPS), Td - Tk_budget, np.nan)
+        cost_w = np.where(_can_dwell(need, tol_k, Tk_whole, Td), Td - Tk_whole, np.nan)
+        cheaper = _dwell_cheaper(every, s_v, Fv, cap, Td, tol_k, np.stack([cost_b, cost_w]))
+        cost_b = cost_w = None
+        for i, (rule, gap) in enumerate(_dwell_sets(cheaper, need, budget, tol_k, Tk_budget, Tk_whole, Td)):
             if k > NEST_STEPS and i != _DEEP_SET:
                 continue
             # the dwell set and rule define the candidate; at tol_v a vertex that needs a slow-down
@@ -269,7 +268,7 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
             if key not in seen:
                 seen.add(key)
                 sets.append((rule, gap, i == _EVERY_CAN, k > NEST_STEPS))
-    Tk = Tk_budget = Tk_whole = need = budget = tol_k = f_k = j_q = every = None  # (and the chain's prefix sums)
+    Tk = Tk_budget = Tk_whole = need = budget = tol_k = cheaper = j_q = every = None  # (and the chain's prefix sums)
     # every set with its feeds held over the whole support T_d / 2, and over the reach of
     # window_half_width as well (module docstring, "Window reach": neither is faster on every
     # program), but "every vertex that can dwell", which few windows hold a feed in
@@ -400,15 +399,6 @@ def window_half_width(delays, own_share):
     return w * (0.5 * float(d.sum())) + (1.0 - w) * float(np.sqrt(np.sum(d**2) / 12.0))
 
 
-def _slow_cost(L, Td, Fv, f):
-    """Estimated time lost slowing a vertex's window from ``Fv`` to ``f`` [mm/s]: on the stretch
-    the window slows, ``f T_d``, or its share of the blocks when neighbouring windows join
-    (non-increasing in ``f``)."""
-    stretch = np.minimum(f * Td, 0.5 * (L[:-1] + L[1:]))
-    with np.errstate(divide="ignore"):
-        return stretch * (1.0 / np.maximum(f, 1e-300) - 1.0 / Fv)
-
-
 _EVERY_CAN = 2  # index of "every vertex that can dwell" among the sets of _dwell_sets
 
 
@@ -418,22 +408,54 @@ def _can_dwell(need, tol, Tk, Td):
     return need & (tol > 0) & (Tk < Td * (1 - 1e-12))
 
 
-def _dwell_sets(L, Td, Fv, f_w, need, tol, budget, Tk_budget, Tk_whole):
+def _dwell_sets(cheaper, need, budget, tol, Tk_budget, Tk_whole, Td):
     """The dwell sets of one tolerance ``tol`` ``(M - 1,)``, each ``(rule, mask)`` (rule 0:
-    "budget", 1: "isolated"): where the dwell is estimated cheaper than the slow-down (both rules),
-    every vertex that can dwell, none.
+    "budget", 1: "isolated"): where the dwell is cheaper than the slow-down (``cheaper`` ``(2, M -
+    1)``, each rule's, :func:`_dwell_cheaper`), every vertex that can dwell, none.
 
-    A vertex can dwell where it needs a slow-down (``need``), its rule leaves it some tolerance and
-    eq 13/14 gives a gap (``T_k < T_d``). The estimate: the dwell costs ``T_d - T_k``, the slow-down
-    to the window feed ``f_w`` the time lost on the stretch the vertex's window slows, ``f T_d``, or
-    its share of the blocks when neighbouring windows join."""
-    slow_cost = _slow_cost(L, Td, Fv, f_w)
+    A vertex can dwell where it needs a slow-down (``need``), its rule leaves it some tolerance
+    (``budget``, ``tol``) and eq 13/14 gives a gap (``T_k < T_d``)."""
     out = []
     for rule, b, Tk in ((0, budget, Tk_budget), (1, tol, Tk_whole)):
         can = _can_dwell(need, b, Tk, Td)
-        out.append((rule, can & (Td - Tk <= slow_cost)))
+        out.append((rule, can & cheaper[rule]))
         if rule == 1:
             out += [(1, can), (1, np.zeros_like(can))]
+    return out
+
+
+def _break_even_feed(cap, Td, Fv, cost):
+    """The window feed [mm/s] whose slow-down costs ``cost`` [s] (``0 < cost < T_d``; 0 for a cost
+    of ``T_d`` or more).
+
+    The slow-down of a vertex's window from ``F_v`` to ``f`` is estimated to lose
+    ``min(f T_d, cap) (1 / f - 1 / F_v)``: the time lost on the stretch the window slows, ``f T_d``,
+    or its share of the blocks when neighbouring windows join (``cap`` [mm], half the two blocks).
+    That is ``T_d (1 - f / F_v)`` while ``f T_d <= cap`` and ``cap (1 / f - 1 / F_v)`` above: it
+    falls strictly from ``T_d`` at ``f -> 0`` to 0 at ``F_v``, so a window feed ``f`` costs more
+    than a dwell of ``cost`` exactly when ``f`` is below the feed returned."""
+    f = Fv * (1.0 - cost / Td)
+    with np.errstate(divide="ignore"):
+        beyond = 1.0 / (cost / cap + 1.0 / Fv)
+    return np.maximum(np.where(f * Td <= cap, f, beyond), 0.0)
+
+
+def _dwell_cheaper(chain, s_v, Fv, cap, Td, tol, costs):
+    """Where each rule's dwell is cheaper than the slow-down: ``(C, M - 1)`` bool for the dwell
+    costs ``costs`` ``(C, M - 1)`` [s] (NaN: the vertex cannot dwell under that rule; False there).
+
+    The slow-down cost falls strictly with the window feed ``f``, so the dwell is cheaper exactly
+    when ``f`` is below the break-even feed ``f*`` (:func:`_break_even_feed`),
+    i.e. when the window's displacement at ``f*`` is above the tolerance (the error grows with
+    the feed; where it does not, this is still one definite rule). One evaluation of the chain's
+    error per rule and vertex, instead of the window feed's root search, and the same function of
+    the tolerance wherever it is asked: a level ``eps q^k`` of a call at ``eps`` decides what a
+    call at ``eps q^k`` decides at its own tolerance, bit for bit (module docstring, item 1)."""
+    out = np.zeros(costs.shape, dtype=bool)
+    rows, j = np.nonzero(~np.isnan(costs))
+    if j.size:
+        f = _break_even_feed(cap[j], Td, Fv[j], costs[rows, j])
+        out[rows, j] = chain(s_v[j], f) > tol[j]
     return out
 
 
