@@ -151,7 +151,7 @@ def run_sweep(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_CACHE,
                                   "vmap fast path only" + (f"; {reason}" if reason else "") + ")")
     table = [{"index": p.index} | p.values | rows[p.index] for p in points]
     tol_field = envelope_field(cfg)
-    if tol_field is not None:
+    if tol_field is not None and any(_is_number(r.get("cycle_time")) for r in table):  # (metrics may leave it out)
         table, moved = tolerance_envelope(table, tol_field, list(cfg.sweep.parameters))
         stats["tolerance_envelope"] = {"field": tol_field, "moved": moved}
         log(f"tolerance envelope over {tol_field}: {moved} of {len(table)} points run the faster plan of a tighter "
