@@ -76,19 +76,18 @@ def tolerance_envelope(rows: list[dict], field: str, fields: list[str]) -> tuple
     moved = 0
     for members in groups.values():
         members.sort(key=lambda i: rows[i][field])
-        best = None  # the fastest row of the tighter tolerances seen so far
+        best = None  # the fastest row of the tolerances seen so far (this block's included)
         start = 0
         while start < len(members):  # one block of equal tolerances at a time
             stop = start + 1
             while stop < len(members) and rows[members[stop]][field] == rows[members[start]][field]:
                 stop += 1
             block = members[start:stop]
+            best = min(block + ([best] if best is not None else []), key=lambda j: rows[j]["cycle_time"])
             for i in block:
-                fastest = min(block + ([best] if best is not None else []), key=lambda j: rows[j]["cycle_time"])
-                kept = i if rows[i]["cycle_time"] <= rows[fastest]["cycle_time"] else fastest
+                kept = i if rows[i]["cycle_time"] <= rows[best]["cycle_time"] else best
                 out[i] = _kept_row(rows[i], rows[kept], field, fields)
                 moved += kept != i
-            best = min(block + ([best] if best is not None else []), key=lambda j: rows[j]["cycle_time"])
             start = stop
     return out, moved
 
@@ -97,7 +96,7 @@ def _kept_row(own: dict, kept: dict, field: str, fields: list[str]) -> dict:
     """``own``'s swept values and bookkeeping with ``kept``'s scalars (module docstring)."""
     row = {k: v for k, v in own.items() if k in fields or k in _BOOKKEEPING}
     for k, v in kept.items():
-        if k in row or k in fields or k in _BOOKKEEPING or k in (OWN_CYCLE_TIME, PLANNED_AT):
+        if k in row:  # (own's swept values and bookkeeping)
             continue
         row[k] = 0.0 if (kept is not own and k.startswith("d_") and k.endswith("/d_eps")) else v
     row[OWN_CYCLE_TIME] = own["cycle_time"]
