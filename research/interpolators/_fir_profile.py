@@ -234,10 +234,14 @@ def profile(start, geo, block, gap, fraction, piece_tv, gaps, delays, joins=None
     delays = np.ascontiguousarray(delays, dtype=np.float64)
     block, gaps = np.ascontiguousarray(block), np.ascontiguousarray(gaps, dtype=np.float64)
     joins = np.zeros(block.size, dtype=bool) if joins is None else np.ascontiguousarray(joins)
-    breaks, lo, coeffs, block = _input_pulses(np.ascontiguousarray(geo, dtype=np.float64), block,
-                                              np.ascontiguousarray(gap), np.ascontiguousarray(fraction, dtype=np.float64),
-                                              np.ascontiguousarray(piece_tv, dtype=np.float64), gaps, joins)
-    vb, vl, vc = breaks, lo, coeffs
+    vb, vl, vc, block = _input_pulses(np.ascontiguousarray(geo, dtype=np.float64), block,
+                                      np.ascontiguousarray(gap), np.ascontiguousarray(fraction, dtype=np.float64),
+                                      np.ascontiguousarray(piece_tv, dtype=np.float64), gaps, joins)
+    Td = 0.0
+    for d in delays.tolist():  # summed in order, as the compiled build did
+        Td += d
+    # the blocks' times first: no filter's input is held once the next one is built (memory)
+    starts, ends, centre = _block_times(vb, block, gaps, Td)
     for k in range(delays.size - 1):
         vb, vl, vc = _moving_average(vb, vl, vc, delays[k])
     # the last filter integrated as it goes: the position, closed by a rest piece of zero length (as
@@ -245,10 +249,6 @@ def profile(start, geo, block, gap, fraction, piece_tv, gaps, delays, joins=None
     # rest (v = a = j = 0), not the last decelerating piece's left limit (sampled trajectories end
     # at rest, ``Trajectory.from_piecewise``)
     pos_breaks, _, position = _filter(vb, vl, vc, delays[-1], start, True)
-    Td = 0.0
-    for d in delays.tolist():  # summed in order, as the compiled build did
-        Td += d
-    starts, ends, centre = _block_times(breaks, block, gaps, Td)
     return starts, ends, pos_breaks, position, centre
 
 
@@ -413,7 +413,8 @@ def _filter_rows(breaks, lo, coeffs, delay, initial, integrate, D):
     same order as axis-innermost loops)."""
     K, _, A = coeffs.shape
     # one pass of the merge (no merged arrays kept) fills the new pieces of positive length into
-    # arrays sized for all ``2 K + 1`` (a view of them returned). An empty piece is never evaluated
+    # arrays sized for all ``2 K + 1`` (a view of them returned, a copy where more than 1/8 is
+    # unused: measured, the first of two filters keeps ~40 %). An empty piece is never evaluated
     # (a right search takes the next piece), integrates to 0, and the next filter's pieces that
     # would take their coefficients from it are empty too; the breaks are the same values, the
     # function the same. The merged breaks never decrease, from ``breaks[0]`` to ``breaks[K] + T``:
@@ -483,8 +484,8 @@ def _filter_rows(breaks, lo, coeffs, delay, initial, integrate, D):
                 out[n_out, m, a] = 0.0
         out_breaks[n_out + 1], out_lo[n_out + 1] = out_breaks[n_out], out_lo[n_out]
         n_out += 1
-    if integrate and 8 * n_out < 7 * cap:  # many empty pieces (the raw pulses of one filter): the
-        # profile kept is not held in a buffer sized for all
+    if 8 * n_out < 7 * cap:  # many empty pieces (raw pulses, pulses shorter than the delay): what
+        # is kept (the profile, or the next filter's input) is not held in a buffer sized for all
         return out_breaks[: n_out + 1].copy(), out_lo[: n_out + 1].copy(), out[:n_out].copy()
     return out_breaks[: n_out + 1], out_lo[: n_out + 1], out[:n_out]
 

@@ -265,3 +265,37 @@ def test_plan_holds_its_profile_inputs_within_their_float_count(arcs):
                                                                 p.piece_tv, p.gaps, p.delays)))
     t = np.linspace(float(pos.start), float(pos.end), 500)
     np.testing.assert_allclose(pos.evaluate_numpy(t), np.asarray(pos_j(jnp.asarray(t))), atol=1e-9)
+
+
+def test_profile_build_holds_no_oversized_buffer_and_no_spent_input():
+    """Memory of one exact profile build (issue "a faster, near-optimal FIR planner": memory per
+    segment). On a plan of 2,000 short lines through two filters, the build's peak traced memory is
+    at most the input pulses + the first filter's pieces + 8/7 of the position's (each counted
+    here from the shapes the stages return, called one by one) + 64 kB: a filter's input is not
+    held once the next one is built, and a buffer sized for all ``2 K + 1`` merged pieces is kept
+    only where it is more than 7/8 used (here the first filter keeps about half)."""
+    import tracemalloc
+
+    from research.interpolators import fir
+
+    steps = np.random.default_rng(11).uniform(-1.0, 1.0, (2000, 2))
+    tp = ToolPath.from_polyline(Polyline(np.cumsum(np.vstack([[0.0, 0.0], steps]), axis=0)))
+    d = np.array([0.06, 0.03])
+    inp = fir.plan_fir(tp, 150.0, tuple(d), 0.05).profile
+    t = inp.pieces.table
+    args = (tp.start, t.geo, t.block, t.gap, inp.fraction, inp.piece_tv, inp.gaps, d, t.joins)
+    joins = np.zeros(t.block.size, dtype=bool) if t.joins is None else t.joins
+    b0, l0, c0, _ = _fir_profile._input_pulses(t.geo, t.block, t.gap, inp.fraction, inp.piece_tv, inp.gaps, joins)
+    b1, l1, c1 = _fir_profile._moving_average(b0, l0, c0, d[0])
+    _, _, breaks, coeffs, _ = _fir_profile.profile(*args)  # warm (compiled)
+    size = lambda *xs: sum(x.size * x.itemsize for x in xs)  # noqa: E731  (what the arrays show, not their buffers)
+    bound = size(b0, l0, c0) + size(b1, l1, c1) + 8 / 7 * size(breaks, breaks, coeffs) + 64e3
+    assert 8 * c1.shape[0] < 7 * (2 * c0.shape[0] + 1)  # the first filter's buffer is mostly unused here
+    b0 = l0 = c0 = b1 = l1 = c1 = breaks = coeffs = None
+    tracemalloc.start()
+    try:
+        _fir_profile.profile(*args)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak <= bound, (peak, bound)
