@@ -51,7 +51,8 @@ def corner_errors(traj: Trajectory, path: Polyline, candidates: int = 8) -> np.n
     """Distance [mm] from each interior vertex of ``path`` to the trajectory, shape ``(M - 1,)``.
 
     The trajectory samples nearest to each vertex are found with a KD-tree; with an exact profile
-    each is refined on ``[t_i - Ts, t_i + Ts]``.
+    those that are local minima of the sampled distance to the vertex are refined on
+    ``[t_i - Ts, t_i + Ts]`` (the others lie on a slope down to a sample next to them).
     """
     vertices = path.corners
     if vertices.shape[0] == 0:
@@ -63,11 +64,20 @@ def corner_errors(traj: Trajectory, path: Polyline, candidates: int = 8) -> np.n
     if traj.exact is None:
         return d.min(axis=1)
     t = np.asarray(traj.t)
-    lo, hi = t[np.maximum(idx - 1, 0)], t[np.minimum(idx + 1, q.shape[0] - 1)]
-    target = np.repeat(vertices[:, None, :], k, axis=1)
-    f = traj.evaluator()
-    refined = _golden_min(lambda s: np.linalg.norm(f(s) - target, axis=-1), lo, hi)
-    return np.minimum(d, refined).min(axis=1)
+    n = q.shape[0]
+    # refined: the candidates that are local minima of the sampled distance to their vertex (the
+    # others lie on a slope down to a neighbour, whose own bracket holds the minimum between them)
+    before = np.linalg.norm(q[np.maximum(idx - 1, 0)] - vertices[:, None, :], axis=-1)
+    after = np.linalg.norm(q[np.minimum(idx + 1, n - 1)] - vertices[:, None, :], axis=-1)
+    row, col = np.nonzero((d <= before) & (d <= after))
+    best = d.min(axis=1)
+    if row.size:
+        i = idx[row, col]
+        lo, hi = t[np.maximum(i - 1, 0)], t[np.minimum(i + 1, n - 1)]
+        f = traj.evaluator()
+        refined = _golden_min(lambda s: np.linalg.norm(f(s) - vertices[row], axis=-1), lo, hi)
+        np.minimum.at(best, row, refined)
+    return best
 
 
 def peak_axis_values(traj: Trajectory, nu: int) -> np.ndarray:

@@ -42,6 +42,27 @@ def test_distance_exact_against_brute_force(dim):
     np.testing.assert_allclose(np.linalg.norm(q - closest, axis=1), d, atol=1e-12)
 
 
+@pytest.mark.parametrize("nearest", [1, 3, 8])
+def test_distance_exact_with_few_or_many_candidates_per_query(monkeypatch, nearest):
+    """``project`` takes the ``_NEAREST_CENTRES`` nearest sub-segment centres of each point in one
+    query and a ball query where more lie within its search radius: exact either way (brute force
+    over every segment). Here a fan of 40 short spokes out of one point (each query near the hub
+    has dozens of centres within its radius) and a waterline-like stack of 0.2 mm-apart rings."""
+    import research.paths.polyline as polyline
+
+    monkeypatch.setattr(polyline, "_NEAREST_CENTRES", nearest)
+    rng = np.random.default_rng(3)
+    ang = np.sort(rng.uniform(0.0, 2 * np.pi, 40))
+    fan = np.concatenate([[[0.0, 0.0, 0.0], [np.cos(a), np.sin(a), 0.0]] for a in ang] + [[[0.0, 0.0, 0.0]]])
+    s = np.linspace(0.0, 2 * np.pi, 400)
+    rings = np.concatenate([np.stack([(5 + 0.01 * k) * np.cos(s), (5 + 0.01 * k) * np.sin(s), np.full(s.size, -0.2 * k)],
+                                     axis=1) for k in range(4)])
+    for pts, scale in ((fan, 0.3), (rings, 0.15)):
+        path = Polyline(pts)
+        q = pts[rng.integers(0, len(pts), 400)] + rng.normal(scale=scale, size=(400, 3))
+        np.testing.assert_allclose(path.distance(q), brute_distance(path, q), atol=1e-12)
+
+
 def test_one_dimensional_path():
     p = Polyline([[0.0], [10.0], [4.0]], axes=("x",))
     np.testing.assert_allclose(p.turning_angles, [np.pi])
