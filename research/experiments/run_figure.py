@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.patches import Circle
 
-from research.experiments.plot_style import AXIS_COLOURS, figure
+from research.experiments.plot_style import AXIS_COLOURS, STYLE, figure
 from research.paths import Polyline
 
 
@@ -18,6 +18,40 @@ from research.paths import Polyline
 #: tests every candidate place against every point (its documentation: "can be slow for plots with
 #: large amounts of data"); measured 9.7 s of a 260,000-sample run's figure.
 BEST_LEGEND_MAX_SAMPLES = 20_000
+
+
+def _envelope(t: np.ndarray, y: np.ndarray, bins: int) -> tuple[np.ndarray, np.ndarray]:
+    """A time series reduced for drawing: of each of ``bins`` consecutive stretches of equal sample
+    count, its first, last, smallest and largest samples, in time order (the M4 reduction of Jugel
+    et al., VLDB 2014). Drawn ``bins`` stretches across, it is the full series' picture (every
+    stretch spans the same pixel column's extremes and joins its neighbours as the full line does);
+    at most ``4 bins`` samples. Series of up to ``4 bins`` samples are returned as they are."""
+    n = t.size
+    if n <= 4 * bins:
+        return t, y
+    w = -(-n // bins)  # samples per stretch (the last one shorter)
+    padded = np.concatenate([y, np.full(bins * w - n, y[-1])]).reshape(bins, w)
+    base = np.arange(bins) * w
+    keep = np.concatenate([base, np.minimum(base + w - 1, n - 1), base + padded.argmin(axis=1),
+                           base + padded.argmax(axis=1)])
+    keep = np.unique(np.minimum(keep, n - 1))
+    return t[keep], y[keep]
+
+
+def _near(q: np.ndarray, centre: np.ndarray, r: float) -> np.ndarray:
+    """The samples of ``q`` ``(N, d)`` within the box ``centre +- r`` in its first two axes, with one
+    neighbour each side of every run of them (the lines leave the box as drawn in full), runs
+    apart separated by a row of NaN (no line drawn between them)."""
+    inside = np.all(np.abs(q[:, :2] - centre[:2]) <= r, axis=1)
+    inside[:-1] |= inside[1:]
+    inside[1:] |= inside[:-1].copy()
+    idx = np.flatnonzero(inside)
+    if not idx.size:
+        return q[:0]
+    gap = np.flatnonzero(np.diff(idx) > 1) + 1
+    parts = np.split(idx, gap)
+    nan = np.full((1, q.shape[1]), np.nan)
+    return np.concatenate([x for p in parts for x in (q[p], nan)][:-1])
 
 
 def plot_run(path: Polyline, runs: list, title: str = ""):
@@ -30,6 +64,8 @@ def plot_run(path: Polyline, runs: list, title: str = ""):
         title: figure title.
     """
     fig, ax = figure(2, 2, figsize=(10, 7))
+    # time series drawn by their M4 envelope over one stretch per pixel column of the saved figure
+    bins = int(np.ceil(fig.get_figwidth() * STYLE["savefig.dpi"]))
     label0, plan0, traj0, metrics0 = runs[0]
     samples = sum(np.asarray(traj.t).size for _, _, traj, _ in runs) + path.points.shape[0]
     best = "best" if samples <= BEST_LEGEND_MAX_SAMPLES else "upper right"
@@ -49,7 +85,7 @@ def plot_run(path: Polyline, runs: list, title: str = ""):
         r = max(4 * max(float(m.corner_errors[0]) for *_, m in runs), 1e-3)
         a.plot(path.points[:, 0], path.points[:, 1], "k--", lw=0.8, label="G01 path")
         for i, (label, _, traj, m) in enumerate(runs):
-            q = np.asarray(traj.q)
+            q = _near(np.asarray(traj.q), c, 2 * r)  # the samples in (and around) the zoom
             a.plot(q[:, 0], q[:, 1], f"C{i}.-", ms=2, label=f"{label}: {float(m.corner_errors[0]) * 1e3:.1f} um")
             a.add_patch(Circle(c[:2], float(m.corner_errors[0]), fill=False, ls=":", color=f"C{i}"))
         overlap = f", T_k = {float(plan0.overlaps[0]) * 1e3:.1f} ms" if plan0 is not None else ""
@@ -62,21 +98,22 @@ def plot_run(path: Polyline, runs: list, title: str = ""):
         a.axis("off")
     a = ax[1, 0]
     for i, (label, _, traj, m) in enumerate(runs):
-        a.plot(traj.t, traj.feed, f"C{i}" if several else "k", label=f"{label}: {m.cycle_time:.4f} s" if several else "feed |v|")
+        a.plot(*_envelope(np.asarray(traj.t), np.asarray(traj.feed), bins), f"C{i}" if several else "k",
+               label=f"{label}: {m.cycle_time:.4f} s" if several else "feed |v|")
+    t0 = np.asarray(traj0.t)
     if not several:
         for k, name in enumerate(traj0.axes):
-            a.plot(traj0.t, np.asarray(traj0.v)[:, k], color=AXIS_COLOURS.get(name), lw=0.8, label=f"v_{name}")
+            a.plot(*_envelope(t0, np.asarray(traj0.v)[:, k], bins), color=AXIS_COLOURS.get(name), lw=0.8, label=f"v_{name}")
     a.set(xlabel="time [s]", ylabel="velocity [mm/s]",
           title="feed (legend: cycle time)" if several else f"feed and axis velocity; cycle time {metrics0.cycle_time:.4f} s")
     a.legend(loc=best)
     a = ax[1, 1]
-    t0 = np.asarray(traj0.t)
     for k, name in enumerate(traj0.axes):
-        a.plot(t0, np.asarray(traj0.a)[:, k], color=AXIS_COLOURS.get(name), label=f"a_{name}")
+        a.plot(*_envelope(t0, np.asarray(traj0.a)[:, k], bins), color=AXIS_COLOURS.get(name), label=f"a_{name}")
     a.set(xlabel="time [s]", ylabel="acceleration [mm/s^2]", title=f"{label0}: axis acceleration (solid), jerk (dotted)")
     b = a.twinx()
     for k, name in enumerate(traj0.axes):
-        b.plot(t0, np.asarray(traj0.j)[:, k], color=AXIS_COLOURS.get(name), lw=0.5, ls=":")
+        b.plot(*_envelope(t0, np.asarray(traj0.j)[:, k], bins), color=AXIS_COLOURS.get(name), lw=0.5, ls=":")
     b.set_ylabel("jerk [mm/s^3] (dotted)")
     b.grid(False)
     a.legend(loc=best)

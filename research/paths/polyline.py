@@ -18,6 +18,8 @@ from research.errors import PathError
 #: a 24k-chord waterline program (benchmarks/README.md): 2 / 4 / 8 / 16 / 32 take 1.30 / 0.65 / 0.62
 #: / 0.90 / 1.47 s against 1.45 s for ball queries alone; at 8, 19 points needed the ball query
 _NEAREST_CENTRES = 8
+#: query points projected at once by :meth:`Polyline.project` (its memory is this many points' worth)
+_CHUNK = 1 << 16
 
 DEFAULT_AXES = ("x", "y", "z")
 
@@ -137,6 +139,13 @@ class Polyline:
         q = np.asarray(query, dtype=np.float64).reshape(-1, self.dim)
         if not np.all(np.isfinite(q)):
             raise PathError("Polyline.project: query points contain NaN or inf")
+        if len(q) > _CHUNK:  # in chunks: the candidate arrays take ~200 bytes a point
+            parts = [self._project(q[i:i + _CHUNK]) for i in range(0, len(q), _CHUNK)]
+            return tuple(np.concatenate(x) for x in zip(*parts))
+        return self._project(q)
+
+    def _project(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`project` of finite points ``q`` ``(N, d)``."""
         tree, owner, h = self._subsegment_tree()
         # the K nearest sub-segment centres in one vectorized query (no per-point lists)
         K = min(_NEAREST_CENTRES, tree.n)

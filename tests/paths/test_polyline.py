@@ -51,6 +51,7 @@ def test_distance_exact_with_few_or_many_candidates_per_query(monkeypatch, neare
     import research.paths.polyline as polyline
 
     monkeypatch.setattr(polyline, "_NEAREST_CENTRES", nearest)
+    monkeypatch.setattr(polyline, "_CHUNK", 97)  # and in chunks (400 points: four and a remainder)
     rng = np.random.default_rng(3)
     ang = np.sort(rng.uniform(0.0, 2 * np.pi, 40))
     fan = np.concatenate([[[0.0, 0.0, 0.0], [np.cos(a), np.sin(a), 0.0]] for a in ang] + [[[0.0, 0.0, 0.0]]])
