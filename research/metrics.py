@@ -175,9 +175,12 @@ def summarize(traj: Trajectory, path: Polyline) -> MotionMetrics:
 def _top_local_extrema(x: np.ndarray, count: int) -> np.ndarray:
     """Indices of the ``count`` largest local maxima of a 1-D array (plateaus included)."""
     inner = np.flatnonzero((x[1:-1] >= x[:-2]) & (x[1:-1] >= x[2:])) + 1
-    ends = [i for i in (0, x.size - 1) if x.size]
-    idx = np.unique(np.concatenate([inner, ends]).astype(int))
-    return idx[np.argsort(x[idx])[::-1][:count]]
+    # ascending and distinct already (the ends are not among ``inner``, which lies in 1 .. n - 2)
+    idx = np.concatenate([[0], inner, [x.size - 1]] if x.size > 1 else [np.arange(x.size)]).astype(np.int64)
+    if idx.size <= count:
+        return idx[np.argsort(x[idx])[::-1]]
+    top = np.argpartition(x[idx], idx.size - count)[idx.size - count:]  # the count largest, unordered
+    return idx[top[np.argsort(x[idx[top]])[::-1]]]
 
 
 def _golden_min(f, lo: np.ndarray, hi: np.ndarray, steps: int = 60) -> np.ndarray:
