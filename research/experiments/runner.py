@@ -137,6 +137,7 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
             buf = io.BytesIO()
             runs[0][2].save(buf)
             files["trajectory.npz"] = buf.getvalue()
+            buf = None  # (its own copy of the bytes: hundreds of MB on a long program)
         if "drive_model.json" in ev.objects:
             files["drive_model.json"] = ev.objects["drive_model.json"]
         if want_figure:
@@ -158,8 +159,11 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
     # files of a stored entry are read back through their manifest checksums (never served damaged)
     stored = (lambda name: entry.read_bytes(name) if entry.file(name) else None) if entry else files.get
     written = ["results.json"]
-    for name in ("trajectory.npz", "arrays.npz", "drive_model.json"):
-        data = stored(name) if entry or name != "arrays.npz" else _npz(ev.arrays)
+    for name in ("trajectory.npz", "arrays.npz", "drive_model.json"):  # large: copied in pieces
+        if entry:
+            data = entry.chunks(name) if entry.file(name) else None
+        else:
+            data = files.get(name) if name != "arrays.npz" else _npz(ev.arrays)
         if data:
             atomic_write(out / name, data)
             written.append(name)

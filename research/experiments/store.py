@@ -97,6 +97,30 @@ class Entry:
                              "run `python -m research store gc` and re-run")
         return data
 
+    def chunks(self, name: str, size: int = 1 << 20):
+        """The bytes of file ``name`` in pieces of ``size``, checked against its manifest checksum as
+        they are read: a generator for :func:`~research.experiments.store_io.atomic_write`, which
+        then never holds the whole file (a long program's ``trajectory.npz`` is hundreds of MB).
+
+        Raises (once the whole file has been read, or at once if it cannot be opened):
+            StoreError: as :meth:`read_bytes`; the target written from it is then left as it was.
+        """
+        meta = self.manifest.get("files", {}).get(name)
+        if meta is None:
+            raise StoreError(f"{self.folder}: the entry has no file {name!r} (files: {sorted(self.manifest.get('files', {}))})")
+        digest, total = hashlib.sha256(), 0
+        try:
+            with open(self.folder / name, "rb") as f:
+                while piece := f.read(size):
+                    digest.update(piece)
+                    total += len(piece)
+                    yield piece
+        except OSError as e:
+            raise StoreError(f"{self.folder / name}: cannot read stored file ({e.strerror or e})") from None
+        if total != meta["bytes"] or digest.hexdigest() != meta["sha256"]:
+            raise StoreError(f"{self.folder / name}: stored file changed since it was written (checksum mismatch); "
+                             "run `python -m research store gc` and re-run")
+
     def arrays(self) -> dict[str, np.ndarray]:
         """The ``arrays.npz`` of the entry (empty when it has none), checksum-verified."""
         if "arrays.npz" not in self.manifest.get("files", {}):
@@ -163,6 +187,7 @@ class ResultStore:
             buf = io.BytesIO()
             np.savez(buf, **{k: np.asarray(v) for k, v in arrays.items()})
             contents["arrays.npz"] = buf.getvalue()
+            buf = None  # (its own copy)
         for name, data in (files or {}).items():
             _check_name(final, name)
             contents[name] = bytes(data)
@@ -321,6 +346,19 @@ def _self_digest(doc: dict) -> str:
     return hashlib.sha256(json.dumps(body, sort_keys=True).encode()).hexdigest()
 
 
+def _digest(path: Path, keep: bool = False, size: int = 1 << 20) -> tuple[int, str, bytes | None]:
+    """``(bytes, SHA-256 hex digest, the bytes if keep else None)`` of a file read in pieces of
+    ``size`` (a long program's ``trajectory.npz`` is hundreds of MB: not held to be checked)."""
+    digest, total, kept = hashlib.sha256(), 0, []
+    with open(path, "rb") as f:
+        while piece := f.read(size):
+            digest.update(piece)
+            total += len(piece)
+            if keep:
+                kept.append(piece)
+    return total, digest.hexdigest(), b"".join(kept) if keep else None
+
+
 def _load(key: str, folder: Path) -> tuple[Entry | None, str]:
     """``(entry, "")`` if ``folder`` holds a complete entry matching its manifest, else ``(None, reason)``.
 
@@ -349,12 +387,12 @@ def _load(key: str, folder: Path) -> tuple[Entry | None, str]:
             except StoreError:
                 return None, f"{MANIFEST}: bad file name {name!r}"
             try:
-                data = (folder / name).read_bytes()
+                size, digest, data = _digest(folder / name, keep=name == "record.json")
             except FileNotFoundError:
                 return None, f"{name} is missing"
-            if len(data) != meta["bytes"]:
-                return None, f"{name} has {len(data)} bytes, the manifest says {meta['bytes']} (truncated?)"
-            if hashlib.sha256(data).hexdigest() != meta["sha256"]:
+            if size != meta["bytes"]:
+                return None, f"{name} has {size} bytes, the manifest says {meta['bytes']} (truncated?)"
+            if digest != meta["sha256"]:
                 return None, f"{name} does not match its SHA-256 checksum"
             if name == "record.json":
                 try:

@@ -16,8 +16,10 @@ from research.errors import StoreError
 TMP_SUFFIX = ".tmp"
 
 
-def atomic_write(target: str | Path, data: bytes) -> Path:
-    """Write ``data`` through a temporary file in the same folder, fsync, then rename: never a half-written file.
+def atomic_write(target: str | Path, data) -> Path:
+    """Write ``data`` (bytes, or an iterable of bytes written in turn) through a temporary file in the
+    same folder, fsync, then rename: never a half-written file (an iterable that raises leaves the
+    target as it was).
 
     Raises:
         StoreError: the folder cannot be written (full disk, permissions); the temporary file is removed.
@@ -28,7 +30,8 @@ def atomic_write(target: str | Path, data: bytes) -> Path:
         target.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=TMP_SUFFIX)
         with os.fdopen(fd, "wb") as f:
-            f.write(data)
+            for piece in (data,) if isinstance(data, (bytes, bytearray, memoryview)) else data:
+                f.write(piece)
             f.flush()
             os.fsync(f.fileno())
         os.chmod(tmp, 0o644)

@@ -212,3 +212,24 @@ def test_verify_and_gc_find_and_remove_damage(tmp_path):
     removed, stale = gc_store(tmp_path)
     assert len(removed) == 2 and stale == []
     assert verify_store(tmp_path) == (2, []) and store.get(keys[1]) is None and store.get(keys[0]).record == {"i": 0}
+
+
+def test_stored_file_copied_in_pieces_is_checked_and_never_half_written(tmp_path):
+    """``Entry.chunks`` through ``atomic_write``: the copy of a stored file equals it; a stored file
+    changed after the entry was read (same size, one byte flipped) raises StoreError once it has
+    been read through, and the target keeps its old contents with no temporary file left."""
+    from research.experiments.store_io import atomic_write
+
+    store = ResultStore(tmp_path / "s")
+    data = bytes(range(256)) * 9000  # 2.3 MB: three pieces of 1 MiB
+    e = store.put(result_key({"m": 2}), {"v": 1}, None, {"trajectory.npz": data})
+    target = tmp_path / "out" / "trajectory.npz"
+    atomic_write(target, e.chunks("trajectory.npz"))
+    assert target.read_bytes() == data
+    f = e.folder / "trajectory.npz"
+    f.chmod(0o644)
+    f.write_bytes(data[:5] + bytes([data[5] ^ 1]) + data[6:])
+    with pytest.raises(StoreError, match="checksum mismatch"):
+        atomic_write(target, e.chunks("trajectory.npz"))
+    assert target.read_bytes() == data
+    assert sorted(p.name for p in target.parent.iterdir()) == ["trajectory.npz"]
