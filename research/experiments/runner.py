@@ -79,8 +79,13 @@ class RunResult:
 
 
 def hashed_config(cfg: ExperimentConfig) -> dict:
-    """The part of a config that sets its results (cosmetic fields dropped), JSON-ready."""
-    return cfg.model_dump(mode="json", exclude=set(COSMETIC))
+    """The part of a config that sets its results (cosmetic fields dropped), JSON-ready. On a G-code
+    path it also says which interpolators take the program's F words (``feed_mm_per_s`` not
+    written): a written 250 mm/s and the default 250 mm/s run different feeds there."""
+    doc = cfg.model_dump(mode="json", exclude=set(COSMETIC))
+    if cfg.path is not None and getattr(cfg.path, "gcode", None) is not None:
+        doc["program_feeds"] = ["feed_mm_per_s" not in ic.model_fields_set for ic in cfg.interpolators]
+    return doc
 
 
 def config_key(cfg: ExperimentConfig, base: Path, *, kind: str = "point") -> str:

@@ -133,7 +133,8 @@ def run_sweep(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_CACHE,
             stats["cached"] += 1
             bar.update(1)
         else:
-            tasks.append((p.index, key, p.config.model_dump(mode="json")))
+            # the point as written (a default left out stays so: the program's F words on a G-code path)
+            tasks.append((p.index, key, p.config.model_dump(mode="json", exclude_unset=True)))
     if tasks:
         general_engine = engine if engine in ("dask", "serial") else ("dask" if (scheduler or len(tasks) > 2) else "serial")
         log(f"general path: {len(tasks)} points to compute ({general_engine}"

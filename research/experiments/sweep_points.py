@@ -57,27 +57,42 @@ def parse_field(field: str) -> list[str | int]:
     return parts
 
 
-def set_field(raw: dict, field: str, value) -> dict:
-    """A copy of ``raw`` with ``field`` set to ``value`` (raises ``KeyError``/``IndexError`` if absent)."""
+def set_field(raw: dict, field: str, value, template: dict | None = None) -> dict:
+    """A copy of ``raw`` with ``field`` set to ``value`` (raises ``KeyError``/``IndexError`` if absent).
+
+    ``template``: the same config with every field (its defaults too); a field ``raw`` leaves out
+    (a default the config did not write) is added where ``template`` has it, a table on the way as
+    an empty one (its other fields stay defaults, not written), a list as the template's."""
     parts = parse_field(field)
     out = _copy(raw)
-    node = out
+    node, tnode = out, template
     for i, part in enumerate(parts):
         last = i == len(parts) - 1
         if isinstance(part, str) and isinstance(node, list) and len(node) == 1:
             node = node[0]  # interpolator.x on a single interpolator
+            tnode = tnode[0] if isinstance(tnode, list) and len(tnode) == 1 else None
         if isinstance(part, int):
             if not isinstance(node, list) or not 0 <= part < len(node):
                 raise IndexError(f"index [{part}] out of range")
         elif not isinstance(node, dict) or part not in node:
-            raise KeyError(part)
+            if not (isinstance(node, dict) and isinstance(tnode, dict) and tnode.get(part) is not None):
+                raise KeyError(part)
+            node[part] = {} if isinstance(tnode[part], dict) else _copy(tnode[part])
         if last:
             node[part] = value
         else:
             if node[part] is None:
                 raise KeyError(part)
             node = node[part]
+            tnode = _child(tnode, part)
     return out
+
+
+def _child(tnode, part):
+    """``tnode[part]`` of a template node, or None where it has none."""
+    if isinstance(part, int):
+        return tnode[part] if isinstance(tnode, list) and 0 <= part < len(tnode) else None
+    return tnode.get(part) if isinstance(tnode, dict) else None
 
 
 def expand(cfg: ExperimentConfig, file: str | Path) -> list[Point]:
@@ -98,14 +113,18 @@ def expand(cfg: ExperimentConfig, file: str | Path) -> list[Point]:
         combos = list(zip(*values.values()))
     else:
         combos = list(itertools.product(*values.values()))
-    base = cfg.model_dump(mode="json", exclude={"sweep"}, exclude_none=True)
+    # each point is the config as written (the fields it sets) with the swept ones set: a default it
+    # did not write stays unwritten (stages read what a config sets: a G-code program's own F words
+    # unless [interpolator] sets feed_mm_per_s), the full config only says which fields exist
+    template = cfg.model_dump(mode="json", exclude={"sweep"}, exclude_none=True)
+    base = cfg.model_dump(mode="json", exclude={"sweep"}, exclude_none=True, exclude_unset=True)
     for f in fields:  # a field that does not exist is an error of the config, not of a point
         try:
-            set_field(base, f, values[f][0])
+            set_field(base, f, values[f][0], template)
         except ValueError as e:
             raise ConfigError(f"{file}: key 'sweep.parameters.\"{f}\"': {e}") from None
         except (KeyError, IndexError) as e:
-            close = difflib.get_close_matches(f, field_names(base), n=1, cutoff=0.6)
+            close = difflib.get_close_matches(f, field_names(template), n=1, cutoff=0.6)
             raise ConfigError(f"{file}: key 'sweep.parameters.\"{f}\"': the config has no field {f!r} "
                               f"({e.args[0] if e.args else e})" + (f"; did you mean {close[0]!r}?" if close else "")
                               + "; fields are written as in the config, e.g. 'interpolator.delays_ms[0]'") from None
@@ -113,7 +132,7 @@ def expand(cfg: ExperimentConfig, file: str | Path) -> list[Point]:
     for i, combo in enumerate(combos):
         raw = base
         for f, v in zip(fields, combo):
-            raw = set_field(raw, f, v)
+            raw = set_field(raw, f, v, template)
         point_values = dict(zip(fields, combo))
         try:
             points.append(Point(i, point_values, validate(raw, file)))

@@ -235,3 +235,41 @@ def test_sweep_axis_labels_come_from_the_schema(tmp_path):
         ModeConfig.model_fields["frequency_hz"].description + " (mode 2, y)")
     assert field_label("drive.modes[0].damping", cfg) == "damping ratio [-] (mode 1, x)"
     assert field_label("no.such_field", cfg) == "no.such_field"
+
+
+def test_sweep_points_keep_the_program_feeds_and_the_fields_left_unwritten(tmp_path):
+    """A sweep point is the config as written with the swept fields set: on a G-code path without
+    ``feed_mm_per_s`` every point runs the program's F words (20 and 10 mm/s, from F1200 / F600
+    mm/min), as ``run`` does -- not the field's default 250 mm/s -- and a swept field the config
+    leaves at its default (``sample_period_ms``) is set on each point all the same. The points'
+    peak feeds stay at the program's 20 mm/s."""
+    (tmp_path / "part.nc").write_text("G21 G90\nG1 X10 F1200\nG1 X10 Y10 F600\n")
+    base = ('name = "g"\nreproduces = "test"\n[path]\ngcode = "part.nc"\n[interpolator]\ndelays_ms = [50.0, 30.0]\n'
+            'tolerance_um = 100.0\n[output]\nfigure = false\n')
+    f = write(tmp_path, '[sweep]\n[sweep.parameters]\n"interpolator.tolerance_um" = [50.0, 200.0]\n'
+                        '"interpolator.sample_period_ms" = [0.5]\n', base=base)
+    cfg, _ = load_config(f)
+    points = expand(cfg, f)
+    assert all("feed_mm_per_s" not in p.config.interpolators[0].model_fields_set for p in points)
+    assert [p.config.interpolators[0].sample_period_ms for p in points] == [0.5, 0.5]
+    res = quiet(f, tmp_path)
+    peaks = list(res.column("peak_feed"))
+    assert len(peaks) == 2 and max(peaks) <= 20.0 * (1 + 1e-9), peaks
+
+
+def test_store_key_tells_program_feeds_from_a_written_default(tmp_path):
+    """On a G-code path a written ``feed_mm_per_s = 250`` (every block at 250 mm/s) and the field
+    left out (the program's F words) are different runs: different store keys, and the second run is
+    computed, not served the first one's feeds."""
+    from research.experiments import run_experiment
+
+    (tmp_path / "part.nc").write_text("G21 G90\nG1 X10 F1200\nG1 X10 Y10 F600\n")
+    base = ('name = "g"\nreproduces = "test"\n[path]\ngcode = "part.nc"\n[interpolator]\ndelays_ms = [50.0, 30.0]\n'
+            'tolerance_um = 100.0\n[output]\nfigure = false\n')
+    own = run_experiment(write(tmp_path, "", base=base, name="a.toml"), cache_dir=tmp_path / "c",
+                         figures_dir=tmp_path / "f", log=lambda s: None)
+    written = run_experiment(write(tmp_path, "", base=base.replace("[interpolator]\n", "[interpolator]\nfeed_mm_per_s = 250.0\n"),
+                                   name="b.toml"), cache_dir=tmp_path / "c", figures_dir=tmp_path / "f", log=lambda s: None)
+    assert own.key != written.key and not written.cached
+    np.testing.assert_allclose(own.record["details"]["fir"]["feeds"], [20.0, 10.0])
+    np.testing.assert_allclose(written.record["details"]["fir"]["feeds"], [250.0, 250.0])
