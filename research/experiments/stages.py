@@ -115,16 +115,24 @@ def _limits_dict(limits) -> dict:
     return {k: getattr(limits, k).tolist() for k in ("velocity", "acceleration", "jerk")}
 
 
+#: segments from which the sigmoid stage shows a progress bar over its moves
+_SIGMOID_BAR = 50
+
+
 def _sigmoid_moves(ic, path, pauses=None):
     """Each segment a rest-to-rest DiMarco move (:func:`~research.interpolators.mtp_motion`), one after
     the other, sampled on one grid ``k Ts``: ``q = P_k + u_k s_k(t - t_k)``. A move ends once inside
     its settle band (``settle_tol`` = 0.1 um of mtp_motion), so consecutive moves join within 0.1 um.
     ``pauses`` ``(M + 1,)`` [s] (NaN: none) delay the moves after each vertex (the samples hold it)."""
+    from tqdm.auto import tqdm
+
     from research.interpolators import mtp_motion
 
+    # each move is its own alpha search (~0.3 s): a bar on programs of many segments
+    lengths = tqdm(path.lengths, desc="sigmoid moves", unit="move", disable=path.n_segments < _SIGMOID_BAR, leave=False)
     moves = [mtp_motion(float(L), ic.feed_mm_per_s, ic.amplitude_mm, ic.frequency_hz,
                         acceleration=ic.acceleration_mm_per_s2, jerk=ic.jerk_mm_per_s3, order=ic.order)
-             for L in path.lengths]
+             for L in lengths]
     durations = np.array([m.duration for m in moves])
     dwell = np.zeros(path.n_segments + 1) if pauses is None else np.nan_to_num(np.asarray(pauses, dtype=np.float64), nan=0.0)
     # move i starts after the moves and dwells before it; starts[M] is the end of the motion (and last dwell)
@@ -133,8 +141,9 @@ def _sigmoid_moves(ic, path, pauses=None):
     t = np.arange(int(np.ceil(starts[-1] / Ts - 1e-9)) + 1) * Ts
     k = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(moves) - 1)
     out = np.zeros((4, t.size, path.dim))
+    first = np.searchsorted(k, np.arange(len(moves) + 1))  # k is non-decreasing: move i's samples are a run
     for i, m in enumerate(moves):
-        on = k == i
+        on = slice(first[i], first[i + 1])
         d = m.derivatives(np.clip(t[on] - starts[i], 0.0, durations[i]))  # held at rest before and after
         for nu in range(4):
             out[nu, on] = (path.points[i] if nu == 0 else 0.0) + d[nu][:, None] * path.directions[i]

@@ -111,15 +111,17 @@ class Blend:
         if not (np.isfinite(self.alpha) and self.alpha > 0):
             raise ParameterError(f"blend time constant alpha must be finite and > 0, got {self.alpha!r}")
 
-    def derivatives(self, t: np.ndarray) -> list[np.ndarray]:
-        """``S, S', S'', S'''`` at ``t`` (exact; Faa di Bruno on ``exp(-g)``, ``g = alpha tau^p``)."""
+    def derivatives(self, t: np.ndarray, orders: int = 4) -> list[np.ndarray]:
+        """``S, S', S'', S'''`` at ``t`` (exact; Faa di Bruno on ``exp(-g)``, ``g = alpha tau^p``): the
+        first ``orders`` of them."""
         on = t >= self.start
         tau = np.where(on, t - self.start, 0.0)
         p = self.order
-        g = [self.alpha * math.perm(p, i) * tau ** (p - i) if i <= p else np.zeros_like(tau) for i in range(4)]
+        g = [self.alpha * math.perm(p, i) * tau ** (p - i) if i <= p else np.zeros_like(tau) for i in range(orders)]
         E = np.exp(-g[0])
-        out = [1.0 - E, g[1] * E, (g[2] - g[1] ** 2) * E, (g[3] - 3 * g[1] * g[2] + g[1] ** 3) * E]
-        return [np.where(on, x, 0.0) for x in out]
+        out = [lambda: 1.0 - E, lambda: g[1] * E, lambda: (g[2] - g[1] ** 2) * E,
+               lambda: (g[3] - 3 * g[1] * g[2] + g[1] ** 3) * E]
+        return [np.where(on, x(), 0.0) for x in out[:orders]]
 
 
 @dataclass(frozen=True)
@@ -140,17 +142,18 @@ class SigmoidMotion:
     order: int = 3
     stop_time: float = 0.0
 
-    def derivatives(self, t) -> np.ndarray:
-        """Position and its first three derivatives at ``t``: shape ``(4,) + t.shape``."""
+    def derivatives(self, t, orders: int = 4) -> np.ndarray:
+        """Position and its first three derivatives at ``t``: shape ``(4,) + t.shape`` (the first
+        ``orders`` of them: ``(orders,) + t.shape``, the position alone for a search on it)."""
         t = np.asarray(t, dtype=np.float64)
-        total = np.zeros((4,) + t.shape)
+        total = np.zeros((orders,) + t.shape)
         for component, blend in self.terms:
             c = component.derivatives(t)
             if blend is None:
-                total += np.stack(c)
+                total += np.stack(c[:orders])
                 continue
-            S = blend.derivatives(t)
-            for k in range(4):  # Leibniz: (c S)^(k) = sum_i C(k, i) c^(i) S^(k - i)
+            S = blend.derivatives(t, orders)
+            for k in range(orders):  # Leibniz: (c S)^(k) = sum_i C(k, i) c^(i) S^(k - i)
                 total[k] += sum(math.comb(k, i) * c[i] * S[k - i] for i in range(k + 1))
         return total
 
@@ -222,8 +225,12 @@ def mtp_motion(
             "no alpha can meet them: lower A or the frequency"
         )
 
-    def build(alpha):
-        return _build(length, feed, amplitude, omega, alpha, order, overshoot_tol, settle_tol)
+    built = {}
+
+    def build(alpha):  # (the searches below ask some alphas twice)
+        if alpha not in built:
+            built[alpha] = _build(length, feed, amplitude, omega, alpha, order, overshoot_tol, settle_tol)
+        return built[alpha]
 
     def has_room(alpha):  # the stop must not start before the move does
         return build(alpha).stop_time >= 0
@@ -274,13 +281,13 @@ def _build(L, m, A, omega, alpha, order, overshoot_tol, settle_tol) -> SigmoidMo
 
     def overshoot(t_stop):
         t = max(t_stop, 0.0) + np.linspace(0.0, 12.0 * scale + 4 * A / m, 601)
-        return _peak(SigmoidMotion(with_stop(t_stop), 0.0).derivatives(t)[0]) - L
+        return _peak(SigmoidMotion(with_stop(t_stop), 0.0).derivatives(t, orders=1)[0]) - L
 
     # latest stop start whose overshoot past L stays within tolerance
     late, early = arrival, arrival - 2.0 * A / m - 12.0 * scale
     if overshoot(late) <= overshoot_tol:
         early = late
-    for _ in range(40):
+    for _ in range(40):  # (bisection: the overshoot is 0 over the early part, flat for a secant)
         if late - early <= 1e-7 * scale:
             break
         mid = 0.5 * (late + early)
