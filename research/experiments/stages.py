@@ -13,6 +13,8 @@ the objects later stages or figures use.
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 
 from research.errors import GCodeError
@@ -103,11 +105,19 @@ def interpolate(ic, path, program_feeds, blocks=None, pauses=None):
     from research.limits import AxisLimits
     from research.optimal import time_optimal
 
-    limits = AxisLimits.fir_envelope(path.dim, ic.feed_mm_per_s, np.asarray(ic.envelope_delays_ms) * 1e-3)
-    res = time_optimal(path, limits, ic.tolerance_um * 1e-3, feed=ic.feed_mm_per_s, window=ic.window,
+    # a G-code program's own feed unless the config writes one, as the FIR stage: its largest F word
+    # (one bound on the whole path; the OCP takes no per-block speed bounds)
+    bound = float(np.max(feed)) if np.ndim(feed) else float(feed)
+    if np.ndim(feed) and np.min(feed) < bound:
+        logging.getLogger(__name__).warning(
+            "interpolator '%s': the program's feeds run from %.6g to %.6g mm/s; the time-optimal reference "
+            "takes one speed bound on the whole path, the largest (set [interpolator] feed_mm_per_s to "
+            "choose another)", ic.label or ic.kind, float(np.min(feed)), bound)
+    limits = AxisLimits.fir_envelope(path.dim, bound, np.asarray(ic.envelope_delays_ms) * 1e-3)
+    res = time_optimal(path, limits, ic.tolerance_um * 1e-3, feed=bound, window=ic.window,
                        intervals_per_segment=ic.intervals_per_segment, sample_period=Ts)
     info = {"status": res.status, "iterations": res.iterations, "solve_time": res.solve_time,
-            "worst_check_ratio": float(res.verification.worst_ratio)}
+            "worst_check_ratio": float(res.verification.worst_ratio), "feed_mm_per_s": bound}
     return res.trajectory, info, None
 
 

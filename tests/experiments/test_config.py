@@ -289,3 +289,27 @@ def test_int_range_sweep_of_an_int_field_stays_int(tmp_path):
     cfg, _ = load_config(f)
     points = expand(cfg, f)
     assert [p.config.identification.n_moves for p in points] == [10, 20, 30]
+
+
+def test_time_optimal_on_a_gcode_program_takes_its_feed(tmp_path, caplog):
+    """The time-optimal reference on a G-code path without ``feed_mm_per_s`` is bounded by the
+    program's F (1200 mm/min = 20 mm/s here: its peak path speed stays at 20 mm/s to the OCP's check
+    tolerance, where the field's default would allow 250), as the FIR stage runs the program's
+    feeds; with feeds that differ it takes the largest and says so in a warning; a written
+    ``feed_mm_per_s`` still wins."""
+    (tmp_path / "part.nc").write_text("G21 G90\nG1 X10 F1200\nG1 X10 Y10\n")
+    text = ('name = "t"\nreproduces = "test"\n[path]\ngcode = "part.nc"\n[interpolator]\nkind = "time_optimal"\n'
+            'tolerance_um = 100.0\nintervals_per_segment = 8\n[output]\nfigure = false\n')
+    res = run_experiment(write(tmp_path, text), cache_dir=tmp_path / "c", figures_dir=tmp_path / "f", log=lambda s: None)
+    assert res.record["details"]["time_optimal"]["feed_mm_per_s"] == 20.0
+    assert res.record["scalars"]["peak_feed"] <= 20.0 * 1.01
+    (tmp_path / "two.nc").write_text("G21 G90\nG1 X10 F1200\nG1 X10 Y10 F600\n")
+    with caplog.at_level("WARNING"):
+        res = run_experiment(write(tmp_path, text.replace("part.nc", "two.nc"), "b.toml"), cache_dir=tmp_path / "c",
+                             figures_dir=tmp_path / "f", log=lambda s: None)
+    assert res.record["details"]["time_optimal"]["feed_mm_per_s"] == 20.0
+    assert any("from 10 to 20 mm/s" in r.getMessage() for r in caplog.records), caplog.text
+    res = run_experiment(write(tmp_path, text.replace("[interpolator]\n", "[interpolator]\nfeed_mm_per_s = 40.0\n"),
+                               "c.toml"), cache_dir=tmp_path / "c", figures_dir=tmp_path / "f", log=lambda s: None)
+    assert res.record["details"]["time_optimal"]["feed_mm_per_s"] == 40.0
+    assert res.record["scalars"]["peak_feed"] > 20.0 * 1.01
