@@ -313,3 +313,24 @@ def test_time_optimal_on_a_gcode_program_takes_its_feed(tmp_path, caplog):
                                "c.toml"), cache_dir=tmp_path / "c", figures_dir=tmp_path / "f", log=lambda s: None)
     assert res.record["details"]["time_optimal"]["feed_mm_per_s"] == 40.0
     assert res.record["scalars"]["peak_feed"] > 20.0 * 1.01
+
+
+def test_whole_path_time_optimal_nlp_on_a_long_program_is_warned_of(monkeypatch, caplog):
+    """A time-optimal reference without ``window`` on a program of ``_WHOLE_NLP_WARN`` segments or more
+    logs a warning that names the NLP's size and the ``window`` key (here the threshold is lowered
+    to the 2 segments of corner90 so that the solve stays small); below it, no warning."""
+    from research.experiments import stages
+    from research.experiments.config import validate
+    from research.paths import named_path
+
+    ic = validate({"name": "t", "reproduces": "-", "path": {"name": "corner90"},
+                   "interpolator": {"kind": "time_optimal", "intervals_per_segment": 8}}, "t.toml").interpolators[0]
+    path = named_path("corner90")
+    with caplog.at_level("WARNING"):
+        stages.interpolate(ic, path, None)
+    assert not any("one NLP" in r.getMessage() for r in caplog.records)
+    monkeypatch.setattr(stages, "_WHOLE_NLP_WARN", 2)
+    with caplog.at_level("WARNING"):
+        stages.interpolate(ic, path, None)
+    assert any("over all 2 segments is one NLP of 16 intervals" in r.getMessage() and "window" in r.getMessage()
+               for r in caplog.records), caplog.text
