@@ -21,6 +21,8 @@ from research.errors import GCodeError
 from research.experiments.config_drive import PER_AXIS_DRIVES
 from research.trajectory import Trajectory
 
+_log = logging.getLogger(__name__)
+
 
 def envelope(ic, n_axes: int):
     """The axis limits of an S-curve / blend config: its ``limits`` or the FIR envelope (Sencer 2015 §2.1)."""
@@ -109,13 +111,13 @@ def interpolate(ic, path, program_feeds, blocks=None, pauses=None):
     # (one bound on the whole path; the OCP takes no per-block speed bounds)
     bound = float(np.max(feed)) if np.ndim(feed) else float(feed)
     if np.ndim(feed) and np.min(feed) < bound:
-        logging.getLogger(__name__).warning(
+        _log.warning(
             "interpolator '%s': the program's feeds run from %.6g to %.6g mm/s; the time-optimal reference "
             "takes one speed bound on the whole path, the largest (set [interpolator] feed_mm_per_s to "
             "choose another)", ic.label or ic.kind, float(np.min(feed)), bound)
     limits = AxisLimits.fir_envelope(path.dim, bound, np.asarray(ic.envelope_delays_ms) * 1e-3)
     if ic.window is None and path.n_segments >= _WHOLE_NLP_WARN:
-        logging.getLogger(__name__).warning(
+        _log.warning(
             "interpolator '%s': the time-optimal reference over all %d segments is one NLP of %d intervals "
             "(measured: 250 segments x 16 took 212 s and 2.6 GB); set [interpolator] window (e.g. 10) for a "
             "receding-horizon reference", ic.label or ic.kind, path.n_segments, path.n_segments * ic.intervals_per_segment)

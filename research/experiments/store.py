@@ -80,22 +80,13 @@ class Entry:
     manifest: dict = field(default_factory=dict, repr=False)
 
     def read_bytes(self, name: str) -> bytes:
-        """The bytes of file ``name`` of the entry, checked against its manifest checksum.
+        """The bytes of file ``name`` of the entry, checked against its manifest checksum (:meth:`chunks`
+        joined).
 
         Raises:
             StoreError: the file is not in the manifest, unreadable, or no longer matches it.
         """
-        meta = self.manifest.get("files", {}).get(name)
-        if meta is None:
-            raise StoreError(f"{self.folder}: the entry has no file {name!r} (files: {sorted(self.manifest.get('files', {}))})")
-        try:
-            data = (self.folder / name).read_bytes()
-        except OSError as e:
-            raise StoreError(f"{self.folder / name}: cannot read stored file ({e.strerror or e})") from None
-        if len(data) != meta["bytes"] or hashlib.sha256(data).hexdigest() != meta["sha256"]:
-            raise StoreError(f"{self.folder / name}: stored file changed since it was written (checksum mismatch); "
-                             "run `python -m research store gc` and re-run")
-        return data
+        return b"".join(self.chunks(name))
 
     def chunks(self, name: str, size: int = 1 << 20):
         """The bytes of file ``name`` in pieces of ``size``, checked against its manifest checksum as
@@ -103,18 +94,18 @@ class Entry:
         then never holds the whole file (a long program's ``trajectory.npz`` is hundreds of MB).
 
         Raises (once the whole file has been read, or at once if it cannot be opened):
-            StoreError: as :meth:`read_bytes`; the target written from it is then left as it was.
+            StoreError: the file is not in the manifest, unreadable, or no longer matches it; a
+            target written from it is then left as it was.
         """
         meta = self.manifest.get("files", {}).get(name)
         if meta is None:
             raise StoreError(f"{self.folder}: the entry has no file {name!r} (files: {sorted(self.manifest.get('files', {}))})")
         digest, total = hashlib.sha256(), 0
         try:
-            with open(self.folder / name, "rb") as f:
-                while piece := f.read(size):
-                    digest.update(piece)
-                    total += len(piece)
-                    yield piece
+            for piece in _pieces(self.folder / name, size):
+                digest.update(piece)
+                total += len(piece)
+                yield piece
         except OSError as e:
             raise StoreError(f"{self.folder / name}: cannot read stored file ({e.strerror or e})") from None
         if total != meta["bytes"] or digest.hexdigest() != meta["sha256"]:
@@ -350,13 +341,19 @@ def _digest(path: Path, keep: bool = False, size: int = 1 << 20) -> tuple[int, s
     """``(bytes, SHA-256 hex digest, the bytes if keep else None)`` of a file read in pieces of
     ``size`` (a long program's ``trajectory.npz`` is hundreds of MB: not held to be checked)."""
     digest, total, kept = hashlib.sha256(), 0, []
+    for piece in _pieces(path, size):
+        digest.update(piece)
+        total += len(piece)
+        if keep:
+            kept.append(piece)
+    return total, digest.hexdigest(), b"".join(kept) if keep else None
+
+
+def _pieces(path: Path, size: int):
+    """The bytes of the file ``path`` in pieces of ``size``."""
     with open(path, "rb") as f:
         while piece := f.read(size):
-            digest.update(piece)
-            total += len(piece)
-            if keep:
-                kept.append(piece)
-    return total, digest.hexdigest(), b"".join(kept) if keep else None
+            yield piece
 
 
 def _load(key: str, folder: Path) -> tuple[Entry | None, str]:
