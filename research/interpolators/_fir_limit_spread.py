@@ -48,7 +48,7 @@ every window of the whole profile as before.
 from __future__ import annotations
 
 import copy
-from collections.abc import Callable
+from collections.abc import Callable, Generator
 
 import numpy as np
 
@@ -188,6 +188,8 @@ class FeedSteps:
         self.step = isolated_step(delays, limits)  # (A,) largest isolated step [mm/s]
         self.velocity = np.asarray(limits.velocity, dtype=np.float64)
         self.feeds, self.u, self.is_arc = np.asarray(feeds, dtype=np.float64), np.asarray(t_in), np.asarray(is_arc)
+        # the same as Python floats, for the per-block loops of __call__
+        self._u, self._step, self._velocity = self.u.tolist(), self.step.tolist(), self.velocity.tolist()
         self.head = self.tail = np.zeros(self.feeds.size)
 
     def of(self, head: np.ndarray, tail: np.ndarray) -> "FeedSteps":
@@ -232,19 +234,29 @@ class FeedSteps:
             unset[n] = not near
             if not near or any(self.is_arc[k] for k in near):
                 continue
-            u = self.u[n]
-            moving = u != 0.0
-            top = self.feeds[n] * float(np.max(factor[n]))
-            lo, hi = 0.0, min(1.0, float(np.min(self.velocity[moving] / np.abs(u[moving]))) / top)
+            # per axis in Python floats (a handful of axes: NumPy's per-call cost dominated), the
+            # same operations in the same order as on arrays, so the same values
+            u = self._u[n]
+            top = float(self.feeds[n]) * float(np.max(factor[n]))
+            lo, hi = 0.0, min(1.0, min(v / abs(u_i) for v, u_i in zip(self._velocity, u) if u_i != 0.0) / top)
             for k in near:
                 side = -1 if k < n else 1  # n's piece facing k; k's facing n is on the other side
-                x = self.feeds[n] * factor[n, self._column(n, side)]  # that piece's feed at multiplier 1
-                V = self.feeds[k] * factor[k, self._column(k, -side)] * g_set.get(k, 1.0) * self.u[k]
-                if np.any(np.abs(V[~moving]) > self.step[~moving]):
+                x = float(self.feeds[n] * factor[n, self._column(n, side)])  # that piece's feed at multiplier 1
+                s = float(self.feeds[k] * factor[k, self._column(k, -side)]) * g_set.get(k, 1.0)
+                lo_k, hi_k = -np.inf, np.inf
+                for u_i, uk_i, step_i in zip(u, self._u[k], self._step):
+                    V = s * uk_i
+                    if u_i == 0.0:
+                        if abs(V) > step_i:
+                            lo_k = np.inf
+                            break
+                        continue
+                    a, b = (V - step_i) / (u_i * x), (V + step_i) / (u_i * x)
+                    lo_k, hi_k = max(lo_k, min(a, b)), min(hi_k, max(a, b))
+                if lo_k == np.inf:
                     lo = np.inf
                     break
-                a, b = (V[moving] - self.step[moving]) / (u[moving] * x), (V[moving] + self.step[moving]) / (u[moving] * x)
-                lo, hi = max(lo, float(np.max(np.minimum(a, b)))), min(hi, float(np.min(np.maximum(a, b))))
+                lo, hi = max(lo, lo_k), min(hi, hi_k)
             if not (lo <= hi and hi > 0.0):
                 continue
             if hi < 1.0 - 1e-12:
@@ -314,8 +326,12 @@ def _connected(ok: np.ndarray, fixed: np.ndarray) -> np.ndarray:
 def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray,
                      breaking: Callable[[np.ndarray, np.ndarray], np.ndarray],
                      hold: Callable[[np.ndarray, np.ndarray], np.ndarray], steps: FeedSteps,
-                     ratios: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> np.ndarray:
-    """Follow the slow-down of the blocks ``slowed`` along the chain (module docstring).
+                     ratios: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> Generator[np.ndarray, None, np.ndarray]:
+    """Follow the slow-down of the blocks ``slowed`` along the chain (module docstring), one step
+    at a time: a generator that yields the feed factors after each step that slows blocks and
+    returns the final ones (``StopIteration.value``). The planner may suspend it between steps
+    (another candidate's bound is lower) and resume it where it stopped: the steps are those of
+    an uninterrupted walk.
 
     Args:
         slowed: ``(M,)`` bool, the blocks just slowed (their factors already in ``factor``).
@@ -329,6 +345,9 @@ def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray
             step from its slowed neighbours), kept where ``ratios(factor, corners)``
             (:meth:`CornerWindows.ratios`) finds the windows of those steps within the limits;
             phase 1 (``hold``) otherwise, and after :data:`MAX_STEPS` such feeds.
+
+    Yields:
+        The feed factors after each step (a new array each time).
 
     Returns:
         The feed factors with every slow-down that the chain's windows call for applied.
@@ -407,3 +426,4 @@ def spread_slow_down(slowed: np.ndarray, checked: np.ndarray, factor: np.ndarray
         if not new.any():
             return factor
         factor = factor * g[:, None]
+        yield factor

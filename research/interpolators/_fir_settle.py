@@ -219,6 +219,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         return predicted_time((f, head, tail, full, others, arc_rel), sh)
 
     last_check = None  # the last complete check of any candidate (RoundChecks.snapshot)
+    rival = [np.inf]  # the least bound of the other candidates (and the best verified time), set by verify
 
     def settle(candidate, several=False, slow_futile=False, on_futile=None):
         """Verify and repair one candidate plan (``candidate()`` builds its new arrays ``(factor,
@@ -247,6 +248,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         checked, repaired = np.zeros(M, dtype=bool), False
         checks = RoundChecks(tp, tb_np, table.block, Td_np, check_period, table.fraction, table.joins)  # redone only where the profile changed
         checks.adopt(last_check)  # from another candidate's last complete check: redone where they differ
+        walked, next_look = 0, 1  # steps of this candidate's chain walks, and the next one weighed
         repairs = Repairs(full, head, tail, tv_np, tb_np, F_np, tp.lengths, Td_np, d_np.size, cum_np)
 
         def hold(fac, which):
@@ -342,8 +344,35 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
                     if np.any(g < 1.0):  # slowed blocks: check the corners again before bisecting
                         factor = factor * np.reshape(g, (-1, 1))  # new array: the state's inputs are the old
                         # their feed steps' corners at once, along the chain (not one block a round)
-                        factor = spread_slow_down(np.reshape(g, -1) < 1.0, checked, factor, breaking, hold,
-                                                  steps.of(head, tail), corner_ratios)
+                        walk = spread_slow_down(np.reshape(g, -1) < 1.0, checked, factor, breaking, hold,
+                                                steps.of(head, tail), corner_ratios)
+                        while True:
+                            try:
+                                factor = next(walk)
+                            except StopIteration as done:
+                                factor, walk, done = done.value, None, None
+                                break
+                            walked += 1
+                            if walked < next_look:
+                                continue
+                            # a long walk (a chain slowed block by block) is weighed against the
+                            # other candidates after 1, 2, 4, ... of this candidate's steps: once
+                            # its prediction passes the least bound among them (rival), it is
+                            # suspended between two steps and resumed there, the same walk
+                            next_look = 2 * walked
+                            low = predicted_time((factor, head, tail, full, others, arc_rel),
+                                                 shrink * bisection.bound_scale)
+                            if not low > rival[0]:
+                                continue
+                            if not tol_due:  # this round reads no profile after its walk
+                                state = pos_np = pulse_np = starts_np = centre_np = durations = None
+                                yield low, True, False
+                            elif (yield low, True, True) is _RELEASE:  # rebuilt for the round's check
+                                inputs, state = state[6], None
+                                pos_np = pulse_np = starts_np = centre_np = durations = None
+                                yield low, True, False
+                                state = schedule(*inputs)
+                                (pulse_np, starts_np, pos_np, centre_np), durations = state[2:6], state[7]
                         too_fast = slowed = True
                     else:
                         too_fast = bisection.update(ratios)
@@ -461,6 +490,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         held = {}  # index -> (bound, steps) of the candidates suspended with their profiles
         while queue and queue[0][0] < best_time:
             bound, i, steps = heapq.heappop(queue)
+            rival[0] = min(queue[0][0], best_time) if queue else best_time
             held.pop(i, None)
             holds = False
             try:

@@ -199,3 +199,37 @@ def test_feed_steps_is_the_isolated_step_bound():
     g, _, _ = steps(np.array([[0.04] * 3, [1.0] * 3]), np.array([False, True]), np.array([True, False]))
     # |x u_x - 2| <= 2 and |x u_y| <= 2: x <= 2 / sqrt(0.5) from the y axis
     assert g[1] * F[1] == pytest.approx(step / np.sqrt(0.5))
+
+
+def test_a_losing_candidates_chain_walk_is_suspended(monkeypatch):
+    """A circle of radius 2 m in 4,000 chords under limits below the FIR envelope (jerk 1e4
+    mm/s^3, T1 T2 = 2e-4 s^2: 2 mm/s from rest) at eps = 0.1 um. The winning candidate slows only
+    the blocks of the path's two end ramps (a few walk steps); two look-ahead candidates of the
+    same bound, whose corners are dwell corners (eq 13/14 overlaps at the tolerance), turn each
+    feed step into a partial overlap that breaks the jerk limit at the next corner, and their walks
+    would slow the whole circle block by block (3,925 walk steps, 5.4 s of 5.5 s planning, for plans
+    of over 5,000 s that lose). A walk is weighed against the other candidates' bounds after 1, 2,
+    4, ... steps and suspended once its prediction passes them (resumed where it stopped, the same
+    walk), so the losers stop after a few steps: fewer than 100 steps in all (model prediction:
+    O(log N) per candidate). The plan holds the limits and the tolerance on its sampled trajectory
+    and its cycle is within 1 % above ``L / v + T_d`` (the velocity limit all the way)."""
+    from research.interpolators import _fir_limit_spread
+
+    calls = []
+    original = _fir_limit_spread.FeedSteps.__call__
+
+    def counted(self, factor, which, fixed):
+        calls.append(1)
+        return original(self, factor, which, fixed)
+
+    monkeypatch.setattr(_fir_limit_spread.FeedSteps, "__call__", counted)
+    lim = AxisLimits.uniform(2, velocity=12.2, acceleration=500.0, jerk=1e4)
+    d = (0.02, 0.01)
+    a = np.linspace(0.0, 2.0 * np.pi, 4001)
+    path = Polyline(2000.0 * np.column_stack([np.cos(a), np.sin(a)]))
+    plan = plan_fir(path, 12.2, d, 1e-4, limits=lim)
+    assert 0 < len(calls) < 100
+    bound = float(path.arc_length[-1]) / 12.2 + sum(d)
+    assert bound <= float(plan.cycle_time) <= 1.01 * bound
+    assert within_limits(plan.trajectory(1e-3), lim)
+    assert float(np.max(np.asarray(plan.corner_errors))) <= 1e-4 * (1 + 1e-9) + 1e-9
