@@ -227,7 +227,10 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         ``(predicted time, limit repaired so far, holds its profile)`` after each failed round and
         returns ``(state, rounds, deviation, limit_repaired)``. Suspended after the vertex errors
         (its profile kept for the path samples), it releases the profile when sent
-        :data:`_RELEASE` and rebuilds it on resuming. The prediction is a lower bound on the final time:
+        :data:`_RELEASE` and rebuilds it on resuming. It also yields inside a round's chain walk
+        (``_fir_limit_spread.spread_slow_down``) once the walk's prediction passes the least bound
+        of the other candidates (``rival``, weighed after 1, 2, 4, ... of its walk steps), and
+        resumes the same walk there. The prediction is a lower bound on the final time:
         repairs only shrink overlaps and lower feeds, and a bisecting corner is predicted at its
         bracket's upper end (:attr:`CornerBisection.bound_scale`), above which it never ends.
         ``several``: other candidates compete (worth a first bound from the first blocks,
