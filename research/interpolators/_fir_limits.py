@@ -27,8 +27,8 @@ planned). Where a corner's window breaks one:
    overlapping corners can break a limit. A corner whose window does has its overlap
    bisected (:class:`CornerBisection`) between 0 (two safe blocks) and its planned value.
 
-Convergence bound: a call of phase 1 builds at most ``2 + BISECTION_STEPS + HALVINGS`` exact-stop
-profiles, of the blocks it checks (then of those it bisects), and costs one round; it runs only in
+Convergence bound: a call of phase 1 builds at most ``2 + SECANT_STEPS + BISECTION_STEPS + HALVINGS``
+exact-stop profiles, of the blocks it checks (then of those it bisects), and costs one round; it runs only in
 rounds that find a block not checked before, so at most ``M`` times (once on the benchmark paths);
 within such a round the slow-down is followed along the chain (``_fir_limit_spread``: the blocks
 whose corner windows the slowed blocks' feed steps break are checked in the same round, at most
@@ -332,9 +332,10 @@ def hold_block_limits(alone_ratios: Callable[[np.ndarray, np.ndarray], np.ndarra
         which: ``(M,)`` bool, the blocks to check (the others keep 1).
 
     Returns:
-        1 where a block keeps the limits alone or is not checked; otherwise the largest multiplier found safe by
-        :data:`BISECTION_STEPS` bisections between ``safe`` and 1 (then up to :data:`HALVINGS`
-        halvings should the bracket's lower end not be safe after all).
+        1 where a block keeps the limits alone or is not checked; otherwise the largest multiplier found safe on
+        the grid of :data:`BISECTION_STEPS` bisections between ``safe`` and 1, next to one that is
+        not (:func:`_largest_safe`; then up to :data:`HALVINGS` halvings should the bracket's
+        lower end not be safe after all).
 
     Raises:
         ConvergenceError: a block still breaks a limit after the halvings.
@@ -346,11 +347,7 @@ def hold_block_limits(alone_ratios: Callable[[np.ndarray, np.ndarray], np.ndarra
         return np.ones(safe.size)
     # the closed-form cap, or the velocity ratio's linear scaling where the cap claims no need
     lo = np.where(bad, np.where(safe < 1.0, safe, 1.0 / np.where(bad, ratio, 1.0)), 1.0)
-    hi = np.ones(safe.size)
-    for _ in range(BISECTION_STEPS):
-        mid = np.where(bad, 0.5 * (lo + hi), 1.0)
-        ok = alone_ratios(mid, bad) <= 1.0 + LIMIT_RTOL
-        lo, hi = np.where(bad & ok, mid, lo), np.where(bad & ~ok, mid, hi)
+    lo = _largest_safe(alone_ratios, bad, lo, ratio)
     still = bad
     for _ in range(HALVINGS + 1):
         ratio = alone_ratios(lo, still)  # a block found safe at its lower end keeps it
@@ -361,6 +358,99 @@ def hold_block_limits(alone_ratios: Callable[[np.ndarray, np.ndarray], np.ndarra
     raise ConvergenceError(f"limit-holding FIR: {int(still.sum())} blocks break a limit alone even at "
                            f"{float(np.min(lo[still])):.3g} of their feed", residual=float(ratio.max() - 1.0),
                            steps=BISECTION_STEPS + HALVINGS)
+
+
+#: secant-guided probes of :func:`_largest_safe` per block before it bisects
+SECANT_STEPS = 4
+
+
+def _grid_point(lo: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """The multiplier the bisection of ``[lo, 1]`` in :data:`BISECTION_STEPS` steps tries at grid
+    index ``j`` (``(M,)`` integers in ``[0, 2^BISECTION_STEPS]``; 0 is ``lo``, the top 1), computed
+    by the same operations as the bisection on its way to that point (so the same floats): the
+    midpoint of each step's bracket, the bracket following the bits of ``j`` from the top."""
+    n = BISECTION_STEPS
+    a, b = lo.copy(), np.ones(lo.size)
+    out = np.where(j <= 0, lo, 1.0)
+    done = (j <= 0) | (j >= 1 << n)
+    for k in range(n - 1, -1, -1):  # step n - k of the bisection: its midpoint is index j with lowest bit k
+        mid = 0.5 * (a + b)
+        here = ~done & (j & ((1 << (k + 1)) - 1) == 1 << k)
+        out = np.where(here, mid, out)
+        done |= here
+        up = (j >> k) & 1 == 1
+        a, b = np.where(up, mid, a), np.where(up, b, mid)
+    return out
+
+
+def _largest_safe(alone_ratios, bad: np.ndarray, lo: np.ndarray, ratio: np.ndarray) -> np.ndarray:
+    """The multipliers :data:`BISECTION_STEPS` bisections of ``[lo, 1]`` give the blocks ``bad``
+    (``(M,)`` bool; the largest point of the bisection's grid found within the limits, ``lo``
+    where none is), found in fewer profile builds where peaks grow with the feed.
+
+    The bisection's points form a grid of ``2^BISECTION_STEPS`` steps on ``[lo, 1]``
+    (:func:`_grid_point`, the same floats); where a block's ratio does not fall as its feed grows,
+    the bisection ends at the largest grid point within the limits whose next one is not, and so
+    does any search that brackets that point between two neighbouring grid points. This one
+    brackets each block by grid indices (``lo`` taken within the limits and 1 above them, as the
+    bisection does) and probes first where a power law of the feed puts the limit: a block's peaks
+    grow as a power of its feed (jerk ``g F |u| / (T_1 T_2)`` for a pulse longer than ``T_2``,
+    Sencer 2015 §2.1; a shorter one's acceleration not at all), so the zero of ``log(ratio / (1 +
+    LIMIT_RTOL))`` on the line through the bracket's ends in ``log g`` (slope 1, the linear law,
+    while the lower end is unmeasured), on the grid point below it after an upper end moved (or
+    none yet) and above it after a lower end moved: two builds for a block that follows a power
+    law, instead of :data:`BISECTION_STEPS`. After :data:`SECANT_STEPS` probes it bisects the
+    bracket's indices; so at most ``SECANT_STEPS + BISECTION_STEPS`` builds, each of the blocks
+    still bracketed wider than one grid step. (The probes depend on the ratios' values, which
+    another time offset moves by rounding, but the result only on which grid points are within
+    the limits.) Where a block's ratio falls somewhere as its feed grows (a pulse whose pieces'
+    lengths meet the delays: peaks of its rise and fall cancel), both end at a grid point within
+    the limits whose next one is not, not always the same: on the 150 programs of
+    ``benchmarks/fir_limits_stress.py``, 6 plans came out faster than with the bisection (to
+    0.72x), none slower, 144 the same (there the secant from the ratio at ``g = 1`` reached safe
+    stretches above an unsafe one that the bisection had given up; on synthetic ratios with one
+    narrow dip below the limit, the bisection's midpoint-first order lands in the dip more often).
+
+    Args:
+        alone_ratios: ``(g, blocks) -> (M,)`` peak ratios of the blocks ``blocks`` alone at feed
+            multipliers ``g`` (:func:`hold_block_limits`).
+        bad: ``(M,)`` bool, the blocks above a limit at multiplier 1; lo: ``(M,)`` their lower
+            ends (not measured: ``hold_block_limits`` checks the result); ratio: ``(M,)`` their
+            ratios at multiplier 1 (``> 1 + LIMIT_RTOL`` on ``bad``).
+    """
+    one, top = 1.0 + LIMIT_RTOL, 1 << BISECTION_STEPS
+    j_lo, j_hi = np.zeros(lo.size, dtype=np.int64), np.full(lo.size, top, dtype=np.int64)
+    g_lo, g_hi = lo.copy(), np.ones(lo.size)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        f_hi = np.where(bad, np.log(ratio / one), 0.0)
+    f_lo = np.full(lo.size, np.nan)  # unmeasured
+    last = np.ones(lo.size, dtype=np.int64)  # the end the last probe moved: -1 lower, 1 upper
+    active = bad.copy()
+    for step in range(SECANT_STEPS + BISECTION_STEPS):
+        if not active.any():
+            break
+        if step < SECANT_STEPS:
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                x_lo, x_hi = np.log(g_lo), np.log(g_hi)
+                slope = np.where(np.isnan(f_lo), 1.0, (f_hi - f_lo) / (x_hi - x_lo))
+                u = (np.exp(x_hi - f_hi / slope) - lo) / (1.0 - lo) * top  # the estimate's grid index
+                j = np.where(last > 0, np.floor(u), np.ceil(u))
+            j = np.where((slope > 0.0) & np.isfinite(j), j, 0.5 * (j_lo + j_hi))
+            j = np.clip(j, j_lo + 1, j_hi - 1).astype(np.int64)
+        else:
+            j = (j_lo + j_hi) // 2
+        j = np.where(active, j, 0)
+        g = np.where(active, _grid_point(lo, j), 1.0)
+        r = alone_ratios(g, active)
+        ok = r <= one
+        with np.errstate(divide="ignore"):
+            f = np.log(r / one)
+        up, down = active & ok, active & ~ok
+        j_lo, g_lo, f_lo = np.where(up, j, j_lo), np.where(up, g, g_lo), np.where(up, f, f_lo)
+        j_hi, g_hi, f_hi = np.where(down, j, j_hi), np.where(down, g, g_hi), np.where(down, f, f_hi)
+        last = np.where(active, np.where(ok, -1, 1), last)
+        active &= j_hi - j_lo > 1
+    return np.where(bad, g_lo, lo)
 
 
 class CornerBisection:

@@ -171,6 +171,76 @@ def test_block_feed_bisection():
     assert np.all(r0[:2] * g[:2] <= 1.0) and np.all(1.0 / r0[:2] - g[:2] <= 2.0**-10)
 
 
+def _bisection(ratio_of, lo):
+    """The multipliers of BISECTION_STEPS plain bisections of ``[lo, 1]`` per block (the search
+    ``hold_block_limits`` ran before the secant-guided one): the last midpoint found within
+    ``1 + 1e-9``, else ``lo``."""
+    lo, hi = lo.copy(), np.ones(lo.size)
+    for _ in range(BISECTION_STEPS):
+        mid = 0.5 * (lo + hi)
+        ok = ratio_of(mid) <= 1.0 + 1e-9
+        lo, hi = np.where(ok, mid, lo), np.where(ok, hi, mid)
+    return lo
+
+
+def test_largest_safe_is_the_bisections_multiplier_in_fewer_builds():
+    """Seeded blocks whose ratio grows with the feed multiplier g as a power law ``c g^p`` (p 1,
+    the jerk of a pulse longer than T_2, Sencer 2015 §2.1; 0.5-3 otherwise) or a floor then a power
+    law (a short pulse's acceleration does not fall with its feed): ``_largest_safe`` returns, bit
+    for bit, what ten plain bisections of ``[lo, 1]`` return (an independent loop), in two builds
+    where p = 1, and never in more than SECANT_STEPS + BISECTION_STEPS."""
+    from research.interpolators._fir_limits import SECANT_STEPS, _largest_safe
+
+    rng = np.random.default_rng(7)
+    n = 400
+    p = np.where(rng.random(n) < 0.5, 1.0, rng.uniform(0.5, 3.0, n))
+    c = rng.uniform(1.01, 8.0, n)
+    floor = np.where(rng.random(n) < 0.3, rng.uniform(0.2, 0.99, n), 0.0)
+    lo = np.where(rng.random(n) < 0.5, rng.uniform(0.05, 0.9, n) * c ** (-1.0 / p), 1.0 / c)
+    bad = rng.random(n) < 0.9
+
+    def ratio_of(g):
+        return np.maximum(c * g**p, floor)
+
+    builds = []
+
+    def alone(g, blocks):
+        builds.append(blocks.copy())
+        assert np.all(g[~blocks] == 1.0)
+        return np.where(blocks, ratio_of(g), 0.0)
+
+    got = _largest_safe(alone, bad, lo.copy(), ratio_of(np.ones(n)))
+    np.testing.assert_array_equal(got[bad], _bisection(ratio_of, lo)[bad])
+    np.testing.assert_array_equal(got[~bad], lo[~bad])
+    counts = np.sum(builds, axis=0)
+    assert counts.max() <= SECANT_STEPS + BISECTION_STEPS
+    assert np.all(counts[bad & (p == 1.0)] <= 2)
+    assert counts[bad].mean() < 0.5 * BISECTION_STEPS
+
+
+def test_largest_safe_where_the_ratio_falls_somewhere():
+    """Blocks whose ratio dips below the limit again at higher feeds (a pulse whose pieces' lengths
+    meet the delays): the multiplier returned is within the limits and the next point of the
+    bisection's grid above it is not (a local largest, as the bisection's own result is)."""
+    from research.interpolators._fir_limits import _largest_safe
+
+    rng = np.random.default_rng(11)
+    n = 300
+    c = rng.uniform(1.5, 4.0, n)
+    dip_at, dip_w = rng.uniform(0.4, 0.8, n), rng.uniform(0.01, 0.08, n)  # ratio(1) > 1.49: above the limit
+    lo = 0.5 / c
+
+    def ratio_of(g):
+        return c * g * (1.0 - 0.8 * np.exp(-(((g - dip_at) / dip_w) ** 2)))
+
+    got = _largest_safe(lambda g, b: np.where(b, ratio_of(g), 0.0), np.ones(n, dtype=bool), lo.copy(),
+                        ratio_of(np.ones(n)))
+    assert np.all(ratio_of(got) <= 1.0 + 1e-9)
+    step = (1.0 - lo) * 2.0**-BISECTION_STEPS
+    nxt = got + step
+    assert np.all((ratio_of(nxt) > 1.0 + 1e-9) | (nxt > 1.0 - 0.5 * step))
+
+
 def test_blocks_in_windows():
     """Blocks 0..3 of 1 s pulses with 0.5 s windows, starting every 1.2 s (T_d = 0.5 s): corner 1's
     window [2.2, 2.9] meets the spans of blocks 1 [1.2, 2.7] and 2 [2.4, 3.9] only."""
