@@ -211,7 +211,12 @@ class FeedSteps:
         """``(B,)`` feeds [mm/s] of the pieces of ``blocks`` facing their start (``side`` -1) or end
         (+1) at feed factors ``factor`` ``(M, 3)`` (:meth:`_column`)."""
         blocks = np.asarray(blocks, dtype=np.int64)
-        cols = np.array([self._column(k, side) for k in blocks.tolist()], dtype=np.int64)
+        head, tail = self.head[blocks], self.tail[blocks]
+        body = 1.0 - head - tail  # :meth:`_column` on every block at once
+        if side < 0:
+            cols = np.where(head > 0.0, 0, np.where(body > 0.0, 1, 2))
+        else:
+            cols = np.where(tail > 0.0, 2, np.where(body > 0.0, 1, 0))
         return self.feeds[blocks] * factor[blocks, cols]
 
     def __call__(self, factor: np.ndarray, which: np.ndarray, fixed: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -440,7 +440,8 @@ def _largest_safe(alone_ratios, bad: np.ndarray, lo: np.ndarray, ratio: np.ndarr
         else:
             j = (j_lo + j_hi) // 2
         j = np.where(active, j, 0)
-        g = np.where(active, _grid_point(lo, j), 1.0)
+        g = np.ones(lo.size)
+        g[active] = _grid_point(lo[active], j[active])
         r = alone_ratios(g, active)
         ok = r <= one
         with np.errstate(divide="ignore"):
