@@ -124,19 +124,20 @@ class CornerWindows:
         meet, and the merged ranges built as one profile, each after an exact stop."""
         table, Td = self.table, self.total_delay
         M = table.n_blocks
+        # the merged [a, z] block ranges: a range starts a run where it begins past every range
+        # before it ends (+ 1: ranges that meet join)
         order = np.argsort(lo_blk, kind="stable")
-        runs = []  # merged [a, z] block ranges
-        for a, z in zip(lo_blk[order].tolist(), hi_blk[order].tolist()):
-            if runs and a <= runs[-1][1] + 1:
-                runs[-1][1] = max(runs[-1][1], z)
-            else:
-                runs.append([a, z])
-        blocks = np.concatenate([np.arange(a, z + 1) for a, z in runs])
+        a_s, z_s = lo_blk[order], hi_blk[order]
+        reach = np.maximum.accumulate(z_s)
+        first = np.concatenate([[True], a_s[1:] > reach[:-1] + 1])
+        run_a = a_s[first]
+        run_z = reach[np.append(np.flatnonzero(first)[1:] - 1, z_s.size - 1)]
+        blocks = _ranges(run_a, run_z + 1)
         n = blocks.size
-        last_run = len(runs) - 1
         # each run's pieces (contiguous in the table), the gap piece after its last block but the last run's
-        idx = np.concatenate([np.arange(table.first_motion[a], table.last_motion[z] + 1 + (r < last_run))
-                              for r, (a, z) in enumerate(runs)])
+        piece_end = table.last_motion[run_z] + 1
+        piece_end[:-1] += 1
+        idx = _ranges(table.first_motion[run_a], piece_end)
         local = np.empty(M, dtype=np.int64)  # position of a block in ``blocks``
         local[blocks] = np.arange(n)
         blk = local[table.block[idx]]
@@ -162,6 +163,17 @@ class CornerWindows:
         first = np.searchsorted(ends + Td, lo, side="right")
         last = np.searchsorted(starts, hi, side="left")
         return ratios, (blocks, first, last), (back, ahead)
+
+
+def _ranges(starts: np.ndarray, stops: np.ndarray) -> np.ndarray:
+    """``concatenate([arange(a, b) for a, b in zip(starts, stops)])`` for ascending, disjoint
+    ranges ``a < b``, without a Python loop."""
+    sizes = stops - starts
+    out = np.ones(int(sizes.sum()), dtype=np.int64)
+    out[0] = starts[0]
+    heads = np.cumsum(sizes)[:-1]
+    out[heads] = starts[1:] - stops[:-1] + 1  # the jump from one range's last element to the next's first
+    return np.cumsum(out)
 
 
 class FeedSteps:
