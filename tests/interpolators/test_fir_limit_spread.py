@@ -94,6 +94,36 @@ def test_corner_windows_decide_as_the_whole_profile(delays):
     assert broke > 20 and kept > 20
 
 
+@pytest.mark.parametrize("delays", [(0.06, 0.03), (0.02, 0.01)])
+def test_first_window_ranges_hold_each_windows_input(delays):
+    """Seeded random programs (lines of 0.2-12 mm: windows over several blocks; lines and arcs)
+    and random plan inputs (feed factors down to 0.05, dwells): the block ranges
+    :meth:`CornerWindows._reach` starts from (the blocks within ``T_d`` of the corner at their
+    commanded feeds, pulses end to end) hold each window's input as the profile built of them
+    shows (``_read``'s before / after flags), so each window is read in one build. The four
+    blocks around a corner it started from before did not, on these paths."""
+    d = np.array(delays)
+    short = 0
+    for seed in range(8):
+        rng = np.random.default_rng(750 + seed)
+        if seed % 2:
+            tp = random_program(rng, arcs=True)
+        else:
+            tp = ToolPath.from_polyline(turning_path(90 + seed, 60, (0.2, 12.0), 40.0))
+        M = tp.n_blocks
+        table, F, head, tail, factor, arc_rel, full, shrink, others, tol = _plan_inputs(tp, rng)
+        limits = AxisLimits.fir_envelope(tp.dim, float(rng.uniform(100.0, 250.0)), d)
+        t_in, t_out = tp.tangents()
+        windows = CornerWindows(table, tp.lengths, F, t_in, t_out, tol, d, limits)
+        corners = np.arange(M - 1)
+        plan = (head, tail, factor, arc_rel, full, shrink, others)
+        _, _, (back, ahead) = windows._read(corners, *windows._reach(corners), *plan)
+        assert back.all() and ahead.all()
+        _, _, (back4, ahead4) = windows._read(corners, np.maximum(corners - 1, 0), np.minimum(corners + 2, M - 1), *plan)
+        short += int(np.sum(~back4 | ~ahead4))
+    assert short > 0
+
+
 def test_pieces_at_are_the_pieces_of_the_whole_table():
     """``PulseTable.pieces_at`` (a few blocks' pieces, with multipliers ``g``) against
     ``PulseTable.pieces`` of the whole table at ``factor * g``: the same floats."""
