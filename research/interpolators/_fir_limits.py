@@ -225,7 +225,7 @@ THRESHOLD_GUARD = 1e-11
 
 def alone_block_ratios(table, blocks: np.ndarray, fraction: np.ndarray, piece_factor: np.ndarray, lengths: np.ndarray,
                        feeds: np.ndarray, start: np.ndarray, delays: np.ndarray, limits: AxisLimits, *,
-                       prove: bool = True) -> np.ndarray:
+                       prove: bool = True, decisions: bool = False) -> np.ndarray:
     """``(M,)`` largest ``peak / limit`` of each block ``blocks`` alone (phase 1), 0 for the others.
 
     With every corner an exact stop no two blocks' filtered outputs overlap, so a block's own peaks
@@ -244,7 +244,11 @@ def alone_block_ratios(table, blocks: np.ndarray, fraction: np.ndarray, piece_fa
     ``1 + LIMIT_RTOL`` comes out as without ``prove``: a block left out is below it, and a block
     built is not moved across it by the other time offset (nor by the last piece of the block
     before it, should that end past its start by rounding: the piece is within that block's own
-    bound or ratio).
+    bound or ratio). With ``decisions`` as well (the caller reads only those comparisons, not the
+    ratios above the limit), the blocks asked for are all built only when a block built comes
+    within :data:`THRESHOLD_GUARD` of ``1 + LIMIT_RTOL`` on either side: a ratio further above it
+    is then the build's own, within rounding of the exact one (a bisection's probes above a
+    block's limit no longer build every block asked for twice).
 
     Args:
         table: the path's ``_fir_blocks.PulseTable``; ``blocks``: ``(M,)`` bool, the blocks asked for.
@@ -254,6 +258,7 @@ def alone_block_ratios(table, blocks: np.ndarray, fraction: np.ndarray, piece_fa
             (``(M_pad + 1,)``, as ``_fir_profile.timing``).
         start: ``(d,)`` start point [mm]; delays: ``(n,)`` filter delays [s]; limits: the per-axis limits.
         prove: leave out the blocks proven safe in closed form (above).
+        decisions: only the comparisons with ``1 + LIMIT_RTOL`` are read (above).
     """
     blocks = np.asarray(blocks, dtype=bool)
     if prove:
@@ -262,7 +267,10 @@ def alone_block_ratios(table, blocks: np.ndarray, fraction: np.ndarray, piece_fa
         if proven.any():
             rest = blocks & ~proven
             out = _built_ratios(table, rest, fraction, piece_factor, lengths, feeds, start, delays, limits)
-            if not np.any(out[rest] > 1.0 + LIMIT_RTOL - THRESHOLD_GUARD):
+            near = out[rest] > 1.0 + LIMIT_RTOL - THRESHOLD_GUARD
+            if decisions:
+                near &= out[rest] < 1.0 + LIMIT_RTOL + THRESHOLD_GUARD
+            if not np.any(near):
                 out[proven] = bound[proven]
                 return out
     return _built_ratios(table, blocks, fraction, piece_factor, lengths, feeds, start, delays, limits)
@@ -324,10 +332,11 @@ def hold_block_limits(alone_ratios: Callable[[np.ndarray, np.ndarray], np.ndarra
     """Feed multipliers ``g`` ``(M,)``, ``0 < g <= 1``, under which the blocks ``which`` alone keep the limits.
 
     Args:
-        alone_ratios: ``(g, blocks) -> (M,)`` peak ratios of the blocks ``blocks`` (``(M,)`` bool)
-            alone, with every corner an exact stop and block feeds multiplied by ``g``
-            (:func:`alone_block_ratios`; blocks are independent, the others' entries unread).
-            It is asked for ``which``, then for the blocks still being bisected.
+        alone_ratios: ``(g, blocks, decisions) -> (M,)`` peak ratios of the blocks ``blocks``
+            (``(M,)`` bool) alone, with every corner an exact stop and block feeds multiplied by
+            ``g`` (:func:`alone_block_ratios`; blocks are independent, the others' entries
+            unread; ``decisions``: only the comparisons with ``1 + LIMIT_RTOL`` are read). It is
+            asked for ``which`` (ratios), then for the blocks still being searched (decisions).
         safe: ``(M,)`` multipliers known safe in closed form (:func:`feed_caps` / planned feed).
         which: ``(M,)`` bool, the blocks to check (the others keep 1).
 
@@ -341,7 +350,7 @@ def hold_block_limits(alone_ratios: Callable[[np.ndarray, np.ndarray], np.ndarra
         ConvergenceError: a block still breaks a limit after the halvings.
     """
     which = np.asarray(which, dtype=bool)
-    ratio = alone_ratios(np.ones(safe.size), which)
+    ratio = alone_ratios(np.ones(safe.size), which, False)
     bad = which & (ratio > 1.0 + LIMIT_RTOL)
     if not bad.any():
         return np.ones(safe.size)
@@ -350,7 +359,7 @@ def hold_block_limits(alone_ratios: Callable[[np.ndarray, np.ndarray], np.ndarra
     lo = _largest_safe(alone_ratios, bad, lo, ratio)
     still = bad
     for _ in range(HALVINGS + 1):
-        ratio = alone_ratios(lo, still)  # a block found safe at its lower end keeps it
+        ratio = alone_ratios(lo, still, True)  # a block found safe at its lower end keeps it
         still = still & (ratio > 1.0 + LIMIT_RTOL)
         if not still.any():
             return lo
@@ -442,7 +451,7 @@ def _largest_safe(alone_ratios, bad: np.ndarray, lo: np.ndarray, ratio: np.ndarr
         j = np.where(active, j, 0)
         g = np.ones(lo.size)
         g[active] = _grid_point(lo[active], j[active])
-        r = alone_ratios(g, active)
+        r = alone_ratios(g, active, True)
         ok = r <= one
         with np.errstate(divide="ignore"):
             f = np.log(r / one)

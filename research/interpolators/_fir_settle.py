@@ -257,11 +257,12 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         def hold(fac, which):
             """``_fir_limits`` phase 1 at feed factors ``fac``: multipliers under which the blocks
             ``which`` alone (every corner an exact stop) keep the limits."""
-            def alone(g, blocks):  # their pieces only (the others are not read)
+            def alone(g, blocks, decisions):  # their pieces only (the others are not read)
                 idx, _ = table.block_pieces(np.flatnonzero(blocks))
                 frac, piece_factor = np.zeros(table.block.size), np.ones(table.block.size)
                 frac[idx], piece_factor[idx] = table.pieces_at(idx, head, tail, fac, arc_rel, g)
-                return alone_block_ratios(table, blocks, frac, piece_factor, lengths_np, feeds_np, tp.start, d_np, limits)
+                return alone_block_ratios(table, blocks, frac, piece_factor, lengths_np, feeds_np, tp.start, d_np, limits,
+                                          decisions=decisions)
             return hold_block_limits(alone, safe_feed / (F_np * fac.max(axis=1)), which)
 
         def futile(fac, corners):

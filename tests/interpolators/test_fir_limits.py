@@ -159,7 +159,7 @@ def test_block_feed_bisection():
     which = np.array([True, True, False, True])
     asked = []
 
-    def alone(g, blocks):
+    def alone(g, blocks, decisions):
         asked.append(blocks.copy())
         return np.where(blocks, r0 * g, 0.0)
 
@@ -204,7 +204,8 @@ def test_largest_safe_is_the_bisections_multiplier_in_fewer_builds():
 
     builds = []
 
-    def alone(g, blocks):
+    def alone(g, blocks, decisions):
+        assert decisions  # the search reads comparisons only
         builds.append(blocks.copy())
         assert np.all(g[~blocks] == 1.0)
         return np.where(blocks, ratio_of(g), 0.0)
@@ -233,7 +234,7 @@ def test_largest_safe_where_the_ratio_falls_somewhere():
     def ratio_of(g):
         return c * g * (1.0 - 0.8 * np.exp(-(((g - dip_at) / dip_w) ** 2)))
 
-    got = _largest_safe(lambda g, b: np.where(b, ratio_of(g), 0.0), np.ones(n, dtype=bool), lo.copy(),
+    got = _largest_safe(lambda g, b, decisions: np.where(b, ratio_of(g), 0.0), np.ones(n, dtype=bool), lo.copy(),
                         ratio_of(np.ones(n)))
     assert np.all(ratio_of(got) <= 1.0 + 1e-9)
     step = (1.0 - lo) * 2.0**-BISECTION_STEPS
@@ -518,16 +519,59 @@ def test_phase_one_decides_alike_with_and_without_the_bound():
         limits = AxisLimits.fir_envelope(tp.dim, float(rng.uniform(40.0, 200.0)), d)
         which = rng.random(M) < 0.8
 
-        def ratios(g, blocks, prove):
+        def ratios(g, blocks, prove, decisions):
             frac, pf = table.pieces(head, tail, factor * g[:, None], None if not table.arc_pieces.size
                                     else np.ones(table.arc_pieces.size))
-            return alone_block_ratios(table, blocks, frac, pf, lengths, feeds, tp.start, d, limits, prove=prove)
+            return alone_block_ratios(table, blocks, frac, pf, lengths, feeds, tp.start, d, limits, prove=prove,
+                                      decisions=decisions)
 
         frac, pf = table.pieces(head, tail, factor, None if not table.arc_pieces.size else np.ones(table.arc_pieces.size))
         left_out += int(np.sum(which & (alone_bounds(table, which, frac, pf, lengths, feeds, d, limits) <= PROVEN)))
         safe = np.full(M, 0.3)
-        g_with = hold_block_limits(lambda g, b: ratios(g, b, True), safe, which)
-        g_without = hold_block_limits(lambda g, b: ratios(g, b, False), safe, which)
+        g_with = hold_block_limits(lambda g, b, decisions: ratios(g, b, True, decisions), safe, which)
+        g_without = hold_block_limits(lambda g, b, decisions: ratios(g, b, False, decisions), safe, which)
         np.testing.assert_array_equal(g_with, g_without)
         repaired += int(np.sum(g_without < 1.0))
     assert left_out > 10 and repaired > 10
+
+
+def test_alone_ratios_for_decisions_compare_as_the_full_build(monkeypatch):
+    """``alone_block_ratios(..., decisions=True)`` on seeded random programs at random feed
+    multipliers, limits near the peaks (some blocks above them, some proven safe): every
+    comparison with ``1 + LIMIT_RTOL`` is that of the build of every block (``prove=False``), and
+    it builds fewer blocks than ``decisions=False``, which builds them all again whenever a block
+    is above the limit."""
+    from research.interpolators import _fir_limits
+    from research.interpolators._fir_limits import LIMIT_RTOL, alone_block_ratios
+    from research.paths.library import random_program
+
+    built = []
+    original = _fir_limits._built_ratios
+
+    def counted(table, blocks, *args):
+        built.append(int(np.sum(blocks)))
+        return original(table, blocks, *args)
+
+    monkeypatch.setattr(_fir_limits, "_built_ratios", counted)
+    d = np.array([0.06, 0.03])
+    sizes = {False: 0, True: 0}
+    above = 0
+    for seed in range(20):
+        rng = np.random.default_rng(950 + seed)
+        tp = random_program(rng, arcs=bool(seed % 2))
+        M = tp.n_blocks
+        table, _, _, lengths, feeds = _alone_inputs(tp, rng, rng.uniform(50.0, 300.0, M))
+        head, tail = rng.uniform(0.0, 0.4, M), rng.uniform(0.0, 0.4, M)
+        factor = rng.uniform(0.3, 1.0, (M, 3)) * rng.uniform(0.2, 1.0, M)[:, None]
+        frac, pf = table.pieces(head, tail, factor, None if not table.arc_pieces.size else np.ones(table.arc_pieces.size))
+        limits = AxisLimits.fir_envelope(tp.dim, float(rng.uniform(40.0, 200.0)), d)
+        blocks = rng.random(M) < 0.8
+        exact = alone_block_ratios(table, blocks, frac, pf, lengths, feeds, tp.start, d, limits, prove=False)
+        for decisions in (False, True):
+            n0 = len(built)
+            got = alone_block_ratios(table, blocks, frac, pf, lengths, feeds, tp.start, d, limits, decisions=decisions)
+            np.testing.assert_array_equal(got[blocks] > 1.0 + LIMIT_RTOL, exact[blocks] > 1.0 + LIMIT_RTOL)
+            sizes[decisions] += sum(built[n0:])
+        above += int(np.sum(exact[blocks] > 1.0 + LIMIT_RTOL))
+    assert above > 10
+    assert sizes[True] < sizes[False]
