@@ -137,6 +137,70 @@ def test_plain_move_peaks_scale_with_alpha():
         assert j == pytest.approx(j1 * alpha ** (2 / 3), rel=1e-6)
 
 
+def test_bisection_on_grid_is_the_bisection():
+    """``_bisection_on_grid`` against plain bisections on ``log alpha`` (an independent loop) for
+    seeded thresholds: the same bracket bit for bit, with values that are power laws of alpha
+    (as the peaks of a plain move, ``m alpha^(1/3)`` and ``m alpha^(2/3)``) or the larger of two
+    (a kink where the binding limit changes), in far fewer predicate evaluations."""
+    import math
+
+    from research.interpolators.sigmoid import _bisection_on_grid
+
+    rng = np.random.default_rng(3)
+    evaluations, bisections = 0, 0
+    for trial in range(400):
+        lo = float(np.exp(rng.uniform(-10.0, 10.0)))
+        hi, steps = 10.0 * lo, int(rng.choice([15, 25]))
+        thr = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+        p, q = rng.uniform(0.3, 3.0, 2)
+        kink = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+        calls = []
+
+        def lower(x):
+            calls.append(x)
+            return x < thr
+
+        if trial % 2:
+            def value(x):  # -log(peak / limit) of a peak ~ alpha^p
+                return -p * math.log(x / thr)
+        else:
+            def value(x):  # the binding one of two power laws changes at the kink (same sign)
+                return -(p if x < kink else q) * math.log(x / thr)
+
+        a, b = lo, hi
+        for _ in range(steps):
+            mid = math.sqrt(a * b)
+            a, b = (mid, b) if mid < thr else (a, mid)
+        assert _bisection_on_grid(lower, value, lo, hi, steps) == (a, b)
+        evaluations += len(calls)
+        bisections += steps
+    assert evaluations < 0.5 * bisections
+
+
+def test_plain_moves_alpha_is_the_boundary():
+    """Seeded plain moves (A = 0: chords of 0.05-200 mm, feeds 5-300 mm/s, acceleration limits,
+    jerk limits or none; blend orders 1 and 2 as well): the returned motion keeps the limits on a
+    dense grid; of the sigmoid (order 3), whose peaks grow with alpha (module docstring), 1.001x to
+    10x its alpha (same stop rule) each break one."""
+    rng = np.random.default_rng(8)
+    for i in range(12):
+        L, m = float(np.exp(rng.uniform(np.log(0.05), np.log(200.0)))), float(rng.uniform(5.0, 300.0))
+        acc = float(rng.uniform(200.0, 5000.0))
+        jerk = None if i % 2 else float(acc * rng.uniform(5.0, 100.0))
+        order = 3 if i < 8 else (1, 2)[i % 2]
+        motion = mtp_motion(L, m, acceleration=acc, jerk=jerk, order=order)
+        _, _, a, j = motion.derivatives(np.linspace(0.0, motion.duration, 200001))
+        assert np.max(np.abs(a)) <= acc * (1 + 1e-6)
+        assert jerk is None or np.max(np.abs(j)) <= jerk * (1 + 1e-6)
+        if order != 3:
+            continue
+        alpha = motion.terms[0][1].alpha
+        for k in (1.001, 1.1, 10.0):
+            big = _build(L, m, 0.0, 0.0, alpha * k, order, 1e-4, 1e-4)
+            _, _, a, j = big.derivatives(_grid(big, alpha * k, 0.0))
+            assert np.max(np.abs(a)) > acc or (jerk is not None and np.max(np.abs(j)) > jerk), (i, k)
+
+
 def test_mtp_rest_to_rest_without_overshoot(mtp):
     t, d = dense(mtp)
     assert d[0][0] == 0.0 and d[1][0] == 0.0 and d[2][0] == 0.0
