@@ -220,6 +220,8 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
 
     last_check = None  # the last complete check of any candidate (RoundChecks.snapshot)
     rival = [np.inf]  # the least bound of the other candidates (and the best verified time), set by verify
+    alone_memo = {}  # a block's phase 1 multiplier by its pieces and safe multiplier (settle's hold)
+    key_width = int(np.max(table.last_motion - table.first_motion, initial=0)) + 2  # its motion pieces and gap
 
     def settle(candidate, several=False, slow_futile=False, on_futile=None):
         """Verify and repair one candidate plan (``candidate()`` builds its new arrays ``(factor,
@@ -256,14 +258,36 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
 
         def hold(fac, which):
             """``_fir_limits`` phase 1 at feed factors ``fac``: multipliers under which the blocks
-            ``which`` alone (every corner an exact stop) keep the limits."""
+            ``which`` alone (every corner an exact stop) keep the limits. A block is checked alone
+            once per plan for the same pieces (shares and feed factors) and safe multiplier
+            (``alone_memo``): the candidates share most blocks, and a block's result depends on
+            its own pieces only (up to the rounding of its time offset in the build)."""
             def alone(g, blocks, decisions):  # their pieces only (the others are not read)
                 idx, _ = table.block_pieces(np.flatnonzero(blocks))
                 frac, piece_factor = np.zeros(table.block.size), np.ones(table.block.size)
                 frac[idx], piece_factor[idx] = table.pieces_at(idx, head, tail, fac, arc_rel, g)
                 return alone_block_ratios(table, blocks, frac, piece_factor, lengths_np, feeds_np, tp.start, d_np, limits,
                                           decisions=decisions)
-            return hold_block_limits(alone, safe_feed / (F_np * fac.max(axis=1)), which)
+            safe = safe_feed / (F_np * fac.max(axis=1))
+            ks = np.flatnonzero(which)
+            idx, owner = table.block_pieces(ks)
+            frac, piece_factor = table.pieces_at(idx, head, tail, fac, arc_rel)
+            keys = _block_keys(ks, safe[ks], owner, frac, piece_factor, key_width)
+            g = np.ones(M)
+            todo = np.zeros(M, dtype=bool)
+            for k, key in zip(ks.tolist(), keys):
+                known = alone_memo.get(key)
+                if known is None:
+                    todo[k] = True
+                else:
+                    g[k] = known
+            if todo.any():
+                found = hold_block_limits(alone, safe, todo)
+                g[todo] = found[todo]
+                for k, key in zip(ks.tolist(), keys):
+                    if todo[k]:
+                        alone_memo[key] = float(found[k])
+            return g
 
         def futile(fac, corners):
             """``_fir_limits.futile_stops`` of ``corners`` at feed factors ``fac`` (each block's piece
@@ -594,6 +618,22 @@ def _timing_kernel(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents,
     full, shrink, others = corner
     overlaps = jnp.where(full > 0, Td, overlap_time(jnp.maximum(tol_vertex - others, 0.0), dF, delays)) * shrink
     return piece_tv, overlaps
+
+
+def _block_keys(ks: np.ndarray, safe: np.ndarray, owner: np.ndarray, frac: np.ndarray, piece_factor: np.ndarray,
+                width: int | None = None):
+    """One hashable key per block ``ks`` ``(K,)``: its index, its safe multiplier and the shares and
+    feed factors of its pieces (``owner``: the position in ``ks`` of each piece's block), bit for
+    bit (rows of floats read as bytes; NaN pads blocks of fewer pieces to ``width`` pieces, by
+    default the most any of them has: keys of calls with different widths never meet)."""
+    counts = np.bincount(owner, minlength=ks.size)
+    width = int(counts.max(initial=0)) if width is None else width
+    rows = np.full((ks.size, 2 + 2 * width), np.nan)
+    rows[:, 0], rows[:, 1] = ks, safe
+    col = np.arange(owner.size) - np.repeat(np.cumsum(counts) - counts, counts)
+    rows[owner, 2 + col] = frac
+    rows[owner, 2 + width + col] = piece_factor
+    return np.ascontiguousarray(rows).view(np.dtype((np.void, rows.shape[1] * 8))).ravel().tolist()
 
 
 def _pulse_table(tp: ToolPath) -> PulseTable:

@@ -263,3 +263,27 @@ def test_a_losing_candidates_chain_walk_is_suspended(monkeypatch):
     assert bound <= float(plan.cycle_time) <= 1.01 * bound
     assert within_limits(plan.trajectory(1e-3), lim)
     assert float(np.max(np.asarray(plan.corner_errors))) <= 1e-4 * (1 + 1e-9) + 1e-9
+
+
+def test_block_keys_tell_blocks_apart_bit_for_bit():
+    """``_fir_settle._block_keys`` (phase 1's per-plan memo of blocks checked alone): two blocks get
+    the same key exactly when their index, safe multiplier and every piece's share and feed factor
+    are the same floats (an independent comparison of tuples), whatever their piece counts (a
+    block of fewer pieces is not equal to one padded with zeros)."""
+    from research.interpolators._fir_settle import _block_keys
+
+    rng = np.random.default_rng(5)
+    for _ in range(50):
+        K = int(rng.integers(1, 40))
+        ks = rng.integers(0, 6, K)
+        counts = rng.integers(1, 4, K)
+        owner = np.repeat(np.arange(K), counts)
+        frac = rng.choice([0.0, 0.25, 0.5, 1.0], owner.size)
+        pf = rng.choice([0.5, 1.0, 1.0 + 2.0**-52], owner.size)
+        safe = rng.choice([0.3, 1.0], K)
+        keys = _block_keys(ks, safe, owner, frac, pf)
+        tuples = [(int(ks[i]), float(safe[i]), tuple(frac[owner == i]), tuple(pf[owner == i])) for i in range(K)]
+        for i in range(K):
+            for j in range(K):
+                assert (keys[i] == keys[j]) == (tuples[i] == tuples[j])
+                assert (hash(keys[i]) == hash(keys[j])) or tuples[i] != tuples[j]
