@@ -39,6 +39,20 @@ def _plan_inputs(tp, rng):
     return table, F, head, tail, factor, arc_rel, full, shrink, others, tol
 
 
+def _random_windows_cases(seeds, path_seed, d):
+    """``(tp, plan inputs of _plan_inputs, limits)`` of seeded random programs: lines of 0.2-12 mm
+    turning up to 40 deg (windows over several blocks; even seeds) and lines with arcs (odd), under
+    the FIR envelope of a random feed."""
+    for seed in seeds:
+        rng = np.random.default_rng(seed)
+        if seed % 2:
+            tp = random_program(rng, arcs=True)
+        else:
+            tp = ToolPath.from_polyline(turning_path(path_seed + seed, 60, (0.2, 12.0), 40.0))
+        inputs = _plan_inputs(tp, rng)
+        yield tp, inputs, AxisLimits.fir_envelope(tp.dim, float(rng.uniform(100.0, 250.0)), d)
+
+
 def _whole_windows(tp, table, F, head, tail, factor, arc_rel, full, shrink, others, tol, d, limits):
     """``(M - 1,)`` corner-window ratios and the starts and pulse lengths of the whole path's
     profile, built as ``plan_fir``'s ``schedule`` builds it (every piece, every corner)."""
@@ -69,15 +83,10 @@ def test_corner_windows_decide_as_the_whole_profile(delays):
     Td = float(np.sum(d))
     thr = 1.0 + LIMIT_RTOL + THRESHOLD_GUARD
     broke = kept = 0
-    for seed in range(10):
-        rng = np.random.default_rng(700 + seed)
-        if seed % 2:
-            tp = random_program(rng, arcs=True)
-        else:
-            tp = ToolPath.from_polyline(turning_path(80 + seed, 60, (0.2, 12.0), 40.0))
+    rng = np.random.default_rng(7)
+    for tp, inputs, limits in _random_windows_cases(range(700, 710), -620, d):
         M = tp.n_blocks
-        table, F, head, tail, factor, arc_rel, full, shrink, others, tol = _plan_inputs(tp, rng)
-        limits = AxisLimits.fir_envelope(tp.dim, float(rng.uniform(100.0, 250.0)), d)
+        table, F, head, tail, factor, arc_rel, full, shrink, others, tol = inputs
         ratios, starts, pulse = _whole_windows(tp, table, F, head, tail, factor, arc_rel, full, shrink, others, tol, d,
                                                limits)
         assert not np.any(np.abs(ratios - thr) < 1e-9)  # no window within rounding of the threshold
@@ -104,15 +113,9 @@ def test_first_window_ranges_hold_each_windows_input(delays):
     blocks around a corner it started from before did not, on these paths."""
     d = np.array(delays)
     short = 0
-    for seed in range(8):
-        rng = np.random.default_rng(750 + seed)
-        if seed % 2:
-            tp = random_program(rng, arcs=True)
-        else:
-            tp = ToolPath.from_polyline(turning_path(90 + seed, 60, (0.2, 12.0), 40.0))
+    for tp, inputs, limits in _random_windows_cases(range(750, 758), -660, d):
         M = tp.n_blocks
-        table, F, head, tail, factor, arc_rel, full, shrink, others, tol = _plan_inputs(tp, rng)
-        limits = AxisLimits.fir_envelope(tp.dim, float(rng.uniform(100.0, 250.0)), d)
+        table, F, head, tail, factor, arc_rel, full, shrink, others, tol = inputs
         t_in, t_out = tp.tangents()
         windows = CornerWindows(table, tp.lengths, F, t_in, t_out, tol, d, limits)
         corners = np.arange(M - 1)

@@ -499,22 +499,31 @@ def test_alone_bound_of_a_rectangular_pulse_is_the_paper_peak(pulse):
         np.testing.assert_allclose(got, [want], rtol=1e-12)
 
 
+def _alone_cases(seeds, d):
+    """``(tp, table, lengths, feeds, head, tail, rng)`` of seeded random programs (lines; lines and
+    arcs on odd seeds) with random feeds and line shares, as phase 1 sees them."""
+    from research.paths.library import random_program
+
+    for seed in seeds:
+        rng = np.random.default_rng(seed)
+        tp = random_program(rng, arcs=bool(seed % 2))
+        M = tp.n_blocks
+        table, _, _, lengths, feeds = _alone_inputs(tp, rng, rng.uniform(50.0, 300.0, M))
+        head, tail = rng.uniform(0.0, 0.4, M), rng.uniform(0.0, 0.4, M)
+        yield tp, table, lengths, feeds, head, tail, rng
+
+
 def test_phase_one_decides_alike_with_and_without_the_bound():
     """``hold_block_limits`` on random programs and limits near their peaks: the same multipliers
     (to the bit) whether ``alone_block_ratios`` leaves out the blocks its bound proves safe or builds
     them all, with some blocks left out and some repaired."""
     from research.interpolators._fir_alone_bound import alone_bounds
     from research.interpolators._fir_limits import PROVEN, alone_block_ratios
-    from research.paths.library import random_program
 
     d = np.array([0.06, 0.03])
     left_out = repaired = 0
-    for seed in range(30):
-        rng = np.random.default_rng(900 + seed)
-        tp = random_program(rng, arcs=bool(seed % 2))
+    for tp, table, lengths, feeds, head, tail, rng in _alone_cases(range(900, 930), d):
         M = tp.n_blocks
-        table, frac0, pf0, lengths, feeds = _alone_inputs(tp, rng, rng.uniform(50.0, 300.0, M))
-        head, tail = rng.uniform(0.0, 0.4, M), rng.uniform(0.0, 0.4, M)
         factor = rng.uniform(0.3, 1.0, (M, 3))
         limits = AxisLimits.fir_envelope(tp.dim, float(rng.uniform(40.0, 200.0)), d)
         which = rng.random(M) < 0.8
@@ -543,7 +552,6 @@ def test_alone_ratios_for_decisions_compare_as_the_full_build(monkeypatch):
     is above the limit."""
     from research.interpolators import _fir_limits
     from research.interpolators._fir_limits import LIMIT_RTOL, alone_block_ratios
-    from research.paths.library import random_program
 
     built = []
     original = _fir_limits._built_ratios
@@ -556,12 +564,8 @@ def test_alone_ratios_for_decisions_compare_as_the_full_build(monkeypatch):
     d = np.array([0.06, 0.03])
     sizes = {False: 0, True: 0}
     above = 0
-    for seed in range(20):
-        rng = np.random.default_rng(950 + seed)
-        tp = random_program(rng, arcs=bool(seed % 2))
+    for tp, table, lengths, feeds, head, tail, rng in _alone_cases(range(950, 970), d):
         M = tp.n_blocks
-        table, _, _, lengths, feeds = _alone_inputs(tp, rng, rng.uniform(50.0, 300.0, M))
-        head, tail = rng.uniform(0.0, 0.4, M), rng.uniform(0.0, 0.4, M)
         factor = rng.uniform(0.3, 1.0, (M, 3)) * rng.uniform(0.2, 1.0, M)[:, None]
         frac, pf = table.pieces(head, tail, factor, None if not table.arc_pieces.size else np.ones(table.arc_pieces.size))
         limits = AxisLimits.fir_envelope(tp.dim, float(rng.uniform(40.0, 200.0)), d)
