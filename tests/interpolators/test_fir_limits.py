@@ -499,7 +499,7 @@ def test_alone_bound_of_a_rectangular_pulse_is_the_paper_peak(pulse):
         np.testing.assert_allclose(got, [want], rtol=1e-12)
 
 
-def _alone_cases(seeds, d):
+def _alone_cases(seeds):
     """``(tp, table, lengths, feeds, head, tail, rng)`` of seeded random programs (lines; lines and
     arcs on odd seeds) with random feeds and line shares, as phase 1 sees them."""
     from research.paths.library import random_program
@@ -522,7 +522,7 @@ def test_phase_one_decides_alike_with_and_without_the_bound():
 
     d = np.array([0.06, 0.03])
     left_out = repaired = 0
-    for tp, table, lengths, feeds, head, tail, rng in _alone_cases(range(900, 930), d):
+    for tp, table, lengths, feeds, head, tail, rng in _alone_cases(range(900, 930)):
         M = tp.n_blocks
         factor = rng.uniform(0.3, 1.0, (M, 3))
         limits = AxisLimits.fir_envelope(tp.dim, float(rng.uniform(40.0, 200.0)), d)
@@ -564,7 +564,7 @@ def test_alone_ratios_for_decisions_compare_as_the_full_build(monkeypatch):
     d = np.array([0.06, 0.03])
     sizes = {False: 0, True: 0}
     above = 0
-    for tp, table, lengths, feeds, head, tail, rng in _alone_cases(range(950, 970), d):
+    for tp, table, lengths, feeds, head, tail, rng in _alone_cases(range(950, 970)):
         M = tp.n_blocks
         factor = rng.uniform(0.3, 1.0, (M, 3)) * rng.uniform(0.2, 1.0, M)[:, None]
         frac, pf = table.pieces(head, tail, factor, None if not table.arc_pieces.size else np.ones(table.arc_pieces.size))
