@@ -100,7 +100,9 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
     if limits is not None:
         if limits.n_axes != tp.dim:
             raise ParameterError(f"limits have {limits.n_axes} axes but the path has {tp.dim}")
-        safe_feed = np.where(tp.is_arc, arc_limit_caps(tp.radii, d_np, limits), feed_caps(tp.lengths, t_in, d_np, limits))
+        safe_feed = feed_caps(tp.lengths, t_in, d_np, limits)
+        if tp.is_arc.any():  # (elementwise: the arcs' caps alone, the same values)
+            safe_feed[tp.is_arc] = arc_limit_caps(tp.radii[tp.is_arc], d_np, limits)
     ahead = None  # the look-ahead's candidates at ``base``, made on the table before its sub-arcs are cut
     if refine and M > 1 and tp.is_arc.any() and limits is None:
         # sub-arcs cut where the candidates' windows end (``_fir_lookahead.arc_cuts``): a window
