@@ -138,13 +138,13 @@ def test_plain_move_peaks_scale_with_alpha():
 
 
 def test_bisection_on_grid_is_the_bisection():
-    """``_bisection_on_grid`` against plain bisections on ``log alpha`` (an independent loop) for
+    """``bisection_on_grid`` against plain bisections on ``log alpha`` (an independent loop) for
     seeded thresholds: the same bracket bit for bit, with values that are power laws of alpha
     (as the peaks of a plain move, ``m alpha^(1/3)`` and ``m alpha^(2/3)``) or the larger of two
     (a kink where the binding limit changes), in far fewer predicate evaluations."""
     import math
 
-    from research.interpolators.sigmoid import _bisection_on_grid
+    from research.interpolators._sigmoid_search import bisection_on_grid
 
     rng = np.random.default_rng(3)
     evaluations, bisections = 0, 0
@@ -171,7 +171,7 @@ def test_bisection_on_grid_is_the_bisection():
         for _ in range(steps):
             mid = math.sqrt(a * b)
             a, b = (mid, b) if mid < thr else (a, mid)
-        assert _bisection_on_grid(lower, value, lo, hi, steps) == (a, b)
+        assert bisection_on_grid(lower, value, lo, hi, steps) == (a, b)
         evaluations += len(calls)
         bisections += steps
     assert evaluations < 0.5 * bisections
