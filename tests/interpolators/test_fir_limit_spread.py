@@ -290,3 +290,41 @@ def test_block_keys_tell_blocks_apart_bit_for_bit():
             for j in range(K):
                 assert (keys[i] == keys[j]) == (tuples[i] == tuples[j])
                 assert (hash(keys[i]) == hash(keys[j])) or tuples[i] != tuples[j]
+
+
+def test_releasing_suspended_candidates_changes_no_plan(monkeypatch):
+    """A seeded circle of 1-4 deg chords under limits at 0.088x the FIR envelope (the stress sweep's
+    program 2), whose candidates are suspended inside their chain walks and after their vertex
+    errors: planned with the default of one held profile (the others released and rebuilt from
+    the same inputs on resuming) and with every profile held, the plans are the same to the bit,
+    and the default built more profiles (it released some)."""
+    from research.interpolators import _fir_profile, _fir_settle
+
+    rng = np.random.default_rng(1002)
+    n, radius, step = int(rng.integers(30, 200)), rng.uniform(5.0, 60.0), rng.uniform(0.5, 4.0)
+    th = np.radians(np.arange(n) * step) + rng.uniform(0.0, 2.0 * np.pi)
+    path = Polyline(np.column_stack([radius * np.cos(th), radius * np.sin(th)]))
+    eps, feed = float(rng.uniform(0.005, 0.1)), float(rng.uniform(50.0, 300.0))
+    d = (0.06, 0.03)
+    env = AxisLimits.fir_envelope(2, feed, d)
+    s = float(np.exp(rng.uniform(np.log(0.05), 0.0)))
+    limits = AxisLimits(env.velocity, s * env.acceleration, s * env.jerk)
+    builds = []
+    original = _fir_profile.profile
+
+    def counted(*args, **kwargs):
+        builds.append(1)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(_fir_profile, "profile", counted)
+    default = plan_fir(path, feed, d, eps, limits=limits)
+    n_default = len(builds)
+    monkeypatch.setattr(_fir_settle, "_HELD_PROFILES", 10**6)
+    builds.clear()
+    held = plan_fir(path, feed, d, eps, limits=limits)
+    assert n_default > len(builds)
+    assert float(default.cycle_time) == float(held.cycle_time)
+    for a, b in ((default.feeds, held.feeds), (default.overlaps, held.overlaps), (default.start_times, held.start_times),
+                 (default.pulse_times, held.pulse_times)):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    assert within_limits(default.trajectory(1e-3), limits)
