@@ -37,10 +37,12 @@ from research.interpolators._fir_limits import (
     feed_caps,
     futile_stops,
     hold_block_limits,
+    isolated_step,
     window_slow_down,
 )
 from research.interpolators._fir_limit_spread import CornerWindows, FeedSteps, spread_slow_down
 from research.interpolators._fir_lookahead import arc_cuts, look_ahead, with_table
+from research.interpolators._fir_staircase import capped_staircase
 from research.interpolators import _fir_profile
 from research.interpolators._fir_overlap import overlap_time
 from research.interpolators._fir_repair import Repairs
@@ -511,10 +513,11 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         candidates = None  # the generators hold the candidates (their arrays are built when started)
 
         def add_capped():
-            for c, bound, uniform in capped():
+            for c, bound, ways in capped():
                 bound = predicted_time(c()) if bound is None else bound
-                heapq.heappush(queue, (bound, next(index), settled(c, False)))
-                if uniform:  # and settled with slow_futile from its start (see capped)
+                if "plain" in ways:
+                    heapq.heappush(queue, (bound, next(index), settled(c, False)))
+                if "futile" in ways:  # settled with slow_futile from its start (see capped)
                     heapq.heappush(queue, (bound, next(index), settle(c, slow_futile=True)))
 
         held = {}  # index -> (bound, steps) of the candidates suspended with their profiles
@@ -552,22 +555,45 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         scale = end_ramp_scale(tp, F_np * base, t_in, t_out, d_np, limits)
 
         def capped():
-            """``[(candidate, bound, uniform)]``: the candidates with every block at its safe feed
-            alone (``uniform`` False), and where the path's start and end ramps break a limit, the
-            one of least bound among those of the whole path at its feeds scaled by
-            ``end_ramp_scale`` (True). A chain of short blocks runs inside one motion, where a
-            block peaks far below its own start and stop (its safe feed alone), and the ramps at
-            the path's ends are what a uniform feed must keep. That candidate is also settled with
-            ``slow_futile`` from its start: its corners sit just above a limit, where a window
+            """``[(candidate, bound, ways)]``: the candidates with every block at its safe feed
+            alone (``ways`` ``("plain",)``: settled as the others), and where the path's start and
+            end ramps break a limit, the one of least bound among those of the whole path at its
+            feeds scaled by ``end_ramp_scale`` (``("plain", "futile")``) and the blocks at feeds
+            capped window by window and joined by staircases of isolated steps
+            (``_fir_staircase``, ``("futile",)``). A chain of short blocks runs inside one motion,
+            where a block peaks far below its own start and stop (its safe feed alone), and the
+            ramps at the path's ends are what a uniform feed must keep. These two are settled with
+            ``slow_futile`` from their start: their corners sit just above a limit, where a window
             slow-down of ``0.98 / ratio`` costs ~2 % and phase 1 would take the blocks down to
-            their safe feeds alone. One candidate, not all: on the quick CAM file at 0.5x the
-            envelope all of them cost 3.6x the planning time for the same plan
-            (benchmarks/README.md)."""
-            out = [(c, b, False) for c, b in plans(np.minimum(base, safe_feed / F_np))]
+            their safe feeds alone (the staircase settled plainly fell back to them: 0.05x the
+            envelope, 142 s against 66 s, benchmarks/README.md). One uniform candidate, not all: on
+            the quick CAM file at 0.5x the envelope all of them cost 3.6x the planning time for the
+            same plan (benchmarks/README.md)."""
+            out = [(c, b, ("plain",)) for c, b in plans(np.minimum(base, safe_feed / F_np))]
             if scale < 1.0 - LIMIT_RTOL:
                 uniform = [(c, predicted_time(c()) if b is None else b) for c, b in plans(base * scale)]
-                out.append(min(uniform, key=lambda cb: cb[1]) + (True,))
+                out.append(min(uniform, key=lambda cb: cb[1]) + (("plain", "futile"),))
+                if M > 1:
+                    out.append((staircase_candidate(), None, ("futile",)))
             return out
+
+        def staircase_candidate():
+            """The blocks at their feeds capped window by window and joined by staircases of
+            isolated steps (``_fir_staircase``), every corner at full overlap."""
+            zeros, full1, ones1, zeros1 = np.zeros(M), np.ones(M - 1, dtype=bool), np.ones(M - 1), np.zeros(M - 1)
+            corners = np.arange(M - 1)
+
+            def factors(feeds):
+                return np.repeat((feeds / F_np)[:, None], 3, axis=1)
+
+            def read(feeds):
+                ratios, (blocks, first, last) = windows._windows(corners, zeros, zeros, factors(feeds), None, full1,
+                                                                 ones1, zeros1)
+                return ratios, blocks, first, last
+
+            step = float(np.min(isolated_step(d_np, limits)))
+            factor = factors(capped_staircase(tp.lengths, F_np * base, step, Td_np, read))
+            return lambda: (factor.copy(), np.zeros(M), np.zeros(M), np.ones(M - 1, dtype=bool), np.zeros(M - 1), None)
     state, rounds, deviation = verify(plans(base), capped)
     if traced:
         (feeds, overlaps, pulse, starts, profile, centre), pieces = traced_plan(*state[6])

@@ -328,3 +328,50 @@ def test_releasing_suspended_candidates_changes_no_plan(monkeypatch):
                  (default.pulse_times, held.pulse_times)):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
     assert within_limits(default.trajectory(1e-3), limits)
+
+
+def test_staircase_joins_caps_by_isolated_steps():
+    """``_fir_staircase.staircase`` on seeded random chains (block lengths 0.1-2 mm, caps 5-200 mm/s
+    with dips): never above a block's cap, starts and ends within one step of rest, changes by at
+    most one step between neighbours, and where the cap stays at C for longer than the ramps take,
+    reaches C (model: levels of one step, each held T_d, so C / step levels)."""
+    from research.interpolators._fir_staircase import staircase
+
+    rng = np.random.default_rng(12)
+    hold = 0.09
+    for _ in range(30):
+        M = int(rng.integers(50, 600))
+        lengths = rng.uniform(0.1, 2.0, M)
+        cap = np.where(rng.random(M) < 0.03, rng.uniform(5.0, 50.0, M), rng.uniform(150.0, 200.0))
+        step = float(rng.uniform(5.0, 40.0))
+        out = staircase(lengths, cap, step, hold)
+        assert np.all(out <= cap) and np.all(out > 0.0)
+        assert out[0] <= step * (1 + 1e-12) and out[-1] <= step * (1 + 1e-12)
+        assert np.all(np.abs(np.diff(out)) <= step * (1 + 1e-12))
+    lengths, C, step = np.full(2000, 0.5), 60.0, 10.0
+    out = staircase(lengths, np.full(2000, C), step, hold)
+    ramp = int(np.ceil(C / step)) * int(np.ceil(hold * C / 0.5))  # blocks of the longest ramp, generously
+    assert np.all(out[ramp:-ramp] == C)
+
+
+def test_tight_limits_run_a_circle_of_short_chords_above_the_feed_of_a_start_from_rest():
+    """A circle of R 20 mm in 600 chords of 0.21 mm at F 200 mm/s, T 60/30 ms, limits at 0.05x the
+    FIR envelope's acceleration and jerk (167 mm/s^2, 5,556 mm/s^3: one isolated step
+    ``min(A T1, J T1 T2)`` = 10 mm/s, Sencer 2015 §2.1). Every chord alone starts from rest at
+    most at 10 mm/s and phase 1 took the whole circle there (11.44 s, 11.0 mm/s on average); the
+    feeds capped window by window and joined by staircases of isolated steps
+    (``_fir_staircase``) run it at more than twice that on average, within the limits and the
+    tolerance, and not faster than the curvature allows (model prediction: ``v^2 / R <= A`` gives
+    ``sqrt(A R)`` = 57.7 mm/s)."""
+    n, R, F = 600, 20.0, 200.0
+    a = np.linspace(0.0, 2.0 * np.pi, n + 1)
+    path = Polyline(R * np.column_stack([np.cos(a), np.sin(a)]))
+    d = (0.06, 0.03)
+    env = AxisLimits.fir_envelope(2, F, d)
+    lim = AxisLimits(env.velocity, 0.05 * env.acceleration, 0.05 * env.jerk)
+    plan = plan_fir(path, F, d, 0.05, limits=lim)
+    L = 2.0 * np.pi * R
+    step = float(np.min(0.05 * env.acceleration * d[0]))
+    assert L / np.sqrt(float(np.min(lim.acceleration)) * R) <= float(plan.cycle_time) <= L / (2.0 * step)
+    assert within_limits(plan.trajectory(1e-3), lim)
+    assert float(np.max(np.asarray(plan.corner_errors))) <= 0.05 * (1 + 1e-9) + 1e-9
