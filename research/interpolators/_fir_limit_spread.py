@@ -94,7 +94,7 @@ class CornerWindows:
         corners = np.unique(np.asarray(corners, dtype=np.int64))
         if corners.size == 0:
             return out
-        ratios, (blocks, first, last) = self._windows(corners, head, tail, factor, arc_rel, full, shrink, others)
+        ratios, (blocks, first, last) = self.with_blocks(corners, head, tail, factor, arc_rel, full, shrink, others)
         for c in np.flatnonzero(ratios > 1.0 + LIMIT_RTOL + THRESHOLD_GUARD):
             out[blocks[first[c]:last[c]]] = True
         return out
@@ -105,11 +105,13 @@ class CornerWindows:
         corners = np.asarray(corners, dtype=np.int64)
         if not corners.size:
             return np.zeros(0)
-        return self._windows(corners, head, tail, factor, arc_rel, full, shrink, others)[0]
+        return self.with_blocks(corners, head, tail, factor, arc_rel, full, shrink, others)[0]
 
-    def _windows(self, corners, *plan):
-        """The corners' window ratios and blocks (:meth:`_read`), their block ranges grown until
-        each window's input lies within them."""
+    def with_blocks(self, corners, *plan):
+        """``(ratios (C,), (blocks, first, last))``: the largest ``peak / limit`` in the windows of
+        ``corners`` (distinct, ascending) in the plan of :meth:`breaking`'s arguments, and the
+        blocks each covers (window ``c``: ``blocks[first[c]:last[c]]``), read by :meth:`_read` on
+        block ranges grown until each window's input lies within them."""
         M = self.table.n_blocks
         lo_blk, hi_blk = self._reach(corners)
         while True:

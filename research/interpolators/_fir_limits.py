@@ -184,7 +184,10 @@ def arc_limit_caps(radii: np.ndarray, delays: np.ndarray, limits: AxisLimits) ->
     its rotation ``F^3 / R^2`` switched on through the shortest filter). Conservative: the
     smallest limit over the axes is used, since an arc's tangent sweeps its plane."""
     d = np.sort(np.asarray(delays, dtype=np.float64))[::-1]
-    r = np.asarray(radii, dtype=np.float64)
+    radii = np.asarray(radii, dtype=np.float64)
+    arc = np.isfinite(radii)
+    out = np.full(radii.shape, np.inf)
+    r = radii[arc]  # the arcs alone: a plan of lines asks for every block (the bisection is elementwise)
     v, a, j = float(np.min(limits.velocity)), float(np.min(limits.acceleration)), float(np.min(limits.jerk))
     T1, T2 = d[0], (d[1] if d.size > 1 else d[0])
 
@@ -200,7 +203,8 @@ def arc_limit_caps(radii: np.ndarray, delays: np.ndarray, limits: AxisLimits) ->
         mid = 0.5 * (lo + hi)
         good = excess(mid) <= 0
         lo, hi = np.where(ok | ~good, lo, mid), np.where(ok | good, hi, mid)
-    return np.where(np.isfinite(r), lo, np.inf)
+    out[arc] = lo
+    return out
 
 
 def block_peak_ratios(peaks: PiecePeaks, starts: np.ndarray, pulse_times: np.ndarray, total_delay: float) -> np.ndarray:
@@ -421,8 +425,8 @@ def _largest_safe(alone_ratios, bad: np.ndarray, lo: np.ndarray, ratio: np.ndarr
     narrow dip below the limit, the bisection's midpoint-first order lands in the dip more often).
 
     Args:
-        alone_ratios: ``(g, blocks) -> (M,)`` peak ratios of the blocks ``blocks`` alone at feed
-            multipliers ``g`` (:func:`hold_block_limits`).
+        alone_ratios: ``(g, blocks, decisions) -> (M,)`` peak ratios of the blocks ``blocks`` alone
+            at feed multipliers ``g`` (:func:`hold_block_limits`; asked for decisions only).
         bad: ``(M,)`` bool, the blocks above a limit at multiplier 1; lo: ``(M,)`` their lower
             ends (not measured: ``hold_block_limits`` checks the result); ratio: ``(M,)`` their
             ratios at multiplier 1 (``> 1 + LIMIT_RTOL`` on ``bad``).

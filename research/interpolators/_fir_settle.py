@@ -102,9 +102,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
     if limits is not None:
         if limits.n_axes != tp.dim:
             raise ParameterError(f"limits have {limits.n_axes} axes but the path has {tp.dim}")
-        safe_feed = feed_caps(tp.lengths, t_in, d_np, limits)
-        if tp.is_arc.any():  # (elementwise: the arcs' caps alone, the same values)
-            safe_feed[tp.is_arc] = arc_limit_caps(tp.radii[tp.is_arc], d_np, limits)
+        safe_feed = np.where(tp.is_arc, arc_limit_caps(tp.radii, d_np, limits), feed_caps(tp.lengths, t_in, d_np, limits))
     ahead = None  # the look-ahead's candidates at ``base``, made on the table before its sub-arcs are cut
     if refine and M > 1 and tp.is_arc.any() and limits is None:
         # sub-arcs cut where the candidates' windows end (``_fir_lookahead.arc_cuts``): a window
@@ -223,7 +221,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         return predicted_time((f, head, tail, full, others, arc_rel), sh)
 
     last_check = None  # the last complete check of any candidate (RoundChecks.snapshot)
-    rival = [np.inf]  # the least bound of the other candidates (and the best verified time), set by verify
+    rival = np.inf  # the least bound of the other candidates (and the best verified time), set by verify
     alone_memo = {}  # a block's phase 1 multiplier by its pieces and safe multiplier (settle's hold)
     key_width = int(np.max(table.last_motion - table.first_motion, initial=0)) + 2  # its motion pieces and gap
 
@@ -394,7 +392,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
                             next_look = 2 * walked
                             low = predicted_time((factor, head, tail, full, others, arc_rel),
                                                  shrink * bisection.bound_scale)
-                            if not low > rival[0]:
+                            if not low > rival:
                                 continue
                             if not tol_due:  # this round reads no profile after its walk
                                 state = pos_np = pulse_np = starts_np = centre_np = durations = None
@@ -495,6 +493,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         exact stops; and one at the feeds the path's end ramps allow) join the same queue. Returns
         the best settled ``(state, rounds, deviation)``, the state without its profile (its first
         and last break in its place)."""
+        nonlocal rival
         best, best_time = None, np.inf
         several = len(candidates) > 1
         # candidates to settle with slow_futile as well (settle's on_futile), each from its start,
@@ -523,7 +522,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         held = {}  # index -> (bound, steps) of the candidates suspended with their profiles
         while queue and queue[0][0] < best_time:
             bound, i, steps = heapq.heappop(queue)
-            rival[0] = min(queue[0][0], best_time) if queue else best_time
+            rival = min(queue[0][0], best_time) if queue else best_time
             held.pop(i, None)
             holds = False
             try:
@@ -587,9 +586,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
                 return np.repeat((feeds / F_np)[:, None], 3, axis=1)
 
             def read(feeds):
-                ratios, (blocks, first, last) = windows._windows(corners, zeros, zeros, factors(feeds), None, full1,
-                                                                 ones1, zeros1)
-                return ratios, blocks, first, last
+                return windows.with_blocks(corners, zeros, zeros, factors(feeds), None, full1, ones1, zeros1)
 
             step = float(np.min(isolated_step(d_np, limits)))
             factor = factors(capped_staircase(tp.lengths, F_np * base, step, Td_np, read))
@@ -649,13 +646,12 @@ def _timing_kernel(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents,
 
 
 def _block_keys(ks: np.ndarray, safe: np.ndarray, owner: np.ndarray, frac: np.ndarray, piece_factor: np.ndarray,
-                width: int | None = None):
+                width: int):
     """One hashable key per block ``ks`` ``(K,)``: its index, its safe multiplier and the shares and
     feed factors of its pieces (``owner``: the position in ``ks`` of each piece's block), bit for
-    bit (rows of floats read as bytes; NaN pads blocks of fewer pieces to ``width`` pieces, by
-    default the most any of them has: keys of calls with different widths never meet)."""
+    bit (rows of floats read as bytes; NaN pads blocks of fewer pieces to ``width`` pieces, the
+    most a block of the path has, so that the keys of every call can meet)."""
     counts = np.bincount(owner, minlength=ks.size)
-    width = int(counts.max(initial=0)) if width is None else width
     rows = np.full((ks.size, 2 + 2 * width), np.nan)
     rows[:, 0], rows[:, 1] = ks, safe
     col = np.arange(owner.size) - np.repeat(np.cumsum(counts) - counts, counts)

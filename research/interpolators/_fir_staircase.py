@@ -7,8 +7,9 @@ A block shorter than the FIR window cannot start from rest above the feed of one
 every block of such a chain to it: on a CAM file of 0.5 mm chords at 0.1x the envelope, 18 mm/s
 where the path's curvature allows ~40-85 mm/s. Inside one motion the feed may change by such
 steps as long as each is held for ``T_d`` (the steps are then isolated). :func:`capped_staircase`
-caps the feeds of the blocks around every corner whose window breaks a limit (the window's peak
-ratio scales the feed down, peaks growing at least linearly with it) and joins the caps by
+caps the feeds of the blocks around every corner whose window breaks a limit (by the window's peak
+ratio to the power ``1 / POWER``: where its peaks grow as a power of the feed of at most 3, the
+cap stays at or above the feed the window allows) and joins the caps by
 :func:`staircase`, until every window keeps the limits; the planner verifies and repairs the
 result like any candidate.
 """
@@ -54,21 +55,22 @@ def _rises(lengths, cap, step, hold, direction, out):
 
 
 def capped_staircase(lengths: np.ndarray, ceiling: np.ndarray, step: float, hold: float,
-                     windows: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]) -> np.ndarray:
+                     windows: Callable[[np.ndarray], tuple[np.ndarray, tuple]]) -> np.ndarray:
     """``(M,)`` block feeds [mm/s]: ``ceiling`` ``(M,)`` joined by :func:`staircase`, the blocks of
-    every window above a limit capped at their feed over its ratio, for :data:`ROUNDS` rounds or
-    until every window keeps the limits.
+    every window above a limit capped at their feed over its ratio to the power ``1 / POWER``, for
+    :data:`ROUNDS` rounds or until every window keeps the limits.
 
     Args:
         lengths: ``(M,)`` block lengths [mm]; ceiling: ``(M,)`` each block's own bound [mm/s];
         step: the isolated step [mm/s]; hold: ``T_d`` [s].
-        windows: ``feeds -> (ratios (C,), blocks, first, last)``: every corner window's largest
-            peak / limit at those feeds; window ``c`` covers ``blocks[first[c]:last[c]]``.
+        windows: ``feeds -> (ratios (C,), (blocks, first, last))``: every corner window's largest
+            peak / limit at those feeds; window ``c`` covers ``blocks[first[c]:last[c]]``
+            (``_fir_limit_spread.CornerWindows.with_blocks``).
     """
     cap = np.asarray(ceiling, dtype=np.float64).copy()
     feeds = staircase(lengths, cap, step, hold)
     for _ in range(ROUNDS):
-        ratios, blocks, first, last = windows(feeds)
+        ratios, (blocks, first, last) = windows(feeds)
         bad = np.flatnonzero(ratios > 1.0)
         if not bad.size:
             break

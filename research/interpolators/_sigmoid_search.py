@@ -35,7 +35,7 @@ def decade_bracket(alpha, has_room, within_limits):
 GUIDED_PROBES = 8
 
 
-def bisection_on_grid(lower, value, lo: float, hi: float, steps: int) -> tuple[float, float]:
+def bisection_on_grid(lower, value, lo: float, hi: float, steps: int, guided: bool = True) -> tuple[float, float]:
     """The bracket ``steps`` bisections of ``[lo, hi]`` on ``log alpha`` end with (midpoints
     ``sqrt(lo hi)``; the lower end moves to a midpoint where ``lower(mid)``, else the upper end),
     found in fewer evaluations where ``lower`` holds below one alpha and not above it.
@@ -48,11 +48,13 @@ def bisection_on_grid(lower, value, lo: float, hi: float, steps: int) -> tuple[f
     known ends crosses 0, on the grid point below it after the upper end moved and above it after
     the lower end moved (two probes where ``value`` is linear in ``log alpha``, as a peak that is
     a power of alpha), bisecting the indices after :data:`GUIDED_PROBES` probes. Where ``lower``
-    holds below one alpha only, the bracket is the bisection's, bit for bit.
+    holds below one alpha only, the bracket is the bisection's, bit for bit. Not ``guided``, it is
+    the bisection itself (its midpoints, in its order; ``value`` is not called).
 
     Args:
         lower: ``alpha -> bool``; value: ``alpha -> float`` (see above); lo, hi: the bracket
-            (``lower(lo)``, not ``lower(hi)``, as the bisection assumes); steps: its bisections.
+            (``lower(lo)``, not ``lower(hi)``, as the bisection assumes); steps: its bisections;
+            guided: probe where ``value``'s secant leads (else bisect from the first step).
 
     Returns:
         ``(lo, hi)`` after the bisections.
@@ -73,14 +75,16 @@ def bisection_on_grid(lower, value, lo: float, hi: float, steps: int) -> tuple[f
 
     j_lo, j_hi = 0, top
     x_lo, x_hi = lo, hi
+    probes = GUIDED_PROBES if guided else 0
+    value = value if guided else (lambda x: 0.0)
     v_lo, v_hi = value(lo), value(hi)  # (the callers evaluated both ends already: memoized)
     last = 0  # the end the last probe moved: -1 lower, 1 upper, 0 none yet
     log_lo, span = math.log(lo), math.log(hi) - math.log(lo)
-    for probe in range(GUIDED_PROBES + steps):
+    for probe in range(probes + steps):
         if j_hi - j_lo <= 1:
             break
         j = (j_lo + j_hi) // 2
-        if probe < GUIDED_PROBES and v_lo != v_hi:
+        if probe < probes and v_lo != v_hi:
             a, b = math.log(x_lo), math.log(x_hi)
             u = (a + (b - a) * v_lo / (v_lo - v_hi) - log_lo) / span * top  # the secant's zero, as an index
             if math.isfinite(u):
@@ -99,11 +103,12 @@ def bisection_on_grid(lower, value, lo: float, hi: float, steps: int) -> tuple[f
 
 def grid_peak(motion, t: np.ndarray, y: np.ndarray, order: int) -> float:
     """Largest ``|d^order s / dt^order|`` of ``motion`` from its samples ``y`` on the grid ``t``
-    (:func:`research.interpolators.sigmoid._grid`, not equally spaced): the largest sample, or the exact value at the vertex of
-    the parabola through the top three samples (their divided differences) where that is larger.
-    Read as equally spaced (:func:`research.interpolators.sigmoid._peak`), a peak between spacings of 0.22 and 0.09 ms came out
-    6.5e-6 below the true one and the move broke its acceleration limit by 5.5e-6; the vertex's
-    own value never lies above the true peak, where a parabola's would at a kink (a blend's start)."""
+    (``sigmoid._grid``, not equally spaced): the largest sample, or the exact value at the vertex
+    of the parabola through the top three samples (their divided differences) where that is
+    larger. Read as equally spaced (``sigmoid._peak``), a peak between spacings of 0.22 and 0.09 ms
+    came out 6.5e-6 below the true one and the move broke its acceleration limit by 5.5e-6; the
+    vertex's own value never lies above the true peak, where a parabola's would at a kink (a
+    blend's start)."""
     i = int(np.argmax(y))
     best = float(y[i])
     if 0 < i < y.size - 1:

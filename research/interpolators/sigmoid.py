@@ -274,12 +274,8 @@ def mtp_motion(
             lo, hi = hi, 10.0 * hi
         while has_room(lo) and lo > 1e-12 * hi:
             lo /= 10.0
-        if plain:  # lo: no room, hi: room (alpha_room to ~5 %)
-            lo, hi = bisection_on_grid(lambda x: not has_room(x), lambda x: -build(x).stop_time, lo, hi, 15)
-        else:
-            for _ in range(15):
-                mid = math.sqrt(lo * hi)
-                lo, hi = (lo, mid) if has_room(mid) else (mid, hi)
+        # lo: no room, hi: room (alpha_room to ~5 %)
+        lo, hi = bisection_on_grid(lambda x: not has_room(x), lambda x: -build(x).stop_time, lo, hi, 15, plain)
         if not within_limits(hi):
             raise InfeasibleProblem(
                 f"no alpha meets a_max = {acceleration:g}, j_max = {jerk} on this {length:g} mm move at "
@@ -288,12 +284,8 @@ def mtp_motion(
         lo, hi = hi, 10.0 * hi  # lo: feasible
         while within_limits(hi):
             lo, hi = hi, 10.0 * hi
-    if plain:  # alpha to a relative 1e-7
-        lo, hi = bisection_on_grid(within_limits, lambda x: -math.log(peak_ratio(x)[1]), lo, hi, 25)
-    else:
-        for _ in range(25):
-            mid = math.sqrt(lo * hi)
-            lo, hi = (mid, hi) if within_limits(mid) else (lo, mid)
+    # alpha to a relative 1e-7
+    lo, hi = bisection_on_grid(within_limits, lambda x: -math.log(peak_ratio(x)[1]), lo, hi, 25, plain)
     return build(lo)
 
 

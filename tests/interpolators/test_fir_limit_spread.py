@@ -284,7 +284,7 @@ def test_block_keys_tell_blocks_apart_bit_for_bit():
         frac = rng.choice([0.0, 0.25, 0.5, 1.0], owner.size)
         pf = rng.choice([0.5, 1.0, 1.0 + 2.0**-52], owner.size)
         safe = rng.choice([0.3, 1.0], K)
-        keys = _block_keys(ks, safe, owner, frac, pf)
+        keys = _block_keys(ks, safe, owner, frac, pf, 3)
         tuples = [(int(ks[i]), float(safe[i]), tuple(frac[owner == i]), tuple(pf[owner == i])) for i in range(K)]
         for i in range(K):
             for j in range(K):
