@@ -185,22 +185,35 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     with np.errstate(invalid="ignore"):
         hold = window_half_width(delays, np.nan_to_num(own / (own + other), nan=1.0))
     d_all = own = None
-    reach = Fv * every.rho.max()  # a window at a feed <= Fv sums the turns strictly inside s_v +- reach
+    every_rho = float(every.rho.max())
+    reach = Fv * every_rho  # a window at a feed <= Fv sums the turns strictly inside s_v +- reach
     # the vertices strictly inside each window's reach: indices [w_lo, w_hi)
     w_lo, w_hi = np.searchsorted(s_v, s_v - reach, side="right"), np.searchsorted(s_v, s_v + reach, side="left")
     memo, solved = {}, []  # gap bytes -> feeds of the vertices that do not dwell; (gap, its feeds (M - 1,)) solved
+    own_reach = []  # the vertices strictly inside each window at its own feed on the whole chain (made once)
 
     def feeds_without(gap):
         """Window feeds of the vertices that do not dwell, on the chain without the dwell turns:
         only windows that reach a removed turn change (the others sum the same turns), and a
         window whose reach holds the same dwell vertices as in a set solved before takes that
-        set's feed (it sums the same turns; up to the rounding of the chain's prefix sums)."""
+        set's feed (it sums the same turns; up to the rounding of the chain's prefix sums).
+
+        A window that reaches a removed turn at the commanded feed but not at its own feed on the
+        whole chain (``f_w``) keeps that feed: below the nearest removed turn's entry the two
+        chains sum the same turns, so ``f_w`` is a root of both (its error within the search's
+        stopping band of the tolerance), and the error above it exceeds the tolerance on both up
+        to that entry. Where the error is monotone in the feed it is the same root the search on
+        the smaller chain finds (to the band, ~1e-9); where it is not, that search may return a
+        higher root beyond the entry, or not (``ChainError.largest_feed``: one of the roots)."""
         key = gap.tobytes()
         if key not in memo:
-            # the windows that reach a removed turn: a dwell vertex strictly inside the reach
+            if not own_reach:
+                r = f_w * every_rho
+                own_reach.extend([np.searchsorted(s_v, s_v - r, side="right"), np.searchsorted(s_v, s_v + r, side="left")])
+            # the windows that reach a removed turn at their own feed: a dwell vertex strictly inside
             removed = np.concatenate([[0], np.cumsum(gap)])
             f = f_w.copy()
-            q = np.flatnonzero((removed[w_hi] > removed[w_lo]) & ~gap)
+            q = np.flatnonzero((removed[own_reach[1]] > removed[own_reach[0]]) & ~gap)
             for g_old, f_old in solved:  # f_old: that set's feeds (f_w at its dwell vertices)
                 if not q.size:
                     break

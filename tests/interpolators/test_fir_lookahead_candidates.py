@@ -214,3 +214,53 @@ def test_galloping_search_is_searchsorted():
                 want = np.searchsorted(a, v, side="right" if right else "left")
                 for hint in (-5, 0, n // 2, n - 1, n + 3, int(want)):
                     assert _search(a, v, right, hint) == want, (n, v, right, hint)
+
+
+
+def _kinked_chain(seed: int) -> np.ndarray:
+    """400 chords of 0.3 mm turning by 0.01 +- 0.004 rad each, with 12 kinks of 0.05-0.3 rad
+    (a finishing pass with a few sharper vertices): windows of many chords whose reach at the
+    commanded feed holds a kink that their own (slower) window does not."""
+    rng = np.random.default_rng(seed)
+    ang = np.cumsum(rng.normal(0.0, 0.004, 400) + 0.01)
+    ang[rng.choice(400, 12, replace=False)] += rng.choice([-1.0, 1.0], 12) * rng.uniform(0.05, 0.3, 12)
+    return np.vstack([[0.0, 0.0], np.cumsum(0.3 * np.column_stack([np.cos(ang), np.sin(ang)]), axis=0)])
+
+
+def test_window_feeds_are_feasible_roots_on_the_chain_without_the_dwell_turns():
+    """Every candidate's window feeds (its full-overlap vertices) keep the windowed displacement
+    within eps on the chain without its dwell turns, and none lies below the lowest feed at which
+    that displacement reaches eps (found independently: a scan of the feeds up to F, refined by
+    bisection; to the search's stopping band), so no window is slower than its first root. Holds
+    for the windows the look-ahead re-solves and for those that keep their feed on the whole chain
+    (their own reach holds no dwell turn). Line programs (seeds 0-9) and kinked chord chains
+    (seeds 0-1, where such windows are many)."""
+    from research.interpolators._fir_feed import ChainError
+    from research.paths import Polyline
+
+    programs = [_program(seed, False) + (4000,) for seed in range(10)]
+    programs += [(_as_toolpath(Polyline(_kinked_chain(seed))), 0.02, 150.0, 600) for seed in range(2)]
+    for tp, eps, feed, n_grid in programs:
+        M = tp.n_blocks
+        t_in, t_out = tp.tangents()
+        s_v, du = np.cumsum(tp.lengths)[:-1], t_in[1:] - t_out[:-1]
+        cands = lookahead.look_ahead(tp, _pulse_table(tp), np.full(M, feed), np.ones(M), np.asarray(DELAYS),
+                                     np.full(M - 1, eps), t_in, t_out)
+        grid = np.linspace(0.0, 1.0, n_grid + 1)[1:]
+        for c, _ in cands:
+            chain = ChainError(s_v[c.full], du[c.full], np.asarray(DELAYS))
+            s, f = s_v[c.full], c._feeds
+            assert np.all(chain(s, f) <= eps * (1 + 1e-9))
+            j = np.flatnonzero(f < feed)
+            if not j.size:
+                continue
+            over = chain(np.repeat(s[j], grid.size), feed * np.tile(grid, j.size)).reshape(j.size, -1) > eps
+            first = np.argmax(over, axis=1)  # every window below F has an infeasible feed above its own
+            lo, hi = np.where(first > 0, feed * grid[first - 1], 0.0), feed * grid[first]
+            for _ in range(60):
+                mid = 0.5 * (lo + hi)
+                ok = chain(s[j], mid) <= eps
+                lo, hi = np.where(ok, mid, lo), np.where(ok, hi, mid)
+            # the search stops within _fir_feed._CLOSE = 2^-30 (log of the error) of eps: ~1e-9
+            # of the feed where the error grows about linearly with it, more where it grows slower
+            assert np.all(f[j] >= lo * (1 - 1e-8)), (tp.n_blocks, f[j] / lo)
