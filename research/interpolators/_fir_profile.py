@@ -499,7 +499,11 @@ def _input_pulses(geo, block, gap, fraction, piece_tv, gaps, joins):
     time) and the block of each piece ``(K,)``. A piece that ``joins`` its predecessor (it goes
     on with its polynomial, ``PulseTable.joins``) at the same pulse length (feed) lengthens that
     piece instead of starting one (``K <= P``; the breaks where pieces start are those of the
-    pieces one by one: every length is added to the running sum as it was)."""
+    pieces one by one: every length is added to the running sum as it was). An empty piece (a gap
+    at full overlap, a head or tail of share 0; about half the pieces of a CAM program) is left
+    out unless the next piece lengthens it: the running sum does not move (it adds 0 to a
+    renormalized double-double), and the filters pass an empty piece without output and add 0
+    to their window sums, so the profile is the same, bit for bit, from a merge half as long."""
     P, D, A = geo.shape
     Mp = gaps.size
     breaks = np.empty(P + 1)
@@ -520,6 +524,9 @@ def _input_pulses(geo, block, gap, fraction, piece_tv, gaps, joins):
         rest += (acc - (s - z)) + (dur - z)
         acc = s + rest
         rest -= acc - s
+        if k >= 0 and dur == 0.0 and not (i + 1 < P and joins[i + 1] and not gap[i + 1]
+                                            and piece_tv[i + 1] == piece_tv[i]):
+            continue  # empty (a gap at full overlap, a head or tail of share 0) and not lengthened
         if k >= 0 and joins[i] and not gap[i] and piece_tv[i] == piece_tv[i - 1]:
             breaks[k + 1] = acc  # the piece before goes on
             lo[k + 1] = rest

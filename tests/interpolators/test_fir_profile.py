@@ -273,7 +273,8 @@ def test_profile_build_holds_no_oversized_buffer_and_no_spent_input():
     at most the input pulses + the first filter's pieces + 8/7 of the position's (each counted
     here from the shapes the stages return, called one by one) + 64 kB: a filter's input is not
     held once the next one is built, and a buffer sized for all ``2 K + 1`` merged pieces is kept
-    only where it is more than 7/8 used (here the first filter keeps about half)."""
+    only where it is more than 7/8 used (here the first filter fills its buffer: its input has no
+    empty piece)."""
     import tracemalloc
 
     from research.interpolators import fir
@@ -290,7 +291,11 @@ def test_profile_build_holds_no_oversized_buffer_and_no_spent_input():
     _, _, breaks, coeffs, _ = _fir_profile.profile(*args)  # warm (compiled)
     size = lambda *xs: sum(x.size * x.itemsize for x in xs)  # noqa: E731  (what the arrays show, not their buffers)
     bound = size(b0, l0, c0) + size(b1, l1, c1) + 8 / 7 * size(breaks, breaks, coeffs) + 64e3
-    assert 8 * c1.shape[0] < 7 * (2 * c0.shape[0] + 1)  # the first filter's buffer is mostly unused here
+    # the input pulses keep no empty piece after the first (a gap at full overlap, a head or tail of
+    # share 0; none is lengthened by the next one here): the first filter's pieces then nearly
+    # fill its buffer of 2 K + 1
+    assert np.all((b0[2:] - b0[1:-1]) + (l0[2:] - l0[1:-1]) > 0)
+    assert 8 * c1.shape[0] >= 7 * (2 * c0.shape[0] + 1)
     b0 = l0 = c0 = b1 = l1 = c1 = breaks = coeffs = None
     tracemalloc.start()
     try:
@@ -299,3 +304,33 @@ def test_profile_build_holds_no_oversized_buffer_and_no_spent_input():
     finally:
         tracemalloc.stop()
     assert peak <= bound, (peak, bound)
+
+
+@pytest.mark.parametrize("arcs", [False, True])
+def test_empty_input_pieces_change_no_bit_of_the_profile(arcs):
+    """``_input_pulses`` leaves out empty pieces (gaps at full overlap, heads and tails of share 0):
+    the filters must pass them without trace. Empty pieces with random coefficients inserted at
+    random places of a plan's input pulses (a break repeated with its low part) give the same
+    position profile, breaks and coefficients bit for bit, through both filters (the first
+    averaging, the last integrating: ``_fir_profile.profile``'s order)."""
+    from research.interpolators import fir
+
+    rng = np.random.default_rng(5)
+    path = random_program(np.random.default_rng(3), arcs=arcs)
+    plan = fir.plan_fir(path, 120.0, (0.06, 0.03), 0.05)
+    inp = plan.profile
+    t = inp.pieces.table
+    joins = np.zeros(t.block.size, dtype=bool) if t.joins is None else t.joins
+    b0, l0, c0, _ = _fir_profile._input_pulses(t.geo, t.block, t.gap, inp.fraction, inp.piece_tv, inp.gaps, joins)
+    at = np.sort(rng.choice(np.arange(1, c0.shape[0] + 1), size=c0.shape[0] // 2))  # before piece at - 1 ends
+    b1, l1 = np.insert(b0, at, b0[at]), np.insert(l0, at, l0[at])
+    c1 = np.insert(c0, at, rng.normal(size=(at.size,) + c0.shape[1:]), axis=0)
+    d = np.array([0.06, 0.03])
+    start = np.asarray(inp.start, dtype=np.float64)
+
+    def position(b, lo, c):
+        b, lo, c = _fir_profile._moving_average(b, lo, c, d[0])
+        return _fir_profile._filter(b, lo, c, d[1], start, True)
+
+    for x, y in zip(position(b0, l0, c0), position(b1, l1, c1)):
+        np.testing.assert_array_equal(x, y)
