@@ -22,6 +22,7 @@ import time
 from dataclasses import dataclass, replace
 
 import numpy as np
+from tqdm.auto import tqdm
 
 from research.optimal._ocp import (
     Geometry,
@@ -90,7 +91,8 @@ def solve_windows(
         guess: warm start on the whole path's phase grid.
         initial_state: ``(3, d)`` start state (the first vertex, at rest); the modes start from
             ``guess.modes[0]`` and their state is carried across windows like ``[p, v, a]``.
-        schedule: from :func:`window_schedule`.
+        schedule: from :func:`window_schedule`; from :data:`PROGRESS_WINDOWS` windows on, a
+            progress bar (tqdm, on stderr) follows them.
         ipopt_options: IPOPT options.
 
     Returns:
@@ -104,7 +106,9 @@ def solve_windows(
     reports = []
     state = np.asarray(initial_state, dtype=np.float64)
     mode_state = None if modes is None else modes[0].copy()
-    for first, stop, commit in schedule:
+    bar = tqdm(schedule, desc="time-optimal windows", unit="window", disable=len(schedule) < PROGRESS_WINDOWS,
+               leave=False)
+    for first, stop, commit in bar:
         n, terminal = stop - first, stop == M
         if (n, terminal) not in problems:
             t0 = time.perf_counter()
@@ -130,6 +134,11 @@ def solve_windows(
             mode_state = solution.modes[(commit - first) * N].copy()
         reports.append(_report(first, stop, commit, stats, float(solution.durations.sum())))
     return PhaseGrid(durations, states, jerks, modes), reports, build_time
+
+
+#: windows from which :func:`solve_windows` shows a progress bar (each window is one IPOPT solve of
+#: about 0.5 s at 10 segments x 16 intervals: a bar from about 10 s of solving)
+PROGRESS_WINDOWS = 20
 
 
 def _report(first: int, stop: int, commit: int, stats: SolveStats, duration: float) -> WindowReport:
