@@ -105,8 +105,8 @@ def test_a_window_inside_the_pieces_slows_only_the_pieces():
 def test_branch_and_bound_returns_the_least_verified_candidate(seed, monkeypatch):
     """A rounded CAM-like closed curve of 599 chords (11 candidates, the first-blocks bound on:
     M / 8 >= 32): the cycle time equals the least over the candidates each planned alone, which
-    verifies every one to the end. A bound above a candidate's verified time (tried: the first
-    blocks' or a round's first half) drops the winner on these programs."""
+    verifies every one to the end (to 1e-12: see below). A bound above a candidate's verified time
+    (tried: the first blocks' or a round's first half) drops the winner on these programs."""
     args = (_closed_curve(seed), 200.0, (0.06, 0.03), 0.05)
     found = []
     look_ahead = settle.look_ahead
@@ -122,7 +122,12 @@ def test_branch_and_bound_returns_the_least_verified_candidate(seed, monkeypatch
     for c in list(found):
         monkeypatch.setattr(settle, "look_ahead", lambda *a, c=c, **k: [c])
         alone.append(float(plan_fir(*args).cycle_time))
-    assert whole == min(alone)
+    # equal up to rounding: a candidate checked after another adopts that one's check and redoes
+    # it only where their profiles differ, the rest kept "up to the time shift" (RoundChecks), so
+    # its repairs can differ from its check alone in the last bits (seed 0: 3.5e-15 s)
+    best = int(np.argmin(alone))
+    assert abs(whole - alone[best]) <= 1e-12 * whole
+    assert all(t > whole * (1 + 1e-9) for i, t in enumerate(alone) if i != best and t != alone[best])
 
 
 @pytest.mark.parametrize("seed", [0, 1])
