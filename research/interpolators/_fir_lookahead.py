@@ -347,6 +347,16 @@ def with_table(candidates, table: PulseTable, measure=None):
     return out
 
 
+
+def without_dwells(candidates):
+    """The candidate of :func:`look_ahead` in which no vertex dwells, its window feeds held over
+    the whole support ``T_d / 2`` (the widest reach), or None (a list without it: a single block,
+    no look-ahead). Its feeds keep every window within the tolerance at full overlap everywhere
+    (the chain of all turns): the ceiling under which feeds that change at full overlap at every
+    corner keep the tolerance too (``_fir_staircase``'s candidate)."""
+    found = [c for c, _ in candidates if isinstance(c, Candidate) and c.full.all()]
+    return max(found, key=lambda c: float(np.min(c._hold, initial=np.inf)), default=None)
+
 class Candidate:
     """A candidate of :func:`look_ahead`, kept as what builds its arrays: its full-overlap flags
     ``full`` ``(M - 1,)`` (bool; shared between the candidates of one dwell set), the window feeds

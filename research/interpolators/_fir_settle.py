@@ -41,7 +41,7 @@ from research.interpolators._fir_limits import (
     window_slow_down,
 )
 from research.interpolators._fir_limit_spread import CornerWindows, FeedSteps, spread_slow_down
-from research.interpolators._fir_lookahead import arc_cuts, look_ahead, with_table
+from research.interpolators._fir_lookahead import arc_cuts, look_ahead, with_table, without_dwells
 from research.interpolators._fir_staircase import capped_staircase
 from research.interpolators import _fir_profile
 from research.interpolators._fir_overlap import overlap_time
@@ -518,9 +518,20 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
                     heapq.heappush(queue, (bound, next(index), settled(c, False)))
                 if "futile" in ways:  # settled with slow_futile from its start (see capped)
                     heapq.heappush(queue, (bound, next(index), settle(c, slow_futile=True)))
+                if "last" in ways:  # the same, once every other candidate is settled or ruled out
+                    last.append((bound, next(index), settle(c, slow_futile=True)))
 
         held = {}  # index -> (bound, steps) of the candidates suspended with their profiles
-        while queue and queue[0][0] < best_time:
+        # candidates settled after all the others (capped's "last"): never the best verified plan
+        # while those go on, so they rule none of them out (a candidate whose own rounds would fork
+        # a better settle is not dropped before it forks); they only add plans
+        last = []
+        while (queue and queue[0][0] < best_time) or last:
+            if not (queue and queue[0][0] < best_time):
+                for item in last:
+                    heapq.heappush(queue, item)
+                last.clear()
+                continue
             bound, i, steps = heapq.heappop(queue)
             rival = min(queue[0][0], best_time) if queue else best_time
             held.pop(i, None)
@@ -567,18 +578,32 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
             their safe feeds alone (the staircase settled plainly fell back to them: 0.05x the
             envelope, 142 s against 66 s, benchmarks/README.md). One uniform candidate, not all: on
             the quick CAM file at 0.5x the envelope all of them cost 3.6x the planning time for the
-            same plan (benchmarks/README.md)."""
+            same plan (benchmarks/README.md).
+
+            And a second staircase (``("last",)``: settled with ``slow_futile`` once every other
+            candidate is settled or ruled out) under the feeds of the look-ahead candidate without
+            dwells (``_fir_lookahead.without_dwells``: every window within the tolerance at full
+            overlap): the first staircase's ceiling is the commanded feed, so where the tolerance
+            binds below the limits its windows break the tolerance and the repairs (windows scaled
+            by ``sqrt(eps / error)``, then the feed steps they make) cost it a third and more
+            (quick CAM file at 0.1x the envelope: 32.3 -> 53.3 s). Settled last, it never rules a
+            candidate out before that one forks a better settle (at 0.2x, settled with the others,
+            it verified first at 30.30 s and dropped the candidate whose fork verifies at 26.94 s):
+            it only adds a plan (benchmarks/README.md)."""
             out = [(c, b, ("plain",)) for c, b in plans(np.minimum(base, safe_feed / F_np))]
             if scale < 1.0 - LIMIT_RTOL:
                 uniform = [(c, predicted_time(c()) if b is None else b) for c, b in plans(base * scale)]
                 out.append(min(uniform, key=lambda cb: cb[1]) + (("plain", "futile"),))
                 if M > 1:
-                    out.append((staircase_candidate(), None, ("futile",)))
+                    out.append((staircase_candidate(F_np * base), None, ("futile",)))
+                    if no_dwell is not None:
+                        ceiling = F_np * np.minimum(base, no_dwell()[0].min(axis=1))
+                        out.append((staircase_candidate(ceiling), None, ("last",)))
             return out
 
-        def staircase_candidate():
-            """The blocks at their feeds capped window by window and joined by staircases of
-            isolated steps (``_fir_staircase``), every corner at full overlap."""
+        def staircase_candidate(ceiling):
+            """The blocks at their feeds ``ceiling`` ``(M,)`` [mm/s] capped window by window and
+            joined by staircases of isolated steps (``_fir_staircase``), every corner at full overlap."""
             zeros, full1, ones1, zeros1 = np.zeros(M), np.ones(M - 1, dtype=bool), np.ones(M - 1), np.zeros(M - 1)
             corners = np.arange(M - 1)
 
@@ -589,9 +614,13 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
                 return windows.with_blocks(corners, zeros, zeros, factors(feeds), None, full1, ones1, zeros1)
 
             step = float(np.min(isolated_step(d_np, limits)))
-            factor = factors(capped_staircase(tp.lengths, F_np * base, step, Td_np, read))
+            factor = factors(capped_staircase(tp.lengths, ceiling, step, Td_np, read))
             return lambda: (factor.copy(), np.zeros(M), np.zeros(M), np.ones(M - 1, dtype=bool), np.zeros(M - 1), None)
-    state, rounds, deviation = verify(plans(base), capped)
+    first = plans(base)
+    # the look-ahead candidate without dwells, whose feeds cap the tolerance-aware staircase (capped)
+    no_dwell = without_dwells(first) if capped is not None else None
+    state, rounds, deviation = verify(first, capped)
+    first = None
     if traced:
         (feeds, overlaps, pulse, starts, profile, centre), pieces = traced_plan(*state[6])
     else:

@@ -375,3 +375,73 @@ def test_tight_limits_run_a_circle_of_short_chords_above_the_feed_of_a_start_fro
     assert L / np.sqrt(float(np.min(lim.acceleration)) * R) <= float(plan.cycle_time) <= L / (2.0 * step)
     assert within_limits(plan.trajectory(1e-3), lim)
     assert float(np.max(np.asarray(plan.corner_errors))) <= 0.05 * (1 + 1e-9) + 1e-9
+
+
+def test_tight_limits_where_the_tolerance_binds_run_a_circle_near_its_steady_feed():
+    """A circle of R 20 mm in 0.5 mm chords at F 200 mm/s, T 60/30 ms, eps 50 um, limits at 0.1x
+    the FIR envelope's acceleration and jerk (333 mm/s^2, 11,111 mm/s^3). Model prediction of the
+    steady feed ``v*``: the least of the tolerance's (eq 8: the filtered circle's radius
+    ``R prod sinc(w T_i / 2)``, ``w = v / R``, within eps of R: ~73 mm/s), the acceleration's
+    (``v^2 / R <= A``: 81.6 mm/s) and the jerk's (``v^3 / R^2 <= J``: 164 mm/s) on each axis of a
+    circle; reached from rest and back by isolated steps ``min(A T1, J T1 T2)`` (Sencer 2015 §2.1),
+    each held ``T_d``, and run 2 % below a window's ratio (the repairs' ``0.98 / ratio``). The
+    plan's cycle is within ``L / (0.98 v*) + (2 ceil(v* / step) + 1) T_d``. The staircase capped
+    at the commanded feed broke the tolerance at every window and its repairs took the circle to
+    5.54 s (the bound is 2.6 s); the one capped at the feeds of the look-ahead candidate without
+    dwells runs it in 2.25 s."""
+    from scipy.optimize import brentq
+
+    R, chord, F, eps = 20.0, 0.5, 200.0, 0.05
+    d = np.array([0.06, 0.03])
+    n = int(2.0 * np.pi * R / chord)
+    a = np.linspace(0.0, 2.0 * np.pi, n + 1)
+    path = Polyline(R * np.column_stack([np.cos(a), np.sin(a)]))
+    env = AxisLimits.fir_envelope(2, F, tuple(d))
+    lim = AxisLimits(env.velocity, 0.1 * env.acceleration, 0.1 * env.jerk)
+    A, J = float(np.min(lim.acceleration)), float(np.min(lim.jerk))
+    radial = lambda v: R * (1.0 - np.prod(np.sinc(v / R * d / 2.0 / np.pi))) - eps  # noqa: E731  (np.sinc is sin(pi x) / (pi x))
+    v_tol = brentq(radial, 1.0, F)
+    v_star = min(F, v_tol, np.sqrt(A * R), (J * R * R) ** (1.0 / 3.0))
+    step = min(A * d[0], J * d[0] * d[1])
+    Td = float(d.sum())
+    bound = path.length / (0.98 * v_star) + (2 * np.ceil(v_star / step) + 1) * Td
+    plan = plan_fir(path, F, tuple(d), eps, limits=lim)
+    assert float(plan.cycle_time) <= bound, (float(plan.cycle_time), bound, v_star)
+    assert within_limits(plan.trajectory(1e-3), lim)
+    assert float(np.max(np.asarray(plan.corner_errors))) <= eps * (1 + 1e-9) + 1e-9
+
+
+def _seeded_circle(rng):
+    """A circle of 30-200 chords of 0.5-4 deg, R 5-60 mm, with eps 5-100 um and F 50-300 mm/s
+    (``benchmarks/fir_limits_stress.py``'s circles)."""
+    n, radius, step = int(rng.integers(30, 200)), rng.uniform(5.0, 60.0), rng.uniform(0.5, 4.0)
+    th = np.radians(np.arange(n) * step) + rng.uniform(0.0, 2.0 * np.pi)
+    return Polyline(np.column_stack([radius * np.cos(th), radius * np.sin(th)])), float(rng.uniform(0.005, 0.1)), \
+        float(rng.uniform(50.0, 300.0))
+
+
+@pytest.mark.parametrize("kind", ["lines", "arcs", "circles"])
+def test_the_tolerance_aware_staircase_only_adds_a_plan(kind, monkeypatch):
+    """The staircase under the feeds of the look-ahead candidate without dwells is settled after
+    every other candidate (``_fir_settle``'s capped ``"last"``), so it rules none of them out: on
+    seeded random programs (lines; lines and arcs) and chord circles under limits at 0.05-0.5x the
+    envelope's acceleration and jerk, the plan is never slower than the plan without that
+    candidate (``without_dwells`` returning None); on the circles (chord chains, where it is
+    meant to win) some are faster."""
+    import research.interpolators._fir_settle as settle_module
+    from tests.interpolators.test_fir_monotone import DELAYS, _program
+
+    faster = 0
+    for seed in range(5):
+        rng = np.random.default_rng(500 + seed)
+        path, eps, feed = _seeded_circle(rng) if kind == "circles" else _program(seed, kind == "arcs")
+        s = float(np.exp(rng.uniform(np.log(0.05), np.log(0.5))))
+        env = AxisLimits.fir_envelope(path.dim, feed, DELAYS)
+        lim = AxisLimits(env.velocity, s * env.acceleration, s * env.jerk)
+        with_it = float(plan_fir(path, feed, DELAYS, eps, limits=lim).cycle_time)
+        with monkeypatch.context() as m:
+            m.setattr(settle_module, "without_dwells", lambda candidates: None)
+            without = float(plan_fir(path, feed, DELAYS, eps, limits=lim).cycle_time)
+        assert with_it <= without * (1 + 1e-12), (seed, with_it, without)
+        faster += with_it < without * (1 - 1e-9)
+    assert faster >= 1 or kind != "circles"
