@@ -72,8 +72,11 @@ class AxisLimits:
 
     def ratios(self, v, a, j) -> dict[str, np.ndarray]:
         """Per-axis ``peak / limit`` for given peak values, e.g. ``{"velocity": [0.98, 1.01], ...}``
-        (above 1: the limit is exceeded)."""
-        return {
-            name: np.asarray(peak, dtype=np.float64) / lim
-            for name, peak, lim in (("velocity", v, self.velocity), ("acceleration", a, self.acceleration), ("jerk", j, self.jerk))
-        }
+        (above 1: the limit is exceeded; 0 under an infinite limit, whatever the peak: the jerk of
+        one FIR filter's motion is unbounded and its envelope sets no jerk limit)."""
+        out = {}
+        for name, peak, lim in (("velocity", v, self.velocity), ("acceleration", a, self.acceleration), ("jerk", j, self.jerk)):
+            peak = np.asarray(peak, dtype=np.float64)
+            with np.errstate(invalid="ignore"):  # inf / inf: an unbounded peak under no limit
+                out[name] = np.where(np.isinf(lim) & ~np.isnan(peak), 0.0, peak / lim)
+        return out

@@ -96,13 +96,18 @@ def peak_axis_values(traj: Trajectory, nu: int) -> np.ndarray:
     breaks = f.breaks
     # both one-sided values at each break: derivatives of order >= degree jump there
     eps = 1e-12 * max(1.0, float(breaks[-1]))
-    at_breaks = np.abs(np.concatenate([f(breaks - eps, nu), f(breaks + eps, nu)]))
-    peak = np.maximum(peak, at_breaks.max(axis=0))
+    left, right = f(breaks - eps, nu), f(breaks + eps, nu)
+    peak = np.maximum(peak, np.abs(np.concatenate([left, right])).max(axis=0))
     # a jump in the derivative below (e.g. the acceleration of a single FIR filter) makes this one
     # a Dirac impulse: report it as unbounded rather than as the zero seen between the jumps
-    below = f(breaks + eps, nu - 1) - f(breaks - eps, nu - 1)
+    # (less the change of a continuous one over the 2 eps between its one-sided values, the
+    # trapezoid of this one's: at a break 1,200 s into a motion that change alone was 4e-5 mm/s)
+    below = f(breaks + eps, nu - 1) - f(breaks - eps, nu - 1) - eps * (left + right)
     scale = np.abs(np.asarray((traj.q, traj.v, traj.a, traj.j)[nu - 1])).max(axis=0)
-    jumps = np.abs(below).max(axis=0) > 1e-6 * np.maximum(scale, 1e-300)
+    # a jump counts from 1e-6 of its axis's peak and 1e-9 of the largest axis's: below that it is
+    # the profile's rounding (an axis that barely moves read an acceleration step of 1.2e-7 mm/s^2,
+    # 2e-6 of its own peak, as an impulse of jerk on a two-filter plan whose other axes ran at 10^3)
+    jumps = np.abs(below).max(axis=0) > 1e-6 * np.maximum(scale, 1e-3 * float(scale.max()))
     peak = np.where(jumps, np.inf, peak)
     t = np.asarray(traj.t)
     for a in range(samples.shape[1]):

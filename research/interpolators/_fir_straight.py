@@ -244,7 +244,7 @@ def ramp_pieces(tp: ToolPath, run, feeds: np.ndarray, delays: np.ndarray, limits
         k_step = np.arange(1, int(n[m]), dtype=np.float64)
         steps = top[m] / n[m] * k_step  # the feeds of the ramp pieces [mm/s]
         at = np.cumsum(steps * Td)  # where each ends, from the run's end [mm]
-        keep = at < 0.5 * L[m]
+        keep = at < 0.5 * L[m] * (1.0 - 1e-9)  # the two ends' cuts apart (not one point rounded twice)
         steps, at, k_step = steps[keep], at[keep], k_step[keep]
         ones = np.ones_like(k_step)
         rec = np.stack([a * ones, v_cap[m] * ones, n[m] * ones, k_step], axis=1)  # (src, cap, den, num) of steps

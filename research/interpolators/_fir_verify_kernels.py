@@ -154,8 +154,11 @@ def corner_distances(breaks, coeffs, vertices, centre, half_window, grid, newton
     positive) kept within one grid step (the compiled form of
     ``_fir_verify._corner_distances``; never above the best grid point's distance). A vertex whose
     distance is still above its ``bound`` ``(C,)`` [mm] then takes up to ``more_steps`` further
-    steps, until one leaves its time where it is; it keeps the least distance met (each is the
-    distance to a point of the trajectory: never optimistic).
+    steps, until one leaves its time where it is, and then, while still above it, the same steps
+    from every other local minimum of the grid (a window over chords shorter than a grid step
+    has several basins, and the best grid point's need not hold the least: a vertex 0.12 eps from
+    the trajectory read 1.37 eps); it keeps the least distance met (each is the distance to a
+    point of the trajectory: never optimistic).
 
     The profile is evaluated as :class:`research.piecewise.NumpyPiecewise` (clipped time, piece
     ``searchsorted(breaks, t, "right") - 1``, Horner's rule; derivatives 0 outside the breaks), each
@@ -256,8 +259,9 @@ def _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_ste
     # search index of each grid point at the last corner: the corner instants run forward, a few
     # pieces apart, while the grid spans many pieces
     at_grid = np.zeros(grid, np.int64)
+    grid_d2 = np.empty(grid)
     for c in range(C):
-        best, best_d2, found = 0.0, np.inf, 0
+        best, best_d2, found, best_g = 0.0, np.inf, 0, 0
         for g in range(grid):
             tg = centre[c] + half_window * (-1.0 + 2.0 * g / (grid - 1))
             tc = min(max(tg, t_lo), t_hi)
@@ -265,8 +269,9 @@ def _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_ste
             piece = min(max(at_grid[g] - 1, 0), K - 1)
             tau = tc - breaks[piece]
             d2 = _squared_distance(coeffs, piece, tau, vertices, c, D, A)
+            grid_d2[g] = d2
             if d2 < best_d2:
-                best, best_d2, found = tg, d2, at_grid[g]
+                best, best_d2, found, best_g = tg, d2, at_grid[g], g
         lo, hi = best - step, best + step
         t = best
         for _ in range(newton_steps):
@@ -282,6 +287,24 @@ def _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_ste
             t = t_next
             d2, found = _distance_at(breaks, coeffs, vertices, c, t, found, t_lo, t_hi, D, A)
             least = min(least, d2)
+        # still above the bound: the other local minima of the grid, each refined the same way (the
+        # distance along a window over chords shorter than a grid step has several: the best grid
+        # point can sit in a basin whose minimum is not the least)
+        for g in range(grid):
+            if math.sqrt(least) <= bound[c]:
+                break
+            if g == best_g or (g > 0 and grid_d2[g - 1] < grid_d2[g]) or (g < grid - 1 and grid_d2[g + 1] < grid_d2[g]):
+                continue
+            tg = centre[c] + half_window * (-1.0 + 2.0 * g / (grid - 1))
+            lo_g, hi_g = tg - step, tg + step
+            t, f_g = tg, at_grid[g]
+            for _ in range(newton_steps + more_steps):
+                t_next, f_g = _newton_time(breaks, coeffs, vertices, c, t, f_g, t_lo, t_hi, lo_g, hi_g, D, A)
+                if t_next == t:
+                    break
+                t = t_next
+                d2, f_g = _distance_at(breaks, coeffs, vertices, c, t, f_g, t_lo, t_hi, D, A)
+                least = min(least, d2)
         out[c] = math.sqrt(least)
     return out
 

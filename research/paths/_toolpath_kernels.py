@@ -116,11 +116,15 @@ def _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
     the sweep (clamped) after at most three safeguarded Newton steps on ``|P(phi) - q|^2``. A
     candidate angle equal to an earlier one, the steps after one that leaves the angle where it
     was, and the point's evaluation after such a step (which computed it) would repeat the same
-    arithmetic: they are skipped (the result is the same). No Newton steps start from the ends: one
-    there only walks towards the stationary point near a turn of ``base``, which the steps from
-    that turn reach (on a circular arc in one step); a minimum left out could only overstate the
-    distance. Measured: the same plans on bench_adaptive's programs and the fuzz programs of
-    ``tests/fuzz/test_fuzz_fir_programs.py``, 44 % less time in this kernel."""
+    arithmetic: they are skipped (the result is the same). No Newton steps start from the ends as
+    such: one there only walks towards the stationary point near a turn of ``base``, which the
+    steps from that turn reach (on a circular arc in one step). But a turn of ``base`` clamped to
+    an end takes its steps from there: on a steep helix (a small sweep over a long axial travel)
+    the nearest point lies near the end its projection angle clamps to, at the query's axial
+    height (skipped, a point 1e-4 mm from a helix of 0.01 rad over 10 mm read 0.1 mm: the distance
+    to its start). Measured: the same plans on bench_adaptive's programs and the fuzz programs of
+    ``tests/fuzz/test_fuzz_fir_programs.py``, 44 % less time in this kernel (before the clamped
+    turns took their steps)."""
     N = q.shape[0]
     out = np.empty(N)
     p, d1, d2 = np.empty(3), np.empty(3), np.empty(3)
@@ -144,7 +148,7 @@ def _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
                 phi = min(max(base[i] + two_pi * (m - 2), 0.0), sw)
             starts[m] = phi
             seen = False
-            for k in range(m):
+            for k in range(2 if m >= 2 else 0, m):  # a turn clamped to an end still takes its steps
                 seen = seen or starts[k] == phi
             if seen:
                 continue

@@ -29,6 +29,11 @@ _GAUSS = np.polynomial.legendre.leggauss(8)
 _QUAD_ANGLE = 0.25 * np.pi  # Gauss-Legendre sub-interval of a spiral / helix length [rad]
 
 
+
+#: sample points of :meth:`ToolPath._tree` per block, at most on average (8: the median block
+#: length rules every program whose mean block is under 8 times its median)
+TREE_SAMPLES = 8
+
 @dataclass(frozen=True, eq=False)
 class ToolPath:
     """Blocks ``0 .. M-1``; block ``k`` runs from ``ends[k - 1]`` (``start`` for ``k = 0``) to ``ends[k]``.
@@ -387,8 +392,14 @@ class ToolPath:
         return self._cache["geo_rows"]
 
     def _tree(self):
+        """A k-d tree of sample points along the blocks, each block cut into pieces of about the
+        median block length ``h`` (one sample per piece, at its middle), its owner blocks and the
+        largest piece length. ``h`` is raised to ``1 / TREE_SAMPLES`` of the mean block length
+        where that is longer: a program of micro-chords with one long line (a rapid to the part,
+        a facing pass) would otherwise cut that line into its length over the chord length (1 m
+        of line over 1 um chords: 10^9 points, tens of GB)."""
         if "tree" not in self._cache:
-            h = float(np.median(self.lengths))
+            h = max(float(np.median(self.lengths)), float(np.mean(self.lengths)) / TREE_SAMPLES)
             pieces = np.maximum(1, np.ceil(self.lengths / h).astype(np.int64))
             owner = np.repeat(np.arange(self.n_blocks), pieces)
             first = np.repeat(np.cumsum(pieces) - pieces, pieces)
