@@ -54,6 +54,7 @@ plan of every tighter tolerance, which is (``_fir_candidates``).
 
 from __future__ import annotations
 
+import warnings
 
 import equinox as eqx
 import jax
@@ -62,7 +63,7 @@ import numpy as np
 from jax import Array
 
 from research._device import device_array
-from research.errors import ParameterError
+from research.errors import ConvergenceError, ParameterError
 from research.interpolators._fir_candidates import FIRSweep, envelope
 from research.interpolators._fir_chain import check_delays
 from research.interpolators._fir_limits import profile_within_limits, steps_within_limits
@@ -265,8 +266,14 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             # of chords that ramps through its own blocks: a circle in 4,000 chords)
             bound = float(np.sum(pieces_tp.lengths / recipe.of(feeds_np))) + float(np.sum(delays_np))
             if min(float(_primal(p.cycle_time)) for p in plans) > bound:
-                plan, _ = _plan_blocks(pieces_tp, recipe.of(feeds_all), delays, tol_all[block], refine, limits,
-                                       check_period, traced)
+                try:
+                    plan, _ = _plan_blocks(pieces_tp, recipe.of(feeds_all), delays, tol_all[block], refine, limits,
+                                           check_period, traced)
+                except ConvergenceError as exc:  # another plan of the same path is at hand: this one is not
+                    warnings.warn(f"plan_fir: the plan with its {'arcs' if arcs else 'lines'} cut into ramp steps "
+                                  f"did not converge and is left out ({exc}); the fastest of the others is returned",
+                                  RuntimeWarning, stacklevel=2)
+                    continue
                 plans.append(join_plan(plan, tp, block, FIRPlan))
     return min(plans, key=lambda p: float(_primal(p.cycle_time)))
 

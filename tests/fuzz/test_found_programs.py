@@ -116,3 +116,42 @@ def test_an_axis_that_barely_moves_reads_no_impulse_from_rounding():
     tr = plan.trajectory(1e-3)
     assert np.all(np.isfinite(peak_axis_values(tr, 3)))
     assert within_limits(tr, lim)
+
+
+_LONG_ARCS = """G1 F600
+G2 X-5.7660 Y3.8023 Z0 I24.5768 J43.5429
+G2 X-5.7650 Y3.8050 Z0 I-5.7642 J3.8031
+G3 X-5.8125 Y3.7306 Z0 I-47.9241 J30.6864 P2
+G1 X-25.3019 Y7.5389 Z4.8843
+G64 P0.0001
+G2 X-1384.1091 Y-999.2062 Z4.8843 I-997.2282 J-74.4036
+G2 X-1374.3552 Y-1001.3521 Z4.8863 I4.8208 J-1.3266
+G3 X-1925.1314 Y-933.5655 Z4.8863 I-158.0313 J987.4341
+G1 X-1925.1255 Y-933.5647 Z4.8902
+X-1925.6397 Y-933.2733 Z4.8902
+X-1926.8451 Y-934.3803 Z4.8902
+X-1926.8373 Y-934.4297
+X-1926.7821 Y-934.6216
+X-1926.7623 Y-934.6675 Z4.8902
+X-1926.7403 Y-934.7124 Z4.8902
+X-1926.2798 Y-935.1548
+X-1926.2340 Y-935.1750 Z4.8902
+"""
+
+
+def test_a_ramp_plan_that_does_not_converge_leaves_the_others():
+    """Arcs of R 5-1000 mm (one of two turns) and 1-50 um chords at 10 mm/s, eps 25.65 um then
+    ``G64 P0.0001``, limits at 0.0536x the envelope (a 25 mm/s^2, j 2,500 mm/s^3): the plan of the
+    path with its lines cut into ramp steps (one of the alternatives ``plan_fir`` compares under
+    limits) ends with an exact stop above a limit and raised ``ConvergenceError``, which took the
+    whole call down although the path as written plans. That alternative is now left out with a
+    ``RuntimeWarning`` naming it, and the fastest of the others is returned, within the limits."""
+    prog = parse_gcode(_LONG_ARCS)
+    tol = np.where(np.isfinite(prog.block_tolerance), prog.block_tolerance, 0.02565240403135098)
+    env = AxisLimits.fir_envelope(3, 10.0, (0.02, 0.01))
+    lim = AxisLimits(env.velocity, 0.053576347506893156 * env.acceleration, 0.053576347506893156 * env.jerk)
+    with pytest.warns(RuntimeWarning, match="ramp steps did not converge"):
+        plan = plan_fir(prog.blocks, prog.block_feeds, (0.02, 0.01), tol, limits=lim)
+    assert np.isfinite(float(plan.cycle_time))
+    assert within_limits(plan.trajectory(0.05), lim)
+    np.testing.assert_allclose(np.asarray(plan.trajectory(0.05).q)[-1], prog.polyline.points[-1], atol=1e-8)
