@@ -52,6 +52,7 @@ from collections.abc import Callable, Generator
 
 import numpy as np
 
+from research.interpolators._fir_feed_steps import feed_steps
 from research.interpolators._fir_limits import LIMIT_RTOL, THRESHOLD_GUARD, isolated_step
 from research.interpolators._fir_piece_peaks import PiecePeaks
 from research.interpolators._fir_profile import profile, timing
@@ -217,16 +218,16 @@ class FeedSteps:
     def __init__(self, feeds, t_in, is_arc, delays, limits: AxisLimits):
         self.step = isolated_step(delays, limits)  # (A,) largest isolated step [mm/s]
         self.velocity = np.asarray(limits.velocity, dtype=np.float64)
-        self.feeds, self.u, self.is_arc = np.asarray(feeds, dtype=np.float64), np.asarray(t_in), np.asarray(is_arc)
-        # the same as Python floats, for the per-block loops of __call__
-        self._u, self._step, self._velocity = self.u.tolist(), self.step.tolist(), self.velocity.tolist()
+        self.feeds = np.ascontiguousarray(feeds, dtype=np.float64)
+        self.u, self.is_arc = np.ascontiguousarray(t_in, dtype=np.float64), np.ascontiguousarray(is_arc, dtype=bool)
         self.head = self.tail = np.zeros(self.feeds.size)
+        self._columns = None  # each block's factor column facing its start and its end (made on first use)
 
     def of(self, head: np.ndarray, tail: np.ndarray) -> "FeedSteps":
         """The same bounds for a candidate whose lines have head and tail shares ``head``, ``tail``
         ``(M,)`` (its pieces of their own feed factors: the piece facing a neighbour takes the step)."""
         out = copy.copy(self)
-        out.head, out.tail = np.asarray(head), np.asarray(tail)
+        out.head, out.tail, out._columns = np.asarray(head), np.asarray(tail), None
         return out
 
     def _column(self, k: int, side: int) -> int:
@@ -237,17 +238,19 @@ class FeedSteps:
             return 0 if self.head[k] > 0.0 else (1 if body > 0.0 else 2)
         return 2 if self.tail[k] > 0.0 else (1 if body > 0.0 else 0)
 
+    def _facing(self, blocks: np.ndarray, side: int) -> np.ndarray:
+        """``(B,)`` :meth:`_column` of ``blocks`` facing ``side``, on every block at once."""
+        head, tail = self.head[blocks], self.tail[blocks]
+        body = 1.0 - head - tail
+        if side < 0:
+            return np.where(head > 0.0, 0, np.where(body > 0.0, 1, 2))
+        return np.where(tail > 0.0, 2, np.where(body > 0.0, 1, 0))
+
     def facing_feeds(self, factor: np.ndarray, blocks: np.ndarray, side: int) -> np.ndarray:
         """``(B,)`` feeds [mm/s] of the pieces of ``blocks`` facing their start (``side`` -1) or end
         (+1) at feed factors ``factor`` ``(M, 3)`` (:meth:`_column`)."""
         blocks = np.asarray(blocks, dtype=np.int64)
-        head, tail = self.head[blocks], self.tail[blocks]
-        body = 1.0 - head - tail  # :meth:`_column` on every block at once
-        if side < 0:
-            cols = np.where(head > 0.0, 0, np.where(body > 0.0, 1, 2))
-        else:
-            cols = np.where(tail > 0.0, 2, np.where(body > 0.0, 1, 0))
-        return self.feeds[blocks] * factor[blocks, cols]
+        return self.feeds[blocks] * factor[blocks, self._facing(blocks, side)]
 
     def __call__(self, factor: np.ndarray, which: np.ndarray, fixed: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(multipliers, within, unset)``: ``(M,)`` feed multipliers ``< 1`` of the blocks ``which``
@@ -259,46 +262,16 @@ class FeedSteps:
         the next (a ramp of several blocks in one call)."""
         M = self.feeds.size
         out, within, unset = np.full(M, np.nan), np.zeros(M, dtype=bool), np.zeros(M, dtype=bool)
-        g_set = {}  # multipliers set by this call (the arrays stay as given)
-
-        ks = np.flatnonzero(which).tolist()
-        for n in ks + ks[::-1]:  # path order, then back (a run walking left from its set block)
-            if n in g_set or self.is_arc[n]:
-                continue
-            near = [k for k in (n - 1, n + 1) if 0 <= k < M and (fixed[k] or k in g_set)]
-            unset[n] = not near
-            if not near or any(self.is_arc[k] for k in near):
-                continue
-            # per axis in Python floats (a handful of axes: NumPy's per-call cost dominated), the
-            # same operations in the same order as on arrays, so the same values
-            u = self._u[n]
-            top = float(self.feeds[n]) * float(np.max(factor[n]))
-            lo, hi = 0.0, min(1.0, min(v / abs(u_i) for v, u_i in zip(self._velocity, u) if u_i != 0.0) / top)
-            for k in near:
-                side = -1 if k < n else 1  # n's piece facing k; k's facing n is on the other side
-                x = float(self.feeds[n] * factor[n, self._column(n, side)])  # that piece's feed at multiplier 1
-                s = float(self.feeds[k] * factor[k, self._column(k, -side)]) * g_set.get(k, 1.0)
-                lo_k, hi_k = -np.inf, np.inf
-                for u_i, uk_i, step_i in zip(u, self._u[k], self._step):
-                    V = s * uk_i
-                    if u_i == 0.0:
-                        if abs(V) > step_i:
-                            lo_k = np.inf
-                            break
-                        continue
-                    a, b = (V - step_i) / (u_i * x), (V + step_i) / (u_i * x)
-                    lo_k, hi_k = max(lo_k, min(a, b)), min(hi_k, max(a, b))
-                if lo_k == np.inf:
-                    lo = np.inf
-                    break
-                lo, hi = max(lo, lo_k), min(hi, hi_k)
-            if not (lo <= hi and hi > 0.0):
-                continue
-            if hi < 1.0 - 1e-12:
-                out[n] = g_set[n] = hi
-            else:
-                within[n], g_set[n] = True, 1.0
-            unset[n] = False
+        if self._columns is None:
+            every = np.arange(M)
+            self._columns = tuple(np.ascontiguousarray(self._facing(every, side), dtype=np.int64)
+                                  for side in (-1, 1))
+        # the walk of runs right, then left, compiled (``_fir_feed_steps``: the loop it replaces,
+        # operation for operation)
+        feed_steps(self.feeds, np.ascontiguousarray(factor, dtype=np.float64), *self._columns, self.u,
+                   np.ascontiguousarray(self.step, dtype=np.float64), np.ascontiguousarray(self.velocity, dtype=np.float64),
+                   self.is_arc, np.ascontiguousarray(fixed, dtype=bool), np.flatnonzero(which).astype(np.int64), out,
+                   within, unset)
         return out, within, unset
 
     def levels(self, factor: np.ndarray, which: np.ndarray, fixed: np.ndarray) -> np.ndarray:
