@@ -392,6 +392,17 @@ def bench_cam(args, table: Table, t0: float) -> None:
 
 
 # -- part 2 ----------------------------------------------------------------------------------------
+def fir_against(table: Table, path: Polyline, limits: AxisLimits, T_ocp: float, indent: str) -> None:
+    """Rows of the plain and limit-holding FIR on ``path`` against the OCP's cycle ``T_ocp`` [s]."""
+    plain = plan_fir(path, FEED, DELAYS, EPS)
+    held = plan_fir(path, FEED, DELAYS, EPS, limits=limits)
+    table.row(f"{indent}FIR plain / OCP", f"{float(plain.cycle_time):.4f} s", f"{float(plain.cycle_time) / T_ocp:.4f}x",
+              "", f"worst limit ratio {worst_ratio(plain, limits):.3f}")
+    r = float(held.cycle_time) / T_ocp
+    table.row(f"{indent}FIR limits held / OCP", f"{float(held.cycle_time):.4f} s", f"{r:.4f}x", f"<= {TARGET_VS_OCP:.2f}x",
+              verdict(r <= TARGET_VS_OCP) + f" (worst limit ratio {worst_ratio(held, limits):.3f})")
+
+
 def bench_ocp(args, table: Table, t0: float, cam: Polyline) -> None:
     from research.optimal import time_optimal
 
@@ -406,13 +417,7 @@ def bench_ocp(args, table: Table, t0: float, cam: Polyline) -> None:
     T_ocp = float(res.cycle_time)
     table.row("OCP cycle time", f"{T_ocp:.4f} s", f"{res.status}, {len(res.windows)} windows, wall {t_ocp:.1f} s, "
               f"dense check {res.verification.worst_ratio:.4f}")
-    plain = plan_fir(path, FEED, DELAYS, EPS)
-    held = plan_fir(path, FEED, DELAYS, EPS, limits=limits)
-    table.row("FIR plain / OCP", f"{float(plain.cycle_time):.4f} s", f"{float(plain.cycle_time) / T_ocp:.4f}x",
-              "", f"worst limit ratio {worst_ratio(plain, limits):.3f}")
-    r = float(held.cycle_time) / T_ocp
-    table.row("FIR limits held / OCP", f"{float(held.cycle_time):.4f} s", f"{r:.4f}x",
-              f"<= {TARGET_VS_OCP:.2f}x", verdict(r <= TARGET_VS_OCP) + f" (worst limit ratio {worst_ratio(held, limits):.3f})")
+    fir_against(table, path, limits, T_ocp, "")
     # the windowed OCP on the CAM file: one IPOPT solve per window (window 10, overlap 4) at about
     # cam30's time per window; the whole file where that fits --ocp-budget, else a 1,000-chord excerpt
     per_window = res.solve_time / len(res.windows)
@@ -434,13 +439,7 @@ def bench_ocp(args, table: Table, t0: float, cam: Polyline) -> None:
     T_part = float(ocp.cycle_time)
     table.row(f"OCP on {label}", f"{T_part:.4f} s", f"{ocp.status}, {len(ocp.windows)} windows, wall {wall:.0f} s "
               f"(estimated {estimate:.0f} s), dense check {ocp.verification.worst_ratio:.4f}")
-    plain = plan_fir(part, FEED, DELAYS, EPS)
-    held = plan_fir(part, FEED, DELAYS, EPS, limits=lim)
-    table.row("  FIR plain / OCP", f"{float(plain.cycle_time):.4f} s", f"{float(plain.cycle_time) / T_part:.4f}x",
-              "", f"worst limit ratio {worst_ratio(plain, lim):.3f}")
-    r = float(held.cycle_time) / T_part
-    table.row("  FIR limits held / OCP", f"{float(held.cycle_time):.4f} s", f"{r:.4f}x", f"<= {TARGET_VS_OCP:.2f}x",
-              verdict(r <= TARGET_VS_OCP) + f" (worst limit ratio {worst_ratio(held, lim):.3f})")
+    fir_against(table, part, lim, T_part, "  ")
 
 
 # -- part 3 ----------------------------------------------------------------------------------------

@@ -278,15 +278,7 @@ def _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_ste
             t, found = _newton_time(breaks, coeffs, vertices, c, t, found, t_lo, t_hi, lo, hi, D, A)
         d2, found = _distance_at(breaks, coeffs, vertices, c, t, found, t_lo, t_hi, D, A)
         least = min(d2, best_d2)
-        for _ in range(more_steps):
-            if math.sqrt(least) <= bound[c]:
-                break
-            t_next, found = _newton_time(breaks, coeffs, vertices, c, t, found, t_lo, t_hi, lo, hi, D, A)
-            if t_next == t:
-                break
-            t = t_next
-            d2, found = _distance_at(breaks, coeffs, vertices, c, t, found, t_lo, t_hi, D, A)
-            least = min(least, d2)
+        least = _descend(breaks, coeffs, vertices, c, t, found, t_lo, t_hi, lo, hi, more_steps, least, bound[c], D, A)
         # still above the bound: the other local minima of the grid, each refined the same way (the
         # distance along a window over chords shorter than a grid step has several: the best grid
         # point can sit in a basin whose minimum is not the least)
@@ -296,17 +288,27 @@ def _corner_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_ste
             if g == best_g or (g > 0 and grid_d2[g - 1] < grid_d2[g]) or (g < grid - 1 and grid_d2[g + 1] < grid_d2[g]):
                 continue
             tg = centre[c] + half_window * (-1.0 + 2.0 * g / (grid - 1))
-            lo_g, hi_g = tg - step, tg + step
-            t, f_g = tg, at_grid[g]
-            for _ in range(newton_steps + more_steps):
-                t_next, f_g = _newton_time(breaks, coeffs, vertices, c, t, f_g, t_lo, t_hi, lo_g, hi_g, D, A)
-                if t_next == t:
-                    break
-                t = t_next
-                d2, f_g = _distance_at(breaks, coeffs, vertices, c, t, f_g, t_lo, t_hi, D, A)
-                least = min(least, d2)
+            least = _descend(breaks, coeffs, vertices, c, tg, at_grid[g], t_lo, t_hi, tg - step, tg + step,
+                             newton_steps + more_steps, least, bound[c], D, A)
         out[c] = math.sqrt(least)
     return out
+
+
+@numba.njit(inline="always", **_OPTIONS)
+def _descend(breaks, coeffs, vertices, c, t, found, t_lo, t_hi, lo, hi, steps, least, bound, D, A):
+    """Up to ``steps`` Newton steps of the corner search from ``t`` within ``[lo, hi]`` while the
+    least squared distance met, ``least``, is above ``bound^2``, until one leaves its time where it
+    is: the least squared distance met."""
+    for _ in range(steps):
+        if math.sqrt(least) <= bound:
+            break
+        t_next, found = _newton_time(breaks, coeffs, vertices, c, t, found, t_lo, t_hi, lo, hi, D, A)
+        if t_next == t:
+            break
+        t = t_next
+        d2, found = _distance_at(breaks, coeffs, vertices, c, t, found, t_lo, t_hi, D, A)
+        least = min(least, d2)
+    return least
 
 
 @numba.njit(**_OPTIONS)
