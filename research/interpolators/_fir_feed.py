@@ -163,7 +163,7 @@ class ChainError:
         return chain_displacements(*self._args(q, F), q, F)
 
     def largest_feed(self, s_query: np.ndarray, feed_max: np.ndarray, tolerance: np.ndarray,
-                     error_max: np.ndarray | None = None) -> np.ndarray:
+                     error_max: np.ndarray | None = None, start: np.ndarray | None = None) -> np.ndarray:
         """Largest feed ``<= feed_max`` with ``|d_j| <= tolerance``, by a safeguarded Newton search
         that keeps the tolerance at its lower end. The first point is ``F eps / |d_j(F)|``, feasible
         whenever the error grows at least linearly in feed (eq 13/14 corners: linearly; chains and
@@ -181,12 +181,16 @@ class ChainError:
         Where ``|d_j|`` is not monotone in the feed (alternating turns), the bracket may hold more
         than one root and the search returns one of them (a feasible feed, not always the largest).
 
-        ``error_max``: ``|d_j(feed_max)|`` where the caller has it already (saves one evaluation)."""
+        ``error_max``: ``|d_j(feed_max)|`` where the caller has it already (saves one evaluation).
+        ``start``: ``(J,)`` first points of the search (a warm start from a nearby problem's roots,
+        used where within ``(0, feed_max)``), or None (the power-law point above); the result is a
+        feed of the same stopping band, not the same float."""
         hi = np.array(feed_max, dtype=np.float64).reshape(-1)
         tol = np.ascontiguousarray(np.broadcast_to(np.asarray(tolerance, dtype=np.float64), hi.shape))
         e = self(s_query, hi) if error_max is None else np.array(error_max, dtype=np.float64).reshape(-1)
         q = np.asarray(s_query, dtype=np.float64).reshape(-1) - self.origin
-        out = chain_largest_feeds(*self._args(q, hi), q, hi, tol, e, _BISECTION_STEPS, _CLOSE, _TINY)
+        first = np.zeros(0) if start is None else np.ascontiguousarray(np.broadcast_to(start, hi.shape), dtype=np.float64)
+        out = chain_largest_feeds(*self._args(q, hi), q, hi, tol, e, _BISECTION_STEPS, _CLOSE, _TINY, first)
         zero = tol <= 0
         if zero.any():
             out[zero] = self.reach_free_feed(q[zero], hi[zero])

@@ -360,7 +360,7 @@ def _log_error(s, du, rho, sign, p, norm, prefix, binom, direct, q, F, t, tiny, 
 
 
 @numba.njit(**_OPTIONS)
-def chain_largest_feeds(s, du, rho, sign, p, norm, prefix, binom, direct, q, hi, tol, e_hi, steps, close, tiny):
+def chain_largest_feeds(s, du, rho, sign, p, norm, prefix, binom, direct, q, hi, tol, e_hi, steps, close, tiny, start):
     """Largest feed ``<= hi`` with ``|d_j| <= tol`` for every query (``ChainError.largest_feed``).
 
     Safeguarded Newton in log space: ``g(x) = log(|d_j(e^x)| / tol)``, ``x = log F`` (the error is
@@ -375,7 +375,9 @@ def chain_largest_feeds(s, du, rho, sign, p, norm, prefix, binom, direct, q, hi,
     Args:
         q: ``(J,)`` re-centred arc lengths; hi, tol, e_hi: ``(J,)`` feed bound, tolerance and
             ``|d_j(hi)|``; steps, close, tiny: the search's resolution exponent, stopping distance
-            (log ratio) and error floor (``_fir_feed``'s constants).
+            (log ratio) and error floor (``_fir_feed``'s constants); start: ``(J,)`` first points
+            (a warm start: the root of a nearby problem; infeasible there, it is the bracket's high
+            end and Newton goes on from it) or an empty array (the power-law point).
 
     Returns:
         ``(J,)`` feeds [mm/s]: the low end of the bracket when its ``g`` is within ``close`` of 0,
@@ -388,13 +390,15 @@ def chain_largest_feeds(s, du, rho, sign, p, norm, prefix, binom, direct, q, hi,
     out = np.empty(J)
     for j in range(J):
         out[j] = _feed_search(s, du, rho, sign, p, norm, prefix, binom, direct, q[j], hi[j], tol[j], e_hi[j], steps,
-                              close, tiny, buf, dbuf, w, wd)
+                              close, tiny, buf, dbuf, w, wd, start[j] if start.size else 0.0)
     return out
 
 
 @numba.njit(**_OPTIONS)
-def _feed_search(s, du, rho, sign, p, norm, prefix, binom, direct, qj, hj, t, e, steps, close, tiny, buf, dbuf, w, wd):
-    """One query of :func:`chain_largest_feeds`."""
+def _feed_search(s, du, rho, sign, p, norm, prefix, binom, direct, qj, hj, t, e, steps, close, tiny, buf, dbuf, w, wd,
+                 x0):
+    """One query of :func:`chain_largest_feeds`; ``x0``: its first point where in ``(0, hi)`` (else
+    the power-law point ``hi tol / |d_j(hi)|``)."""
     h = hj
     if e <= t:
         return h
@@ -403,7 +407,8 @@ def _feed_search(s, du, rho, sign, p, norm, prefix, binom, direct, qj, hj, t, e,
     resolution = 0.5 ** steps
     target = -0.5 * close
     g_h = math.log(e / t)
-    x = h * t / e
+    warm = 0.0 < x0 < h
+    x = x0 if warm else h * t / e
     l, g_l, g_low = 0.0, -np.inf, -np.inf  # g_low: the low end's own g (g_l is Illinois-weighted)
     width = h * resolution
     side = 0
@@ -414,7 +419,7 @@ def _feed_search(s, du, rho, sign, p, norm, prefix, binom, direct, qj, hj, t, e,
                 g_h = 0.5 * g_h
             g_l, g_low, l = gx, gx, x
             side = -1
-        elif it == 0:  # the first point is infeasible: the bracket stays [0, hi], bisected
+        elif it == 0 and not warm:  # the first point is infeasible: the bracket stays [0, hi], bisected
             x = 0.5 * h
             continue
         else:
