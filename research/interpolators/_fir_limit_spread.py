@@ -216,8 +216,8 @@ class FeedSteps:
     """
 
     def __init__(self, feeds, t_in, is_arc, delays, limits: AxisLimits):
-        self.step = isolated_step(delays, limits)  # (A,) largest isolated step [mm/s]
-        self.velocity = np.asarray(limits.velocity, dtype=np.float64)
+        self.step = np.ascontiguousarray(isolated_step(delays, limits), dtype=np.float64)  # (A,) largest isolated step [mm/s]
+        self.velocity = np.ascontiguousarray(limits.velocity, dtype=np.float64)
         self.feeds = np.ascontiguousarray(feeds, dtype=np.float64)
         self.u, self.is_arc = np.ascontiguousarray(t_in, dtype=np.float64), np.ascontiguousarray(is_arc, dtype=bool)
         self.head = self.tail = np.zeros(self.feeds.size)
@@ -230,27 +230,21 @@ class FeedSteps:
         out.head, out.tail, out._columns = np.asarray(head), np.asarray(tail), None
         return out
 
-    def _column(self, k: int, side: int) -> int:
-        """The feed-factor column of block ``k``'s piece facing its start (``side`` -1) or end (+1):
-        head / body / tail, the first of them that is not empty from that side."""
-        body = 1.0 - self.head[k] - self.tail[k]
-        if side < 0:
-            return 0 if self.head[k] > 0.0 else (1 if body > 0.0 else 2)
-        return 2 if self.tail[k] > 0.0 else (1 if body > 0.0 else 0)
-
-    def _facing(self, blocks: np.ndarray, side: int) -> np.ndarray:
-        """``(B,)`` :meth:`_column` of ``blocks`` facing ``side``, on every block at once."""
-        head, tail = self.head[blocks], self.tail[blocks]
-        body = 1.0 - head - tail
-        if side < 0:
-            return np.where(head > 0.0, 0, np.where(body > 0.0, 1, 2))
-        return np.where(tail > 0.0, 2, np.where(body > 0.0, 1, 0))
+    def columns(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(M,)`` int64 each: the feed-factor column of every block's piece facing its start and
+        its end, head / body / tail, the first of them that is not empty from that side (made once
+        per head and tail shares)."""
+        if self._columns is None:
+            body = 1.0 - self.head - self.tail
+            self._columns = (np.where(self.head > 0.0, 0, np.where(body > 0.0, 1, 2)).astype(np.int64),
+                             np.where(self.tail > 0.0, 2, np.where(body > 0.0, 1, 0)).astype(np.int64))
+        return self._columns
 
     def facing_feeds(self, factor: np.ndarray, blocks: np.ndarray, side: int) -> np.ndarray:
         """``(B,)`` feeds [mm/s] of the pieces of ``blocks`` facing their start (``side`` -1) or end
-        (+1) at feed factors ``factor`` ``(M, 3)`` (:meth:`_column`)."""
+        (+1) at feed factors ``factor`` ``(M, 3)`` (:meth:`columns`)."""
         blocks = np.asarray(blocks, dtype=np.int64)
-        return self.feeds[blocks] * factor[blocks, self._facing(blocks, side)]
+        return self.feeds[blocks] * factor[blocks, self.columns()[int(side > 0)][blocks]]
 
     def __call__(self, factor: np.ndarray, which: np.ndarray, fixed: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(multipliers, within, unset)``: ``(M,)`` feed multipliers ``< 1`` of the blocks ``which``
@@ -262,16 +256,11 @@ class FeedSteps:
         the next (a ramp of several blocks in one call)."""
         M = self.feeds.size
         out, within, unset = np.full(M, np.nan), np.zeros(M, dtype=bool), np.zeros(M, dtype=bool)
-        if self._columns is None:
-            every = np.arange(M)
-            self._columns = tuple(np.ascontiguousarray(self._facing(every, side), dtype=np.int64)
-                                  for side in (-1, 1))
         # the walk of runs right, then left, compiled (``_fir_feed_steps``: the loop it replaces,
         # operation for operation)
-        feed_steps(self.feeds, np.ascontiguousarray(factor, dtype=np.float64), *self._columns, self.u,
-                   np.ascontiguousarray(self.step, dtype=np.float64), np.ascontiguousarray(self.velocity, dtype=np.float64),
-                   self.is_arc, np.ascontiguousarray(fixed, dtype=bool), np.flatnonzero(which).astype(np.int64), out,
-                   within, unset)
+        feed_steps(self.feeds, np.ascontiguousarray(factor, dtype=np.float64), *self.columns(), self.u, self.step,
+                   self.velocity, self.is_arc, np.ascontiguousarray(fixed, dtype=bool),
+                   np.flatnonzero(which).astype(np.int64), out, within, unset)
         return out, within, unset
 
     def levels(self, factor: np.ndarray, which: np.ndarray, fixed: np.ndarray) -> np.ndarray:
@@ -281,6 +270,7 @@ class FeedSteps:
         M = which.size
         out = np.full(M, np.nan)
         g_set = {}
+        start, end = self.columns()
         ks = np.flatnonzero(which).tolist()
         for n in ks + ks[::-1]:
             if n in g_set:
@@ -289,8 +279,8 @@ class FeedSteps:
             for k in (n - 1, n + 1):
                 if 0 <= k < M and (fixed[k] or k in g_set):
                     side = -1 if k < n else 1
-                    own = self.feeds[n] * factor[n, self._column(n, side)]
-                    theirs = self.feeds[k] * factor[k, self._column(k, -side)] * g_set.get(k, 1.0)
+                    own = self.feeds[n] * factor[n, (start if side < 0 else end)[n]]  # n's piece facing k
+                    theirs = self.feeds[k] * factor[k, (end if side < 0 else start)[k]] * g_set.get(k, 1.0)
                     g = min(g, theirs / own)
             if g < 1.0 - 1e-12:
                 out[n] = g_set[n] = g

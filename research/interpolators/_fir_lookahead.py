@@ -190,7 +190,6 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     # the vertices strictly inside each window's reach: indices [w_lo, w_hi)
     w_lo, w_hi = np.searchsorted(s_v, s_v - reach, side="right"), np.searchsorted(s_v, s_v + reach, side="left")
     memo, solved = {}, []  # gap bytes -> feeds of the vertices that do not dwell; (gap, its feeds (M - 1,)) solved
-    own_reach = []  # the vertices strictly inside each window at its own feed on the whole chain (made once)
 
     def feeds_without(gap):
         """Window feeds of the vertices that do not dwell, on the chain without the dwell turns:
@@ -207,13 +206,10 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
         higher root beyond the entry, or not (``ChainError.largest_feed``: one of the roots)."""
         key = gap.tobytes()
         if key not in memo:
-            if not own_reach:
-                r = f_w * every_rho
-                own_reach.extend([np.searchsorted(s_v, s_v - r, side="right"), np.searchsorted(s_v, s_v + r, side="left")])
             # the windows that reach a removed turn at their own feed: a dwell vertex strictly inside
             removed = np.concatenate([[0], np.cumsum(gap)])
             f = f_w.copy()
-            q = np.flatnonzero((removed[own_reach[1]] > removed[own_reach[0]]) & ~gap)
+            q = np.flatnonzero((removed[own_hi] > removed[own_lo]) & ~gap)
             for g_old, f_old in solved:  # f_old: that set's feeds (f_w at its dwell vertices)
                 if not q.size:
                     break
@@ -284,6 +280,9 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
                 seen.add(key)
                 sets.append((rule, gap, i == _EVERY_CAN, k > NEST_STEPS))
     Tk = Tk_budget = Tk_whole = need = budget = tol_k = cheaper = j_q = every = None  # (and the chain's prefix sums)
+    # the vertices strictly inside each window at its own feed on the whole chain (feeds_without)
+    own_lo = np.searchsorted(s_v, s_v - f_w * every_rho, side="right")
+    own_hi = np.searchsorted(s_v, s_v + f_w * every_rho, side="left")
     # every set with its feeds held over the whole support T_d / 2, and over the reach of
     # window_half_width as well (module docstring, "Window reach": neither is faster on every
     # program), but "every vertex that can dwell", which few windows hold a feed in
@@ -349,7 +348,6 @@ def with_table(candidates, table: PulseTable, measure=None):
     return out
 
 
-
 def without_dwells(candidates):
     """The candidate of :func:`look_ahead` in which no vertex dwells, its window feeds held over
     the whole support ``T_d / 2`` (the widest reach), or None (a list without it: a single block,
@@ -358,6 +356,7 @@ def without_dwells(candidates):
     corner keep the tolerance too (``_fir_staircase``'s candidate)."""
     found = [c for c, _ in candidates if isinstance(c, Candidate) and c.full.all()]
     return max(found, key=lambda c: float(np.min(c._hold, initial=np.inf)), default=None)
+
 
 class Candidate:
     """A candidate of :func:`look_ahead`, kept as what builds its arrays: its full-overlap flags

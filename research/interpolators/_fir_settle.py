@@ -620,7 +620,6 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
     # the look-ahead candidate without dwells, whose feeds cap the tolerance-aware staircase (capped)
     no_dwell = without_dwells(first) if capped is not None else None
     state, rounds, deviation = verify(first, capped)
-    first = None
     if traced:
         (feeds, overlaps, pulse, starts, profile, centre), pieces = traced_plan(*state[6])
     else:

@@ -34,6 +34,11 @@ from research.optimal._ocp import (
 )
 
 
+#: windows from which :func:`solve_windows` shows a progress bar (each window is one IPOPT solve of
+#: about 0.5 s at 10 segments x 16 intervals: a bar from about 10 s of solving)
+PROGRESS_WINDOWS = 20
+
+
 @dataclass(frozen=True)
 class WindowReport:
     """One window of the receding-window solution.
@@ -134,11 +139,6 @@ def solve_windows(
             mode_state = solution.modes[(commit - first) * N].copy()
         reports.append(_report(first, stop, commit, stats, float(solution.durations.sum())))
     return PhaseGrid(durations, states, jerks, modes), reports, build_time
-
-
-#: windows from which :func:`solve_windows` shows a progress bar (each window is one IPOPT solve of
-#: about 0.5 s at 10 segments x 16 intervals: a bar from about 10 s of solving)
-PROGRESS_WINDOWS = 20
 
 
 def _report(first: int, stop: int, commit: int, stats: SolveStats, duration: float) -> WindowReport:

@@ -27,12 +27,10 @@ from research.paths.polyline import DEFAULT_AXES, Polyline
 
 _GAUSS = np.polynomial.legendre.leggauss(8)
 _QUAD_ANGLE = 0.25 * np.pi  # Gauss-Legendre sub-interval of a spiral / helix length [rad]
-
-
-
 #: sample points of :meth:`ToolPath._tree` per block, at most on average (8: the median block
 #: length rules every program whose mean block is under 8 times its median)
 TREE_SAMPLES = 8
+
 
 @dataclass(frozen=True, eq=False)
 class ToolPath:

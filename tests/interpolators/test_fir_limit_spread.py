@@ -243,6 +243,12 @@ def _feed_steps_reference(steps, factor, which, fixed):
     g_set = {}
     ks = np.flatnonzero(which).tolist()
     u_all, step, vel = steps.u.tolist(), steps.step.tolist(), steps.velocity.tolist()
+
+    def column(k, side):  # head / body / tail, the first not empty from that side
+        body = 1.0 - steps.head[k] - steps.tail[k]
+        if side < 0:
+            return 0 if steps.head[k] > 0.0 else (1 if body > 0.0 else 2)
+        return 2 if steps.tail[k] > 0.0 else (1 if body > 0.0 else 0)
     for n in ks + ks[::-1]:
         if n in g_set or steps.is_arc[n]:
             continue
@@ -255,8 +261,8 @@ def _feed_steps_reference(steps, factor, which, fixed):
         lo, hi = 0.0, min(1.0, min(v / abs(u_i) for v, u_i in zip(vel, u) if u_i != 0.0) / top)
         for k in near:
             side = -1 if k < n else 1
-            x = float(steps.feeds[n] * factor[n, steps._column(n, side)])
-            s = float(steps.feeds[k] * factor[k, steps._column(k, -side)]) * g_set.get(k, 1.0)
+            x = float(steps.feeds[n] * factor[n, column(n, side)])
+            s = float(steps.feeds[k] * factor[k, column(k, -side)]) * g_set.get(k, 1.0)
             lo_k, hi_k = -np.inf, np.inf
             for u_i, uk_i, step_i in zip(u, u_all[k], step):
                 V = s * uk_i
