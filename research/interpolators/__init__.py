@@ -1,7 +1,9 @@
 """Interpolators: tool path -> :class:`~research.trajectory.Trajectory`.
 
 - FIR-overlap cornering (Sencer 2015): :func:`plan_fir`, :func:`fir_interpolate`; per-corner
-  overlaps and per-block feeds optimized for cycle time (a named extension): :func:`optimize_fir`.
+  overlaps and per-block feeds optimized for cycle time (a named extension): :func:`optimize_fir`;
+  the filters' input pre-compensated by mirror passes so that their output keeps the programmed
+  path at higher feeds (a named extension, Prevost 2012's mirror): :func:`plan_fir_mirror`.
 - Jerk-limited S-curve with exact stops (the "linear interpolator"): :func:`scurve_interpolate`,
   and the time-optimal double-S move with boundary speeds :func:`double_s`.
 - Geometric corner smoothing (Sencer 2015 Fig 6 baseline): :func:`blend_interpolate`.
@@ -16,6 +18,7 @@ from research.interpolators._fir_chain import (
     magnitude_response,
     total_delay,
 )
+from research.interpolators._fir_mirror import MirrorPlan, plan_fir_mirror
 from research.interpolators._fir_optimize import optimize_fir
 from research.interpolators._fir_overlap import cornering_error, overlap_time
 from research.interpolators.blend import blend_interpolate, corner_blends
@@ -35,6 +38,7 @@ from research.interpolators.sigmoid import (
 __all__ = [
     "FIRPlan",
     "FIRSweep",
+    "MirrorPlan",
     "SigmoidMotion",
     "acceleration_spectrum",
     "blend_interpolate",
@@ -54,6 +58,7 @@ __all__ = [
     "optimize_fir",
     "overlap_time",
     "plan_fir",
+    "plan_fir_mirror",
     "plan_fir_sweep",
     "scurve_interpolate",
     "scurve_phases",

@@ -1,0 +1,311 @@
+"""Mirror pre-compensation of a FIR plan: the filters' input moved so that their output keeps the
+programmed path (beyond Sencer 2015: Prevost 2012's mirror applied to the interpolator itself).
+
+Why: on a curve the FIR chain averages the path, and the average of a curve lies inside it. On a
+circle of radius ``R`` at feed ``F`` the output is a circle of radius ``R prod sinc(F T_i / 2R)``
+(eq 8), an inward error of about ``F^2 var / (2 R)`` (``var`` the kernel's variance); ``plan_fir``
+holds it within the tolerance by the feed, which is what keeps a FIR plan on a CAM file of smooth
+chords well below the feeds a time-optimal plan reaches under the same limits (``sqrt(A R)``).
+The error is a known function of the input, so it can be compensated instead of waited out: with
+the plan's timing held (every block's pulse start and length, eq 5 and 11), the output is linear in
+the input's vertices (each block's velocity pulse is its chord over its pulse length), and moving
+each vertex by the mirror of its error brings the output back onto the path (Prevost 2012 eq 4,
+``x_ref <- x_ref + (x_CAM - x_sim)``, here with ``x_sim`` the exact filtered profile).
+
+What this module does (:func:`compensate`):
+
+1. The timing comes from ``plan_fir`` at a relaxed tolerance ``g_k eps_k`` per block (``g_k >= 1``):
+   faster feeds on curves, larger overlaps at corners, its limits held on the uncompensated
+   profile.
+2. ``passes`` mirror passes move the vertices of the planned blocks (its pulse table's chords): the
+   error of the output at each corner instant (the window centred on the vertex), less its
+   component along the path's tangent there (a timing lag, not a contour error), is added to the
+   vertex. Fixed: the path's two ends, exact stops (the output rests on them) and the ends of arc
+   blocks (an arc's geometry is left as programmed).
+3. The exact profile of the moved input is checked against the *programmed* path as ``plan_fir``
+   checks its own (vertex distances at every corner, the trajectory sampled every
+   ``check_period``), and against ``limits`` on its exact peaks. Blocks within a window of a
+   violation have their relaxation halved towards 1 (``g <- 1 + (g - 1) / 2``, to 1 below
+   :data:`_LAST_STEP`); where a violation meets blocks already at 1, the vertices within reach stop
+   being moved; then the next round re-plans. At most ``rounds`` rounds.
+
+The plan returned is the faster of this and ``plan_fir``'s own at the tolerance, so it is never
+slower than the plain plan and always verified. What the machine's interpolator is fed is the
+moved polyline (:attr:`MirrorPlan.input_vertices`); the filters then run it unchanged.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from research.errors import ParameterError
+from research.interpolators import _fir_pauses
+from research.interpolators._fir_kernels import verified_bound
+from research.interpolators._fir_limits import LIMIT_RTOL
+from research.interpolators._fir_piece_peaks import PiecePeaks
+from research.interpolators._fir_profile import ProfileInputs, profile
+from research.interpolators._fir_verify import path_deviations, profile_rounding, vertex_distances
+from research.interpolators.fir import CHECK_PERIOD, FIRPlan, _as_toolpath, _check_inputs, plan_fir
+from research.limits import AxisLimits
+from research.paths.gcode import checked_pauses
+from research.paths.toolpath import ToolPath
+from research.piecewise import NumpyPiecewise
+
+RELAX = 2.0  # tolerance factor of the first round's timing (benchmarks/fir_mirror.py sweeps 1.5-6)
+PASSES = 3  # mirror passes per round (the same script sweeps 0-6)
+ROUNDS = 8  # re-plans at most: 2 -> 1.5 -> 1.25 -> 1 -> no moves, with room for neighbours
+_LAST_STEP = 1.25  # a relaxation below this goes to 1 on the next violation (one round, not many)
+
+
+@dataclass(frozen=True)
+class MirrorPlan:
+    """A FIR plan whose filters' input is moved so that their output keeps the programmed path.
+
+    Attributes:
+        plan: the :class:`FIRPlan` (its timing, programmed vertices and corner instants; its
+            profile the filtered moved input, verified against the programmed path:
+            :attr:`FIRPlan.path_deviation` is the largest sampled distance [mm]).
+        input_vertices: ``(B + 1, d)`` the polyline the filters average [mm]: the vertices of the
+            planned blocks (straight runs merged, lines cut into ramp pieces where ``plan_fir``
+            did), moved; the programmed ones where nothing was compensated.
+        relaxation: ``(M,)`` factor ``g_k >= 1`` on each programmed block's tolerance at which the
+            timing was planned (1 everywhere when the plain plan was kept).
+        compensated: False when ``plan_fir``'s own plan was kept (it was as fast, or no round
+            verified).
+        rounds: re-plans made.
+        plain_cycle_time: ``plan_fir``'s cycle time at the tolerance [s], for comparison.
+    """
+
+    plan: FIRPlan
+    input_vertices: np.ndarray
+    relaxation: np.ndarray
+    compensated: bool
+    rounds: int
+    plain_cycle_time: float
+
+    @property
+    def cycle_time(self) -> float:
+        """Total motion time [s] (:attr:`FIRPlan.cycle_time`)."""
+        return float(self.plan.cycle_time)
+
+
+def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None = None, relax: float = RELAX,
+                    passes: int = PASSES, rounds: int = ROUNDS, check_period: float = CHECK_PERIOD,
+                    pauses=None) -> MirrorPlan:
+    """A FIR plan with its input pre-compensated by mirror passes (module docstring).
+
+    Args:
+        path, feed, delays, tolerance, limits, check_period, pauses: as :func:`plan_fir` (concrete
+            values: this search decides on them and is not differentiable).
+        relax: tolerance factor ``>= 1`` the first round plans its timing at.
+        passes: mirror passes per round, ``>= 0`` (0: relaxed timing, nothing moved: verifies only
+            where the relaxed plan already keeps the tolerance).
+        rounds: re-plans at most, ``>= 1``.
+
+    Returns:
+        :class:`MirrorPlan`; its plan keeps ``tolerance`` on the programmed path (vertices and
+        sampled trajectory, as ``plan_fir`` verifies) and ``limits`` on its exact peaks, and its cycle
+        time is at most ``plan_fir``'s.
+
+    Raises:
+        ParameterError: a bad ``relax``, ``passes`` or ``rounds`` (naming which), or what
+            :func:`plan_fir` raises.
+
+    Example:
+        >>> import numpy as np
+        >>> from research.paths import Polyline
+        >>> a = np.linspace(0.0, np.pi, 200)
+        >>> arc = Polyline(np.stack([10 * np.cos(a), 10 * np.sin(a)], axis=1))
+        >>> m = plan_fir_mirror(arc, 200.0, [0.06, 0.03], 0.05)
+        >>> bool(m.cycle_time <= m.plain_cycle_time)
+        True
+    """
+    if not (np.isfinite(relax) and relax >= 1.0):
+        raise ParameterError(f"relax must be a finite factor >= 1 on the tolerance, got {relax!r}")
+    if isinstance(passes, bool) or not isinstance(passes, (int, np.integer)) or passes < 0:
+        raise ParameterError(f"passes must be an integer >= 0 (mirror passes per round), got {passes!r}")
+    if isinstance(rounds, bool) or not isinstance(rounds, (int, np.integer)) or rounds < 1:
+        raise ParameterError(f"rounds must be an integer >= 1 (re-plans at most), got {rounds!r}")
+    tp = _as_toolpath(path)
+    M = tp.n_blocks
+    _check_inputs(delays, feed, tolerance, M)
+    if pauses is not None:
+        pauses = checked_pauses(pauses, M)
+        if not np.all(np.isnan(pauses)):
+            ranges = _fir_pauses.parts(pauses)
+            parts = [plan_fir_mirror(tp.part(a, b), _fir_pauses.per_block(feed, a, b, M), delays,
+                                     _fir_pauses.per_block(tolerance, a, b, M), limits=limits, relax=relax,
+                                     passes=passes, rounds=rounds, check_period=check_period) for a, b in ranges]
+            starts, pulse, overlaps, feeds, position, centre, deviation, n = _fir_pauses.join(
+                [p.plan for p in parts], ranges, pauses)
+            plan = FIRPlan(starts, pulse, overlaps, feeds, parts[0].plan.delays, position, centre, tp.vertices,
+                           deviation, n, tp.axes)
+            return MirrorPlan(plan, np.concatenate([parts[0].input_vertices] + [p.input_vertices[1:] for p in parts[1:]]),
+                              np.concatenate([p.relaxation for p in parts]), any(p.compensated for p in parts),
+                              sum(p.rounds for p in parts), sum(p.plain_cycle_time for p in parts)
+                              + float(np.nansum(pauses)))
+    tol = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), (M,))
+    feed = np.asarray(feed, dtype=np.float64)
+    delays = np.asarray(delays, dtype=np.float64).reshape(-1)
+    plain = plan_fir(tp, feed, delays, tol, limits=limits, check_period=check_period)
+    T_plain = float(plain.cycle_time)
+    best = MirrorPlan(plain, _input_vertices(plain), np.ones(M), False, 0, T_plain)
+    g = np.full(M, float(relax))
+    frozen = np.zeros(M, dtype=bool)  # programmed blocks whose planned vertices are not moved
+    r = 0
+    while r < rounds and (np.any(g > 1.0) or (passes > 0 and not np.all(frozen))):
+        r += 1
+        plan = plan_fir(tp, feed, delays, tol * g, limits=limits, check_period=check_period)
+        if float(plan.cycle_time) >= float(best.plan.cycle_time):
+            break  # this timing cannot beat the plan at hand, moved or not
+        moved, vertices = compensate(plan, tp, passes, frozen)
+        bad_times, deviation = violations(moved, tp, tol, limits, check_period)
+        if bad_times.size == 0:
+            best = MirrorPlan(dataclasses.replace(moved, path_deviation=deviation), vertices, g.copy(), True, r, T_plain)
+            break
+        near = _blocks_near(plan, bad_times)
+        relaxed = near & (g > 1.0)
+        g[relaxed] = np.where(g[relaxed] < _LAST_STEP, 1.0, 1.0 + 0.5 * (g[relaxed] - 1.0))
+        stuck = near & ~relaxed & ~frozen  # at the tolerance already: stop moving what reaches them
+        if not relaxed.any() and not stuck.any():
+            break  # the violations sit where nothing is relaxed or moved any more
+        frozen |= stuck
+    return dataclasses.replace(best, rounds=r)
+
+
+def compensate(plan: FIRPlan, tp: ToolPath, passes: int, frozen: np.ndarray) -> tuple[FIRPlan, np.ndarray]:
+    """``passes`` mirror passes on ``plan``'s input, its timing held (module docstring, step 2).
+
+    Args:
+        plan: a concrete plan of ``tp`` (its profile a ``ProfileInputs``).
+        tp: the programmed path.
+        passes: mirror passes (0: the plan's own input).
+        frozen: ``(M,)`` programmed blocks whose planned vertices are not moved.
+
+    Returns:
+        ``(plan with the moved input's profile, its input vertices (B + 1, d) [mm])``.
+    """
+    inputs = plan.profile
+    table = inputs.pieces.table
+    B = table.n_blocks
+    target = _input_vertices(plan)
+    arc = np.zeros(B, dtype=bool)
+    arc[table.block[table.arc_pieces]] = True
+    fixed = _fixed_vertices(inputs, tp, frozen, target, arc)
+    normal = _normal_projectors(target)
+    moved = target.copy()
+    motion = ~table.gap & (table.block < B)
+    line = motion & ~arc[np.minimum(table.block, B - 1)]
+    geo = table.geo
+    for k in range(passes + 1):
+        geo = table.geo.copy()
+        geo[line, 0, :] = np.diff(moved, axis=0)[table.block[line]]
+        _, _, breaks, coeffs, centre = profile(inputs.start, geo, table.block, table.gap, inputs.fraction,
+                                               inputs.piece_tv, inputs.gaps, inputs.delays, table.joins)
+        if k == passes or B < 2:
+            break
+        error = target[1:-1] - NumpyPiecewise(breaks, coeffs)(centre[: B - 1])
+        step = np.einsum("kij,kj->ki", normal, error)  # its part across the path (a contour error)
+        step[fixed[1:-1]] = 0.0
+        moved[1:-1] += step
+    moved_inputs = ProfileInputs(dataclasses.replace(table, geo=geo), inputs.fraction, inputs.piece_tv, inputs.gaps,
+                                 inputs.delays, inputs.start, np.asarray(inputs.span))
+    return dataclasses.replace(plan, profile=moved_inputs), moved
+
+
+def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits | None,
+               check_period: float) -> tuple[np.ndarray, float]:
+    """``(times [s], deviation [mm])``: when ``plan``'s profile breaks the tolerance ``tol`` ``(M,)``
+    on the programmed path ``tp`` or the ``limits`` (module docstring, step 3; empty when it keeps
+    both), and its largest sampled distance to the path. The bounds are ``plan_fir``'s own:
+    ``verified_bound`` plus the rounding the profile has accumulated by its end."""
+    pos = plan.position.numpy_evaluator()
+    Td = float(np.sum(np.asarray(plan.delays)))
+    slack = profile_rounding(pos, tp.ends[-1])
+    centre = np.asarray(plan.corner_times)
+    starts = np.asarray(plan.start_times)
+    times = []
+    if tp.n_blocks > 1:
+        tol_v = np.minimum(tol[:-1], tol[1:])
+        errors = vertex_distances(pos, np.asarray(tp.vertices), centre, 0.5 * Td, tol_v)
+        times.append(centre[errors > verified_bound(tol_v) + slack])
+    deviation, at_vertex, at_block = path_deviations(pos, tp, starts, centre, Td, tol, check_period, slack=slack)
+    times.append(centre[sorted(at_vertex)] if at_vertex else np.zeros(0))
+    middle = starts + 0.5 * np.asarray(plan.pulse_times) + 0.5 * Td  # the window centred on the block
+    times.append(middle[sorted(at_block)] if at_block else np.zeros(0))
+    if limits is not None:
+        over = PiecePeaks(pos, limits).per_piece > 1.0 + LIMIT_RTOL
+        times.append(0.5 * (pos.breaks[:-1] + pos.breaks[1:])[over])
+    return np.sort(np.concatenate(times)), float(deviation)
+
+
+def _input_vertices(plan: FIRPlan) -> np.ndarray:
+    """``(B + 1, d)`` vertices [mm] of the blocks ``plan``'s pulse table holds: its start plus the
+    running sum of every piece's displacement (``geo`` holds ``dP/du`` in powers of the piece's
+    local block fraction ``u' in [0, share]``: the piece moves ``sum_m geo_m share^(m+1) / (m+1)``)."""
+    inputs = plan.profile
+    table = inputs.pieces.table
+    B = table.n_blocks
+    motion = ~table.gap & (table.block < B)
+    m = np.arange(table.geo.shape[1])
+    weight = table.fraction[:, None] ** (m + 1) / (m + 1)
+    disp = np.zeros((B, table.geo.shape[2]))
+    np.add.at(disp, table.block[motion], np.einsum("pmd,pm->pd", table.geo[motion], weight[motion]))
+    return np.asarray(inputs.start, dtype=np.float64) + np.concatenate([np.zeros((1, disp.shape[1])),
+                                                                        np.cumsum(disp, axis=0)])
+
+
+def _fixed_vertices(inputs: ProfileInputs, tp: ToolPath, frozen: np.ndarray, vertices: np.ndarray,
+                    arc: np.ndarray) -> np.ndarray:
+    """``(B + 1,)`` planned vertices that stay where they are: the two ends, exact stops (gap
+    ``T_d``: the output rests on the vertex), the ends of arc blocks and the vertices on the
+    programmed blocks ``frozen`` ``(M,)`` (found by the path's sample tree: the block owning the
+    nearest sample, and its neighbours)."""
+    B = vertices.shape[0] - 1
+    fixed = np.zeros(B + 1, dtype=bool)
+    fixed[[0, B]] = True
+    Td = float(np.sum(inputs.delays))
+    gaps = np.asarray(inputs.gaps)[: B - 1]
+    fixed[1:B][gaps >= Td * (1.0 - 1e-12)] = True
+    fixed[:-1] |= arc
+    fixed[1:] |= arc
+    if frozen.any():
+        tree, owner, _ = tp._tree()
+        _, idx = tree.query(vertices)
+        block = owner[np.asarray(idx)]
+        near = frozen.copy()
+        near[:-1] |= frozen[1:]
+        near[1:] |= frozen[:-1]
+        fixed |= near[block]
+    return fixed
+
+
+def _normal_projectors(vertices: np.ndarray) -> np.ndarray:
+    """``(B - 1, d, d)`` projectors across the path at the interior vertices: ``I - tau tau^T`` with
+    ``tau`` the unit bisector of the two chords' directions (the identity at a reversal, where the
+    tangent is undefined)."""
+    chords = np.diff(vertices, axis=0)
+    u = chords / np.maximum(np.linalg.norm(chords, axis=1, keepdims=True), 1e-300)
+    tau = u[:-1] + u[1:]
+    n = np.linalg.norm(tau, axis=1, keepdims=True)
+    tau = np.where(n > 1e-9, tau / np.maximum(n, 1e-300), 0.0)
+    d = vertices.shape[1]
+    return np.eye(d)[None] - tau[:, :, None] * tau[:, None, :]
+
+
+def _blocks_near(plan: FIRPlan, times: np.ndarray) -> np.ndarray:
+    """``(M,)`` programmed blocks whose output span (pulse start to ``T_d`` after its end) comes
+    within ``T_d`` of one of ``times`` [s] (a window of the violation)."""
+    starts = np.asarray(plan.start_times)
+    Td = float(np.sum(np.asarray(plan.delays)))
+    ends = starts + np.asarray(plan.pulse_times) + Td
+    M = starts.size
+    lo = np.searchsorted(ends, times - Td, side="left")
+    hi = np.searchsorted(starts, times + Td, side="right")
+    mark = np.zeros(M + 1, dtype=np.int64)
+    np.add.at(mark, np.minimum(lo, M), 1)
+    np.add.at(mark, np.minimum(np.maximum(hi, lo), M), -1)
+    return np.cumsum(mark)[:M] > 0

@@ -1,0 +1,191 @@
+"""Mirror pre-compensation of FIR plans (``plan_fir_mirror``): tolerance and limits held on the
+programmed path (checked here by brute force, not by the planner's own checks), never slower than
+``plan_fir``, faster where the filters' averaging of a curve binds (eq 8)."""
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq, minimize_scalar
+
+from research import metrics
+from research.errors import ParameterError
+from research.interpolators import plan_fir, plan_fir_mirror
+from research.interpolators._fir_mirror import _input_vertices, compensate
+from research.limits import AxisLimits
+from research.paths import Polyline
+from research.paths.toolpath import ToolPath
+from research.paths.library import random_program
+from tests.interpolators._paths import turning_path
+
+F, DELAYS, EPS = 200.0, (0.06, 0.03), 0.05  # benchmarks/bench_cam.py's setting [mm/s, s, mm]
+
+
+def circle_of_chords(radius: float, chord: float, turns: float = 1.0) -> Polyline:
+    """A circle of ``radius`` [mm] tessellated into chords of about ``chord`` [mm], from (R, 0)."""
+    n = int(np.ceil(2 * np.pi * radius * turns / chord))
+    a = np.linspace(0.0, 2 * np.pi * turns, n + 1)
+    return Polyline(np.stack([radius * np.cos(a), radius * np.sin(a)], axis=1))
+
+
+def segment_distances(q: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Distance [mm] from each row of ``q`` to the polyline ``points``, by brute force over every segment."""
+    a, b = points[:-1], points[1:]
+    best = np.full(len(q), np.inf)
+    for i in range(0, len(q), 2000):
+        x = q[i:i + 2000, None, :]
+        ab = b - a
+        t = np.clip(np.sum((x - a) * ab, axis=2) / np.maximum(np.sum(ab * ab, axis=1), 1e-300), 0.0, 1.0)
+        best[i:i + 2000] = np.min(np.linalg.norm(x - a - t[..., None] * ab, axis=2), axis=1)
+    return best
+
+
+def vertex_distances(plan, vertices: np.ndarray, step: float = 2e-4) -> np.ndarray:
+    """Distance [mm] from each vertex to the exact profile: the nearest sample every ``step`` [s],
+    refined by a bounded scalar search around it."""
+    pos = plan.position.numpy_evaluator()
+    t = np.arange(pos.breaks[0], pos.breaks[-1], step)
+    q = pos(t)
+    out = []
+    for p in vertices:
+        i = int(np.argmin(np.linalg.norm(q - p, axis=1)))
+        lo, hi = t[max(i - 1, 0)], t[min(i + 1, t.size - 1)]
+        res = minimize_scalar(lambda s: float(np.linalg.norm(pos(np.array([s]))[0] - p)), bounds=(lo, hi),
+                              method="bounded", options={"xatol": 1e-12})
+        out.append(min(res.fun, float(np.linalg.norm(q[i] - p))))
+    return np.asarray(out)
+
+
+def assert_keeps(m, points: np.ndarray, eps: float, limits: AxisLimits | None) -> None:
+    """The plan keeps ``eps`` on the polyline ``points`` (samples every 0.2 ms and the vertices) and
+    the limits (``metrics.limit_ratios``), and runs from the first point to the last at rest."""
+    tr = m.plan.trajectory(2e-4)
+    q = np.asarray(tr.q)
+    slack = eps * 1e-6 + 1e-8
+    assert segment_distances(q, points).max() <= eps + slack
+    if len(points) > 2:
+        assert vertex_distances(m.plan, points[1:-1]).max() <= eps + slack
+    np.testing.assert_allclose(q[0], points[0], atol=1e-9)
+    np.testing.assert_allclose(q[-1], points[-1], atol=1e-9)
+    assert np.abs(np.asarray(tr.v)[-1]).max() <= 1e-6
+    if limits is not None:
+        assert all(np.max(r) <= 1.0 + 1e-6 for r in metrics.limit_ratios(tr, limits).values())
+
+
+def test_circle_of_chords_beats_the_feed_of_eq8_and_keeps_the_tolerance():
+    """A circle of R 10 mm in 0.5 mm chords at F 200 mm/s, eps 50 um, T 60/30 ms. Eq 8: the filtered
+    circle has radius ``R prod sinc(F T_i / 2R)``, so ``plan_fir`` cannot run it faster than the feed
+    ``F8`` with ``R (1 - prod sinc) = eps`` (solved here by brentq). The mirror moves the input
+    outwards, so it runs faster than ``F8`` (a model prediction: the property tested is only that
+    it beats ``F8``'s own time, and keeps eps and the envelope's limits)."""
+    R = 10.0
+    path = circle_of_chords(R, 0.5)
+    limits = AxisLimits.fir_envelope(2, F, DELAYS)
+    shrink = lambda f: R * (1.0 - np.prod([np.sinc(f * T / (2 * R) / np.pi) for T in DELAYS])) - EPS  # noqa: E731
+    F8 = brentq(shrink, 1.0, F)
+    m = plan_fir_mirror(path, F, DELAYS, EPS, limits=limits)
+    assert m.compensated
+    assert m.cycle_time < path.length / F8  # the plain plan's steady part alone takes this long
+    assert m.cycle_time < m.plain_cycle_time
+    assert_keeps(m, np.asarray(path.points), EPS, limits)
+
+
+def test_mirror_passes_bring_the_corner_instants_onto_a_steady_circle():
+    """With the timing held the output is linear in the input's vertices, and on a steady circle
+    each pass leaves less of the eq 8 shrink at the corner instants (Prevost 2012 eq 4: the mirror
+    of the error)."""
+    path = circle_of_chords(10.0, 0.5, turns=2.0)
+    tp = ToolPath.from_polyline(path)
+    plan = plan_fir(path, F, DELAYS, 4 * EPS)  # a timing whose shrink is about 4 eps
+    frozen = np.zeros(tp.n_blocks, dtype=bool)
+    middle = slice(tp.n_blocks // 4, 3 * tp.n_blocks // 4)  # steady: a window away from the ends
+    radial = []
+    for passes in (0, 1, 3):
+        moved, _ = compensate(plan, tp, passes, frozen)
+        q = moved.position.numpy_evaluator()(np.asarray(plan.corner_times)[middle])
+        radial.append(np.max(np.abs(np.linalg.norm(q, axis=1) - 10.0)))
+    assert radial[0] > 2 * EPS
+    assert radial[1] < 0.5 * radial[0] and radial[2] < radial[1]
+
+
+def test_no_passes_rebuild_the_plan_itself():
+    """``compensate`` with 0 passes rebuilds the planned input from the vertices it reads back (the
+    running sum of the table's chords): the programmed vertices, and the same profile bit for bit."""
+    path = turning_path(3, 40, (0.2, 3.0), 40.0)
+    tp = ToolPath.from_polyline(path)
+    plan = plan_fir(path, F, DELAYS, EPS)
+    np.testing.assert_allclose(_input_vertices(plan), np.asarray(path.points), rtol=0, atol=1e-12)
+    moved, vertices = compensate(plan, tp, 0, np.zeros(tp.n_blocks, dtype=bool))
+    a, b = plan.position.numpy_evaluator(), moved.position.numpy_evaluator()
+    np.testing.assert_array_equal(a.breaks, b.breaks)
+    np.testing.assert_allclose(a.coeffs, b.coeffs, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_random_line_programs_keep_tolerance_and_limits_and_are_never_slower(seed):
+    """Seeded random programs of lines (0.02-30 mm at any turn) and chains of short chords, with and
+    without limits below the envelope: tolerance and limits held on the programmed path, the cycle
+    no longer than ``plan_fir``'s."""
+    rng = np.random.default_rng(seed)
+    if seed % 2:
+        points = np.vstack([random_program(rng, arcs=False).vertices])
+        path = Polyline(points)
+    else:
+        path = turning_path(seed, 60, (0.1, 1.0), 15.0)
+    points = np.asarray(path.points)
+    envelope = AxisLimits.fir_envelope(2, F, DELAYS)
+    limits = None if seed % 3 == 0 else AxisLimits(envelope.velocity, 0.5 * envelope.acceleration, 0.5 * envelope.jerk)
+    m = plan_fir_mirror(path, F, DELAYS, EPS, limits=limits)
+    plain = plan_fir(path, F, DELAYS, EPS, limits=limits)
+    assert m.cycle_time <= float(plain.cycle_time) * (1 + 1e-12)
+    assert m.plain_cycle_time == pytest.approx(float(plain.cycle_time), rel=1e-12)
+    assert_keeps(m, points, EPS, limits)
+
+
+def test_tolerance_zero_keeps_the_exact_stops():
+    """eps = 0: every corner an exact stop (eq 11, ``T_k = 0``), fixed vertices, nothing to move: the
+    plain plan is returned."""
+    path = turning_path(1, 12, (1.0, 5.0), 60.0)
+    m = plan_fir_mirror(path, F, DELAYS, 0.0)
+    assert not m.compensated
+    assert m.cycle_time == pytest.approx(float(plan_fir(path, F, DELAYS, 0.0).cycle_time), rel=1e-12)
+    np.testing.assert_allclose(m.input_vertices, np.asarray(path.points), atol=1e-12)
+
+
+def test_arcs_keep_their_geometry_and_their_ends():
+    """A line, a quarter arc (R 20 mm) and a chain of short chords: the arc's ends are not moved (its
+    geometry stays as programmed), and the plan keeps eps by its own verification and by the exact
+    distance to the tool path (``ToolPath.distance``) at samples every 0.5 ms."""
+    chords = circle_of_chords(8.0, 0.4)
+    tp = ToolPath.from_polyline(Polyline([[0.0, -20.0], [0.0, 0.0]]))
+    tp = tp.then_arc(np.array([20.0, 20.0]), np.array([20.0, 0.0]), ccw=False)
+    for p in np.asarray(chords.points)[1:40] + np.array([12.0, 20.0]) - np.asarray(chords.points)[0] + np.array([8.0, 0.0]):
+        tp = ToolPath(tp.start, np.vstack([tp.ends, p]), np.vstack([tp.centers, [[np.nan, np.nan]]]),
+                      np.vstack([tp.normals, [[np.nan] * 3]]), np.concatenate([tp.sweeps, [0.0]]))
+    m = plan_fir_mirror(tp, F, DELAYS, EPS)
+    v = m.input_vertices
+    assert np.any(np.all(np.isclose(v, [0.0, 0.0], atol=1e-12), axis=1))
+    assert np.any(np.all(np.isclose(v, [20.0, 20.0], atol=1e-12), axis=1))
+    q = np.asarray(m.plan.trajectory(5e-4).q)
+    assert np.max(tp.distance(q)) <= EPS * (1 + 1e-6) + 1e-8
+    assert m.cycle_time <= m.plain_cycle_time
+
+
+def test_pauses_plan_each_part_alone():
+    """A pause (``G4``) cuts the program: its parts are compensated alone and joined with the pause
+    held, the cycle the parts' own plus the pause."""
+    path = circle_of_chords(10.0, 0.5)
+    M = path.n_segments
+    pauses = np.full(M + 1, np.nan)
+    pauses[M // 2] = 0.25
+    m = plan_fir_mirror(path, F, DELAYS, EPS, pauses=pauses)
+    first = plan_fir_mirror(Polyline(np.asarray(path.points)[: M // 2 + 1]), F, DELAYS, EPS)
+    second = plan_fir_mirror(Polyline(np.asarray(path.points)[M // 2:]), F, DELAYS, EPS)
+    assert m.cycle_time == pytest.approx(first.cycle_time + second.cycle_time + 0.25, rel=1e-12)
+    assert m.input_vertices.shape == (first.input_vertices.shape[0] + second.input_vertices.shape[0] - 1, 2)
+
+
+@pytest.mark.parametrize("kwargs, name", [({"relax": 0.5}, "relax"), ({"relax": np.nan}, "relax"),
+                                          ({"passes": -1}, "passes"), ({"passes": 1.5}, "passes"),
+                                          ({"rounds": 0}, "rounds"), ({"rounds": True}, "rounds")])
+def test_bad_settings_are_named(kwargs, name):
+    with pytest.raises(ParameterError, match=name):
+        plan_fir_mirror(circle_of_chords(5.0, 0.5), F, DELAYS, EPS, **kwargs)
