@@ -37,6 +37,7 @@ moved polyline (:attr:`MirrorPlan.input_vertices`); the filters then run it unch
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -54,10 +55,18 @@ from research.paths.gcode import checked_pauses
 from research.paths.toolpath import ToolPath
 from research.piecewise import NumpyPiecewise
 
-RELAX = 2.0  # tolerance factor of the first round's timing (benchmarks/fir_mirror.py sweeps 1.5-6)
-PASSES = 3  # mirror passes per round (the same script sweeps 0-6)
-ROUNDS = 8  # re-plans at most: 2 -> 1.5 -> 1.25 -> 1 -> no moves, with room for neighbours
+#: tolerance factor of the first round's timing and mirror passes per round: the best of the sweep
+#: of ``benchmarks/fir_mirror.py --sweep`` (relax 1.5-16 x passes 0-8 on bench_cam's quick CAM file:
+#: 0.5637x ``plan_fir``'s cycle at 8 / 5; 0.5852x at 4 / 3, 0.5576x at 16 / 5 for 30 % more planning)
+RELAX, PASSES = 8.0, 5
 _LAST_STEP = 1.25  # a relaxation below this goes to 1 on the next violation (one round, not many)
+
+
+def default_rounds(relax: float) -> int:
+    """Re-plans that take a block from ``relax`` to 1 by the halvings of the search (to
+    :data:`_LAST_STEP`, then 1), one more to stop moving its vertices and one to verify."""
+    halvings = 0 if relax <= _LAST_STEP else math.ceil(math.log2((relax - 1.0) / (_LAST_STEP - 1.0)))
+    return halvings + 3
 
 
 @dataclass(frozen=True)
@@ -93,7 +102,7 @@ class MirrorPlan:
 
 
 def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None = None, relax: float = RELAX,
-                    passes: int = PASSES, rounds: int = ROUNDS, check_period: float = CHECK_PERIOD,
+                    passes: int = PASSES, rounds: int | None = None, check_period: float = CHECK_PERIOD,
                     pauses=None) -> MirrorPlan:
     """A FIR plan with its input pre-compensated by mirror passes (module docstring).
 
@@ -103,7 +112,7 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
         relax: tolerance factor ``>= 1`` the first round plans its timing at.
         passes: mirror passes per round, ``>= 0`` (0: relaxed timing, nothing moved: verifies only
             where the relaxed plan already keeps the tolerance).
-        rounds: re-plans at most, ``>= 1``.
+        rounds: re-plans at most, ``>= 1``; None: :func:`default_rounds` of ``relax``.
 
     Returns:
         :class:`MirrorPlan`; its plan keeps ``tolerance`` on the programmed path (vertices and
@@ -127,6 +136,8 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
         raise ParameterError(f"relax must be a finite factor >= 1 on the tolerance, got {relax!r}")
     if isinstance(passes, bool) or not isinstance(passes, (int, np.integer)) or passes < 0:
         raise ParameterError(f"passes must be an integer >= 0 (mirror passes per round), got {passes!r}")
+    if rounds is None and np.isfinite(relax) and relax >= 1.0:
+        rounds = default_rounds(float(relax))
     if isinstance(rounds, bool) or not isinstance(rounds, (int, np.integer)) or rounds < 1:
         raise ParameterError(f"rounds must be an integer >= 1 (re-plans at most), got {rounds!r}")
     tp = _as_toolpath(path)

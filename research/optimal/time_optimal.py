@@ -51,6 +51,7 @@ from research.optimal._warm import grid_from_result, grid_from_trajectory
 from research.optimal._windowing import (
     WindowFailure,
     WindowReport,
+    braking_distance,
     solve_windows,
     window_schedule,
 )
@@ -143,6 +144,7 @@ def time_optimal(
     intervals_per_segment: int = 24,
     window: int | None = None,
     overlap: int = 4,
+    lookahead: float | str | None = None,
     warm_start: Trajectory | TimeOptimalResult | None = None,
     sample_period: float = 1e-3,
     solver_options: dict | None = None,
@@ -163,6 +165,14 @@ def time_optimal(
             single segment needs >= 3).
         window: segments per receding window (``None``: the whole path in one NLP).
         overlap: segments of look-ahead solved again by the next window (``0 <= overlap < window``).
+        lookahead: path length [mm] a window keeps after what it commits (at least ``overlap``
+            segments, fewer committed where they are short), or ``"braking"``: the braking
+            distance from the feed cap under the limits (``_windowing.braking_distance``), with
+            which each window's terminal stop costs its committed part nothing. ``None``: ``overlap``
+            segments alone, which on chords much shorter than the braking distance makes every
+            window slow down for a stop it never takes (on 100 chords of 0.85 mm of bench_cam's
+            CAM file, F 200 mm/s, T 60/30 ms envelope, window 10: 0.8667 s against 0.5194 s for the
+            whole path in one NLP; window 40 with ``"braking"`` (9 mm): 0.5235 s, +0.8 %).
         warm_start: a trajectory along the path (FIR, S-curve, ...) mapped onto the phase grid, or
             a :class:`TimeOptimalResult` on the same path (its phase boundaries kept, e.g. another
             ``N``); default: the exact-stop S-curve under the same limits (a feasible point).
@@ -220,7 +230,7 @@ def time_optimal(
         path.points[:-1], path.points[1:], path.directions, path.lengths,
         np.maximum((path.lengths - 2 * tolerance) / min(cap, float(np.linalg.norm(limits.velocity))), 1e-6),
     )
-    schedule = window_schedule(M, window, overlap)
+    schedule = window_schedule(M, window, overlap, path.lengths, _lookahead(lookahead, limits, cap))
     n_max = max(stop - first for first, stop, _ in schedule)
     spec = ProblemSpec(
         n_phases=n_max, intervals=N, dim=d,
@@ -370,6 +380,20 @@ def _bad_input(message: str, constraint: str) -> InfeasibleProblem:
     err = InfeasibleProblem(message)
     err.status, err.constraint, err.segment, err.violation, err.iterations = "not solved", constraint, None, float("nan"), 0
     return err
+
+
+def _lookahead(lookahead, limits: AxisLimits, cap: float) -> float:
+    """The look-ahead length [mm] of ``time_optimal``'s ``lookahead`` argument."""
+    if lookahead is None:
+        return 0.0
+    if isinstance(lookahead, str):
+        if lookahead != "braking":
+            raise ParameterError(f"lookahead must be None, a length >= 0 mm or 'braking', got {lookahead!r}")
+        return braking_distance(limits, cap)
+    value = float(lookahead)
+    if not (np.isfinite(value) and value >= 0):
+        raise ParameterError(f"lookahead must be None, a length >= 0 mm or 'braking', got {lookahead!r}")
+    return value
 
 
 def _check(path, limits, tolerance, feed, intervals, window, overlap, sample_period, checks) -> None:

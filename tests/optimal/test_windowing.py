@@ -5,8 +5,11 @@ from itertools import pairwise
 import numpy as np
 import pytest
 
+from research.errors import ParameterError
 from research.limits import AxisLimits
 from research.optimal import time_optimal, window_schedule
+from research.optimal._windowing import braking_distance
+from research.paths import Polyline
 from research.paths.library import zigzag
 
 LIMITS = AxisLimits.fir_envelope(2, 250.0, (0.148, 0.089))
@@ -54,3 +57,65 @@ def test_state_is_continuous_at_window_joints(whole_and_windowed):
     # the joints are mid-motion, not stops
     assert np.all(np.linalg.norm(np.asarray(pp(t, 1)), axis=1) > 10.0)
     assert pp.coeffs.shape[0] == N * path.n_segments
+
+
+def test_lookahead_commits_only_where_that_much_path_is_left():
+    """With a look-ahead length every window but the last keeps at least that much of its own path
+    after what it commits, commits as much as that allows (one more segment would leave less, or
+    the ``overlap`` rule binds), and the committed parts tile the path."""
+    rng = np.random.default_rng(5)
+    lengths = rng.choice([0.25, 0.5, 1.0, 4.0], size=200)
+    cum = np.concatenate([[0.0], np.cumsum(lengths)])
+    sched = window_schedule(200, 40, 4, lengths, 9.0)
+    assert sched[0][0] == 0 and sched[-1][1:] == (200, 200)
+    for (_, _, commit), (first, _, _) in pairwise(sched):
+        assert commit == first
+    for first, stop, commit in sched[:-1]:
+        assert first < commit <= stop - 4
+        assert cum[stop] - cum[commit] >= 9.0
+        assert commit == stop - 4 or cum[stop] - cum[commit + 1] < 9.0
+    assert window_schedule(11, 6, 3, np.ones(11), 0.0) == window_schedule(11, 6, 3)
+
+
+def test_lookahead_longer_than_the_window_is_refused():
+    with pytest.raises(ParameterError, match="window of 10 segments from segment 0"):
+        window_schedule(100, 10, 2, np.full(100, 0.5), 9.0)
+
+
+@pytest.mark.parametrize("V", [50.0, 200.0])
+def test_braking_distance_is_the_double_s_stop(V):
+    """``braking_distance`` against a stop integrated step by step: jerk -J until the deceleration
+    reaches A (or half the speed is gone), hold, then +J to rest (Biagiotti & Melchiorri 2008
+    §3.4's double S), Euler steps of 1e-7 s. The two branches: 200 mm/s reaches A = 3,333 mm/s^2
+    at J = 111,111 mm/s^3 (A^2 / J = 100 mm/s), 50 mm/s does not."""
+    lim = AxisLimits.fir_envelope(3, 200.0, (0.06, 0.03))
+    A, J = float(lim.acceleration[0]), float(lim.jerk[0])
+    ap = min(A, np.sqrt(V * J))  # the deceleration reached
+    t1 = ap / J  # ramp time
+    t2 = max(V / ap - t1, 0.0)  # hold time: the speed lost in the two ramps is ap t1
+    dt = 1e-7
+    t = np.arange(0.0, 2 * t1 + t2, dt)
+    a = -np.where(t < t1, J * t, np.where(t < t1 + t2, ap, ap - J * (t - t1 - t2)))
+    v = V + np.cumsum(a) * dt
+    assert abs(v[-1]) < 1e-2
+    assert braking_distance(lim, V) == pytest.approx(float(np.sum(v) * dt), rel=1e-4)
+
+
+def test_braking_lookahead_beats_a_few_segments_of_overlap_on_short_chords():
+    """A 30-chord arc of 0.5 mm chords (R 10 mm) at F 200 mm/s under the 60/30 ms envelope: a window
+    of 12 chords that looks 4 chords (2 mm) ahead brakes inside them at every window, a 24-chord
+    window with the 9 mm braking look-ahead does not; neither beats the whole-path NLP."""
+    a = np.linspace(0.0, 1.5, 31)
+    path = Polyline(np.stack([10 * np.cos(a), 10 * np.sin(a)], axis=1))
+    lim = AxisLimits.fir_envelope(2, 200.0, (0.06, 0.03))
+    kw = {"feed": 200.0, "intervals_per_segment": 8}
+    whole = time_optimal(path, lim, 0.05, **kw).cycle_time
+    short = time_optimal(path, lim, 0.05, window=12, overlap=4, **kw).cycle_time
+    braking = time_optimal(path, lim, 0.05, window=24, overlap=4, lookahead="braking", **kw).cycle_time
+    assert whole * (1 - 1e-6) <= braking < 0.9 * short
+
+
+@pytest.mark.parametrize("bad", ["brake", -1.0, np.nan])
+def test_bad_lookahead_is_named(bad):
+    with pytest.raises(ParameterError, match="lookahead"):
+        time_optimal(zigzag(5), LIMITS, 0.5, window=2, overlap=1, lookahead=bad)
