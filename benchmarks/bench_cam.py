@@ -37,12 +37,15 @@ little); every target prints PASS or MISS as measured, nothing is tuned to pass.
    (``cam_like_path(30)``; there is no ``named_path("cam30")``), same call as the optimality study
    (``window=10``, ``intervals_per_segment=16``), under the FIR's nominal envelope at this
    benchmark's F, delays and eps. Plain and limit-holding FIR. Target <= 1.10x with limits held.
-   The windowed OCP (window 10, overlap 4) on the CAM file is estimated from its own first
-   ``OCP_PROBE_CHORDS`` chords' IPOPT time per window (about 2.4 s, 4x cam30's); it runs on the
-   whole file if the estimate is within ``--ocp-budget`` (default ``OCP_BUDGET_S``; the
-   10^4-chord file needs about 70 min), else on the longest of ``OCP_EXCERPTS`` chords from its
-   start that fits, else it is skipped with the estimate printed. Plain and limit-holding FIR on
-   the same chords, the same target.
+   On the CAM file the OCP runs in windows of ``CAM_WINDOW`` chords that commit only where the
+   braking distance (9 mm here) of their own path is left (``time_optimal(lookahead="braking")``;
+   windows of 10 chords with 4 of look-ahead, 2-4 mm, brake in every window: +67 % on the first
+   100 chords against the whole-path NLP). Its time is estimated from the file's own first
+   ``OCP_PROBE_CHORDS`` chords' IPOPT time per window; it runs on the whole file if the estimate
+   is within ``--ocp-budget`` (default ``OCP_BUDGET_S``; the 10^4-chord file needs about 2 h),
+   else on the longest of ``OCP_EXCERPTS`` chords from its start that fits, else it is skipped
+   with the estimate printed. Plain, limit-holding and mirror pre-compensated FIR
+   (``plan_fir_mirror``) on the same chords, the same target.
 
 3. The issue's part: four G1 lines and one 90 deg G2 arc (R 20 mm) at F 150 mm/s, eps 50 um,
    T 60/30 ms, parsed with ``parse_gcode``: cycle time with the arc as one block and as chords at
@@ -71,12 +74,12 @@ import jax
 import numpy as np
 
 import research  # noqa: F401  (sets jax_enable_x64)
-from research.interpolators import plan_fir, plan_fir_sweep
+from research.interpolators import plan_fir, plan_fir_mirror, plan_fir_sweep
 from research.interpolators._fir_candidates import envelope
 from research.interpolators._fir_feed import arc_feed_caps
 from research.limits import AxisLimits
 from research.metrics import limit_ratios
-from research.optimal._windowing import window_schedule
+from research.optimal._windowing import braking_distance, window_schedule
 from research.paths import Polyline
 from research.paths.library import random_program
 from research.paths.gcode import parse_gcode, to_gcode
@@ -125,8 +128,9 @@ BELOW_ENVELOPE = (0.2, 0.05)  # machines whose acceleration and jerk limits are 
 TARGET_VS_OCP = 1.10
 TARGET_ARC_CHORDS = 0.05
 OCP_BUDGET_S = 180.0
-OCP_PROBE_CHORDS = 24  # the CAM file's first chords, whose OCP windows time the estimate (4 windows)
-OCP_EXCERPTS = (1000, 300)  # excerpts from the file's start, the longest within --ocp-budget
+OCP_PROBE_CHORDS = 60  # the CAM file's first chords, whose OCP windows time the estimate (2 windows)
+OCP_EXCERPTS = (1000, 300, 100)  # excerpts from the file's start, the longest within --ocp-budget
+CAM_WINDOW = 40  # OCP window on the CAM file [chords]: 34 mm of 0.85 mm chords, room for the 9 mm look-ahead
 
 
 # -- scenario --------------------------------------------------------------------------------------
@@ -379,6 +383,12 @@ def bench_cam(args, table: Table, t0: float) -> None:
     if theirs is not None:
         table.row("  per segment, FIR limits held / ruckig", f"{t_lim / M * 1e6:.2f} us", f"{t_lim / M / theirs:.3f}x",
                   f"<= {TARGET_VS_RUCKIG:g}x", verdict(t_lim / M / theirs <= TARGET_VS_RUCKIG))
+    pm, t_mirror = timed(plan_fir_mirror, path, FEED, DELAYS, EPS, limits=limits)
+    table.row("FIR mirror pre-compensated (plan_fir_mirror), limits held: cycle time", f"{pm.cycle_time:.4f} s",
+              f"{pm.cycle_time / Tl:.4f}x limits held, {pm.cycle_time / lower:.4f}x bound",
+              f"path deviation {pm.plan.path_deviation * 1e3:.1f} um, worst limit ratio {worst_ratio(pm.plan, limits):.3f}")
+    table.row("  planning (one call)", f"{t_mirror:.2f} s", f"{t_mirror / M * 1e6:.2f} us per segment, "
+              f"{t_mirror / t_lim:.1f}x the limit-holding plan ({pm.rounds} rounds)")
     # below the envelope: blocks checked alone, their feeds searched, slow-downs followed along
     # chains, staircases of isolated steps (the feed of a start from rest: min(A T1, J T1 T2))
     for share in BELOW_ENVELOPE:
@@ -396,14 +406,20 @@ def bench_cam(args, table: Table, t0: float) -> None:
 
 # -- part 2 ----------------------------------------------------------------------------------------
 def fir_against(table: Table, path: Polyline, limits: AxisLimits, T_ocp: float, indent: str) -> None:
-    """Rows of the plain and limit-holding FIR on ``path`` against the OCP's cycle ``T_ocp`` [s]."""
+    """Rows of the plain, limit-holding and mirror pre-compensated FIR on ``path`` against the
+    OCP's cycle ``T_ocp`` [s]."""
     plain = plan_fir(path, FEED, DELAYS, EPS)
     held = plan_fir(path, FEED, DELAYS, EPS, limits=limits)
+    mirror = plan_fir_mirror(path, FEED, DELAYS, EPS, limits=limits)
     table.row(f"{indent}FIR plain / OCP", f"{float(plain.cycle_time):.4f} s", f"{float(plain.cycle_time) / T_ocp:.4f}x",
               "", f"worst limit ratio {worst_ratio(plain, limits):.3f}")
     r = float(held.cycle_time) / T_ocp
     table.row(f"{indent}FIR limits held / OCP", f"{float(held.cycle_time):.4f} s", f"{r:.4f}x", f"<= {TARGET_VS_OCP:.2f}x",
               verdict(r <= TARGET_VS_OCP) + f" (worst limit ratio {worst_ratio(held, limits):.3f})")
+    r = mirror.cycle_time / T_ocp
+    table.row(f"{indent}FIR mirror pre-compensated, limits held / OCP", f"{mirror.cycle_time:.4f} s", f"{r:.4f}x",
+              f"<= {TARGET_VS_OCP:.2f}x", verdict(r <= TARGET_VS_OCP) + f" (worst limit ratio "
+              f"{worst_ratio(mirror.plan, limits):.3f}, path deviation {mirror.plan.path_deviation * 1e3:.1f} um)")
 
 
 def bench_ocp(args, table: Table, t0: float, cam: Polyline) -> None:
@@ -428,27 +444,34 @@ def bench_ocp(args, table: Table, t0: float, cam: Polyline) -> None:
         table.row(f"windowed OCP on the {cam.n_segments}-chord file", "", "skipped in --quick")
         return
     lim = AxisLimits.fir_envelope(cam.dim, FEED, DELAYS)
-    probe = time_optimal(Polyline(cam.points[:OCP_PROBE_CHORDS + 1]), lim, EPS, feed=FEED, window=10,
-                         intervals_per_segment=16)
+    ahead = braking_distance(lim, FEED)
+    ocp_kw = dict(feed=FEED, window=CAM_WINDOW, overlap=4, lookahead="braking", intervals_per_segment=16)
+    probe = time_optimal(Polyline(cam.points[:OCP_PROBE_CHORDS + 1]), lim, EPS, **ocp_kw)
     per_window = probe.solve_time / len(probe.windows)
+
+    def windows(n):
+        return len(window_schedule(n, CAM_WINDOW, 4, cam.lengths[:n], ahead))
+
     for n in (cam.n_segments,) + tuple(k for k in OCP_EXCERPTS if k < cam.n_segments):
-        estimate = per_window * len(window_schedule(n, 10, 4))
+        estimate = per_window * windows(n)
         if estimate <= args.ocp_budget:
             break
     else:
         table.row(f"windowed OCP on the {cam.n_segments}-chord file skipped", "",
-                  f"estimated {per_window * len(window_schedule(cam.n_segments, 10, 4)):.0f} s ({per_window:.2f} s a "
-                  f"window on its first {OCP_PROBE_CHORDS} chords) > --ocp-budget {args.ocp_budget:.0f} s")
+                  f"estimated {per_window * windows(cam.n_segments):.0f} s ({per_window:.2f} s a window on its first "
+                  f"{OCP_PROBE_CHORDS} chords) > --ocp-budget {args.ocp_budget:.0f} s")
         return
     part = cam if n == cam.n_segments else Polyline(cam.points[:n + 1])
     label = f"the {n}-chord file" if n == cam.n_segments else f"its first {n} chords"
-    progress(f"part 2: windowed OCP on {label} (estimated {estimate:.0f} s)", t0)
+    progress(f"part 2: windowed OCP on {label} (window {CAM_WINDOW}, look-ahead {ahead:g} mm, estimated "
+             f"{estimate:.0f} s)", t0)
     t1 = time.perf_counter()
-    ocp = time_optimal(part, lim, EPS, feed=FEED, window=10, intervals_per_segment=16)
+    ocp = time_optimal(part, lim, EPS, **ocp_kw)
     wall = time.perf_counter() - t1
     T_part = float(ocp.cycle_time)
-    table.row(f"OCP on {label}", f"{T_part:.4f} s", f"{ocp.status}, {len(ocp.windows)} windows, wall {wall:.0f} s "
-              f"(estimated {estimate:.0f} s), dense check {ocp.verification.worst_ratio:.4f}")
+    table.row(f"OCP on {label} (window {CAM_WINDOW}, braking look-ahead {ahead:g} mm)", f"{T_part:.4f} s",
+              f"{ocp.status}, {len(ocp.windows)} windows, wall {wall:.0f} s (estimated {estimate:.0f} s), dense check "
+              f"{ocp.verification.worst_ratio:.4f}")
     fir_against(table, part, lim, T_part, "  ")
 
 
@@ -561,7 +584,7 @@ def main(argv=None) -> int:
     ap.add_argument("--no-ocp", action="store_true", help="skip part 2")
     ap.add_argument("--ocp-budget", type=float, default=OCP_BUDGET_S,
                     help=f"seconds the windowed OCP on the CAM file may take (estimated; default {OCP_BUDGET_S:g}: "
-                         "the whole 10^4-chord file needs about 70 min)")
+                         "the whole 10^4-chord file needs about 2 h)")
     args = ap.parse_args(argv)
     args.repeats = args.repeats or (3 if args.quick else 7)
     cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()

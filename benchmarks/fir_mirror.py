@@ -1,0 +1,118 @@
+"""Mirror pre-compensated FIR plans (``plan_fir_mirror``) against ``plan_fir`` in the same run.
+
+Usage::
+
+    python benchmarks/fir_mirror.py [--quick] [--sweep]
+
+1. ``--sweep``: the two constants of ``research/interpolators/_fir_mirror.py`` (``RELAX``, the
+   tolerance factor the first round's timing is planned at, and ``PASSES``, the mirror passes per
+   round) swept on bench_cam's quick CAM file (2,251 chords, F 200 mm/s, T 60/30 ms, eps 50 um,
+   limits = the FIR's nominal envelope): cycle time, ratio to ``plan_fir``, rounds, planning time.
+2. The defaults on bench_cam's CAM files (quick; the 10^4-chord file unless ``--quick``), on cam30
+   and on the paper paths (``corner90``, ``diamond``, ``zigzag``) at bench_cam's setting, with the
+   envelope's limits and without: cycle times, the ratio mirror / plain, the largest distance to the
+   programmed path and the worst limit ratio of the mirror plan (``metrics``, on samples every
+   0.5 ms), and the planning time of both (process time; the mirror's includes its plain plan).
+
+Every plan printed is verified on the programmed path by ``plan_fir_mirror`` itself (vertex
+distances and samples every 1 ms, as ``plan_fir``); the distance and limit columns are an
+independent check on the sampled trajectory.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, "benchmarks")
+import bench_cam  # noqa: E402
+from bench_fir import Table  # noqa: E402
+from research import metrics  # noqa: E402
+from research.interpolators import plan_fir, plan_fir_mirror  # noqa: E402
+from research.interpolators import _fir_mirror  # noqa: E402
+from research.limits import AxisLimits  # noqa: E402
+from research.paths import named_path  # noqa: E402
+from research.paths.toolpath import ToolPath  # noqa: E402
+
+SWEEP_RELAX = (2.0, 4.0, 8.0, 16.0, 32.0, 64.0)
+SWEEP_PASSES = (1, 3, 5, 8)
+
+
+def timed(fn, *args, **kwargs):
+    t0 = time.process_time()
+    out = fn(*args, **kwargs)
+    return out, time.process_time() - t0
+
+
+def checked(m, path, limits) -> tuple[float, float]:
+    """Largest distance [mm] of the mirror plan's samples (every 0.5 ms) to the programmed path
+    (``ToolPath.distance``) and its worst limit ratio (``metrics.limit_ratios``; NaN without limits)."""
+    tr = m.plan.trajectory(5e-4)
+    tp = path if isinstance(path, ToolPath) else ToolPath.from_polyline(path)
+    dist = float(np.max(tp.distance(np.asarray(tr.q))))
+    ratio = float("nan") if limits is None else max(float(np.max(r)) for r in metrics.limit_ratios(tr, limits).values())
+    return dist, ratio
+
+
+def cam_file(levels: int):
+    path, _ = bench_cam.cam_program(0, levels)
+    prog = bench_cam.parse_gcode(bench_cam.to_gcode(path, bench_cam.FEED * 60.0), start=tuple(path.points[0]))
+    return prog.polyline
+
+
+def sweep(table: Table) -> None:
+    path = cam_file(bench_cam.LEVELS_QUICK)
+    limits = AxisLimits.fir_envelope(path.dim, bench_cam.FEED, bench_cam.DELAYS)
+    args = (path, bench_cam.FEED, bench_cam.DELAYS, bench_cam.EPS)
+    plain, t_plain = timed(plan_fir, *args, limits=limits)
+    T = float(plain.cycle_time)
+    table.section(f"Sweep on the quick CAM file ({path.n_segments} chords), limits = envelope: plan_fir {T:.4f} s, "
+                  f"planned in {t_plain:.2f} s")
+    for relax in SWEEP_RELAX:
+        for passes in SWEEP_PASSES:
+            m, t = timed(plan_fir_mirror, *args, limits=limits, relax=relax, passes=passes)
+            table.row(f"  relax {relax:g}, passes {passes}", f"{m.cycle_time:.4f} s", f"{m.cycle_time / T:.4f}x plain",
+                      f"{m.rounds} rounds", f"{t:.2f} s planning")
+
+
+def compare(table: Table, name: str, path, feed, delays, eps, limits) -> None:
+    args = (path, feed, delays, eps)
+    plan_fir(*args, limits=limits)  # compiled kernels warm for both timings
+    plain, t_plain = timed(plan_fir, *args, limits=limits)
+    m, t = timed(plan_fir_mirror, *args, limits=limits)
+    dist, ratio = checked(m, path, limits)
+    T = float(plain.cycle_time)
+    table.row(f"{name}{'' if limits is None else ', limits = envelope'}", f"{T:.4f} -> {m.cycle_time:.4f} s",
+              f"{m.cycle_time / T:.4f}x plain", f"dist {dist * 1e3:.2f} um / eps {eps * 1e3:g}, limits {ratio:.3f}",
+              f"planning {t_plain:.2f} -> {t:.2f} s ({m.rounds} rounds)")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="the quick CAM file only (no 10^4-chord file)")
+    ap.add_argument("--sweep", action="store_true", help="sweep RELAX x PASSES on the quick CAM file first")
+    args = ap.parse_args(argv)
+    table = Table(f"plan_fir_mirror (RELAX {_fir_mirror.RELAX:g}, PASSES {_fir_mirror.PASSES}) against plan_fir")
+    if args.sweep:
+        sweep(table)
+    F, D, eps = bench_cam.FEED, bench_cam.DELAYS, bench_cam.EPS
+    table.section(f"Defaults, F {F:g} mm/s, T {D[0] * 1e3:g}/{D[1] * 1e3:g} ms, eps {eps * 1e3:g} um: "
+                  "plain -> mirror cycle time")
+    files = [bench_cam.LEVELS_QUICK] + ([] if args.quick else [bench_cam.LEVELS])
+    for levels in files:
+        path = cam_file(levels)
+        lim = AxisLimits.fir_envelope(path.dim, F, D)
+        compare(table, f"CAM file, {path.n_segments} chords", path, F, D, eps, lim)
+    for name, path in (("cam30", bench_cam.cam30_path()), ("corner90", named_path("corner90")),
+                       ("diamond", named_path("diamond")), ("zigzag", named_path("zigzag"))):
+        for lim in (None, AxisLimits.fir_envelope(path.dim, F, D)):
+            compare(table, name, path, F, D, eps, lim)
+    table.print()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
