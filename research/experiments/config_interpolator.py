@@ -32,6 +32,10 @@ class FIRConfig(_Strict):
     optimized: bool = Field(False, description="per-corner overlaps and per-block feeds chosen for the least cycle "
                                                "time (research.interpolators.optimize_fir, beyond the paper): G01 "
                                                "paths with one feed and tolerance, eps > 0")
+    mirror: bool = Field(False, description="the filters' input pre-compensated by mirror passes so that their output "
+                                            "keeps the programmed path at higher feeds "
+                                            "(research.interpolators.plan_fir_mirror, beyond the paper; never "
+                                            "slower than plan_fir)")
 
     @model_validator(mode="after")
     def _positive_delays(self):
@@ -41,6 +45,9 @@ class FIRConfig(_Strict):
         _plausible_units(self.feed_mm_per_s, self.delays_ms, self.sample_period_ms, "delays_ms")
         if self.optimized and not self.tolerance_um > 0:
             raise ValueError("optimized = true needs a cornering tolerance tolerance_um > 0 um (optimize_fir)")
+        if self.mirror and (self.optimized or not self.refine):
+            raise ValueError("mirror = true plans with plan_fir's verified look-ahead: it takes neither optimized = true "
+                             "nor refine = false")
         return self
 
 
@@ -55,6 +62,11 @@ class TimeOptimalConfig(_Strict):
     envelope_delays_ms: list[float] = Field([148.0, 89.0], min_length=1, description="FIR delays setting the limits [ms]")
     intervals_per_segment: int = Field(16, ge=3, description="jerk intervals per segment")
     window: int | None = Field(None, ge=1, description="segments per receding window (none: whole path)")
+    lookahead: Literal["segments", "braking"] = Field(
+        "segments", description="what a window keeps after what it commits: 'segments' 4 segments whatever their "
+                                "length, 'braking' at least the braking distance from the feed bound "
+                                "(time_optimal(lookahead='braking')); on short chords a window must be several "
+                                "braking distances long either way")
     sample_period_ms: float = Field(1.0, gt=0, description="sample period of the returned trajectory [ms]")
 
     @model_validator(mode="after")

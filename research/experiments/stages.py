@@ -86,10 +86,15 @@ def interpolate(ic, path, program_feeds, blocks=None, pauses=None):
         limits = None if ic.limits is None else ic.limits.axis_limits(path.dim)
         if ic.optimized:
             plan = _optimized_fir(ic, target, feed, tolerance, limits)
+        elif ic.mirror:
+            from research.interpolators import plan_fir_mirror
+
+            plan = plan_fir_mirror(target, feed, np.asarray(ic.delays_ms) * 1e-3, tolerance, limits=limits,
+                                   pauses=block_pauses).plan
         else:
             plan = plan_fir(target, feed, np.asarray(ic.delays_ms) * 1e-3, tolerance, refine=ic.refine, limits=limits,
                             pauses=block_pauses)
-        info = {"planner": "optimize_fir" if ic.optimized else "plan_fir", "feeds": np.asarray(plan.feeds).tolist(), "overlap_times": np.asarray(plan.overlaps).tolist(),
+        info = {"planner": "optimize_fir" if ic.optimized else "plan_fir_mirror" if ic.mirror else "plan_fir", "feeds": np.asarray(plan.feeds).tolist(), "overlap_times": np.asarray(plan.overlaps).tolist(),
                 "corner_errors": np.asarray(plan.corner_errors).tolist()}
         return plan.trajectory(Ts), info, plan
     if ic.kind == "scurve":
@@ -122,6 +127,7 @@ def interpolate(ic, path, program_feeds, blocks=None, pauses=None):
             "(measured: 250 segments x 16 took 212 s and 2.6 GB); set [interpolator] window (e.g. 10) for a "
             "receding-horizon reference", ic.label or ic.kind, path.n_segments, path.n_segments * ic.intervals_per_segment)
     res = time_optimal(path, limits, ic.tolerance_um * 1e-3, feed=bound, window=ic.window,
+                       lookahead="braking" if ic.lookahead == "braking" else None,
                        intervals_per_segment=ic.intervals_per_segment, sample_period=Ts)
     info = {"status": res.status, "iterations": res.iterations, "solve_time": res.solve_time,
             "worst_check_ratio": float(res.verification.worst_ratio), "feed_mm_per_s": bound}

@@ -263,3 +263,61 @@ def test_arc_under_g61_is_refused_with_its_line_and_runs_under_g64_p(tmp_path):
     near_arc = (q[:, 0] > 41.0) & (q[:, 1] < 19.0)  # away from the arc's ends
     r = np.linalg.norm(q[near_arc] - np.array([40.0, 20.0]), axis=1)
     assert near_arc.sum() > 10 and np.all(np.abs(r - 20.0) <= 0.05 * (1 + 1e-6))
+
+
+def test_mirror_fir_from_a_config_keeps_eps_and_limits_and_is_no_slower(tmp_path):
+    """``mirror = true`` runs ``plan_fir_mirror``: on a circle of 0.5 mm chords (R 10 mm) under the FIR
+    envelope, every sample is within eps of the chords (brute force over every segment here), the
+    limits hold (1e-6, as ``metrics.within_limits``), and the cycle is below ``plan_fir``'s (eq 8: the
+    plain plan's feed is held to the shrink of the filtered circle). ``optimized`` with ``mirror`` is
+    refused by name."""
+    from research.interpolators import plan_fir
+    from research.limits import AxisLimits
+    from research.paths import Polyline
+
+    a = np.linspace(0.0, 2 * np.pi, 126)
+    pts = np.stack([10 * np.cos(a), 10 * np.sin(a)], axis=1)
+    lim = AxisLimits.fir_envelope(2, 200.0, (0.06, 0.03))
+    limd = {"velocity_mm_per_s": 200.0, "acceleration_mm_per_s2": float(lim.acceleration[0]),
+            "jerk_mm_per_s3": float(lim.jerk[0])}
+    ic = {"kind": "fir", "label": "m", "mirror": True, "feed_mm_per_s": 200.0, "delays_ms": [60.0, 30.0],
+          "tolerance_um": 50.0, "limits": limd, "sample_period_ms": 0.2}
+    _, ev = run(path={"points_mm": pts.tolist()}, interpolator=ic)
+    assert ev.record["details"]["m"]["planner"] == "plan_fir_mirror"
+    q, v, acc, j = (np.asarray(ev.arrays[f"m.{k}"]) for k in "qvaj")
+    seg_a, seg_b = pts[:-1], pts[1:]
+    ab = seg_b - seg_a
+    t = np.clip(np.sum((q[:, None, :] - seg_a) * ab, axis=2) / np.sum(ab * ab, axis=1), 0.0, 1.0)
+    dist = np.min(np.linalg.norm(q[:, None, :] - seg_a - t[..., None] * ab, axis=2), axis=1)
+    assert dist.max() <= 0.05 * (1 + 1e-6)
+    assert np.abs(v).max() <= 200.0 * (1 + 1e-6) and np.abs(acc).max() <= lim.acceleration[0] * (1 + 1e-6)
+    assert np.abs(j).max() <= lim.jerk[0] * (1 + 1e-6)
+    plain = plan_fir(Polyline(pts), 200.0, np.array([0.06, 0.03]), 0.05, limits=lim)
+    times = np.asarray(ev.arrays["m.t"])
+    assert times[-1] - times[0] < float(plain.cycle_time)
+    with pytest.raises(ConfigError, match="mirror = true"):
+        validate({"name": "t", "reproduces": "-", "path": {"points_mm": pts.tolist()},
+                  "interpolator": ic | {"optimized": True}}, tmp_path / "t.toml")
+
+
+def test_time_optimal_windows_take_a_braking_lookahead(tmp_path):
+    """``[interpolator] kind = "time_optimal"`` with ``window`` and ``lookahead = "braking"``: a window
+    commits only where the braking distance of its own path is left (9 mm at 200 mm/s under the
+    60/30 ms envelope). On a 30-chord arc the reference runs, is no faster than the whole path in one
+    NLP (a window cannot beat it), and a typo is refused by name."""
+    from research.limits import AxisLimits
+    from research.optimal import time_optimal
+    from research.paths import Polyline
+
+    a = np.linspace(0.0, 1.5, 31)
+    pts = np.stack([10 * np.cos(a), 10 * np.sin(a)], axis=1)
+    ic = {"kind": "time_optimal", "label": "ocp", "feed_mm_per_s": 200.0, "tolerance_um": 50.0,
+          "envelope_delays_ms": [60.0, 30.0], "intervals_per_segment": 8, "window": 24, "lookahead": "braking"}
+    _, ev = run(path={"points_mm": pts.tolist()}, interpolator=ic)
+    t = np.asarray(ev.arrays["ocp.t"])
+    whole = time_optimal(Polyline(pts), AxisLimits.fir_envelope(2, 200.0, (0.06, 0.03)), 0.05, feed=200.0,
+                         intervals_per_segment=8)
+    assert t[-1] - t[0] >= float(whole.cycle_time) - 1e-3  # one sample period
+    with pytest.raises(ConfigError, match="lookahead"):
+        validate({"name": "t", "reproduces": "-", "path": {"points_mm": pts.tolist()},
+                  "interpolator": ic | {"lookahead": "brake"}}, tmp_path / "t.toml")

@@ -101,18 +101,22 @@ def test_braking_distance_is_the_double_s_stop(V):
     assert braking_distance(lim, V) == pytest.approx(float(np.sum(v) * dt), rel=1e-4)
 
 
-def test_braking_lookahead_beats_a_few_segments_of_overlap_on_short_chords():
-    """A 30-chord arc of 0.5 mm chords (R 10 mm) at F 200 mm/s under the 60/30 ms envelope: a window
-    of 12 chords that looks 4 chords (2 mm) ahead brakes inside them at every window, a 24-chord
-    window with the 9 mm braking look-ahead does not; neither beats the whole-path NLP."""
+def test_braking_lookahead_commits_what_the_whole_path_nlp_does_before_its_last_window():
+    """A 30-chord arc of 0.5 mm chords (R 10 mm) at F 200 mm/s under the 60/30 ms envelope, window 24
+    with the 9 mm braking look-ahead: the windows commit 5 chords each, whose terminal stop lies past
+    the braking distance, so up to the last window the motion is the whole-path NLP's (time at its
+    start within 3 %; a model prediction of the windowing, not a paper number); the last window, warm
+    started from the previous one's stop, is slower (module docstring), and no window beats the whole."""
     a = np.linspace(0.0, 1.5, 31)
     path = Polyline(np.stack([10 * np.cos(a), 10 * np.sin(a)], axis=1))
     lim = AxisLimits.fir_envelope(2, 200.0, (0.06, 0.03))
     kw = {"feed": 200.0, "intervals_per_segment": 8}
-    whole = time_optimal(path, lim, 0.05, **kw).cycle_time
-    short = time_optimal(path, lim, 0.05, window=12, overlap=4, **kw).cycle_time
-    braking = time_optimal(path, lim, 0.05, window=24, overlap=4, lookahead="braking", **kw).cycle_time
-    assert whole * (1 - 1e-6) <= braking < 0.9 * short
+    whole = time_optimal(path, lim, 0.05, **kw)
+    windowed = time_optimal(path, lim, 0.05, window=24, overlap=4, lookahead="braking", **kw)
+    last = windowed.windows[-1].first_segment
+    assert [w.committed_stop - w.first_segment for w in windowed.windows[:-1]] == [5, 5]
+    np.testing.assert_allclose(np.sum(windowed.phase_durations[:last]), np.sum(whole.phase_durations[:last]), rtol=0.03)
+    assert windowed.cycle_time >= whole.cycle_time * (1 - 1e-6)
 
 
 @pytest.mark.parametrize("bad", ["brake", -1.0, np.nan])
