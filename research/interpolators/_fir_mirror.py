@@ -20,8 +20,11 @@ What this module does (:func:`compensate`):
 2. ``passes`` mirror passes move the vertices of the planned blocks (its pulse table's chords): the
    error of the output at each corner instant (the window centred on the vertex), less its
    component along the path's tangent there (a timing lag, not a contour error), is added to the
-   vertex. Fixed: the path's two ends, exact stops (the output rests on them) and the ends of arc
-   blocks (an arc's geometry is left as programmed).
+   vertex. An arc between two lines is scaled about its centre instead (eq 8's shrink is radial):
+   its radius takes the mirror of the output's radial error at the instant the window is centred
+   on the arc's middle, and its ends move with it; an arc next to an arc keeps its radius (both
+   cannot scale about their own centres and still meet). Fixed: the path's two ends and exact
+   stops (the output rests on them).
 3. The exact profile of the moved input is checked against the *programmed* path as ``plan_fir``
    checks its own (vertex distances at every corner, the trajectory sampled every
    ``check_period``), and against ``limits`` on its exact peaks. Blocks whose window holds a
@@ -80,9 +83,10 @@ class MirrorPlan:
         plan: the :class:`FIRPlan` (its timing, programmed vertices and corner instants; its
             profile the filtered moved input, verified against the programmed path:
             :attr:`FIRPlan.path_deviation` is the largest sampled distance [mm]).
-        input_vertices: ``(B + 1, d)`` the polyline the filters average [mm]: the vertices of the
+        input_vertices: ``(B + 1, d)`` the path the filters average [mm]: the vertices of the
             planned blocks (straight runs merged, lines cut into ramp pieces where ``plan_fir``
-            did), moved; the programmed ones where nothing was compensated.
+            did), moved; an arc block keeps its centre and axis, its radius the distance from the
+            centre to its moved ends; the programmed vertices where nothing was compensated.
         relaxation: ``(M,)`` factor ``g_k >= 1`` on each programmed block's tolerance at which the
             timing was planned (1 everywhere when the plain plan was kept).
         compensated: False when ``plan_fir``'s own plan was kept (it was as fast, or no round
@@ -175,7 +179,7 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
         plan = plan_fir(tp, feed, delays, tol * g, limits=limits, check_period=check_period)
         if float(plan.cycle_time) >= float(best.plan.cycle_time):
             break  # this timing cannot beat the plan at hand, moved or not
-        moved, vertices = compensate(plan, passes, frozen)
+        moved, vertices = compensate(plan, tp, passes, frozen)
         bad_times, deviation = violations(moved, tp, tol, limits, check_period)
         if bad_times.size == 0:
             best = MirrorPlan(dataclasses.replace(moved, path_deviation=deviation), vertices, g.copy(), True, r, T_plain)
@@ -190,11 +194,12 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
     return dataclasses.replace(best, rounds=r)
 
 
-def compensate(plan: FIRPlan, passes: int, frozen: np.ndarray) -> tuple[FIRPlan, np.ndarray]:
+def compensate(plan: FIRPlan, tp: ToolPath, passes: int, frozen: np.ndarray) -> tuple[FIRPlan, np.ndarray]:
     """``passes`` mirror passes on ``plan``'s input, its timing held (module docstring, step 2).
 
     Args:
-        plan: a concrete plan (its profile a ``ProfileInputs``).
+        plan: a concrete plan of ``tp`` (its profile a ``ProfileInputs``).
+        tp: the programmed path (its arcs' centres and axes).
         passes: mirror passes (0: the plan's own input).
         frozen: ``(M,)`` programmed blocks whose planned vertices are not moved.
 
@@ -204,30 +209,73 @@ def compensate(plan: FIRPlan, passes: int, frozen: np.ndarray) -> tuple[FIRPlan,
     inputs = plan.profile
     table = inputs.pieces.table
     B = table.n_blocks
+    Td = float(np.sum(inputs.delays))
     target = _input_vertices(plan)
     arc = np.zeros(B, dtype=bool)
     arc[table.block[table.arc_pieces]] = True
     normal = _normal_projectors(target)
     moved = target.copy()
     motion = ~table.gap & (table.block < B)
-    line = motion & ~arc[np.minimum(table.block, B - 1)]
-    fixed = None
+    owner = np.minimum(table.block, B - 1)
+    line, arc_rows = motion & ~arc[owner], motion & arc[owner]
+    fixed = scaled = plane = centres = middle = radius = None
+    scale = np.ones(B)
     for k in range(passes + 1):
         geo = table.geo.copy()
         geo[line, 0, :] = np.diff(moved, axis=0)[table.block[line]]
-        _, ends, breaks, coeffs, centre = profile(inputs.start, geo, table.block, table.gap, inputs.fraction,
-                                                  inputs.piece_tv, inputs.gaps, inputs.delays, table.joins)
+        if scaled is not None and scaled.any():  # an arc's in-plane part scaled about its centre
+            rows = arc_rows & scaled[owner]
+            b = table.block[rows]
+            geo[rows] += (scale[b] - 1.0)[:, None, None] * np.einsum("nmd,nde->nme", geo[rows], plane[b])
+        starts, ends, breaks, coeffs, centre = profile(inputs.start, geo, table.block, table.gap, inputs.fraction,
+                                                       inputs.piece_tv, inputs.gaps, inputs.delays, table.joins)
         if k == passes or B < 2:
             break
-        if fixed is None:  # the timing is held: the planned pulses end where they did in the first build
-            fixed = _fixed_vertices(inputs, plan, frozen, ends[: B - 1], arc)
-        error = target[1:-1] - NumpyPiecewise(breaks, coeffs)(centre[: B - 1])
+        if fixed is None:  # the timing is held: the planned pulses start and end where they did here
+            fixed = _fixed_vertices(inputs, plan, frozen, ends[: B - 1])
+            scaled, middle, centres, plane, radius = _scalable_arcs(plan, tp, arc, fixed, starts[:B], ends[:B], Td)
+            fixed[:-1] |= arc  # an arc's ends follow its scale, not the vertices' mirror
+            fixed[1:] |= arc
+        pos = NumpyPiecewise(breaks, coeffs)
+        error = target[1:-1] - pos(centre[: B - 1])
         step = np.einsum("kij,kj->ki", normal, error)  # its part across the path (a contour error)
         step[fixed[1:-1]] = 0.0
         moved[1:-1] += step
+        if scaled.any():  # the mirror of an arc's radial error at its middle instant (eq 8's shrink)
+            bs = np.flatnonzero(scaled)
+            out = np.linalg.norm(np.einsum("nde,ne->nd", plane[bs], pos(middle[bs]) - centres[bs]), axis=1)
+            scale[bs] += (radius[bs] - out) / radius[bs]
+            for end in (bs, bs + 1):
+                moved[end] = target[end] + (scale[bs] - 1.0)[:, None] * np.einsum(
+                    "nde,ne->nd", plane[bs], target[end] - centres[bs])
     moved_inputs = ProfileInputs(dataclasses.replace(table, geo=geo), inputs.fraction, inputs.piece_tv, inputs.gaps,
                                  inputs.delays, inputs.start, np.asarray(inputs.span))
     return dataclasses.replace(plan, profile=moved_inputs), moved
+
+
+def _scalable_arcs(plan: FIRPlan, tp: ToolPath, arc: np.ndarray, fixed: np.ndarray, starts: np.ndarray,
+                   ends: np.ndarray, Td: float):
+    """The planned arc blocks whose radius the mirror scales about their centre: those between two
+    lines (an arc next to an arc keeps its radius: both cannot scale about their own centres and
+    still meet) whose ends move (not the path's ends, exact stops or frozen). Returns ``(scaled
+    (B,), middle instants (B,) [s], centres (B, d) [mm], in-plane projectors (B, d, d), radii (B,)
+    [mm])``: each arc's programmed block is the one whose pulse holds the middle of its own
+    (``plan.start_times``), the instant its window is centred on that middle."""
+    B, d = arc.size, tp.dim
+    middle = 0.5 * (starts + ends) + 0.5 * Td
+    scaled = arc.copy()
+    scaled[1:] &= ~arc[:-1]
+    scaled[:-1] &= ~arc[1:]
+    scaled &= ~fixed[:-1] & ~fixed[1:]
+    block = np.clip(np.searchsorted(np.asarray(plan.start_times), 0.5 * (starts + ends), side="right") - 1,
+                    0, tp.n_blocks - 1)
+    scaled &= tp.is_arc[block]
+    centres = np.where(scaled[:, None], tp.centers[block], 0.0)
+    axis = np.where(scaled[:, None], tp.normals[block], 0.0)[:, :d] if d == 3 else np.zeros((B, d))
+    plane = np.eye(d)[None] - axis[:, :, None] * axis[:, None, :]
+    target = _input_vertices(plan)
+    radius = np.where(scaled, np.linalg.norm(np.einsum("nde,ne->nd", plane, target[:-1] - centres), axis=1), 1.0)
+    return scaled, middle, centres, plane, radius
 
 
 def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits | None,
@@ -272,21 +320,18 @@ def _input_vertices(plan: FIRPlan) -> np.ndarray:
                                                                         np.cumsum(disp, axis=0)])
 
 
-def _fixed_vertices(inputs: ProfileInputs, plan: FIRPlan, frozen: np.ndarray, ends: np.ndarray,
-                    arc: np.ndarray) -> np.ndarray:
+def _fixed_vertices(inputs: ProfileInputs, plan: FIRPlan, frozen: np.ndarray, ends: np.ndarray) -> np.ndarray:
     """``(B + 1,)`` planned vertices that stay where they are: the two ends, exact stops (gap
-    ``T_d``: the output rests on the vertex), the ends of arc blocks and the vertices on the
-    programmed blocks ``frozen`` ``(M,)`` or next to them. A planned vertex is where its block's
-    pulse ends (``ends`` ``(B - 1,)`` [s]): on the programmed block whose pulse started last before
-    then (``plan.start_times``), or at that block's end."""
+    ``T_d``: the output rests on the vertex) and the vertices on the programmed blocks ``frozen``
+    ``(M,)`` or next to them. A planned vertex is where its block's pulse ends (``ends`` ``(B - 1,)``
+    [s]): on the programmed block whose pulse started last before then (``plan.start_times``), or
+    at that block's end."""
     B = ends.size + 1
     fixed = np.zeros(B + 1, dtype=bool)
     fixed[[0, B]] = True
     Td = float(np.sum(inputs.delays))
     gaps = np.asarray(inputs.gaps)[: B - 1]
     fixed[1:B][gaps >= Td * (1.0 - 1e-12)] = True
-    fixed[:-1] |= arc
-    fixed[1:] |= arc
     if frozen.any():
         M = frozen.size
         block = np.clip(np.searchsorted(np.asarray(plan.start_times), ends, side="right") - 1, 0, M - 1)
