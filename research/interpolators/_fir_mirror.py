@@ -46,15 +46,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from research.errors import ParameterError
-from research.interpolators import _fir_pauses
 from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_limits import LIMIT_RTOL
 from research.interpolators._fir_piece_peaks import PiecePeaks
 from research.interpolators._fir_profile import ProfileInputs, profile
 from research.interpolators._fir_verify import path_deviations, profile_rounding, vertex_distances
-from research.interpolators.fir import CHECK_PERIOD, FIRPlan, _as_toolpath, _check_inputs, plan_fir
+from research.interpolators.fir import (CHECK_PERIOD, FIRPlan, _as_toolpath, _check_inputs, joined_plan, paused_parts,
+                                       plan_fir)
 from research.limits import AxisLimits
-from research.paths.gcode import checked_pauses
 from research.paths.toolpath import ToolPath
 from research.piecewise import NumpyPiecewise
 
@@ -150,21 +149,15 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
     tp = _as_toolpath(path)
     M = tp.n_blocks
     _check_inputs(delays, feed, tolerance, M)
-    if pauses is not None:
-        pauses = checked_pauses(pauses, M)
-        if not np.all(np.isnan(pauses)):
-            ranges = _fir_pauses.parts(pauses)
-            parts = [plan_fir_mirror(tp.part(a, b), _fir_pauses.per_block(feed, a, b, M), delays,
-                                     _fir_pauses.per_block(tolerance, a, b, M), limits=limits, relax=relax,
-                                     passes=passes, rounds=rounds, check_period=check_period) for a, b in ranges]
-            starts, pulse, overlaps, feeds, position, centre, deviation, n = _fir_pauses.join(
-                [p.plan for p in parts], ranges, pauses)
-            plan = FIRPlan(starts, pulse, overlaps, feeds, parts[0].plan.delays, position, centre, tp.vertices,
-                           deviation, n, tp.axes)
-            return MirrorPlan(plan, np.concatenate([parts[0].input_vertices] + [p.input_vertices[1:] for p in parts[1:]]),
-                              np.concatenate([p.relaxation for p in parts]), any(p.compensated for p in parts),
-                              sum(p.rounds for p in parts), sum(p.plain_cycle_time for p in parts)
-                              + float(np.nansum(pauses)))
+    cut = paused_parts(tp, feed, tolerance, pauses, lambda part, f, t: plan_fir_mirror(
+        part, f, delays, t, limits=limits, relax=relax, passes=passes, rounds=rounds, check_period=check_period))
+    if cut is not None:
+        pauses, ranges, parts = cut
+        return MirrorPlan(joined_plan(tp, pauses, ranges, [p.plan for p in parts]),
+                          np.concatenate([parts[0].input_vertices] + [p.input_vertices[1:] for p in parts[1:]]),
+                          np.concatenate([p.relaxation for p in parts]), any(p.compensated for p in parts),
+                          sum(p.rounds for p in parts),
+                          sum(p.plain_cycle_time for p in parts) + float(np.nansum(pauses)))
     tol = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), (M,))
     feed = np.asarray(feed, dtype=np.float64)
     delays = np.asarray(delays, dtype=np.float64).reshape(-1)

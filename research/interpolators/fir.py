@@ -210,16 +210,10 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     tp = _as_toolpath(path)
     M = tp.n_blocks
     _check_inputs(delays, feed, tolerance, M)
-    if pauses is not None:
-        pauses = checked_pauses(pauses, M)
-        if not np.all(np.isnan(pauses)):
-            ranges = _fir_pauses.parts(pauses)
-            plans = [plan_fir(tp.part(a, b), _fir_pauses.per_block(feed, a, b, M), delays,
-                              _fir_pauses.per_block(tolerance, a, b, M), refine=refine, limits=limits,
-                              check_period=check_period) for a, b in ranges]
-            starts, pulse, overlaps, feeds, position, centre, deviation, rounds = _fir_pauses.join(plans, ranges, pauses)
-            return FIRPlan(starts, pulse, overlaps, feeds, plans[0].delays, position, centre, device_array(tp.vertices),
-                           deviation, rounds, tp.axes)
+    cut = paused_parts(tp, feed, tolerance, pauses, lambda part, f, t: plan_fir(
+        part, f, delays, t, refine=refine, limits=limits, check_period=check_period))
+    if cut is not None:
+        return joined_plan(tp, *cut)
     traced = any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves((delays, feed, tolerance)))
     xp = jnp if traced else np
     # the variants below are decided on primal values and built from the inputs as given, so a
@@ -276,6 +270,28 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                     continue
                 plans.append(join_plan(plan, tp, block, FIRPlan))
     return min(plans, key=lambda p: float(_primal(p.cycle_time)))
+
+
+def paused_parts(tp: ToolPath, feed, tolerance, pauses, plan_part):
+    """A program cut at its pauses (``_fir_pauses``) and each part planned alone:
+    ``(pauses, ranges, [plan_part(part, its feed, its tolerance), ...])`` with ``pauses`` checked
+    ``(M + 1,)`` [s] and ``ranges`` the parts' block ranges; None when ``pauses`` holds no pause."""
+    if pauses is None:
+        return None
+    M = tp.n_blocks
+    pauses = checked_pauses(pauses, M)
+    if np.all(np.isnan(pauses)):
+        return None
+    ranges = _fir_pauses.parts(pauses)
+    return pauses, ranges, [plan_part(tp.part(a, b), _fir_pauses.per_block(feed, a, b, M),
+                                      _fir_pauses.per_block(tolerance, a, b, M)) for a, b in ranges]
+
+
+def joined_plan(tp: ToolPath, pauses: np.ndarray, ranges, plans) -> FIRPlan:
+    """The :class:`FIRPlan` of the whole program from its parts' plans (:func:`paused_parts`)."""
+    starts, pulse, overlaps, feeds, position, centre, deviation, rounds = _fir_pauses.join(plans, ranges, pauses)
+    return FIRPlan(starts, pulse, overlaps, feeds, plans[0].delays, position, centre, device_array(tp.vertices),
+                   deviation, rounds, tp.axes)
 
 
 def _run_value(x, run: np.ndarray, first: np.ndarray):
