@@ -11,8 +11,12 @@ independent computations: every sample of the 0.5 ms trajectory within the large
 the program of the path (``ToolPath.distance``), the end point reached (1e-8 mm) and, with limits,
 the sampled peaks within them (``metrics.limit_ratios``, 1e-6).
 
-Examples: ``RESEARCH_FUZZ_EXAMPLES_FIR`` (default 6 here, the file runs in about 20 seconds); a session
-ran 830 programs of 3-300 blocks with no failure (README, 2026-12-04 fifth).
+The same programs through ``plan_fir_mirror`` (its filters' input moved off the path): the same
+checks, and never slower than ``plan_fir``.
+
+Examples: ``RESEARCH_FUZZ_EXAMPLES_FIR`` (default 6 here, the file runs in about a minute); a session
+ran 830 programs of 3-300 blocks with no failure (README, 2026-12-04 fifth), another 100 through
+``plan_fir_mirror`` (2026-12-05, second).
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ import os
 import numpy as np
 import pytest
 
-from research.interpolators import plan_fir
+from research.interpolators import plan_fir, plan_fir_mirror
 from research.limits import AxisLimits
 from research.metrics import limit_ratios
 from research.paths.gcode import parse_gcode
@@ -97,8 +101,8 @@ def random_program(rng: np.random.Generator, blocks: int) -> str:
     return "\n".join(out) + "\n"
 
 
-@pytest.mark.parametrize("seed", range(EXAMPLES))
-def test_random_programs_keep_tolerance_limits_and_end_point(seed):
+def _drawn(seed: int):
+    """``(path, feeds, delays, tolerances, limits, pauses)`` of the seeded program (module docstring)."""
     rng = np.random.default_rng(seed)
     text = random_program(rng, int(rng.integers(3, 40)))
     eps = float(np.exp(rng.uniform(np.log(0.003), np.log(0.3))))
@@ -111,9 +115,26 @@ def test_random_programs_keep_tolerance_limits_and_end_point(seed):
         env = AxisLimits.fir_envelope(tp.dim, float(np.max(prog.block_feeds)), delays)
         s = float(np.exp(rng.uniform(np.log(0.05), 0.0)))
         limits = AxisLimits(env.velocity, s * env.acceleration, s * env.jerk)
-    plan = plan_fir(tp, prog.block_feeds, delays, tol, limits=limits, pauses=prog.block_pauses, check_period=2.5e-4)
+    return tp, prog.block_feeds, delays, tol, limits, prog.block_pauses
+
+
+def _check(plan, tp, tol, limits) -> None:
     q = np.asarray(plan.trajectory(5e-4).q)
     assert np.max(tp.distance(q)) <= float(np.max(tol)) * (1 + 1e-3) + 1e-9
     assert np.linalg.norm(q[-1] - tp.ends[-1]) < 1e-8
     if limits is not None:
         assert all(np.all(r <= 1 + 1e-6) for r in limit_ratios(plan.trajectory(1e-3), limits).values())
+
+
+@pytest.mark.parametrize("seed", range(EXAMPLES))
+def test_random_programs_keep_tolerance_limits_and_end_point(seed):
+    tp, feeds, delays, tol, limits, pauses = _drawn(seed)
+    _check(plan_fir(tp, feeds, delays, tol, limits=limits, pauses=pauses, check_period=2.5e-4), tp, tol, limits)
+
+
+@pytest.mark.parametrize("seed", range(EXAMPLES))
+def test_random_programs_through_the_mirror_keep_tolerance_limits_and_end_point(seed):
+    tp, feeds, delays, tol, limits, pauses = _drawn(seed)
+    m = plan_fir_mirror(tp, feeds, delays, tol, limits=limits, pauses=pauses, check_period=2.5e-4)
+    _check(m.plan, tp, tol, limits)
+    assert m.cycle_time <= m.plain_cycle_time * (1 + 1e-12)
