@@ -127,11 +127,11 @@ def run_case(label, path, setting, convention, args, out):
     quiet = bool(np.all(o["residual"] <= p["residual"] * (1 + 1e-6) + 1e-9))
     held_lim = o["worst"] <= 1 + 1e-6 and o["corner"] <= 1 + 1e-6
     v19 = verdict(held_lim and quiet and o["vratio"] <= TARGET_OPT)
-    why = f" (proven: any FIR >= {bound / T_vib:.3f}x)" if bound / T_vib > TARGET_OPT else ""
+    why = f" (proven: any FIR fed the programmed path >= {bound / T_vib:.3f}x)" if bound / T_vib > TARGET_OPT else ""
     print(f"  issue 19, optimized <= {TARGET_OPT:.2f}x vib-OCP, residual <= plain FIR's: {v19}{why}")
     if not study:
         ok13 = held_lim and o["ratio"] <= TARGET_HELD
-        why = f" (proven: any FIR >= {bound / T_ocp:.3f}x)" if bound / T_ocp > TARGET_HELD else ""
+        why = f" (proven: any FIR fed the programmed path >= {bound / T_ocp:.3f}x)" if bound / T_ocp > TARGET_HELD else ""
         print(f"  issue 13, limits held and <= {TARGET_HELD:.2f}x OCP: limit-holding {verdict(h['worst'] <= 1 + 1e-6 and h['ratio'] <= TARGET_HELD)}, "
               f"optimized {verdict(ok13)}{why}")
     out.append((label, convention, rows, T_ocp, T_vib, bound, time.perf_counter() - t0))
