@@ -142,7 +142,7 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
         raise ParameterError(f"relax must be a finite factor >= 1 on the tolerance, got {relax!r}")
     if isinstance(passes, bool) or not isinstance(passes, (int, np.integer)) or passes < 0:
         raise ParameterError(f"passes must be an integer >= 0 (mirror passes per round), got {passes!r}")
-    if rounds is None and np.isfinite(relax) and relax >= 1.0:
+    if rounds is None:
         rounds = default_rounds(float(relax))
     if isinstance(rounds, bool) or not isinstance(rounds, (int, np.integer)) or rounds < 1:
         raise ParameterError(f"rounds must be an integer >= 1 (re-plans at most), got {rounds!r}")
@@ -226,7 +226,8 @@ def compensate(plan: FIRPlan, tp: ToolPath, passes: int, frozen: np.ndarray) -> 
             break
         if fixed is None:  # the timing is held: the planned pulses start and end where they did here
             fixed = _fixed_vertices(inputs, plan, frozen, ends[: B - 1])
-            scaled, middle, centres, plane, radius = _scalable_arcs(plan, tp, arc, fixed, starts[:B], ends[:B], Td)
+            scaled, middle, centres, plane, radius = _scalable_arcs(plan, tp, target, arc, fixed, starts[:B], ends[:B],
+                                                                    Td)
             fixed[:-1] |= arc  # an arc's ends follow its scale, not the vertices' mirror
             fixed[1:] |= arc
         pos = NumpyPiecewise(breaks, coeffs)
@@ -246,27 +247,26 @@ def compensate(plan: FIRPlan, tp: ToolPath, passes: int, frozen: np.ndarray) -> 
     return dataclasses.replace(plan, profile=moved_inputs), moved
 
 
-def _scalable_arcs(plan: FIRPlan, tp: ToolPath, arc: np.ndarray, fixed: np.ndarray, starts: np.ndarray,
-                   ends: np.ndarray, Td: float):
+def _scalable_arcs(plan: FIRPlan, tp: ToolPath, target: np.ndarray, arc: np.ndarray, fixed: np.ndarray,
+                   starts: np.ndarray, ends: np.ndarray, Td: float):
     """The planned arc blocks whose radius the mirror scales about their centre: those between two
     lines (an arc next to an arc keeps its radius: both cannot scale about their own centres and
-    still meet) whose ends move (not the path's ends, exact stops or frozen). Returns ``(scaled
+    still meet) whose ends move (not the path's ends, exact stops or frozen); ``target`` ``(B + 1, d)``
+    their planned vertices [mm] (:func:`_input_vertices`). Returns ``(scaled
     (B,), middle instants (B,) [s], centres (B, d) [mm], in-plane projectors (B, d, d), radii (B,)
     [mm])``: each arc's programmed block is the one whose pulse holds the middle of its own
-    (``plan.start_times``), the instant its window is centred on that middle."""
+    (:func:`_programmed_blocks`), the instant its window is centred on that middle."""
     B, d = arc.size, tp.dim
     middle = 0.5 * (starts + ends) + 0.5 * Td
     scaled = arc.copy()
     scaled[1:] &= ~arc[:-1]
     scaled[:-1] &= ~arc[1:]
     scaled &= ~fixed[:-1] & ~fixed[1:]
-    block = np.clip(np.searchsorted(np.asarray(plan.start_times), 0.5 * (starts + ends), side="right") - 1,
-                    0, tp.n_blocks - 1)
+    block = _programmed_blocks(plan, 0.5 * (starts + ends))
     scaled &= tp.is_arc[block]
     centres = np.where(scaled[:, None], tp.centers[block], 0.0)
     axis = np.where(scaled[:, None], tp.normals[block], 0.0)[:, :d] if d == 3 else np.zeros((B, d))
     plane = np.eye(d)[None] - axis[:, :, None] * axis[:, None, :]
-    target = _input_vertices(plan)
     radius = np.where(scaled, np.linalg.norm(np.einsum("nde,ne->nd", plane, target[:-1] - centres), axis=1), 1.0)
     return scaled, middle, centres, plane, radius
 
@@ -317,8 +317,8 @@ def _fixed_vertices(inputs: ProfileInputs, plan: FIRPlan, frozen: np.ndarray, en
     """``(B + 1,)`` planned vertices that stay where they are: the two ends, exact stops (gap
     ``T_d``: the output rests on the vertex) and the vertices on the programmed blocks ``frozen``
     ``(M,)`` or next to them. A planned vertex is where its block's pulse ends (``ends`` ``(B - 1,)``
-    [s]): on the programmed block whose pulse started last before then (``plan.start_times``), or
-    at that block's end."""
+    [s]): on the programmed block whose pulse started last before then (:func:`_programmed_blocks`),
+    or at that block's end."""
     B = ends.size + 1
     fixed = np.zeros(B + 1, dtype=bool)
     fixed[[0, B]] = True
@@ -326,13 +326,20 @@ def _fixed_vertices(inputs: ProfileInputs, plan: FIRPlan, frozen: np.ndarray, en
     gaps = np.asarray(inputs.gaps)[: B - 1]
     fixed[1:B][gaps >= Td * (1.0 - 1e-12)] = True
     if frozen.any():
-        M = frozen.size
-        block = np.clip(np.searchsorted(np.asarray(plan.start_times), ends, side="right") - 1, 0, M - 1)
+        block = _programmed_blocks(plan, ends)
         near = frozen.copy()
         near[:-1] |= frozen[1:]
         near[1:] |= frozen[:-1]
         fixed[1:B] |= near[block]
     return fixed
+
+
+def _programmed_blocks(plan: FIRPlan, times: np.ndarray) -> np.ndarray:
+    """The programmed block whose pulse started last at or before each of ``times`` [s]
+    (``plan.start_times``; the first block before its start): where a planned block's pulse
+    instant lies on the program, its timing being the plan's."""
+    starts = np.asarray(plan.start_times)
+    return np.clip(np.searchsorted(starts, times, side="right") - 1, 0, starts.size - 1)
 
 
 def _normal_projectors(vertices: np.ndarray) -> np.ndarray:

@@ -220,6 +220,7 @@ def time_optimal(
         return _exact_stop(path, limits, feed, intervals_per_segment, sample_period)
     d, M, N = path.dim, path.n_segments, int(intervals_per_segment)
     cap = feed if feed is not None else float(np.linalg.norm(limits.velocity))
+    ahead = _lookahead(lookahead, limits, cap)  # [mm], refused before any warm start is built
     if isinstance(warm_start, TimeOptimalResult):
         if warm_start.phase_durations.size != M:
             raise ParameterError(f"warm_start is a solution with {warm_start.phase_durations.size} phases, the path has {M} segments")
@@ -232,7 +233,7 @@ def time_optimal(
         path.points[:-1], path.points[1:], path.directions, path.lengths,
         np.maximum((path.lengths - 2 * tolerance) / min(cap, float(np.linalg.norm(limits.velocity))), 1e-6),
     )
-    schedule = window_schedule(M, window, overlap, path.lengths, _lookahead(lookahead, limits, cap))
+    schedule = window_schedule(M, window, overlap, path.lengths, ahead)
     n_max = max(stop - first for first, stop, _ in schedule)
     spec = ProblemSpec(
         n_phases=n_max, intervals=N, dim=d,
