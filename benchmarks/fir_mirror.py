@@ -2,12 +2,15 @@
 
 Usage::
 
-    python benchmarks/fir_mirror.py [--quick] [--sweep]
+    python benchmarks/fir_mirror.py [--quick] [--sweep] [--sweep-feeds]
 
 1. ``--sweep``: the two constants of ``research/interpolators/_fir_mirror.py`` (``RELAX``, the
    tolerance factor the first round's timing is planned at, and ``PASSES``, the mirror passes per
    round) swept on bench_cam's quick CAM file (2,251 chords, F 200 mm/s, T 60/30 ms, eps 50 um,
    limits = the FIR's nominal envelope): cycle time, ratio to ``plan_fir``, rounds, planning time.
+   ``--sweep-feeds``: the three of ``_fir_mirror_feeds`` (``LIMIT_EXPONENT``, ``LEAST_STEP``,
+   ``TOLERANCE_STEP``) on the first 100 and 300 chords of the 10^4-chord file and on the quick
+   file, the same setting: each one's cycle times, their sum and the rounds.
 2. The defaults on bench_cam's CAM files (quick; the 10^4-chord file unless ``--quick``), on cam30
    and on the paper paths (``corner90``, ``diamond``, ``zigzag``) at bench_cam's setting, with the
    envelope's limits and without: cycle times, the ratio mirror / plain, the largest distance to the
@@ -32,13 +35,16 @@ import bench_cam  # noqa: E402
 from bench_fir import Table  # noqa: E402
 from research import metrics  # noqa: E402
 from research.interpolators import plan_fir, plan_fir_mirror  # noqa: E402
-from research.interpolators import _fir_mirror  # noqa: E402
+from research.interpolators import _fir_mirror, _fir_mirror_feeds  # noqa: E402
 from research.limits import AxisLimits  # noqa: E402
-from research.paths import named_path  # noqa: E402
+from research.paths import Polyline, named_path  # noqa: E402
 from research.paths.toolpath import ToolPath  # noqa: E402
 
 SWEEP_RELAX = (2.0, 4.0, 8.0, 16.0, 32.0, 64.0)
 SWEEP_PASSES = (1, 3, 5, 8)
+SWEEP_EXPONENT = (0.25, 1.0 / 3.0, 0.5)
+SWEEP_LEAST = (0.01, 0.03)
+SWEEP_TOLERANCE = (0.03, 0.05, 0.1)
 
 
 def timed(fn, *args, **kwargs):
@@ -78,6 +84,32 @@ def sweep(table: Table) -> None:
                       f"{m.rounds} rounds", f"{t:.2f} s planning")
 
 
+def sweep_feeds(table: Table) -> None:
+    whole = cam_file(bench_cam.LEVELS)
+    paths = {"first 100": Polyline(whole.points[:101]), "first 300": Polyline(whole.points[:301]),
+             "quick file": cam_file(bench_cam.LEVELS_QUICK)}
+    F, D, eps = bench_cam.FEED, bench_cam.DELAYS, bench_cam.EPS
+    table.section("Sweep of the mirror's feed steps (LIMIT_EXPONENT, LEAST_STEP, TOLERANCE_STEP), limits = envelope: "
+                  "cycle times of " + ", ".join(paths) + " [s]")
+    kept = (_fir_mirror_feeds.LIMIT_EXPONENT, _fir_mirror_feeds.LEAST_STEP, _fir_mirror.TOLERANCE_STEP)
+    try:
+        for expo in SWEEP_EXPONENT:
+            for least in SWEEP_LEAST:
+                for step in SWEEP_TOLERANCE:
+                    _fir_mirror_feeds.LIMIT_EXPONENT, _fir_mirror_feeds.LEAST_STEP = expo, least
+                    _fir_mirror.TOLERANCE_STEP = step
+                    times, rounds = [], []
+                    for path in paths.values():
+                        m = plan_fir_mirror(path, F, D, eps, limits=AxisLimits.fir_envelope(path.dim, F, D))
+                        times.append(m.cycle_time)
+                        rounds.append(m.rounds)
+                    table.row(f"  exponent {expo:.3g}, least {least:g}, tolerance step {step:g}",
+                              " / ".join(f"{t:.4f}" for t in times), f"sum {sum(times):.4f} s",
+                              "rounds " + " / ".join(str(r) for r in rounds))
+    finally:
+        _fir_mirror_feeds.LIMIT_EXPONENT, _fir_mirror_feeds.LEAST_STEP, _fir_mirror.TOLERANCE_STEP = kept
+
+
 def compare(table: Table, name: str, path, feed, delays, eps, limits) -> None:
     args = (path, feed, delays, eps)
     plan_fir(*args, limits=limits)  # compiled kernels warm for both timings
@@ -94,10 +126,13 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="the quick CAM file only (no 10^4-chord file)")
     ap.add_argument("--sweep", action="store_true", help="sweep RELAX x PASSES on the quick CAM file first")
+    ap.add_argument("--sweep-feeds", action="store_true", help="sweep the feed steps of _fir_mirror_feeds first")
     args = ap.parse_args(argv)
     table = Table(f"plan_fir_mirror (RELAX {_fir_mirror.RELAX:g}, PASSES {_fir_mirror.PASSES}) against plan_fir")
     if args.sweep:
         sweep(table)
+    if args.sweep_feeds:
+        sweep_feeds(table)
     F, D, eps = bench_cam.FEED, bench_cam.DELAYS, bench_cam.EPS
     table.section(f"Defaults, F {F:g} mm/s, T {D[0] * 1e3:g}/{D[1] * 1e3:g} ms, eps {eps * 1e3:g} um: "
                   "plain -> mirror cycle time")

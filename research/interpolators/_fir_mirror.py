@@ -12,25 +12,34 @@ the input's vertices (each block's velocity pulse is its chord over its pulse le
 each vertex by the mirror of its error brings the output back onto the path (Prevost 2012 eq 4,
 ``x_ref <- x_ref + (x_CAM - x_sim)``, here with ``x_sim`` the exact filtered profile).
 
-What this module does (:func:`compensate`):
+What this module does:
 
-1. The timing comes from ``plan_fir`` at a relaxed tolerance ``g_k eps_k`` per block (``g_k >= 1``):
-   faster feeds on curves, larger overlaps at corners, its limits held on the uncompensated
-   profile.
-2. ``passes`` mirror passes move the vertices of the planned blocks (its pulse table's chords): the
-   error of the output at each corner instant (the window centred on the vertex), less its
-   component along the path's tangent there (a timing lag, not a contour error), is added to the
-   vertex. An arc between two lines is scaled about its centre instead (eq 8's shrink is radial):
-   its radius takes the mirror of the output's radial error at the instant the window is centred
-   on the arc's middle, and its ends move with it; an arc next to an arc keeps its radius (both
-   cannot scale about their own centres and still meet). Fixed: the path's two ends and exact
-   stops (the output rests on them).
-3. The exact profile of the moved input is checked against the *programmed* path as ``plan_fir``
-   checks its own (vertex distances at every corner, the trajectory sampled every
-   ``check_period``), and against ``limits`` on its exact peaks. Blocks whose window holds a
-   violation have their relaxation halved towards 1 (``g <- 1 + (g - 1) / 2``, to 1 below
-   :data:`_LAST_STEP`); where a violation meets blocks already at 1, the vertices within reach stop
-   being moved; then the next round re-plans. At most ``rounds`` rounds.
+1. **Timing.** Once the input is compensated, the output runs on the programmed path, so its feed
+   is bounded by what bounds any motion on that path: the limits on its curvature, as in a
+   time-optimal plan. The timing is ``plan_fir``'s eq 13/14 plan (``refine=False``: no look-ahead,
+   no checks of its own) at a relaxed tolerance ``g_k eps_k`` per block (``g_k >= 1``: larger
+   overlaps at corners) with each block's feed at its curvature cap
+   (``_fir_mirror_feeds.curvature_caps``) times a factor the search lowers.
+2. **Mirror passes** (:func:`compensate`): ``passes`` passes move the vertices of the planned
+   blocks (its pulse table's chords). Each vertex takes the mirror of its contour error: the vector
+   from the output's point nearest the vertex (searched over the window centred on it) to the
+   vertex, less its component along the path's tangent there. The point at the corner instant
+   instead lagged behind the vertex where the feed changes, and its mirror moved the vertex along
+   the curve; on the first 100 chords of bench_cam's CAM file that input broke the jerk limit by
+   4.3x after five passes, the nearest point's by 1.5x. An arc between two lines is scaled about
+   its centre instead (eq 8's shrink is radial): its radius takes the mirror of the output's radial
+   error at the instant the window is centred on the arc's middle, and its ends move with it; an
+   arc next to an arc keeps its radius (both cannot scale about their own centres and still meet).
+   Fixed: the path's two ends and exact stops (the output rests on them).
+3. **Checks and search.** The exact profile of the moved input is checked against the
+   *programmed* path as ``plan_fir`` checks its own (vertex distances at every corner, the
+   trajectory sampled every ``check_period``), and against ``limits`` on its exact peaks. A limit
+   violation lowers the feeds of the blocks whose input makes the profile at its instant
+   (``_fir_mirror_feeds.limit_factors``). A tolerance violation at a corner where eq 13/14 dwells
+   halves that corner's relaxation towards 1 (``g <- 1 + (g - 1) / 2``, to 1 below
+   :data:`_LAST_STEP`), and once it is at 1 its vertices stop being moved; elsewhere it lowers the
+   feeds of the blocks whose window holds it by ``TOLERANCE_STEP``. Then the next round re-plans,
+   at most ``rounds`` rounds.
 
 The plan returned is the faster of this and ``plan_fir``'s own at the tolerance, so it is never
 slower than the plain plan and always verified. What the machine's interpolator is fed is the
@@ -50,7 +59,8 @@ from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_limits import LIMIT_RTOL
 from research.interpolators._fir_piece_peaks import PiecePeaks
 from research.interpolators._fir_profile import ProfileInputs, profile
-from research.interpolators._fir_verify import path_deviations, profile_rounding, vertex_distances
+from research.interpolators._fir_mirror_feeds import TOLERANCE_STEP, curvature_caps, limit_factors, triangle_sum
+from research.interpolators._fir_verify import nearest_instants, path_deviations, profile_rounding, vertex_distances
 from research.interpolators.fir import (CHECK_PERIOD, FIRPlan, _as_toolpath, _check_inputs, joined_plan, paused_parts,
                                        plan_fir)
 from research.limits import AxisLimits
@@ -61,17 +71,22 @@ from research.piecewise import NumpyPiecewise
 #: of ``benchmarks/fir_mirror.py --sweep`` (relax 2-64 x passes 1-8 on bench_cam's quick CAM file,
 #: limits = the envelope: 0.496x ``plan_fir``'s cycle at 32 / 5, 0.499x at 16 / 5, 0.507x at 8 / 5)
 RELAX, PASSES = 32.0, 5
+#: half-width of the triangle that smooths each pass's steps along the path, as a share of the
+#: shortest delay times the input speed (module docstring, step 2). Swept (benchmarks/README.md):
+#: 0, 0.1, 0.15, 0.25, 0.35, 0.5, 1 on the first 100 and 300 chords of bench_cam's CAM file, its
+#: quick file and the micro-chord program (16 um chords) rounded to 0.1 and 2.54 um, limits = the
+#: envelope; 0.15-0.35 is flat, 0 never verifies the rounded program
+SMOOTH = 0.25
 _LAST_STEP = 1.25  # a relaxation below this goes to 1 on the next violation (one round, not many)
 
 
 def default_rounds(relax: float) -> int:
-    """Re-plans allowed: twice those that take one block from ``relax`` to 1 by the search's
+    """Re-plans allowed: twice those that take one corner from ``relax`` to 1 by the search's
     halvings (to :data:`_LAST_STEP`, then 1) and stop moving its vertices, since a violation moves
-    on to the neighbours of the blocks it relaxed (bench_cam's quick file at eps 10 um, relax 32:
-    verified in the 12th round, 32.15 s against ``plan_fir``'s 54.82 s, where ``halvings + 3`` = 10
-    rounds had returned the plain plan)."""
+    on to the neighbours of the blocks it changed, plus those that halve a feed by
+    ``TOLERANCE_STEP`` steps (relax 32: 18 + 14 = 32 rounds at a step of 0.05)."""
     halvings = 0 if relax <= _LAST_STEP else math.ceil(math.log2((relax - 1.0) / (_LAST_STEP - 1.0)))
-    return 2 * (halvings + 2)
+    return 2 * (halvings + 2) + math.ceil(math.log(0.5) / math.log(1.0 - TOLERANCE_STEP))
 
 
 @dataclass(frozen=True)
@@ -88,6 +103,8 @@ class MirrorPlan:
             centre to its moved ends; the programmed vertices where nothing was compensated.
         relaxation: ``(M,)`` factor ``g_k >= 1`` on each programmed block's tolerance at which the
             timing was planned (1 everywhere when the plain plan was kept).
+        feed_factors: ``(M,)`` each block's feed in the timing over its commanded feed (the
+            curvature caps times the search's factors; 1 everywhere when the plain plan was kept).
         compensated: False when ``plan_fir``'s own plan was kept (it was as fast, or no round
             verified).
         rounds: re-plans made.
@@ -97,6 +114,7 @@ class MirrorPlan:
     plan: FIRPlan
     input_vertices: np.ndarray
     relaxation: np.ndarray
+    feed_factors: np.ndarray
     compensated: bool
     rounds: int
     plain_cycle_time: float
@@ -155,35 +173,48 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
         pauses, ranges, parts = cut
         return MirrorPlan(joined_plan(tp, pauses, ranges, [p.plan for p in parts]),
                           np.concatenate([parts[0].input_vertices] + [p.input_vertices[1:] for p in parts[1:]]),
-                          np.concatenate([p.relaxation for p in parts]), any(p.compensated for p in parts),
+                          np.concatenate([p.relaxation for p in parts]), np.concatenate([p.feed_factors for p in parts]),
+                          any(p.compensated for p in parts),
                           sum(p.rounds for p in parts),
                           sum(p.plain_cycle_time for p in parts) + float(np.nansum(pauses)))
     tol = np.broadcast_to(np.asarray(tolerance, dtype=np.float64), (M,))
-    feed = np.asarray(feed, dtype=np.float64)
+    feed = np.broadcast_to(np.asarray(feed, dtype=np.float64), (M,))
     delays = np.asarray(delays, dtype=np.float64).reshape(-1)
+    Td = float(np.sum(delays))
     plain = plan_fir(tp, feed, delays, tol, limits=limits, check_period=check_period)
     T_plain = float(plain.cycle_time)
-    best = MirrorPlan(plain, _input_vertices(plain), np.ones(M), False, 0, T_plain)
+    best = MirrorPlan(plain, _input_vertices(plain), np.ones(M), np.ones(M), False, 0, T_plain)
     g = np.full(M, float(relax))
+    corners = np.zeros(max(M - 1, 0), dtype=bool)
+    if M > 1:  # eq 13/14 dwells there at the relaxed tolerance: a corner, not a curve (no curvature cap)
+        corners = np.asarray(plan_fir(tp, feed, delays, tol * g, refine=False).overlaps) < Td * (1.0 - 1e-12)
+    caps = curvature_caps(tp, feed, corners, delays, limits)
+    scale = np.ones(M)  # the search's factors on the caps
     frozen = np.zeros(M, dtype=bool)  # programmed blocks whose planned vertices are not moved
     r = 0
-    while r < rounds and (np.any(g > 1.0) or (passes > 0 and not np.all(frozen))):
+    while r < rounds:
         r += 1
-        plan = plan_fir(tp, feed, delays, tol * g, limits=limits, check_period=check_period)
+        plan = plan_fir(tp, caps * scale, delays, tol * g, refine=False, check_period=check_period)
         if float(plan.cycle_time) >= float(best.plan.cycle_time):
             break  # this timing cannot beat the plan at hand, moved or not
         moved, vertices = compensate(plan, tp, passes, frozen)
-        bad_times, deviation = violations(moved, tp, tol, limits, check_period)
-        if bad_times.size == 0:
-            best = MirrorPlan(dataclasses.replace(moved, path_deviation=deviation), vertices, g.copy(), True, r, T_plain)
+        found = violations(moved, tp, tol, limits, check_period)
+        if found.tolerance.size == 0 and found.limits.size == 0:
+            best = MirrorPlan(dataclasses.replace(moved, path_deviation=found.deviation), vertices, g.copy(),
+                              caps * scale / feed, True, r, T_plain)
             break
-        near = _blocks_near(plan, bad_times)
-        relaxed = near & (g > 1.0)
-        g[relaxed] = np.where(g[relaxed] < _LAST_STEP, 1.0, 1.0 + 0.5 * (g[relaxed] - 1.0))
-        stuck = near & ~relaxed & ~frozen  # at the tolerance already: stop moving what reaches them
-        if not relaxed.any() and not stuck.any():
-            break  # the violations sit where nothing is relaxed or moved any more
-        frozen |= stuck
+        scale *= limit_factors(np.asarray(moved.start_times), np.asarray(moved.pulse_times), found.limits,
+                               found.ratios, delays)
+        dwell = np.zeros(found.tolerance.size, dtype=bool)
+        if found.tolerance.size and M > 1:  # at a dwell corner: its eq 13/14 tolerance back towards eps
+            at_corner = _nearest_corner(moved, found.tolerance)
+            dwell = np.asarray(moved.overlaps)[at_corner] < Td * (1.0 - 1e-12)
+            blocks = np.zeros(M, dtype=bool)
+            blocks[at_corner[dwell]] = blocks[at_corner[dwell] + 1] = True
+            relaxed = blocks & (g > 1.0)
+            g[relaxed] = np.where(g[relaxed] < _LAST_STEP, 1.0, 1.0 + 0.5 * (g[relaxed] - 1.0))
+            frozen |= blocks & ~relaxed  # at the tolerance already: stop moving its vertices
+        scale[_blocks_near(moved, found.tolerance[~dwell])] *= 1.0 - TOLERANCE_STEP  # elsewhere: slower
     return dataclasses.replace(best, rounds=r)
 
 
@@ -211,7 +242,7 @@ def compensate(plan: FIRPlan, tp: ToolPath, passes: int, frozen: np.ndarray) -> 
     motion = ~table.gap & (table.block < B)
     owner = np.minimum(table.block, B - 1)
     line, arc_rows = motion & ~arc[owner], motion & arc[owner]
-    fixed = scaled = plane = centres = middle = radius = None
+    fixed = scaled = plane = centres = middle = radius = smooth = None
     scale = np.ones(B)
     for k in range(passes + 1):
         geo = table.geo.copy()
@@ -230,10 +261,12 @@ def compensate(plan: FIRPlan, tp: ToolPath, passes: int, frozen: np.ndarray) -> 
                                                                     Td)
             fixed[:-1] |= arc  # an arc's ends follow its scale, not the vertices' mirror
             fixed[1:] |= arc
+            smooth = _smoothing(target, fixed, ends[:B] - starts[:B], float(np.min(inputs.delays)))
         pos = NumpyPiecewise(breaks, coeffs)
-        error = target[1:-1] - pos(centre[: B - 1])
+        error = target[1:-1] - pos(nearest_instants(pos, target[1:-1], centre[: B - 1], 0.5 * Td))
         step = np.einsum("kij,kj->ki", normal, error)  # its part across the path (a contour error)
         step[fixed[1:-1]] = 0.0
+        step = smooth(step)
         moved[1:-1] += step
         if scaled.any():  # the mirror of an arc's radial error at its middle instant (eq 8's shrink)
             bs = np.flatnonzero(scaled)
@@ -245,6 +278,28 @@ def compensate(plan: FIRPlan, tp: ToolPath, passes: int, frozen: np.ndarray) -> 
     moved_inputs = ProfileInputs(dataclasses.replace(table, geo=geo), inputs.fraction, inputs.piece_tv, inputs.gaps,
                                  inputs.delays, inputs.start, np.asarray(inputs.span))
     return dataclasses.replace(plan, profile=moved_inputs), moved
+
+
+def _smoothing(target: np.ndarray, fixed: np.ndarray, pulses: np.ndarray, shortest: float):
+    """The smoothing of a pass's steps (module docstring, step 2): a function of the steps
+    ``(B - 1, d)`` at the interior planned vertices ``target[1:-1]`` [mm] that averages them along
+    the path with triangle weights of half-width ``SMOOTH * shortest * v`` (``v`` the larger input
+    speed of the vertex's two blocks, chord over pulse ``pulses`` ``(B,)`` [s]; ``shortest`` the
+    shortest delay [s]), over the vertices not ``fixed`` ``(B + 1,)``, and leaves those at 0."""
+    chords = np.linalg.norm(np.diff(target, axis=0), axis=1)
+    along = np.cumsum(chords)[:-1]  # arc length at each interior vertex [mm]
+    speed = chords / np.maximum(pulses, 1e-300)
+    width = np.maximum(SMOOTH * shortest * np.maximum(speed[:-1], speed[1:]), 1e-12)
+    still = fixed[1:-1]
+    weight = triangle_sum(along, (~still).astype(np.float64)[:, None], width)
+
+    def smooth(step: np.ndarray) -> np.ndarray:
+        out = np.where(weight > 0, triangle_sum(along, np.where(still[:, None], 0.0, step), width)
+                       / np.maximum(weight, 1e-300), 0.0)
+        out[still] = 0.0
+        return out
+
+    return smooth
 
 
 def _scalable_arcs(plan: FIRPlan, tp: ToolPath, target: np.ndarray, arc: np.ndarray, fixed: np.ndarray,
@@ -271,12 +326,29 @@ def _scalable_arcs(plan: FIRPlan, tp: ToolPath, target: np.ndarray, arc: np.ndar
     return scaled, middle, centres, plane, radius
 
 
+@dataclass(frozen=True)
+class Violations:
+    """Where a plan's profile breaks the tolerance or the limits (:func:`violations`).
+
+    Attributes:
+        tolerance: ``(N,)`` times [s] of the tolerance violations, sorted.
+        limits: ``(P,)`` middle times [s] of the profile pieces above a limit, and ``ratios``
+            ``(P,)`` their largest ``peak / limit``.
+        deviation: the largest sampled distance to the path [mm].
+    """
+
+    tolerance: np.ndarray
+    limits: np.ndarray
+    ratios: np.ndarray
+    deviation: float
+
+
 def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits | None,
-               check_period: float) -> tuple[np.ndarray, float]:
-    """``(times [s], deviation [mm])``: when ``plan``'s profile breaks the tolerance ``tol`` ``(M,)``
-    on the programmed path ``tp`` or the ``limits`` (module docstring, step 3; empty when it keeps
-    both), and its largest sampled distance to the path. The bounds are ``plan_fir``'s own:
-    ``verified_bound`` plus the rounding the profile has accumulated by its end."""
+               check_period: float) -> Violations:
+    """Where ``plan``'s profile breaks the tolerance ``tol`` ``(M,)`` on the programmed path ``tp``
+    or the ``limits`` (module docstring, step 3). The bounds are ``plan_fir``'s own:
+    ``verified_bound`` plus the rounding the profile has accumulated by its end, and its limits'
+    relative tolerance on the exact peaks."""
     pos = plan.position.numpy_evaluator()
     Td = float(np.sum(np.asarray(plan.delays)))
     slack = profile_rounding(pos, tp.ends[-1])
@@ -291,10 +363,21 @@ def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits 
     times.append(centre[sorted(at_vertex)] if at_vertex else np.zeros(0))
     middle = starts + 0.5 * np.asarray(plan.pulse_times) + 0.5 * Td  # the window centred on the block
     times.append(middle[sorted(at_block)] if at_block else np.zeros(0))
+    over_times, ratios = np.zeros(0), np.zeros(0)
     if limits is not None:
-        over = PiecePeaks(pos, limits).per_piece > 1.0 + LIMIT_RTOL
-        times.append(0.5 * (pos.breaks[:-1] + pos.breaks[1:])[over])
-    return np.sort(np.concatenate(times)), float(deviation)
+        per_piece = PiecePeaks(pos, limits).per_piece
+        over = per_piece > 1.0 + LIMIT_RTOL
+        over_times, ratios = 0.5 * (pos.breaks[:-1] + pos.breaks[1:])[over], per_piece[over]
+    return Violations(np.sort(np.concatenate(times)), over_times, ratios, float(deviation))
+
+
+def _nearest_corner(plan: FIRPlan, times: np.ndarray) -> np.ndarray:
+    """``(N,)`` the corner (``0 .. M - 2``) whose instant (``plan.corner_times``) is nearest each of
+    ``times`` [s]."""
+    centre = np.asarray(plan.corner_times)
+    j = np.clip(np.searchsorted(centre, times), 1, max(centre.size - 1, 1))
+    before = np.abs(centre[j - 1] - times) <= np.abs(centre[np.minimum(j, centre.size - 1)] - times)
+    return np.where(before, j - 1, np.minimum(j, centre.size - 1))
 
 
 def _input_vertices(plan: FIRPlan) -> np.ndarray:

@@ -22,8 +22,8 @@ from jax import Array
 from research.paths.toolpath import ToolPath
 from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_verify_kernels import corner_distances as _corner_kernel
-from research.interpolators._fir_verify_kernels import (charge_samples, grid_times, sampled_line_distances, scatter_max,
-                                                        thinned_runs)
+from research.interpolators._fir_verify_kernels import (charge_samples, grid_times, nearest_times, sampled_line_distances,
+                                                        scatter_max, thinned_runs)
 from research.piecewise import NumpyPiecewise, PiecewisePolynomial, bucket_size
 
 _GRID = 9  # grid points per corner window for the corner-error search
@@ -116,6 +116,19 @@ def vertex_distances(position: NumpyPiecewise, vertices: np.ndarray, centre: np.
     return _corner_kernel(np.ascontiguousarray(position.breaks), np.ascontiguousarray(position.coeffs),
                           np.ascontiguousarray(vertices, dtype=np.float64), np.ascontiguousarray(centre, dtype=np.float64),
                           float(half_window), _GRID, _NEWTON_STEPS, bound, _MORE_STEPS)
+
+
+def nearest_instants(position: NumpyPiecewise, vertices: np.ndarray, centre: np.ndarray,
+                     half_window: float) -> np.ndarray:
+    """``(C,)`` time [s] of the profile's point nearest each vertex ``(C, d)`` within ``centre +-
+    half_window`` [s]: the grid and Newton steps of :func:`vertex_distances` (compiled,
+    ``_fir_verify_kernels.nearest_times``), returning where the search settles instead of how far
+    it is."""
+    if vertices.shape[0] == 0:
+        return np.zeros(0)
+    return nearest_times(np.ascontiguousarray(position.breaks), np.ascontiguousarray(position.coeffs),
+                         np.ascontiguousarray(vertices, dtype=np.float64), np.ascontiguousarray(centre, dtype=np.float64),
+                         float(half_window), _GRID, _NEWTON_STEPS)
 
 
 def profile_rounding(position: NumpyPiecewise, end: np.ndarray) -> float:

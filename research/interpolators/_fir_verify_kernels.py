@@ -199,6 +199,35 @@ def _corner_any(breaks, coeffs, vertices, centre, half_window, grid, newton_step
 _CORNER_FORMS = {(4, 3): _corner_4_3, (9, 3): _corner_9_3, (4, 2): _corner_4_2, (9, 2): _corner_9_2}
 
 
+@numba.njit(**_OPTIONS)
+def nearest_times(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
+    """``(C,)`` time [s] of the point of the profile nearest each vertex ``(C, A)`` near ``centre``
+    ``(C,)`` [s]: the best of ``grid`` points over ``centre +- half_window``, then ``newton_steps``
+    safeguarded Newton steps within one grid step of it (the search of :func:`corner_distances`
+    without its bound: the time it settles on, the nearer of it and the best grid point)."""
+    C, K, A, D = vertices.shape[0], coeffs.shape[0], coeffs.shape[2], coeffs.shape[1]
+    t_lo, t_hi = breaks[0], breaks[K]
+    out = np.empty(C)
+    step = half_window * (2.0 / (grid - 1))
+    at_grid = np.zeros(grid, np.int64)
+    for c in range(C):
+        best, best_d2, found = 0.0, np.inf, 0
+        for g in range(grid):
+            tg = centre[c] + half_window * (-1.0 + 2.0 * g / (grid - 1))
+            tc = min(max(tg, t_lo), t_hi)
+            at_grid[g] = _right_next(breaks, tc, at_grid[g])
+            piece = min(max(at_grid[g] - 1, 0), K - 1)
+            d2 = _squared_distance(coeffs, piece, tc - breaks[piece], vertices, c, D, A)
+            if d2 < best_d2:
+                best, best_d2, found = tc, d2, at_grid[g]
+        t = best
+        for _ in range(newton_steps):
+            t, found = _newton_time(breaks, coeffs, vertices, c, t, found, t_lo, t_hi, best - step, best + step, D, A)
+        d2, found = _distance_at(breaks, coeffs, vertices, c, t, found, t_lo, t_hi, D, A)
+        out[c] = min(max(t, t_lo), t_hi) if d2 < best_d2 else best
+    return out
+
+
 @numba.njit(inline="always", **_OPTIONS)
 def _newton_time(breaks, coeffs, vertices, c, t, found, t_lo, t_hi, lo, hi, D, A):
     """One safeguarded Newton step of the corner search (:func:`corner_distances`) from ``t``:

@@ -1,0 +1,139 @@
+"""Block feeds of the mirror search (``_fir_mirror``): the caps its timing starts from and the
+factors its rounds lower them by.
+
+Once the mirror has moved the filters' input, the output runs on the programmed path at the
+planned timing, so what bounds its feed is what bounds any motion along that path: the per-axis
+limits on the path's curvature, as in a time-optimal plan (Sencer 2009 ch 3: ``v^2 kappa <= A``
+and, on steady circular motion, ``v^3 kappa^2 <= J``). :func:`curvature_caps` starts every block
+there. Where the moved input still breaks a limit (feed steps, the start and stop pulses, the
+chords' discrete turns), :func:`limit_factors` lowers the feeds of the blocks whose input makes the
+profile at that instant; the search lowers the blocks around a tolerance violation by
+:data:`TOLERANCE_STEP`.
+
+Constants (swept with ``benchmarks/fir_mirror.py --sweep-feeds`` on the first 100 and 300 chords
+of bench_cam's CAM file and its quick file, limits = the envelope; benchmarks/README.md):
+
+* :data:`LIMIT_EXPONENT`: a block at ``peak / limit = r`` takes ``r^-LIMIT_EXPONENT``; a jerk
+  that grows as ``F^3`` would need ``1/3``, a pulse edge's as ``F`` a full ``1``; 1/4 lowers less
+  than either, since the instant's peak is shared by several blocks that are all lowered.
+* :data:`LEAST_STEP`: at least this much, so that a peak a hair above its limit does not take many
+  rounds.
+* :data:`TOLERANCE_STEP`: the step of the feeds around a tolerance violation.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+
+from research.limits import AxisLimits
+from research.paths.toolpath import ToolPath
+
+LIMIT_EXPONENT = 0.25
+LIMIT_REACH = 0.05
+LEAST_STEP = 0.01
+TOLERANCE_STEP = 0.05
+
+
+def curvature_caps(tp: ToolPath, feed: np.ndarray, corners: np.ndarray, delays: np.ndarray,
+                   limits: AxisLimits | None) -> np.ndarray:
+    """``(M,)`` feed [mm/s] per block: the commanded ``feed`` ``(M,)`` capped by the limits on the
+    path's curvature (module docstring).
+
+    The curvature at a vertex is the turn of the tangent over the stretch the filters average
+    there: the tangent steps ``t_in - t_out`` of the vertices around it, weighted by a triangle of
+    half-width ``b = sqrt(6) F sigma`` along the path and summed as vectors, over ``b`` (the
+    triangle's area) [1/mm, per axis]. ``F`` is the larger feed of the vertex's two blocks and
+    ``sigma = sqrt(sum T_i^2 / 12)`` the kernel's rms half-width in time, so the triangle spreads
+    as far as the kernel does along the path (rms ``F sigma``; ``_fir_lookahead``'s window reach).
+    On a regular polygon of radius ``R`` that is ``1 / R`` to second order in ``b / R``; the turns
+    of chords rounded to a grid alternate and cancel, instead of each reading as a tight curve, and
+    the triangle's weights fade at its edges, where a box would count one turn of a pair only. The
+    vertex caps both of its blocks at ``min_a sqrt(A_a / |kappa_a|)`` and
+    ``(min J / |kappa|^2)^(1/3)``. The ``corners`` ``(M - 1,)`` (vertices where eq 13/14 dwells:
+    a corner, not a curve, whose error the dwell holds) add no turn. An arc block of radius ``R``
+    takes ``sqrt(min A R)`` and ``(min J R^2)^(1/3)`` (its normal sweeps its plane); a line block
+    ``min_a V_a / |u_a|``, ``u`` the direction from the path ``F sigma`` before its start to ``F sigma``
+    after its end (the filters' averaged direction: a rounded chord's own zigzags by degrees); an arc ``min
+    V``. Without ``limits``: ``feed``.
+    """
+    feed = np.asarray(feed, dtype=np.float64)
+    if limits is None:
+        return feed.copy()
+    A, J, V = (np.asarray(x, dtype=np.float64) for x in (limits.acceleration, limits.jerk, limits.velocity))
+    t_in, t_out = tp.tangents()
+    arc = tp.is_arc
+    sigma = math.sqrt(float(np.sum(np.asarray(delays, dtype=np.float64) ** 2)) / 12.0)
+    S = np.concatenate([[0.0], np.cumsum(tp.lengths)])  # arc length at each vertex, the ends included [mm]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # a line's direction: the chord from its start less h to its end plus h (the averaged input)
+        lo = np.searchsorted(S, S[:-1] - feed * sigma, side="left")
+        hi = np.searchsorted(S, S[1:] + feed * sigma, side="right") - 1
+        points = np.vstack([np.asarray(tp.start, dtype=np.float64)[None], np.asarray(tp.ends, dtype=np.float64)])
+        chord = points[hi] - points[lo]
+        direction = np.abs(chord) / np.linalg.norm(chord, axis=1, keepdims=True)
+        cap = np.minimum(feed, np.where(arc, np.min(V), np.min(V[None] / direction, axis=1)))
+        r = tp.radii[arc]
+        cap[arc] = np.minimum.reduce([cap[arc], np.sqrt(np.min(A) * r), np.cbrt(np.min(J) * r**2)])
+        if tp.n_blocks > 1:
+            step = np.where(np.asarray(corners, dtype=bool)[:, None], 0.0, t_in[1:] - t_out[:-1])
+            s = S[1:-1]  # at the interior vertices
+            b = math.sqrt(6.0) * np.maximum(feed[:-1], feed[1:]) * sigma  # the triangle's half-width
+            kappa = triangle_sum(s, step, b) / b[:, None]
+            at_vertex = np.minimum(np.min(np.sqrt(A[None] / np.abs(kappa)), axis=1),
+                                   np.cbrt(np.min(J) / np.sum(kappa * kappa, axis=1)))
+            cap[:-1] = np.minimum(cap[:-1], at_vertex)
+            cap[1:] = np.minimum(cap[1:], at_vertex)
+    return cap
+
+
+def triangle_sum(s: np.ndarray, step: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``(V, d)``: at each ``s_v`` [mm], ``sum_u max(0, 1 - |s_u - s_v| / b_v) step_u`` over the
+    vertices ``u`` (``s`` ``(V,)`` nondecreasing), by running sums of ``step`` and ``s step``: the
+    left half ``(b - s_v) sum step + sum s_u step`` and the right half ``(b + s_v) sum step - sum
+    s_u step``, each over the vertices within ``b`` on its side."""
+    zero = np.zeros((1, step.shape[1]))
+    total = np.vstack([zero, np.cumsum(step, axis=0)])
+    moment = np.vstack([zero, np.cumsum(s[:, None] * step, axis=0)])
+    lo = np.searchsorted(s, s - b, side="right")  # strictly inside: the weight is 0 at distance b
+    mid = np.arange(s.size)  # the vertex itself counted once, on the right
+    hi = np.searchsorted(s, s + b, side="left")
+    left = (b - s)[:, None] * (total[mid] - total[lo]) + (moment[mid] - moment[lo])
+    right = (b + s)[:, None] * (total[hi] - total[mid]) - (moment[hi] - moment[mid])
+    return (left + right) / b[:, None]
+
+
+def kernel_shifts(delays: np.ndarray) -> np.ndarray:
+    """The sums of every subset of the ``delays`` [s] (``2^n`` of them, 0 included): the filter
+    chain's highest derivative at ``t`` is a signed sum of its input at ``t`` less each of them."""
+    d = np.asarray(delays, dtype=np.float64).reshape(-1)
+    return np.array([sum(s) for n in range(d.size + 1) for s in itertools.combinations(d.tolist(), n)])
+
+
+def limit_factors(starts: np.ndarray, pulses: np.ndarray, times: np.ndarray, ratios: np.ndarray,
+                  delays: np.ndarray) -> np.ndarray:
+    """``(M,)`` factors ``<= 1`` on the block feeds for limit violations at ``times`` [s] with
+    ``peak / limit`` ``ratios`` (module docstring): each violation lowers the blocks whose input
+    was in use within ``LIMIT_REACH min T_i`` of ``times - s`` for each shift ``s`` of
+    :func:`kernel_shifts` (pulses from ``starts`` ``(M,)`` [s] for ``pulses`` ``(M,)`` [s]; the
+    block whose pulse started last before then, in a dwell), by ``min(r^-LIMIT_EXPONENT, 1 -
+    LEAST_STEP)`` for the largest ``r`` that reaches it. A span, not the one block: lowering one
+    short block among its neighbours steps the input's speed down and up within the filters'
+    memory, and those steps are jerk of their own."""
+    M = starts.size
+    ends = starts + pulses
+    reach = LIMIT_REACH * float(np.min(delays))
+    worst = np.ones(M)
+    for shift in kernel_shifts(delays):
+        x = times - shift
+        first = np.searchsorted(ends, x - reach, side="left")  # the first pulse ending at or after the span
+        last = np.searchsorted(starts, x + reach, side="right") - 1  # the last starting before its end
+        first = np.minimum(first, np.maximum(last, 0))  # in a dwell: the block before it
+        keep = last >= 0
+        first, last, r = first[keep], last[keep], ratios[keep]
+        count = last - first + 1
+        index = np.repeat(first - np.cumsum(count) + count, count) + np.arange(int(count.sum()))
+        np.maximum.at(worst, index, np.repeat(r, count))
+    return np.where(worst > 1.0, np.minimum(worst ** -LIMIT_EXPONENT, 1.0 - LEAST_STEP), 1.0)
