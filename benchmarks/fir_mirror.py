@@ -8,9 +8,10 @@ Usage::
    tolerance factor the first round's timing is planned at, and ``PASSES``, the mirror passes per
    round) swept on bench_cam's quick CAM file (2,251 chords, F 200 mm/s, T 60/30 ms, eps 50 um,
    limits = the FIR's nominal envelope): cycle time, ratio to ``plan_fir``, rounds, planning time.
-   ``--sweep-feeds``: the three of ``_fir_mirror_feeds`` (``LIMIT_EXPONENT``, ``LEAST_STEP``,
-   ``TOLERANCE_STEP``) on the first 100 and 300 chords of the 10^4-chord file and on the quick
-   file, the same setting: each one's cycle times, their sum and the rounds.
+   ``--sweep-feeds``: the search's feed steps (``LIMIT_EXPONENT`` x ``LEAST_STEP`` x
+   ``TOLERANCE_STEP``, then ``LIMIT_REACH`` alone) and the passes' smoothing (``SMOOTH``) on the
+   first 100 and 300 chords of the 10^4-chord file, the quick file and bench_cam's part 4
+   micro-chord program rounded to 0.1 and 2.54 um, the same setting: cycle times, rounds, sum.
 2. The defaults on bench_cam's CAM files (quick; the 10^4-chord file unless ``--quick``), on cam30
    and on the paper paths (``corner90``, ``diamond``, ``zigzag``) at bench_cam's setting, with the
    envelope's limits and without: cycle times, the ratio mirror / plain, the largest distance to the
@@ -25,6 +26,7 @@ independent check on the sampled trajectory.
 from __future__ import annotations
 
 import argparse
+import itertools
 import sys
 import time
 
@@ -45,6 +47,8 @@ SWEEP_PASSES = (1, 3, 5, 8)
 SWEEP_EXPONENT = (0.25, 1.0 / 3.0, 0.5)
 SWEEP_LEAST = (0.01, 0.03)
 SWEEP_TOLERANCE = (0.03, 0.05, 0.1)
+SWEEP_REACH = (0.0, 0.05, 0.1, 0.25, 0.5)
+SWEEP_SMOOTH = (0.0, 0.1, 0.15, 0.25, 0.35, 0.5, 1.0)
 
 
 def timed(fn, *args, **kwargs):
@@ -87,27 +91,31 @@ def sweep(table: Table) -> None:
 def sweep_feeds(table: Table) -> None:
     whole = cam_file(bench_cam.LEVELS)
     paths = {"first 100": Polyline(whole.points[:101]), "first 300": Polyline(whole.points[:301]),
-             "quick file": cam_file(bench_cam.LEVELS_QUICK)}
+             "quick file": cam_file(bench_cam.LEVELS_QUICK), "micro 0.1 um": bench_cam.micro_program(1e-4),
+             "micro 2.54 um": bench_cam.micro_program(2.54e-3)}
     F, D, eps = bench_cam.FEED, bench_cam.DELAYS, bench_cam.EPS
-    table.section("Sweep of the mirror's feed steps (LIMIT_EXPONENT, LEAST_STEP, TOLERANCE_STEP), limits = envelope: "
-                  "cycle times of " + ", ".join(paths) + " [s]")
-    kept = (_fir_mirror_feeds.LIMIT_EXPONENT, _fir_mirror_feeds.LEAST_STEP, _fir_mirror.TOLERANCE_STEP)
+    table.section("Sweep of the mirror's feed steps and smoothing, limits = envelope: cycle times [s] (rounds) of "
+                  + ", ".join(paths) + " (part 4's program rounded to 0.1 / 2.54 um)")
+    names = [(_fir_mirror_feeds, "LIMIT_EXPONENT"), (_fir_mirror_feeds, "LEAST_STEP"), (_fir_mirror, "TOLERANCE_STEP"),
+             (_fir_mirror_feeds, "LIMIT_REACH"), (_fir_mirror, "SMOOTH")]
+    kept = [getattr(module, name) for module, name in names]
+    settings = [dict(zip(("LIMIT_EXPONENT", "LEAST_STEP", "TOLERANCE_STEP"), c))
+                for c in itertools.product(SWEEP_EXPONENT, SWEEP_LEAST, SWEEP_TOLERANCE)]
+    settings += [{"LIMIT_REACH": r} for r in SWEEP_REACH] + [{"SMOOTH": w} for w in SWEEP_SMOOTH]
     try:
-        for expo in SWEEP_EXPONENT:
-            for least in SWEEP_LEAST:
-                for step in SWEEP_TOLERANCE:
-                    _fir_mirror_feeds.LIMIT_EXPONENT, _fir_mirror_feeds.LEAST_STEP = expo, least
-                    _fir_mirror.TOLERANCE_STEP = step
-                    times, rounds = [], []
-                    for path in paths.values():
-                        m = plan_fir_mirror(path, F, D, eps, limits=AxisLimits.fir_envelope(path.dim, F, D))
-                        times.append(m.cycle_time)
-                        rounds.append(m.rounds)
-                    table.row(f"  exponent {expo:.3g}, least {least:g}, tolerance step {step:g}",
-                              " / ".join(f"{t:.4f}" for t in times), f"sum {sum(times):.4f} s",
-                              "rounds " + " / ".join(str(r) for r in rounds))
+        for setting in settings:
+            for (module, name), value in zip(names, kept):
+                setattr(module, name, setting.get(name, value))
+            times, rounds = [], []
+            for path in paths.values():
+                m = plan_fir_mirror(path, F, D, eps, limits=AxisLimits.fir_envelope(path.dim, F, D))
+                times.append(m.cycle_time)
+                rounds.append(m.rounds)
+            table.row("  " + ", ".join(f"{k} {v:.3g}" for k, v in setting.items()),
+                      " / ".join(f"{t:.4f} ({r})" for t, r in zip(times, rounds)), f"sum {sum(times):.4f} s")
     finally:
-        _fir_mirror_feeds.LIMIT_EXPONENT, _fir_mirror_feeds.LEAST_STEP, _fir_mirror.TOLERANCE_STEP = kept
+        for (module, name), value in zip(names, kept):
+            setattr(module, name, value)
 
 
 def compare(table: Table, name: str, path, feed, delays, eps, limits) -> None:

@@ -59,7 +59,8 @@ from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_limits import LIMIT_RTOL
 from research.interpolators._fir_piece_peaks import PiecePeaks
 from research.interpolators._fir_profile import ProfileInputs, profile
-from research.interpolators._fir_mirror_feeds import TOLERANCE_STEP, curvature_caps, limit_factors, triangle_sum
+from research.interpolators._fir_mirror_feeds import (TOLERANCE_STEP, curvature_caps, limit_factors, shrink_caps,
+                                                      triangle_sum, vertex_curvature)
 from research.interpolators._fir_verify import nearest_instants, path_deviations, profile_rounding, vertex_distances
 from research.interpolators.fir import (CHECK_PERIOD, FIRPlan, _as_toolpath, _check_inputs, joined_plan, paused_parts,
                                        plan_fir)
@@ -184,38 +185,55 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
     plain = plan_fir(tp, feed, delays, tol, limits=limits, check_period=check_period)
     T_plain = float(plain.cycle_time)
     best = MirrorPlan(plain, _input_vertices(plain), np.ones(M), np.ones(M), False, 0, T_plain)
-    g = np.full(M, float(relax))
     corners = np.zeros(max(M - 1, 0), dtype=bool)
     if M > 1:  # eq 13/14 dwells there at the relaxed tolerance: a corner, not a curve (no curvature cap)
-        corners = np.asarray(plan_fir(tp, feed, delays, tol * g, refine=False).overlaps) < Td * (1.0 - 1e-12)
-    caps = curvature_caps(tp, feed, corners, delays, limits)
+        corners = np.asarray(plan_fir(tp, feed, delays, tol * relax, refine=False).overlaps) < Td * (1.0 - 1e-12)
+    kappa = vertex_curvature(tp, feed, corners, delays)
+    caps = curvature_caps(tp, feed, kappa, delays, limits)
+    total = 0
+    for refine in (False, True):  # eq 13/14 at the caps, then plan_fir's look-ahead (module docstring)
+        best, r = _search(tp, feed, delays, tol, limits, relax, passes, rounds, check_period, refine, kappa, caps, best)
+        total += r
+    return dataclasses.replace(best, rounds=total)
+
+
+def _search(tp: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray, limits: AxisLimits | None,
+            relax: float, passes: int, rounds: int, check_period: float, refine: bool, kappa: np.ndarray,
+            caps: np.ndarray, best: MirrorPlan) -> tuple[MirrorPlan, int]:
+    """One timing's search (module docstring, steps 1-3): ``(the faster of best and what it
+    verified, rounds made)``. ``refine``: the timing is ``plan_fir``'s look-ahead plan, else its eq
+    13/14 plan capped by :func:`shrink_caps` as well; ``kappa`` ``(M - 1, d)`` the vertices'
+    curvature [1/mm], ``caps`` ``(M,)`` the blocks' curvature caps [mm/s]."""
+    M = tp.n_blocks
+    g = np.full(M, float(relax))
     scale = np.ones(M)  # the search's factors on the caps
     frozen = np.zeros(M, dtype=bool)  # programmed blocks whose planned vertices are not moved
     r = 0
     while r < rounds:
         r += 1
-        plan = plan_fir(tp, caps * scale, delays, tol * g, refine=False, check_period=check_period)
+        top = caps if refine else np.minimum(caps, shrink_caps(kappa, np.minimum(tol * g, np.roll(tol * g, -1))[:-1],
+                                                                delays))
+        plan = plan_fir(tp, top * scale, delays, tol * g, refine=refine, check_period=check_period)
         if float(plan.cycle_time) >= float(best.plan.cycle_time):
             break  # this timing cannot beat the plan at hand, moved or not
         moved, vertices = compensate(plan, tp, passes, frozen)
         found = violations(moved, tp, tol, limits, check_period)
         if found.tolerance.size == 0 and found.limits.size == 0:
             best = MirrorPlan(dataclasses.replace(moved, path_deviation=found.deviation), vertices, g.copy(),
-                              caps * scale / feed, True, r, T_plain)
+                              top * scale / feed, True, r, best.plain_cycle_time)
             break
         scale *= limit_factors(np.asarray(moved.start_times), np.asarray(moved.pulse_times), found.limits,
                                found.ratios, delays)
-        dwell = np.zeros(found.tolerance.size, dtype=bool)
-        if found.tolerance.size and M > 1:  # at a dwell corner: its eq 13/14 tolerance back towards eps
-            at_corner = _nearest_corner(moved, found.tolerance)
-            dwell = np.asarray(moved.overlaps)[at_corner] < Td * (1.0 - 1e-12)
-            blocks = np.zeros(M, dtype=bool)
-            blocks[at_corner[dwell]] = blocks[at_corner[dwell] + 1] = True
-            relaxed = blocks & (g > 1.0)
-            g[relaxed] = np.where(g[relaxed] < _LAST_STEP, 1.0, 1.0 + 0.5 * (g[relaxed] - 1.0))
-            frozen |= blocks & ~relaxed  # at the tolerance already: stop moving its vertices
-        scale[_blocks_near(moved, found.tolerance[~dwell])] *= 1.0 - TOLERANCE_STEP  # elsewhere: slower
-    return dataclasses.replace(best, rounds=r)
+        if found.tolerance.size:
+            if M > 1:  # the nearest corner's eq 13/14 tolerance back towards eps
+                at = _nearest_corner(moved, found.tolerance)
+                blocks = np.zeros(M, dtype=bool)
+                blocks[at] = blocks[at + 1] = True
+                relaxed = blocks & (g > 1.0)
+                g[relaxed] = np.where(g[relaxed] < _LAST_STEP, 1.0, 1.0 + 0.5 * (g[relaxed] - 1.0))
+                frozen |= blocks & ~relaxed  # at the tolerance already: stop moving its vertices
+            scale[_blocks_near(moved, found.tolerance)] *= 1.0 - TOLERANCE_STEP
+    return best, r
 
 
 def compensate(plan: FIRPlan, tp: ToolPath, passes: int, frozen: np.ndarray) -> tuple[FIRPlan, np.ndarray]:

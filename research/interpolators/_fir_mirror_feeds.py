@@ -37,56 +37,89 @@ LEAST_STEP = 0.01
 TOLERANCE_STEP = 0.05
 
 
-def curvature_caps(tp: ToolPath, feed: np.ndarray, corners: np.ndarray, delays: np.ndarray,
+def vertex_curvature(tp: ToolPath, feed: np.ndarray, corners: np.ndarray, delays: np.ndarray) -> np.ndarray:
+    """``(M - 1, d)`` curvature [1/mm, per axis] of the path at each vertex, over the stretch the
+    filters average there.
+
+    The tangent steps ``t_in - t_out`` of the vertices around it, weighted by a triangle of
+    half-width ``b = sqrt(6) F sigma`` along the path and summed as vectors, over ``b`` (the
+    triangle's area). ``F`` is the larger commanded feed of the vertex's two blocks (``feed``
+    ``(M,)`` [mm/s]) and ``sigma = sqrt(sum T_i^2 / 12)`` the kernel's rms half-width in time
+    (``delays`` [s]), so the triangle spreads as far as the kernel does along the path (rms ``F
+    sigma``; ``_fir_lookahead``'s window reach). On a regular polygon of radius ``R`` that is
+    ``1 / R`` to second order in ``b / R``; the turns of chords rounded to a grid alternate and
+    cancel, instead of each reading as a tight curve, and the triangle's weights fade at its edges,
+    where a box would count one turn of a pair only. The ``corners`` ``(M - 1,)`` (vertices where
+    eq 13/14 dwells: a corner, not a curve, whose error the dwell holds) add no turn.
+    """
+    if tp.n_blocks < 2:
+        return np.zeros((0, tp.dim))
+    feed = np.asarray(feed, dtype=np.float64)
+    t_in, t_out = tp.tangents()
+    step = np.where(np.asarray(corners, dtype=bool)[:, None], 0.0, t_in[1:] - t_out[:-1])
+    s = np.cumsum(tp.lengths)[:-1]  # arc length at the interior vertices [mm]
+    b = math.sqrt(6.0) * np.maximum(feed[:-1], feed[1:]) * _sigma(delays)  # the triangle's half-width
+    return triangle_sum(s, step, b) / b[:, None]
+
+
+def curvature_caps(tp: ToolPath, feed: np.ndarray, kappa: np.ndarray, delays: np.ndarray,
                    limits: AxisLimits | None) -> np.ndarray:
     """``(M,)`` feed [mm/s] per block: the commanded ``feed`` ``(M,)`` capped by the limits on the
     path's curvature (module docstring).
 
-    The curvature at a vertex is the turn of the tangent over the stretch the filters average
-    there: the tangent steps ``t_in - t_out`` of the vertices around it, weighted by a triangle of
-    half-width ``b = sqrt(6) F sigma`` along the path and summed as vectors, over ``b`` (the
-    triangle's area) [1/mm, per axis]. ``F`` is the larger feed of the vertex's two blocks and
-    ``sigma = sqrt(sum T_i^2 / 12)`` the kernel's rms half-width in time, so the triangle spreads
-    as far as the kernel does along the path (rms ``F sigma``; ``_fir_lookahead``'s window reach).
-    On a regular polygon of radius ``R`` that is ``1 / R`` to second order in ``b / R``; the turns
-    of chords rounded to a grid alternate and cancel, instead of each reading as a tight curve, and
-    the triangle's weights fade at its edges, where a box would count one turn of a pair only. The
-    vertex caps both of its blocks at ``min_a sqrt(A_a / |kappa_a|)`` and
-    ``(min J / |kappa|^2)^(1/3)``. The ``corners`` ``(M - 1,)`` (vertices where eq 13/14 dwells:
-    a corner, not a curve, whose error the dwell holds) add no turn. An arc block of radius ``R``
-    takes ``sqrt(min A R)`` and ``(min J R^2)^(1/3)`` (its normal sweeps its plane); a line block
-    ``min_a V_a / |u_a|``, ``u`` the direction from the path ``F sigma`` before its start to ``F sigma``
-    after its end (the filters' averaged direction: a rounded chord's own zigzags by degrees); an arc ``min
-    V``. Without ``limits``: ``feed``.
+    A vertex of curvature ``kappa`` ``(M - 1, d)`` [1/mm] (:func:`vertex_curvature`) caps both of
+    its blocks at ``min_a sqrt(A_a / |kappa_a|)`` and ``(min J / |kappa|^2)^(1/3)``. An arc block
+    of radius ``R`` takes ``sqrt(min A R)`` and ``(min J R^2)^(1/3)`` (its normal sweeps its
+    plane); a line block ``min_a V_a / |u_a|``, ``u`` the direction from the path ``F sigma``
+    before its start to ``F sigma`` after its end (the filters' averaged direction: a rounded
+    chord's own zigzags by degrees); an arc ``min V``. Without ``limits``: ``feed``.
     """
     feed = np.asarray(feed, dtype=np.float64)
     if limits is None:
         return feed.copy()
     A, J, V = (np.asarray(x, dtype=np.float64) for x in (limits.acceleration, limits.jerk, limits.velocity))
-    t_in, t_out = tp.tangents()
     arc = tp.is_arc
-    sigma = math.sqrt(float(np.sum(np.asarray(delays, dtype=np.float64) ** 2)) / 12.0)
     S = np.concatenate([[0.0], np.cumsum(tp.lengths)])  # arc length at each vertex, the ends included [mm]
+    reach = feed * _sigma(delays)
     with np.errstate(divide="ignore", invalid="ignore"):
-        # a line's direction: the chord from its start less h to its end plus h (the averaged input)
-        lo = np.searchsorted(S, S[:-1] - feed * sigma, side="left")
-        hi = np.searchsorted(S, S[1:] + feed * sigma, side="right") - 1
+        lo = np.searchsorted(S, S[:-1] - reach, side="left")
+        hi = np.searchsorted(S, S[1:] + reach, side="right") - 1
         points = np.vstack([np.asarray(tp.start, dtype=np.float64)[None], np.asarray(tp.ends, dtype=np.float64)])
         chord = points[hi] - points[lo]
         direction = np.abs(chord) / np.linalg.norm(chord, axis=1, keepdims=True)
         cap = np.minimum(feed, np.where(arc, np.min(V), np.min(V[None] / direction, axis=1)))
         r = tp.radii[arc]
         cap[arc] = np.minimum.reduce([cap[arc], np.sqrt(np.min(A) * r), np.cbrt(np.min(J) * r**2)])
-        if tp.n_blocks > 1:
-            step = np.where(np.asarray(corners, dtype=bool)[:, None], 0.0, t_in[1:] - t_out[:-1])
-            s = S[1:-1]  # at the interior vertices
-            b = math.sqrt(6.0) * np.maximum(feed[:-1], feed[1:]) * sigma  # the triangle's half-width
-            kappa = triangle_sum(s, step, b) / b[:, None]
-            at_vertex = np.minimum(np.min(np.sqrt(A[None] / np.abs(kappa)), axis=1),
-                                   np.cbrt(np.min(J) / np.sum(kappa * kappa, axis=1)))
-            cap[:-1] = np.minimum(cap[:-1], at_vertex)
-            cap[1:] = np.minimum(cap[1:], at_vertex)
+        at_vertex = np.minimum(np.min(np.sqrt(A[None] / np.abs(kappa)), axis=1),
+                               np.cbrt(np.min(J) / np.sum(kappa * kappa, axis=1)))
+    return _at_blocks(cap, at_vertex)
+
+
+def shrink_caps(kappa: np.ndarray, tolerance: np.ndarray, delays: np.ndarray) -> np.ndarray:
+    """``(M,)`` feed [mm/s] per block at which the filters' shrink of the curve at its vertices,
+    ``F^2 var |kappa| / 2`` (eq 8 to second order, ``var = sum T_i^2 / 12``), is the vertex's
+    ``tolerance`` ``(M - 1,)`` [mm] (``inf`` where the path is straight, and at a tolerance of 0,
+    an exact stop): the error the mirror passes then compensate is at most that, and their
+    residual a share of it."""
+    size = np.linalg.norm(kappa, axis=1)
+    curved = (size > 0) & (tolerance > 0)  # a tolerance of 0: an exact stop (eq 11), the output rests on it
+    at_vertex = np.full(size.shape, np.inf)
+    at_vertex[curved] = np.sqrt(2.0 * tolerance[curved] / (_sigma(delays) ** 2 * size[curved]))
+    return _at_blocks(np.full(kappa.shape[0] + 1, np.inf), at_vertex)
+
+
+def _at_blocks(cap: np.ndarray, at_vertex: np.ndarray) -> np.ndarray:
+    """``cap`` ``(M,)`` lowered to each vertex's ``at_vertex`` ``(M - 1,)`` on both of its blocks."""
+    cap = cap.copy()
+    cap[:-1] = np.minimum(cap[:-1], at_vertex)
+    cap[1:] = np.minimum(cap[1:], at_vertex)
     return cap
+
+
+def _sigma(delays: np.ndarray) -> float:
+    """The FIR kernel's rms half-width [s]: ``sqrt(sum T_i^2 / 12)`` (its variance, each moving
+    average's ``T_i^2 / 12`` summed)."""
+    return math.sqrt(float(np.sum(np.asarray(delays, dtype=np.float64) ** 2)) / 12.0)
 
 
 def triangle_sum(s: np.ndarray, step: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from research.interpolators._fir_mirror_feeds import (LEAST_STEP, LIMIT_EXPONENT, LIMIT_REACH, curvature_caps,
-                                                      kernel_shifts, limit_factors)
+                                                      kernel_shifts, limit_factors, shrink_caps, vertex_curvature)
 from research.interpolators._fir_verify import nearest_instants
 from research.limits import AxisLimits
 from research.paths import Polyline
@@ -17,6 +17,10 @@ LIMITS = AxisLimits(np.array([150.0, 300.0]), np.array([2000.0, 5000.0]), np.arr
 
 DELAYS = np.array([0.06, 0.03])
 SIGMA = np.sqrt(np.sum(DELAYS**2) / 12.0)  # the kernel's rms half-width [s]
+
+
+def caps_of(tp, feed, corners, limits):
+    return curvature_caps(tp, feed, vertex_curvature(tp, feed, corners, DELAYS), DELAYS, limits)
 
 
 @pytest.mark.parametrize("radius, n, feed", [(50.0, 400, 200.0), (10.0, 90, 150.0), (3.0, 60, 60.0)])
@@ -33,7 +37,7 @@ def test_a_regular_polygon_is_capped_by_its_weighted_turn(radius, n, feed):
     path = Polyline(np.stack([radius * np.cos(a), radius * np.sin(a)], axis=1))
     tp = ToolPath.from_polyline(path)
     c = 2 * radius * np.sin(theta / 2)
-    caps = curvature_caps(tp, np.full(n, feed), np.zeros(n - 1, dtype=bool), DELAYS, LIMITS)
+    caps = caps_of(tp, np.full(n, feed), np.zeros(n - 1, dtype=bool), LIMITS)
     b = np.sqrt(6.0) * feed * SIGMA
     k = int(np.floor(b / c))
     j = np.arange(-k, k + 1)
@@ -62,7 +66,7 @@ def test_rounded_chords_read_as_the_curve_they_follow():
     exact = np.stack([R * np.cos(a), R * np.sin(a)], axis=1)
     rounded = np.round(exact / 2.54e-3) * 2.54e-3
     feed = np.full(n, 200.0)
-    caps = [curvature_caps(ToolPath.from_polyline(Polyline(p)), feed, np.zeros(n - 1, dtype=bool), DELAYS, LIMITS)
+    caps = [caps_of(ToolPath.from_polyline(Polyline(p)), feed, np.zeros(n - 1, dtype=bool), LIMITS)
             for p in (exact, rounded)]
     turns = ToolPath.from_polyline(Polyline(rounded)).turning_angles()
     assert np.degrees(turns.max()) > 5.0
@@ -77,11 +81,11 @@ def test_corners_and_no_limits_take_no_curvature_cap():
     (the larger feed's triangle) caps both blocks."""
     tp = ToolPath.from_polyline(Polyline([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]]))
     feed = np.array([400.0, 120.0])
-    np.testing.assert_array_equal(curvature_caps(tp, feed, np.array([True]), DELAYS, LIMITS), [150.0, 120.0])
-    np.testing.assert_array_equal(curvature_caps(tp, feed, np.array([True]), DELAYS, None), feed)
+    np.testing.assert_array_equal(caps_of(tp, feed, np.array([True]), LIMITS), [150.0, 120.0])
+    np.testing.assert_array_equal(caps_of(tp, feed, np.array([True]), None), feed)
     kappa = 1.0 / (np.sqrt(6.0) * 400.0 * SIGMA)  # per axis [1/mm]: the vertex's own step, weight 1
     cap = min(np.sqrt(2000.0 / kappa), np.cbrt(8e4 / (2 * kappa**2)))
-    capped = curvature_caps(tp, feed, np.array([False]), DELAYS, LIMITS)
+    capped = caps_of(tp, feed, np.array([False]), LIMITS)
     np.testing.assert_allclose(capped, [min(150.0, cap), min(120.0, cap)], rtol=1e-12)
 
 
@@ -89,7 +93,7 @@ def test_an_arc_block_takes_its_radius():
     """A G2 quarter arc of R 8 mm: ``min(F, min V, sqrt(min A R), (min J R^2)^(1/3))``."""
     tp = ToolPath.from_polyline(Polyline([[0.0, 0.0], [0.0, 8.0]]))
     tp = tp.then_arc(np.array([8.0, 16.0]), np.array([8.0, 8.0]), ccw=False)
-    caps = curvature_caps(tp, np.array([500.0, 500.0]), np.array([True]), DELAYS, LIMITS)
+    caps = caps_of(tp, np.array([500.0, 500.0]), np.array([True]), LIMITS)
     R = 8.0
     assert caps[1] == pytest.approx(min(150.0, np.sqrt(2000.0 * R), np.cbrt(8e4 * R**2)), rel=1e-12)
 
@@ -138,3 +142,19 @@ def test_nearest_instants_of_a_line_are_the_projections():
     vertices = p0 + np.outer(t_true, v) + 0.3 * side
     centre = t_true + rng.uniform(-0.03, 0.03, 50)
     np.testing.assert_allclose(nearest_instants(pos, vertices, centre, 0.045), t_true, atol=1e-9)
+
+
+@pytest.mark.parametrize("radius", [5.0, 20.0, 80.0])
+def test_shrink_caps_hold_eq8s_shrink_near_the_tolerance(radius):
+    """On a circle of radius ``R`` (curvature ``1 / R``) the cap is the feed at which eq 8's
+    second-order shrink ``F^2 var / (2 R)`` is the tolerance; eq 8's exact shrink ``R (1 - prod
+    sinc(F T_i / 2R))`` at that feed (computed here) is the tolerance to within its fourth-order
+    term (a few % at these feeds); straight vertices cap nothing."""
+    eps = 0.05
+    kappa = np.array([[1.0 / radius, 0.0], [0.0, 0.0]])
+    caps = shrink_caps(kappa, np.array([eps, eps]), DELAYS)
+    F = caps[0]
+    exact = radius * (1.0 - np.prod([np.sinc(F * T / (2 * radius) / np.pi) for T in DELAYS]))
+    assert exact == pytest.approx(eps, rel=0.05)
+    assert F == pytest.approx(np.sqrt(2 * eps * radius / SIGMA**2), rel=1e-12)
+    assert caps[2] == np.inf
