@@ -16,10 +16,19 @@ What this module does:
 
 1. **Timing.** Once the input is compensated, the output runs on the programmed path, so its feed
    is bounded by what bounds any motion on that path: the limits on its curvature, as in a
-   time-optimal plan. The timing is ``plan_fir``'s eq 13/14 plan (``refine=False``: no look-ahead,
-   no checks of its own) at a relaxed tolerance ``g_k eps_k`` per block (``g_k >= 1``: larger
-   overlaps at corners) with each block's feed at its curvature cap
-   (``_fir_mirror_feeds.curvature_caps``) times a factor the search lowers.
+   time-optimal plan (``_fir_mirror_feeds.curvature_caps``). Two timings are searched, each at a
+   relaxed tolerance ``g_k eps_k`` per block (``g_k >= 1``) and at the blocks' curvature caps times
+   factors the search lowers, and the faster verified plan is kept:
+
+   a. ``plan_fir``'s eq 13/14 plan (``refine=False``: no look-ahead, no checks of its own), also
+      capped where the filters' shrink of the curve would exceed ``g eps`` (eq 8 to second order,
+      ``_fir_mirror_feeds.shrink_caps``): the mirror then compensates an error of at most that;
+   b. ``plan_fir``'s look-ahead plan, whose window feeds hold the whole windowed error within
+      ``g eps``. It is slower where the mirror converges (bench_cam's first 300 CAM chords at eps
+      50 um: 1.4653 s against 1.3877 s) and faster where its residual is a larger share of eps
+      (the quick file at eps 10 um: 30.59 s against 45.12 s). It starts from (a)'s plan and stops
+      as soon as its timing alone cannot beat it.
+
 2. **Mirror passes** (:func:`compensate`): ``passes`` passes move the vertices of the planned
    blocks (its pulse table's chords). Each vertex takes the mirror of its contour error: the vector
    from the output's point nearest the vertex (searched over the window centred on it) to the
@@ -35,11 +44,12 @@ What this module does:
    *programmed* path as ``plan_fir`` checks its own (vertex distances at every corner, the
    trajectory sampled every ``check_period``), and against ``limits`` on its exact peaks. A limit
    violation lowers the feeds of the blocks whose input makes the profile at its instant
-   (``_fir_mirror_feeds.limit_factors``). A tolerance violation at a corner where eq 13/14 dwells
-   halves that corner's relaxation towards 1 (``g <- 1 + (g - 1) / 2``, to 1 below
-   :data:`_LAST_STEP`), and once it is at 1 its vertices stop being moved; elsewhere it lowers the
-   feeds of the blocks whose window holds it by ``TOLERANCE_STEP``. Then the next round re-plans,
-   at most ``rounds`` rounds.
+   (``_fir_mirror_feeds.limit_factors``). A tolerance violation halves the relaxation of the
+   corner nearest it towards 1 (``g <- 1 + (g - 1) / 2``, to 1 below
+   :data:`_LAST_STEP`; at a sharp corner eq 13/14 then dwells), and once it is at 1 its vertices
+   stop being moved; and it lowers the feeds of the blocks whose window holds it by
+   ``TOLERANCE_STEP`` (the mirror's residual falls with the feed where it does not with ``g``). Then the next round re-plans, at
+   most ``rounds`` rounds per timing.
 
 The plan returned is the faster of this and ``plan_fir``'s own at the tolerance, so it is never
 slower than the plain plan and always verified. What the machine's interpolator is fed is the
@@ -68,9 +78,12 @@ from research.limits import AxisLimits
 from research.paths.toolpath import ToolPath
 from research.piecewise import NumpyPiecewise
 
-#: tolerance factor of the first round's timing and mirror passes per round: the best of the sweep
-#: of ``benchmarks/fir_mirror.py --sweep`` (relax 2-64 x passes 1-8 on bench_cam's quick CAM file,
-#: limits = the envelope: 0.496x ``plan_fir``'s cycle at 32 / 5, 0.499x at 16 / 5, 0.507x at 8 / 5)
+#: tolerance factor of the first round's timing and mirror passes per round, swept with
+#: ``benchmarks/fir_mirror.py --sweep`` (relax 2-64 x passes 1-8 on bench_cam's quick CAM file,
+#: limits = the envelope, the search of 2026-12-05 third: 0.3923x ``plan_fir``'s cycle at 32 / 5,
+#: 0.3890x at 16 / 5, 0.3929x at 64 / 5, 0.4420x at 8 / 5, 0.7307x at 2 / 5): flat from 16 to 64;
+#: 32 is where the feed steps were swept (16 with them: the first 1,000 chords 1.091x the OCP, but
+#: eps 150 / 200 um 8.3752 / 8.3840 s, a rise; 32: 1.099x and 8.3840 / 8.3840 s)
 RELAX, PASSES = 32.0, 5
 #: half-width of the triangle that smooths each pass's steps along the path, as a share of the
 #: shortest delay times the input speed (module docstring, step 2). Swept (benchmarks/README.md):
@@ -85,7 +98,9 @@ def default_rounds(relax: float) -> int:
     """Re-plans allowed: twice those that take one corner from ``relax`` to 1 by the search's
     halvings (to :data:`_LAST_STEP`, then 1) and stop moving its vertices, since a violation moves
     on to the neighbours of the blocks it changed, plus those that halve a feed by
-    ``TOLERANCE_STEP`` steps (relax 32: 18 + 14 = 32 rounds at a step of 0.05)."""
+    ``TOLERANCE_STEP`` steps (relax 32: 18 + 23 = 41 rounds at a step of 0.03), for each of the two
+    timings. bench_cam's CAM files verified in 14-17 rounds in all, its quick file's eps ladder
+    (10-200 um) in 15-55."""
     halvings = 0 if relax <= _LAST_STEP else math.ceil(math.log2((relax - 1.0) / (_LAST_STEP - 1.0)))
     return 2 * (halvings + 2) + math.ceil(math.log(0.5) / math.log(1.0 - TOLERANCE_STEP))
 

@@ -8,14 +8,19 @@ and, on steady circular motion, ``v^3 kappa^2 <= J``). :func:`curvature_caps` st
 there. Where the moved input still breaks a limit (feed steps, the start and stop pulses, the
 chords' discrete turns), :func:`limit_factors` lowers the feeds of the blocks whose input makes the
 profile at that instant; the search lowers the blocks around a tolerance violation by
-:data:`TOLERANCE_STEP`.
+:data:`TOLERANCE_STEP`. :func:`shrink_caps` caps the eq 13/14 timing where the filters' shrink of
+the curve exceeds the relaxed tolerance (eq 8).
 
 Constants (swept with ``benchmarks/fir_mirror.py --sweep-feeds`` on the first 100 and 300 chords
-of bench_cam's CAM file and its quick file, limits = the envelope; benchmarks/README.md):
+of bench_cam's CAM file, its quick file and its part 4 micro-chord program rounded to 0.1 and 2.54
+um, limits = the envelope; benchmarks/README.md):
 
 * :data:`LIMIT_EXPONENT`: a block at ``peak / limit = r`` takes ``r^-LIMIT_EXPONENT``; a jerk
   that grows as ``F^3`` would need ``1/3``, a pulse edge's as ``F`` a full ``1``; 1/4 lowers less
   than either, since the instant's peak is shared by several blocks that are all lowered.
+* :data:`LIMIT_REACH`: the blocks lowered lie within this share of the shortest delay of each
+  instant (:func:`limit_factors`); 0 lowers single 16 um chords of the micro-chord program among
+  their neighbours, whose speed steps are jerk of their own.
 * :data:`LEAST_STEP`: at least this much, so that a peak a hair above its limit does not take many
   rounds.
 * :data:`TOLERANCE_STEP`: the step of the feeds around a tolerance violation.
@@ -34,7 +39,7 @@ from research.paths.toolpath import ToolPath
 LIMIT_EXPONENT = 0.25
 LIMIT_REACH = 0.05
 LEAST_STEP = 0.01
-TOLERANCE_STEP = 0.05
+TOLERANCE_STEP = 0.03
 
 
 def vertex_curvature(tp: ToolPath, feed: np.ndarray, corners: np.ndarray, delays: np.ndarray) -> np.ndarray:

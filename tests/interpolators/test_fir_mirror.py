@@ -257,3 +257,22 @@ def test_random_programs_with_arcs_keep_tolerance_and_limits_and_are_never_slowe
     assert np.max(tp.distance(np.asarray(tr.q))) <= EPS * (1 + 1e-6) + 1e-8
     if limits is not None:
         assert all(np.max(r) <= 1.0 + 1e-6 for r in metrics.limit_ratios(tr, limits).values())
+
+
+def test_chords_rounded_to_four_decimals_of_an_inch_are_compensated():
+    """20 mm of ``y = 3 sin(x / 15)`` (R >= 75 mm) in 16 um chords rounded to 2.54 um, the issue's
+    public contouring program in small: the rounding zigzags the chords by degrees. Under the
+    envelope's limits the mirror's passes amplified the zigzags (each vertex moved by the mirror of
+    its own rounding) until the jerk limit broke everywhere, and no round verified (the search of
+    2026-12-05 returned ``plan_fir``'s plan). The passes' steps are now smoothed along the path and
+    the curvature read over the filters' reach: the plan is compensated, faster than ``plan_fir``,
+    and keeps eps and the limits (brute force)."""
+    x = np.linspace(0.0, 25.0, 100001)
+    s = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(3 * np.sin(x / 15))))])
+    xs = np.interp(np.arange(0.0, 20.0 + 1e-9, 0.016), s, x)
+    points = np.round(np.column_stack([xs, 3 * np.sin(xs / 15)]) / 2.54e-3) * 2.54e-3
+    path = Polyline.from_points(points, merge_duplicates=True)
+    limits = AxisLimits.fir_envelope(2, F, DELAYS)
+    m = plan_fir_mirror(path, F, DELAYS, EPS, limits=limits)
+    assert m.compensated and m.cycle_time < m.plain_cycle_time
+    assert_keeps(m, np.asarray(path.points), EPS, limits)
