@@ -44,7 +44,8 @@ What this module does:
    *programmed* path as ``plan_fir`` checks its own (vertex distances at every corner, the
    trajectory sampled every ``check_period``), and against ``limits`` on its exact peaks. A limit
    violation lowers the feeds of the blocks whose input makes the profile at its instant
-   (``_fir_mirror_feeds.limit_factors``). A tolerance violation halves the relaxation of the
+   (``_fir_mirror_feeds.limit_factors``; at a jerk peak of a cubic profile, only those whose term
+   has the peak's sign). A tolerance violation halves the relaxation of the
    corner nearest it towards 1 (``g <- 1 + (g - 1) / 2``, to 1 below
    :data:`_LAST_STEP`; at a sharp corner eq 13/14 then dwells), and once it is at 1 its vertices
    stop being moved; and it lowers the feeds of the blocks whose window holds it by
@@ -237,8 +238,16 @@ def _search(tp: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray,
             best = MirrorPlan(dataclasses.replace(moved, path_deviation=found.deviation), vertices, g.copy(),
                               top * scale / feed, True, r, best.plain_cycle_time)
             break
+        push = None
+        if found.limits.size and delays.size == 2:  # lines under two filters: a cubic profile
+            pos = moved.position.numpy_evaluator()
+            if pos.coeffs.shape[1] == 4:
+                piece = np.clip(np.searchsorted(pos.breaks, found.limits, side="right") - 1, 0, pos.coeffs.shape[0] - 1)
+                jerk = 6.0 * pos.coeffs[piece, 3] / np.asarray(limits.jerk)[None]
+                jerk[np.max(np.abs(jerk), axis=1) < found.ratios * (1.0 - 1e-9)] = 0.0  # a peak of v or a: all
+                push = (jerk, tp.tangents()[0])
         scale *= limit_factors(np.asarray(moved.start_times), np.asarray(moved.pulse_times), found.limits,
-                               found.ratios, delays)
+                               found.ratios, delays, push)
         if found.tolerance.size:
             if M > 1:  # the nearest corner's eq 13/14 tolerance back towards eps
                 at = _nearest_corner(moved, found.tolerance)

@@ -151,7 +151,7 @@ def kernel_shifts(delays: np.ndarray) -> np.ndarray:
 
 
 def limit_factors(starts: np.ndarray, pulses: np.ndarray, times: np.ndarray, ratios: np.ndarray,
-                  delays: np.ndarray) -> np.ndarray:
+                  delays: np.ndarray, push=None) -> np.ndarray:
     """``(M,)`` factors ``<= 1`` on the block feeds for limit violations at ``times`` [s] with
     ``peak / limit`` ``ratios`` (module docstring): each violation lowers the blocks whose input
     was in use within ``LIMIT_REACH min T_i`` of ``times - s`` for each shift ``s`` of
@@ -159,17 +159,34 @@ def limit_factors(starts: np.ndarray, pulses: np.ndarray, times: np.ndarray, rat
     block whose pulse started last before then, in a dwell), by ``min(r^-LIMIT_EXPONENT, 1 -
     LEAST_STEP)`` for the largest ``r`` that reaches it. A span, not the one block: lowering one
     short block among its neighbours steps the input's speed down and up within the filters'
-    memory, and those steps are jerk of their own."""
+    memory, and those steps are jerk of their own.
+
+    ``push``: None, or ``(jerk (P, A) / limit, tangents (M, A))`` for a cubic profile under two
+    filters, whose jerk is the second difference ``sum_S (-1)^|S| v(t - s_S) / (T_1 T_2)`` of the
+    input's velocity ``v``: then, where the piece's peak is its jerk's (a row of ``jerk`` not 0),
+    only the blocks whose term has the sign of that jerk on its largest axis are lowered (lowering
+    the others would push it further). A velocity or acceleration peak lowers every block in
+    reach: signed by the piece's jerk as well, small excesses at eps 150 and 200 um on bench_cam's
+    quick file stayed for 41 rounds (benchmarks/README.md)."""
     M = starts.size
     ends = starts + pulses
     reach = LIMIT_REACH * float(np.min(delays))
     worst = np.ones(M)
-    for shift in kernel_shifts(delays):
+    shifts = kernel_shifts(delays)
+    d = np.asarray(delays, dtype=np.float64).reshape(-1)
+    sizes = [n for n in range(d.size + 1) for _ in itertools.combinations(range(d.size), n)]
+    for shift, size in zip(shifts, sizes):
         x = times - shift
         first = np.searchsorted(ends, x - reach, side="left")  # the first pulse ending at or after the span
         last = np.searchsorted(starts, x + reach, side="right") - 1  # the last starting before its end
         first = np.minimum(first, np.maximum(last, 0))  # in a dwell: the block before it
         keep = last >= 0
+        if push is not None:  # only the blocks whose part of the peak has its sign
+            jerk, tangents = push
+            axis = np.argmax(np.abs(jerk), axis=1)
+            largest = jerk[np.arange(jerk.shape[0]), axis]
+            sign = (-1.0) ** size * tangents[np.clip(last, 0, M - 1), axis] * largest
+            keep &= (sign > 0) | (largest == 0.0)
         first, last, r = first[keep], last[keep], ratios[keep]
         count = last - first + 1
         index = np.repeat(first - np.cumsum(count) + count, count) + np.arange(int(count.sum()))

@@ -158,3 +158,23 @@ def test_shrink_caps_hold_eq8s_shrink_near_the_tolerance(radius):
     assert exact == pytest.approx(eps, rel=0.05)
     assert F == pytest.approx(np.sqrt(2 * eps * radius / SIGMA**2), rel=1e-12)
     assert caps[2] == np.inf
+
+
+def test_a_jerk_peak_lowers_only_the_blocks_that_push_it():
+    """Under two filters the jerk is ``(v(t) - v(t - T_1) - v(t - T_2) + v(t - T_1 - T_2)) / (T_1
+    T_2)``. Blocks moving along +x, a jerk peak of +1.5 on x at 95 ms (delays 40/20 ms): the terms
+    at 95 and 35 ms push it up, those at 55 and 75 ms down, so only blocks 9 and 3 are lowered. The
+    same instant's peak of another derivative (its jerk row 0) lowers all four; a peak of -1.5
+    lowers blocks 5 and 7."""
+    delays = np.array([0.04, 0.02])
+    starts = np.arange(12) * 0.01
+    tangents = np.tile([1.0, 0.0], (12, 1))
+    up = limit_factors(starts, np.full(12, 0.01), np.array([0.095]), np.array([1.5]), delays,
+                       (np.array([[1.5, 0.2]]), tangents))
+    np.testing.assert_array_equal(np.flatnonzero(up < 1.0), [3, 9])
+    other = limit_factors(starts, np.full(12, 0.01), np.array([0.095]), np.array([1.5]), delays,
+                          (np.zeros((1, 2)), tangents))
+    np.testing.assert_array_equal(np.flatnonzero(other < 1.0), [3, 5, 7, 9])
+    down = limit_factors(starts, np.full(12, 0.01), np.array([0.095]), np.array([1.5]), delays,
+                         (np.array([[-1.5, 0.0]]), tangents))
+    np.testing.assert_array_equal(np.flatnonzero(down < 1.0), [5, 7])
