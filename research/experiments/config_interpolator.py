@@ -46,8 +46,8 @@ class FIRConfig(_Strict):
         if self.optimized and not self.tolerance_um > 0:
             raise ValueError("optimized = true needs a cornering tolerance tolerance_um > 0 um (optimize_fir)")
         if self.mirror and (self.optimized or not self.refine):
-            raise ValueError("mirror = true plans with plan_fir's verified look-ahead: it takes neither optimized = true "
-                             "nor refine = false")
+            raise ValueError("mirror = true plans by plan_fir_mirror's own verified search: it takes neither "
+                             "optimized = true nor refine = false")
         return self
 
 

@@ -70,8 +70,8 @@ from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_limits import LIMIT_RTOL
 from research.interpolators._fir_piece_peaks import PiecePeaks
 from research.interpolators._fir_profile import ProfileInputs, profile
-from research.interpolators._fir_mirror_feeds import (TOLERANCE_STEP, curvature_caps, limit_factors, shrink_caps,
-                                                      triangle_sum, vertex_curvature)
+from research.interpolators._fir_mirror_feeds import (TOLERANCE_STEP, curvature_caps, jerk_push, limit_factors,
+                                                      shrink_caps, triangle_sum, vertex_curvature)
 from research.interpolators._fir_verify import nearest_instants, path_deviations, profile_rounding, vertex_distances
 from research.interpolators.fir import (CHECK_PERIOD, FIRPlan, _as_toolpath, _check_inputs, joined_plan, paused_parts,
                                        plan_fir)
@@ -224,12 +224,14 @@ def _search(tp: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray,
     g = np.full(M, float(relax))
     scale = np.ones(M)  # the search's factors on the caps
     frozen = np.zeros(M, dtype=bool)  # programmed blocks whose planned vertices are not moved
+    tangents = tp.tangents()[0]
     r = 0
     while r < rounds:
         r += 1
-        top = caps if refine else np.minimum(caps, shrink_caps(kappa, np.minimum(tol * g, np.roll(tol * g, -1))[:-1],
+        relaxed_tol = tol * g
+        top = caps if refine else np.minimum(caps, shrink_caps(kappa, np.minimum(relaxed_tol[:-1], relaxed_tol[1:]),
                                                                 delays))
-        plan = plan_fir(tp, top * scale, delays, tol * g, refine=refine, check_period=check_period)
+        plan = plan_fir(tp, top * scale, delays, relaxed_tol, refine=refine, check_period=check_period)
         if float(plan.cycle_time) >= float(best.plan.cycle_time):
             break  # this timing cannot beat the plan at hand, moved or not
         moved, vertices = compensate(plan, tp, passes, frozen)
@@ -238,14 +240,8 @@ def _search(tp: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray,
             best = MirrorPlan(dataclasses.replace(moved, path_deviation=found.deviation), vertices, g.copy(),
                               top * scale / feed, True, r, best.plain_cycle_time)
             break
-        push = None
-        if found.limits.size and delays.size == 2:  # lines under two filters: a cubic profile
-            pos = moved.position.numpy_evaluator()
-            if pos.coeffs.shape[1] == 4:
-                piece = np.clip(np.searchsorted(pos.breaks, found.limits, side="right") - 1, 0, pos.coeffs.shape[0] - 1)
-                jerk = 6.0 * pos.coeffs[piece, 3] / np.asarray(limits.jerk)[None]
-                jerk[np.max(np.abs(jerk), axis=1) < found.ratios * (1.0 - 1e-9)] = 0.0  # a peak of v or a: all
-                push = (jerk, tp.tangents()[0])
+        push = None if found.limits.size == 0 else jerk_push(moved.position.numpy_evaluator(), found.limits,
+                                                             found.ratios, limits, delays, tangents)
         scale *= limit_factors(np.asarray(moved.start_times), np.asarray(moved.pulse_times), found.limits,
                                found.ratios, delays, push)
         if found.tolerance.size:
@@ -306,10 +302,7 @@ def compensate(plan: FIRPlan, tp: ToolPath, passes: int, frozen: np.ndarray) -> 
             smooth = _smoothing(target, fixed, ends[:B] - starts[:B], float(np.min(inputs.delays)))
         pos = NumpyPiecewise(breaks, coeffs)
         error = target[1:-1] - pos(nearest_instants(pos, target[1:-1], centre[: B - 1], 0.5 * Td))
-        step = np.einsum("kij,kj->ki", normal, error)  # its part across the path (a contour error)
-        step[fixed[1:-1]] = 0.0
-        step = smooth(step)
-        moved[1:-1] += step
+        moved[1:-1] += smooth(np.einsum("kij,kj->ki", normal, error))  # its part across the path, smoothed
         if scaled.any():  # the mirror of an arc's radial error at its middle instant (eq 8's shrink)
             bs = np.flatnonzero(scaled)
             out = np.linalg.norm(np.einsum("nde,ne->nd", plane[bs], pos(middle[bs]) - centres[bs]), axis=1)

@@ -28,11 +28,11 @@ um, limits = the envelope; benchmarks/README.md):
 
 from __future__ import annotations
 
-import itertools
 import math
 
 import numpy as np
 
+from research.interpolators._fir_profile import _subsets
 from research.limits import AxisLimits
 from research.paths.toolpath import ToolPath
 
@@ -145,9 +145,24 @@ def triangle_sum(s: np.ndarray, step: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def kernel_shifts(delays: np.ndarray) -> np.ndarray:
     """The sums of every subset of the ``delays`` [s] (``2^n`` of them, 0 included): the filter
-    chain's highest derivative at ``t`` is a signed sum of its input at ``t`` less each of them."""
-    d = np.asarray(delays, dtype=np.float64).reshape(-1)
-    return np.array([sum(s) for n in range(d.size + 1) for s in itertools.combinations(d.tolist(), n)])
+    chain's highest derivative at ``t`` is a signed sum of its input at ``t`` less each of them
+    (``_fir_profile._subsets``, which holds their signs ``(-1)^|S|`` as well)."""
+    return _subsets(tuple(np.asarray(delays, dtype=np.float64).reshape(-1).tolist()))[0]
+
+
+def jerk_push(position, times: np.ndarray, ratios: np.ndarray, limits: AxisLimits, delays: np.ndarray,
+              tangents: np.ndarray):
+    """:func:`limit_factors`' ``push`` for the limit violations at ``times`` [s] with ``ratios`` on
+    ``position`` (a ``NumpyPiecewise``): each violating piece's jerk over the limit ``(P, A)`` (its
+    row 0 where the piece's peak is not its jerk's) and the blocks' start ``tangents`` ``(M, A)``;
+    None unless the profile is cubic under two filters (lines), whose jerk is the input's second
+    difference."""
+    if np.asarray(delays).size != 2 or position.coeffs.shape[1] != 4:
+        return None
+    piece = np.clip(np.searchsorted(position.breaks, times, side="right") - 1, 0, position.coeffs.shape[0] - 1)
+    jerk = 6.0 * position.coeffs[piece, 3] / np.asarray(limits.jerk)[None]
+    jerk[np.max(np.abs(jerk), axis=1) < ratios * (1.0 - 1e-9)] = 0.0  # a peak of v or a: every block in reach
+    return jerk, tangents
 
 
 def limit_factors(starts: np.ndarray, pulses: np.ndarray, times: np.ndarray, ratios: np.ndarray,
@@ -172,10 +187,7 @@ def limit_factors(starts: np.ndarray, pulses: np.ndarray, times: np.ndarray, rat
     ends = starts + pulses
     reach = LIMIT_REACH * float(np.min(delays))
     worst = np.ones(M)
-    shifts = kernel_shifts(delays)
-    d = np.asarray(delays, dtype=np.float64).reshape(-1)
-    sizes = [n for n in range(d.size + 1) for _ in itertools.combinations(range(d.size), n)]
-    for shift, size in zip(shifts, sizes):
+    for shift, sign_s in zip(*_subsets(tuple(np.asarray(delays, dtype=np.float64).reshape(-1).tolist()))):
         x = times - shift
         first = np.searchsorted(ends, x - reach, side="left")  # the first pulse ending at or after the span
         last = np.searchsorted(starts, x + reach, side="right") - 1  # the last starting before its end
@@ -185,7 +197,7 @@ def limit_factors(starts: np.ndarray, pulses: np.ndarray, times: np.ndarray, rat
             jerk, tangents = push
             axis = np.argmax(np.abs(jerk), axis=1)
             largest = jerk[np.arange(jerk.shape[0]), axis]
-            sign = (-1.0) ** size * tangents[np.clip(last, 0, M - 1), axis] * largest
+            sign = sign_s * tangents[np.clip(last, 0, M - 1), axis] * largest
             keep &= (sign > 0) | (largest == 0.0)
         first, last, r = first[keep], last[keep], ratios[keep]
         count = last - first + 1
