@@ -2,7 +2,7 @@
 
 Usage::
 
-    python benchmarks/fir_mirror.py [--quick] [--sweep] [--sweep-feeds]
+    python benchmarks/fir_mirror.py [--quick] [--sweep] [--sweep-feeds] [--sweep-raise]
 
 1. ``--sweep``: the two constants of ``research/interpolators/_fir_mirror.py`` (``RELAX``, the
    tolerance factor the first round's timing is planned at, and ``PASSES``, the mirror passes per
@@ -12,6 +12,9 @@ Usage::
    ``TOLERANCE_STEP``, then ``LIMIT_REACH`` alone) and the passes' smoothing (``SMOOTH``) on the
    first 100 and 300 chords of the 10^4-chord file, the quick file and bench_cam's part 4
    micro-chord program rounded to 0.1 and 2.54 um, the same setting: cycle times, rounds, sum.
+   ``--sweep-raise``: the raise phase's step (``RAISE_STEP``, 0: no raise phase) on the first 100,
+   300 and 1,000 chords, the quick file at eps 10-200 um and the micro-chord program at 0.1 and
+   2.54 um: cycle times, rounds, sum.
 2. The defaults on bench_cam's CAM files (quick; the 10^4-chord file unless ``--quick``), on cam30
    and on the paper paths (``corner90``, ``diamond``, ``zigzag``) at bench_cam's setting, with the
    envelope's limits and without: cycle times, the ratio mirror / plain, the largest distance to the
@@ -49,6 +52,8 @@ SWEEP_LEAST = (0.01, 0.03)
 SWEEP_TOLERANCE = (0.03, 0.05, 0.1)
 SWEEP_REACH = (0.0, 0.05, 0.1, 0.25, 0.5)
 SWEEP_SMOOTH = (0.0, 0.1, 0.15, 0.25, 0.35, 0.5, 1.0)
+SWEEP_RAISE = (0.0, 0.01, 0.03, 0.05, 0.1, 0.2)
+SWEEP_RAISE_EPS = (0.01, 0.02, 0.03, 0.05, 0.075, 0.1, 0.15, 0.2)  # the quick file's eps ladder [mm]
 
 
 def timed(fn, *args, **kwargs):
@@ -118,6 +123,27 @@ def sweep_feeds(table: Table) -> None:
             setattr(module, name, value)
 
 
+def sweep_raise(table: Table) -> None:
+    whole = cam_file(bench_cam.LEVELS)
+    quick = cam_file(bench_cam.LEVELS_QUICK)
+    F, D = bench_cam.FEED, bench_cam.DELAYS
+    cases = [(f"first {n}", Polyline(whole.points[:n + 1]), bench_cam.EPS) for n in (100, 300, 1000)]
+    cases += [(f"quick {e * 1e3:g} um", quick, e) for e in SWEEP_RAISE_EPS]
+    cases += [("micro 0.1 um", bench_cam.micro_program(1e-4), bench_cam.EPS),
+              ("micro 2.54 um", bench_cam.micro_program(2.54e-3), bench_cam.EPS)]
+    table.section("Sweep of the raise phase's step (RAISE_STEP; 0: none), limits = envelope: cycle times [s] "
+                  "(rounds) of " + ", ".join(name for name, _, _ in cases))
+    kept = _fir_mirror_feeds.RAISE_STEP
+    try:
+        for step in SWEEP_RAISE:
+            _fir_mirror_feeds.RAISE_STEP = step
+            out = [plan_fir_mirror(p, F, D, e, limits=AxisLimits.fir_envelope(p.dim, F, D)) for _, p, e in cases]
+            table.row(f"  RAISE_STEP {step:g}", " / ".join(f"{m.cycle_time:.4f} ({m.rounds})" for m in out),
+                      f"sum {sum(m.cycle_time for m in out):.4f} s")
+    finally:
+        _fir_mirror_feeds.RAISE_STEP = kept
+
+
 def compare(table: Table, name: str, path, feed, delays, eps, limits) -> None:
     args = (path, feed, delays, eps)
     plan_fir(*args, limits=limits)  # compiled kernels warm for both timings
@@ -135,12 +161,15 @@ def main(argv=None) -> int:
     ap.add_argument("--quick", action="store_true", help="the quick CAM file only (no 10^4-chord file)")
     ap.add_argument("--sweep", action="store_true", help="sweep RELAX x PASSES on the quick CAM file first")
     ap.add_argument("--sweep-feeds", action="store_true", help="sweep the feed steps of _fir_mirror_feeds first")
+    ap.add_argument("--sweep-raise", action="store_true", help="sweep the raise phase's step first")
     args = ap.parse_args(argv)
     table = Table(f"plan_fir_mirror (RELAX {_fir_mirror.RELAX:g}, PASSES {_fir_mirror.PASSES}) against plan_fir")
     if args.sweep:
         sweep(table)
     if args.sweep_feeds:
         sweep_feeds(table)
+    if args.sweep_raise:
+        sweep_raise(table)
     F, D, eps = bench_cam.FEED, bench_cam.DELAYS, bench_cam.EPS
     table.section(f"Defaults, F {F:g} mm/s, T {D[0] * 1e3:g}/{D[1] * 1e3:g} ms, eps {eps * 1e3:g} um: "
                   "plain -> mirror cycle time")

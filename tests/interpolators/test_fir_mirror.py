@@ -276,3 +276,39 @@ def test_chords_rounded_to_four_decimals_of_an_inch_are_compensated():
     m = plan_fir_mirror(path, F, DELAYS, EPS, limits=limits)
     assert m.compensated and m.cycle_time < m.plain_cycle_time
     assert_keeps(m, np.asarray(path.points), EPS, limits)
+
+
+def test_the_raise_phase_lifts_blocks_the_lowering_left_below_their_limits(monkeypatch):
+    """120 chords of 0.5 mm on ``y = 3 sin(x / 5)`` (R >= 8.3 mm, an inflection every 15.7 mm) under
+    the envelope's limits. The search lowers blocks by steps around each limit violation and, before
+    the raise phase, returned the first plan that verified, with blocks left below what their
+    limits allow. Raising them (``_fir_mirror_feeds.raise_factors``) and taking back what breaks a
+    limit or the tolerance gives a faster plan than the same search without the raise (1.9 %
+    measured), which keeps eps and the limits (brute force)."""
+    import research.interpolators._fir_mirror as fm
+
+    x = np.arange(0.0, 60.0, 0.5)
+    path = Polyline(np.column_stack([x, 3.0 * np.sin(x / 5.0)]))
+    limits = AxisLimits.fir_envelope(2, F, DELAYS)
+    m = plan_fir_mirror(path, F, DELAYS, EPS, limits=limits)
+    monkeypatch.setattr(fm, "raise_factors", lambda starts, *args: np.ones(starts.size))
+    lowered_only = plan_fir_mirror(path, F, DELAYS, EPS, limits=limits)
+    assert m.cycle_time < lowered_only.cycle_time * 0.995
+    assert_keeps(m, np.asarray(path.points), EPS, limits)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_raise_phase_is_never_slower(seed, monkeypatch):
+    """On random chains of short chords under limits at 0.5x the envelope, the search with the raise
+    phase returns no slower a plan than without it: the raise starts from the first verified plan
+    and keeps only faster verified ones; the second timing stops sooner against a faster best,
+    where its later rounds (feeds and relaxations only lowered) would be slower still."""
+    import research.interpolators._fir_mirror as fm
+
+    path = turning_path(seed + 10, 60, (0.1, 1.0), 15.0)
+    envelope = AxisLimits.fir_envelope(2, F, DELAYS)
+    limits = AxisLimits(envelope.velocity, 0.5 * envelope.acceleration, 0.5 * envelope.jerk)
+    m = plan_fir_mirror(path, F, DELAYS, EPS, limits=limits)
+    monkeypatch.setattr(fm, "raise_factors", lambda starts, *args: np.ones(starts.size))
+    lowered_only = plan_fir_mirror(path, F, DELAYS, EPS, limits=limits)
+    assert m.cycle_time <= lowered_only.cycle_time * (1 + 1e-12)
