@@ -52,16 +52,17 @@ What this module does:
    ``TOLERANCE_STEP`` (the mirror's residual falls with the feed where it does not with ``g``). Then the next round re-plans, at
    most ``rounds`` rounds per timing.
 4. **Raise phase** (with limits). Steps down overshoot: a block lowered for a peak that its
-   neighbours' lowering then removed stays low (bench_cam's first 100 CAM chords: blocks at 0.67-0.8
-   of their caps under acceleration and jerk peaks of 0.4-0.5 of the limits). Once a plan
+   neighbours' lowering then removed stays low (bench_cam's first 100 CAM chords: about 40 blocks
+   left at 0.93-0.99 of their caps where nothing in their spans reached a limit). Once a plan
    verifies, every block whose output span keeps below the limits is raised by its headroom
-   (``_fir_mirror_feeds.raise_factors``), and the search re-plans. A raise that breaks a limit or
-   the tolerance takes the raised blocks whose span holds the violation back to the last verified
-   feeds for good; a violation no raised block reaches is searched as in step 3. The phase ends
-   when nothing can be raised, a re-plan is not faster than the best verified plan, or the rounds
-   run out. Only verified plans faster than the best are kept. The second timing's search stops
-   once its timing alone is no faster than the best (step 1), which its later rounds, with feeds
-   and relaxations only lowered, would not be either where ``plan_fir``'s cycle falls with both.
+   (``_fir_mirror_feeds.span_ratios``, ``raise_factors``), and the search re-plans. A raise that
+   breaks a limit or the tolerance takes the raised blocks whose span holds the violation back to
+   the last verified feeds for good; a violation no raised block's span holds is searched as in
+   step 3. The phase ends when nothing can be raised, a re-plan is not faster than the best
+   verified plan, or the rounds run out. Only verified plans faster than the best are kept. The
+   second timing's search stops once its timing alone is no faster than the best (step 1), which
+   its later rounds, with feeds and relaxations only lowered, would not be either where
+   ``plan_fir``'s cycle falls with both.
 
 The plan returned is the faster of this and ``plan_fir``'s own at the tolerance, so it is never
 slower than the plain plan and always verified. What the machine's interpolator is fed is the
@@ -82,7 +83,8 @@ from research.interpolators._fir_limits import LIMIT_RTOL
 from research.interpolators._fir_piece_peaks import PiecePeaks
 from research.interpolators._fir_profile import ProfileInputs, profile
 from research.interpolators._fir_mirror_feeds import (TOLERANCE_STEP, curvature_caps, jerk_push, limit_factors,
-                                                      raise_factors, shrink_caps, triangle_sum, vertex_curvature)
+                                                      raise_factors, shrink_caps, span_ratios, triangle_sum,
+                                                      vertex_curvature)
 from research.interpolators._fir_verify import nearest_instants, path_deviations, profile_rounding, vertex_distances
 from research.interpolators.fir import (CHECK_PERIOD, FIRPlan, _as_toolpath, _check_inputs, joined_plan, paused_parts,
                                        plan_fir)
@@ -257,8 +259,8 @@ def _search(tp: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray,
                 break
             # raise phase: every block whose span keeps below the limits, up to its cap
             verified = scale.copy()
-            up = raise_factors(np.asarray(moved.start_times), np.asarray(moved.pulse_times),
-                               moved.position.numpy_evaluator(), limits, delays)
+            up = raise_factors(span_ratios(np.asarray(moved.start_times), np.asarray(moved.pulse_times),
+                                           moved.position.numpy_evaluator(), limits, delays))
             up = np.where(kept, 1.0, np.minimum(up, 1.0 / scale))
             if np.max(up) < 1.0 + RAISE_LEAST:
                 break
@@ -266,7 +268,7 @@ def _search(tp: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray,
             continue
         if verified is not None:
             # a raise broke something: the raised blocks whose span holds it go back to the last
-            # verified feeds and stay there; a violation no raised block reaches is searched as before
+            # verified feeds and stay there; a violation no raised block's span holds is searched as before
             back = _blocks_near(moved, np.concatenate([found.limits, found.tolerance])) & (scale > verified)
             if back.any():
                 scale[back] = verified[back]

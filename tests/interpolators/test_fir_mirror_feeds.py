@@ -6,7 +6,7 @@ import pytest
 
 from research.interpolators._fir_mirror_feeds import (LEAST_STEP, LIMIT_EXPONENT, LIMIT_REACH, RAISE_STEP,
                                                       curvature_caps, kernel_shifts, limit_factors, raise_factors,
-                                                      shrink_caps, vertex_curvature)
+                                                      shrink_caps, span_ratios, vertex_curvature)
 from research.interpolators._fir_piece_peaks import PiecePeaks
 from research.interpolators._fir_verify import nearest_instants
 from research.limits import AxisLimits
@@ -183,28 +183,28 @@ def test_a_jerk_peak_lowers_only_the_blocks_that_push_it():
 
 
 @pytest.mark.parametrize("seed", range(3))
-def test_raise_factors_take_the_headroom_of_each_blocks_output_span(seed):
-    """A random cubic profile (60 pieces of 1-5 ms, two axes) and 20 blocks of random pulses: each
-    block's factor is ``min(r^-LIMIT_EXPONENT, 1 + RAISE_STEP)`` of the largest piece ratio ``r``
-    whose middle instant lies in ``[start, end + T_d]``, found here by a loop over the blocks; 1
-    where ``r >= 1``. The profile grows along time so that some spans are above a limit and some
-    below."""
+def test_span_ratios_and_raise_factors_read_each_blocks_output_span(seed):
+    """A random cubic profile (60 pieces of 1-5 ms, two axes, growing along time so that some
+    spans hold a peak above a limit and some do not) and 20 blocks of random pulses under delays of
+    8 / 3 ms: each block's ratio is the largest ``PiecePeaks`` ratio of the pieces overlapping
+    ``[start, end + T_1 + T_2]``, found here by a loop over the blocks; the factors of
+    :func:`raise_factors` are ``min(r^-LIMIT_EXPONENT, 1 + RAISE_STEP)``, 1 where ``r >= 1``."""
     rng = np.random.default_rng(seed)
     breaks = np.concatenate([[0.0], np.cumsum(rng.uniform(1e-3, 5e-3, 60))])
     coeffs = rng.normal(size=(60, 4, 2)) * np.array([1.0, 30.0, 300.0, 1e4])[None, :, None]
-    coeffs *= np.linspace(0.05, 2.0, 60)[:, None, None]  # low at the start, above the limits at the end
+    coeffs *= np.linspace(0.05, 2.0, 60)[:, None, None]
     position = NumpyPiecewise(breaks, coeffs)
     per_piece = PiecePeaks(position, LIMITS).per_piece
     starts = np.sort(rng.uniform(-0.02, breaks[-1], 20))
     pulses = rng.uniform(1e-4, 8e-3, 20)
-    delays = np.array([0.004, 0.002])  # spans of a few pieces, along a profile of 60
-    f = raise_factors(starts, pulses, position, LIMITS, delays)
-    middle = 0.5 * (breaks[:-1] + breaks[1:])
-    expected = np.ones(20)
+    delays = np.array([0.003, 0.008])
+    r = span_ratios(starts, pulses, position, LIMITS, delays)
+    expected = np.zeros(20)
     for k in range(20):
-        inside = (middle >= starts[k]) & (middle <= starts[k] + pulses[k] + delays.sum())
-        r = per_piece[inside].max(initial=0.0)
-        if r < 1.0:
-            expected[k] = min(max(r, 1e-300) ** -LIMIT_EXPONENT, 1.0 + RAISE_STEP)
-    np.testing.assert_allclose(f, expected, rtol=1e-12)
-    assert np.all(f >= 1.0) and np.any(f == 1.0) and np.any(f > 1.0)
+        overlap = (breaks[1:] > starts[k]) & (breaks[:-1] < starts[k] + pulses[k] + 0.011)
+        expected[k] = per_piece[overlap].max(initial=0.0)
+    np.testing.assert_allclose(r, expected, rtol=1e-12)
+    assert np.any(r < 1.0) and np.any(r > 1.0)
+    below = np.where(r < 1.0, r, 1.0)
+    np.testing.assert_allclose(raise_factors(r), np.minimum(np.maximum(below, 1e-300) ** -LIMIT_EXPONENT,
+                                                             1.0 + RAISE_STEP))
