@@ -133,15 +133,15 @@ def sweep_raise(table: Table) -> None:
               ("micro 2.54 um", bench_cam.micro_program(2.54e-3), bench_cam.EPS)]
     table.section("Sweep of the raise phase's step (RAISE_STEP; 0: none), limits = envelope: cycle times [s] "
                   "(rounds) of " + ", ".join(name for name, _, _ in cases))
-    kept = _fir_mirror_feeds.RAISE_STEP
+    kept = _fir_mirror.RAISE_STEP
     try:
         for step in SWEEP_RAISE:
-            _fir_mirror_feeds.RAISE_STEP = step
+            _fir_mirror.RAISE_STEP = step  # the name _fir_mirror's search starts each block's step from
             out = [plan_fir_mirror(p, F, D, e, limits=AxisLimits.fir_envelope(p.dim, F, D)) for _, p, e in cases]
             table.row(f"  RAISE_STEP {step:g}", " / ".join(f"{m.cycle_time:.4f} ({m.rounds})" for m in out),
                       f"sum {sum(m.cycle_time for m in out):.4f} s")
     finally:
-        _fir_mirror_feeds.RAISE_STEP = kept
+        _fir_mirror.RAISE_STEP = kept
 
 
 def compare(table: Table, name: str, path, feed, delays, eps, limits) -> None:

@@ -57,9 +57,11 @@ What this module does:
    verifies, every block whose output span keeps below the limits is raised by its headroom
    (``_fir_mirror_feeds.span_ratios``, ``raise_factors``), and the search re-plans. A raise that
    breaks a limit or the tolerance takes the raised blocks whose span holds the violation back to
-   the last verified feeds for good; a violation no raised block's span holds is searched as in
-   step 3. The phase ends when nothing can be raised, a re-plan is not faster than the best
-   verified plan, or the rounds run out. Only verified plans faster than the best are kept. The
+   the last verified feeds and halves their largest raise (one failed raise freezing every block in
+   its span instead: the first 1,000 chords 0.8 % slower, the quick file 0.4 %); a violation no
+   raised block's span holds is searched as in step 3. The phase ends when nothing can be raised
+   by more than ``RAISE_LEAST``, a re-plan is not faster than the best verified plan, or the
+   rounds run out. Only verified plans faster than the best are kept. The
    second timing's search stops once its timing alone is no faster than the best (step 1), which
    its later rounds, with feeds and relaxations only lowered, would not be either where
    ``plan_fir``'s cycle falls with both.
@@ -82,9 +84,9 @@ from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_limits import LIMIT_RTOL
 from research.interpolators._fir_piece_peaks import PiecePeaks
 from research.interpolators._fir_profile import ProfileInputs, profile
-from research.interpolators._fir_mirror_feeds import (TOLERANCE_STEP, curvature_caps, jerk_push, limit_factors,
-                                                      raise_factors, shrink_caps, span_ratios, triangle_sum,
-                                                      vertex_curvature)
+from research.interpolators._fir_mirror_feeds import (RAISE_STEP, TOLERANCE_STEP, curvature_caps, jerk_push,
+                                                      limit_factors, raise_factors, shrink_caps, span_ratios,
+                                                      triangle_sum, vertex_curvature)
 from research.interpolators._fir_verify import nearest_instants, path_deviations, profile_rounding, vertex_distances
 from research.interpolators.fir import (CHECK_PERIOD, FIRPlan, _as_toolpath, _check_inputs, joined_plan, paused_parts,
                                        plan_fir)
@@ -240,7 +242,7 @@ def _search(tp: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray,
     frozen = np.zeros(M, dtype=bool)  # programmed blocks whose planned vertices are not moved
     tangents = tp.tangents()[0]
     verified = None  # the search's factors of the last verified plan (raise phase)
-    kept = np.zeros(M, dtype=bool)  # blocks a raise broke something with: not raised again
+    step = np.full(M, RAISE_STEP)  # each block's largest raise a round, halved where a raise broke something
     r = 0
     while r < rounds:
         r += 1
@@ -260,19 +262,19 @@ def _search(tp: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray,
             # raise phase: every block whose span keeps below the limits, up to its cap
             verified = scale.copy()
             up = raise_factors(span_ratios(np.asarray(moved.start_times), np.asarray(moved.pulse_times),
-                                           moved.position.numpy_evaluator(), limits, delays))
-            up = np.where(kept, 1.0, np.minimum(up, 1.0 / scale))
+                                           moved.position.numpy_evaluator(), limits, delays), step)
+            up = np.minimum(up, 1.0 / scale)
             if np.max(up) < 1.0 + RAISE_LEAST:
                 break
             scale = scale * up
             continue
         if verified is not None:
             # a raise broke something: the raised blocks whose span holds it go back to the last
-            # verified feeds and stay there; a violation no raised block's span holds is searched as before
+            # verified feeds, their raise halved; a violation no raised block's span holds is searched as before
             back = _blocks_near(moved, np.concatenate([found.limits, found.tolerance])) & (scale > verified)
             if back.any():
                 scale[back] = verified[back]
-                kept |= back
+                step[back] *= 0.5
                 continue
         push = None if found.limits.size == 0 else jerk_push(moved.position.numpy_evaluator(), found.limits,
                                                              found.ratios, limits, delays, tangents)

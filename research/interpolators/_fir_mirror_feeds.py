@@ -1,5 +1,5 @@
 """Block feeds of the mirror search (``_fir_mirror``): the caps its timing starts from and the
-factors its rounds lower them by.
+factors its rounds lower and raise them by.
 
 Once the mirror has moved the filters' input, the output runs on the programmed path at the
 planned timing, so what bounds its feed is what bounds any motion along that path: the per-axis
@@ -12,8 +12,8 @@ profile at that instant; the search lowers the blocks around a tolerance violati
 the curve exceeds the relaxed tolerance (eq 8). Lowering by steps overshoots: a block lowered for
 a peak that its neighbours' lowering then removed stays low. Once a plan verifies,
 :func:`raise_factors` lifts every block whose output span keeps below the limits
-(:func:`span_ratios`) by its headroom, the same exponent as the lowering, at most
-:data:`RAISE_STEP` a round.
+(:func:`span_ratios`) by its headroom, the same exponent as the lowering, at most a step that
+starts at :data:`RAISE_STEP`.
 
 Constants (swept with ``benchmarks/fir_mirror.py --sweep-feeds`` on the first 100 and 300 chords
 of bench_cam's CAM file, its quick file and its part 4 micro-chord program rounded to 0.1 and 2.54
@@ -28,11 +28,12 @@ um, limits = the envelope; benchmarks/README.md):
 * :data:`LEAST_STEP`: at least this much, so that a peak a hair above its limit does not take many
   rounds.
 * :data:`TOLERANCE_STEP`: the step of the feeds around a tolerance violation.
-* :data:`RAISE_STEP`: the largest raise of a block in one round (:func:`raise_factors`). Swept
-  0.01 / 0.03 / 0.05 / 0.1 / 0.2 on the first 100, 300 and 1,000 chords, the quick file at eps
-  10-200 um and the micro-chord program at 0.1 and 2.54 um: all within 0.1 % of each other in sum;
-  0.01 was fastest on the CAM excerpts but needs the most rounds and lost at eps 20 / 30 um
-  (rounds ran out), 0.03 next.
+* :data:`RAISE_STEP`: the largest raise of a block in one round (:func:`raise_factors`), halved
+  for the blocks a raise broke something with (``_fir_mirror``, step 4). Swept (``fir_mirror.py
+  --sweep-raise``: the first 100, 300 and 1,000 chords, the quick file at eps 10-200 um, the
+  micro-chord program at 0.1 and 2.54 um) 0.01 / 0.03 / 0.05 / 0.1 / 0.2: sums 105.07 / 104.95 /
+  104.91 / 104.89 / 104.81 s (no raise: 105.92 s); on the 10^4-chord file 0.03 is fastest
+  (44.7339 s against 44.8583 / 44.8880 s at 0.1 / 0.2), and that is the file the issue measures.
 """
 
 from __future__ import annotations
@@ -216,11 +217,12 @@ def limit_factors(starts: np.ndarray, pulses: np.ndarray, times: np.ndarray, rat
     return np.where(worst > 1.0, np.minimum(worst ** -LIMIT_EXPONENT, 1.0 - LEAST_STEP), 1.0)
 
 
-def raise_factors(ratios: np.ndarray) -> np.ndarray:
+def raise_factors(ratios: np.ndarray, step) -> np.ndarray:
     """``(M,)`` factors ``>= 1`` on the block feeds of a verified plan (module docstring): each
-    block takes ``min(r^-LIMIT_EXPONENT, 1 + RAISE_STEP)`` of the largest ``peak / limit`` ``r``
-    over its output span (``ratios`` ``(M,)``, :func:`span_ratios`), 1 where ``r >= 1``."""
-    up = np.minimum(np.maximum(ratios, 1e-300) ** -LIMIT_EXPONENT, 1.0 + RAISE_STEP)
+    block takes ``min(r^-LIMIT_EXPONENT, 1 + step)`` of the largest ``peak / limit`` ``r`` over its
+    output span (``ratios`` ``(M,)``, :func:`span_ratios`), 1 where ``r >= 1``; ``step``: the
+    largest raise, one or ``(M,)`` (:data:`RAISE_STEP` at first)."""
+    up = np.minimum(np.maximum(ratios, 1e-300) ** -LIMIT_EXPONENT, 1.0 + np.asarray(step, dtype=np.float64))
     return np.maximum(up, 1.0)
 
 

@@ -206,5 +206,8 @@ def test_span_ratios_and_raise_factors_read_each_blocks_output_span(seed):
     np.testing.assert_allclose(r, expected, rtol=1e-12)
     assert np.any(r < 1.0) and np.any(r > 1.0)
     below = np.where(r < 1.0, r, 1.0)
-    np.testing.assert_allclose(raise_factors(r), np.minimum(np.maximum(below, 1e-300) ** -LIMIT_EXPONENT,
-                                                             1.0 + RAISE_STEP))
+    np.testing.assert_allclose(raise_factors(r, RAISE_STEP), np.minimum(np.maximum(below, 1e-300) ** -LIMIT_EXPONENT,
+                                                                         1.0 + RAISE_STEP))
+    steps = rng.uniform(0.0, 0.1, 20)  # one largest raise per block
+    np.testing.assert_allclose(raise_factors(r, steps), np.minimum(np.maximum(below, 1e-300) ** -LIMIT_EXPONENT,
+                                                                   1.0 + steps))
