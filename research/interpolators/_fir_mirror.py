@@ -261,8 +261,8 @@ def _search(tp: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray,
                 break
             # raise phase: every block whose span keeps below the limits, up to its cap
             verified = scale.copy()
-            up = raise_factors(span_ratios(np.asarray(moved.start_times), np.asarray(moved.pulse_times),
-                                           moved.position.numpy_evaluator(), limits, delays), step)
+            up = raise_factors(span_ratios(np.asarray(moved.start_times), np.asarray(moved.pulse_times), found.peaks,
+                                           delays), step)
             up = np.minimum(up, 1.0 / scale)
             if np.max(up) < 1.0 + RAISE_LEAST:
                 break
@@ -406,12 +406,14 @@ class Violations:
         limits: ``(P,)`` middle times [s] of the profile pieces above a limit, and ``ratios``
             ``(P,)`` their largest ``peak / limit``.
         deviation: the largest sampled distance to the path [mm].
+        peaks: the profile's ``PiecePeaks`` under the limits (None without limits).
     """
 
     tolerance: np.ndarray
     limits: np.ndarray
     ratios: np.ndarray
     deviation: float
+    peaks: PiecePeaks | None = None
 
 
 def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits | None,
@@ -434,12 +436,12 @@ def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits 
     times.append(centre[sorted(at_vertex)] if at_vertex else np.zeros(0))
     middle = starts + 0.5 * np.asarray(plan.pulse_times) + 0.5 * Td  # the window centred on the block
     times.append(middle[sorted(at_block)] if at_block else np.zeros(0))
-    over_times, ratios = np.zeros(0), np.zeros(0)
+    over_times, ratios, peaks = np.zeros(0), np.zeros(0), None
     if limits is not None:
-        per_piece = PiecePeaks(pos, limits).per_piece
-        over = per_piece > 1.0 + LIMIT_RTOL
-        over_times, ratios = 0.5 * (pos.breaks[:-1] + pos.breaks[1:])[over], per_piece[over]
-    return Violations(np.sort(np.concatenate(times)), over_times, ratios, float(deviation))
+        peaks = PiecePeaks(pos, limits)
+        over = peaks.per_piece > 1.0 + LIMIT_RTOL
+        over_times, ratios = 0.5 * (pos.breaks[:-1] + pos.breaks[1:])[over], peaks.per_piece[over]
+    return Violations(np.sort(np.concatenate(times)), over_times, ratios, float(deviation), peaks)
 
 
 def _nearest_corner(plan: FIRPlan, times: np.ndarray) -> np.ndarray:

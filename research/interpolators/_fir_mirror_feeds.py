@@ -42,6 +42,7 @@ import math
 
 import numpy as np
 
+from research.interpolators._fir_piece_peaks import range_max
 from research.interpolators._fir_profile import _subsets
 from research.limits import AxisLimits
 from research.paths.toolpath import ToolPath
@@ -226,28 +227,18 @@ def raise_factors(ratios: np.ndarray, step) -> np.ndarray:
     return np.maximum(up, 1.0)
 
 
-def span_ratios(starts: np.ndarray, pulses: np.ndarray, position, limits: AxisLimits,
-                delays: np.ndarray) -> np.ndarray:
-    """``(M,)`` the largest ``peak / limit`` (``PiecePeaks``' closed form, over orders and axes) of
-    the pieces of ``position`` (a ``NumpyPiecewise``) that overlap each block's output span, from
-    its pulse start to ``sum(delays)`` after its end (every instant its input is inside the
-    filters' window: ``starts``, ``pulses`` ``(M,)`` [s]); 0 where no piece does. Narrower reaches
-    were tried (per order, the instants the kernel's derivatives read: the jerk under two filters
-    four instants, not the window's middle): within 0.3 % either way on the CAM excerpts and the
-    quick file, 0.8 % slower on the 10^4-chord file (benchmarks/README.md)."""
-    from research.interpolators._fir_piece_peaks import PiecePeaks
-
-    breaks = np.asarray(position.breaks, dtype=np.float64)
-    lo = np.searchsorted(breaks[1:], starts, side="right")  # the first piece ending after the start
-    hi = np.searchsorted(breaks[:-1], starts + pulses + float(np.sum(delays)), side="left")  # past the last one
-    return _span_max(PiecePeaks(position, limits).per_piece, lo, hi)
-
-
-def _span_max(values: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """``max(values[lo_k:hi_k])`` for each span (0 where empty), by ``reduceat`` over the pairs
-    ``(lo, hi)`` (every second result)."""
-    out = np.zeros(lo.size)
+def span_ratios(starts: np.ndarray, pulses: np.ndarray, peaks, delays: np.ndarray) -> np.ndarray:
+    """``(M,)`` the largest ``peak / limit`` of a profile's pieces (``peaks``: its ``PiecePeaks``,
+    over orders and axes) that overlap each block's output span, from its pulse start to
+    ``sum(delays)`` after its end (every instant its input is inside the filters' window:
+    ``starts``, ``pulses`` ``(M,)`` [s]); 0 where no piece does. Narrower reaches were tried (per
+    order, the instants the kernel's derivatives read: the jerk under two filters four instants,
+    not the window's middle): within 0.3 % either way on the CAM excerpts and the quick file, 0.8 %
+    slower on the 10^4-chord file (benchmarks/README.md)."""
+    lo = np.searchsorted(peaks.breaks[1:], starts, side="right")  # the first piece ending after the start
+    hi = np.searchsorted(peaks.breaks[:-1], starts + pulses + float(np.sum(delays)), side="left")  # past the last
+    out = np.zeros(np.shape(starts))
     some = hi > lo
-    pairs = np.minimum(np.stack([lo[some], hi[some]], axis=1).ravel(), values.size)
-    out[some] = np.maximum.reduceat(np.append(values, 0.0), pairs)[::2]
+    if some.any():
+        out[some] = range_max(peaks.per_piece, lo[some], hi[some])
     return out

@@ -198,7 +198,7 @@ def test_span_ratios_and_raise_factors_read_each_blocks_output_span(seed):
     starts = np.sort(rng.uniform(-0.02, breaks[-1], 20))
     pulses = rng.uniform(1e-4, 8e-3, 20)
     delays = np.array([0.003, 0.008])
-    r = span_ratios(starts, pulses, position, LIMITS, delays)
+    r = span_ratios(starts, pulses, PiecePeaks(position, LIMITS), delays)
     expected = np.zeros(20)
     for k in range(20):
         overlap = (breaks[1:] > starts[k]) & (breaks[:-1] < starts[k] + pulses[k] + 0.011)
