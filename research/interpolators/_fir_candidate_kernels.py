@@ -138,7 +138,7 @@ def staircase_cuts(r_h, f_h, r_t, f_t, length, cap):
 
 @numba.njit(**_OPTIONS)
 def predicted_cycle(lengths, feeds, block, role, fraction, arc_of, arc_rel, factor, head, tail, first_motion,
-                    last_motion, t_in, t_out, full, shrink, others, tol_v, delays, h_full):
+                    last_motion, t_in, t_out, full, shrink, others, tol_v, delays, h_full, turn):
     """Cycle time ``sum_pieces share L / (F f) + sum_corners (T_d - T_k) + T_d`` [s] of a candidate
     plan, in one pass (``fir.plan_fir``'s ``predicted_time``: ``PulseTable.pieces`` and
     ``_fir_profile.timing`` without their arrays; the same operations per piece and corner, summed in
@@ -153,7 +153,8 @@ relative: it is used as a bound only). One or two filters (eq 13/14's closed
             ``arc_rel`` (-1 elsewhere); factor ``(M, 3)``, head, tail ``(M,)``: the candidate's
             feed factors and shares; first_motion, last_motion: ``(M,)`` pieces; t_in, t_out:
             ``(M, d)`` tangents; full, shrink, others, tol_v: ``(M - 1,)`` per corner; delays:
-            ``(n,)`` sorted descending, ``n <= 2``; h_full: ``H2(T_d / 2)``.
+            ``(n,)`` sorted descending, ``n <= 2``; h_full: ``H2(T_d / 2)``; turn: the corners'
+            speed change (``_fir_overlap.corner_speed_change``).
     """
     M = lengths.size
     P = block.size
@@ -190,10 +191,14 @@ relative: it is used as a bound only). One or two filters (eq 13/14's closed
             f_in = feeds[j + 1] * _piece_factor(factor, arc_rel, role, arc_of, block, first_motion[j + 1])
             f_out = feeds[j] * _piece_factor(factor, arc_rel, role, arc_of, block, last_motion[j])
             s = 0.0
+            bend = 0.0
             for c in range(dims):
                 x = f_in * t_in[j + 1, c] - f_out * t_out[j, c]
                 s += x * x
-            dF = math.sqrt(s) if s > 0 else 0.0
+                bend += (t_in[j + 1, c] - t_out[j, c]) ** 2
+            dF = math.sqrt(s)
+            if turn:  # _fir_overlap.corner_speed_change
+                dF = min(dF, max(f_in, f_out) * math.sqrt(bend))
             tol = max(tol_v[j] - others[j], 0.0)
             h = min(tol / (dF if dF > 0 else 1.0), h_full)
             if dF > 0 and h < h_full:

@@ -69,11 +69,12 @@ class CornerWindows:
         t_in, t_out: ``(M, d)`` unit tangents at each block's start and end.
         tol_vertex: ``(M - 1,)`` corner tolerances [mm]; delays: ``(n,)`` filter delays [s].
         limits: the per-axis limits.
+        turn: the corners' speed change (``_fir_overlap.corner_speed_change``).
     """
 
     def __init__(self, table, lengths: np.ndarray, feeds: np.ndarray, t_in: np.ndarray, t_out: np.ndarray,
-                 tol_vertex: np.ndarray, delays: np.ndarray, limits: AxisLimits):
-        self.table, self.limits = table, limits
+                 tol_vertex: np.ndarray, delays: np.ndarray, limits: AxisLimits, turn: bool):
+        self.table, self.limits, self.turn = table, limits, turn
         M = table.n_blocks
         self.lengths, self.feeds = np.asarray(lengths, dtype=np.float64)[:M], np.asarray(feeds, dtype=np.float64)[:M]
         self.t_in, self.t_out = np.asarray(t_in, dtype=np.float64), np.asarray(t_out, dtype=np.float64)
@@ -167,7 +168,7 @@ class CornerWindows:
         tangents = np.stack([self.t_in[blocks], self.t_out[blocks]])
         k = np.minimum(blocks[:-1], M - 2)  # the corner after each block (a run's last: any, replaced)
         piece_tv, overlaps = timing(self.lengths[blocks], self.feeds[blocks], blk, piece_factor, motion_ends, tangents,
-                                    full[k], shrink[k], others[k], self.tol[k], self.delays)
+                                    full[k], shrink[k], others[k], self.tol[k], self.delays, self.turn)
         joined = blocks[1:] == blocks[:-1] + 1
         gaps = np.append(np.where(joined, Td - overlaps, Td), 0.0)  # between runs: an exact stop
         starts, ends, breaks, coeffs, _ = profile(np.zeros(self.t_in.shape[1]), table.geo[idx], blk, table.gap[idx],

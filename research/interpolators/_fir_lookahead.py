@@ -93,7 +93,7 @@ from research.interpolators._fir_blocks import PulseTable
 from research.interpolators._fir_feed import ChainError
 from research.interpolators._fir_kernels import VERIFY_ATOL
 from research.interpolators._fir_candidate_kernels import candidate_pieces, line_piece_feeds, slowing_windows, staircase_cuts
-from research.interpolators._fir_profile import kernel_second_integral, overlaps
+from research.interpolators._fir_profile import kernel_second_integral, overlaps, speed_change
 from research.paths.toolpath import ToolPath
 from research.piecewise import bucket_size
 
@@ -113,7 +113,7 @@ DEEP_STEPS = 2
 _DEEP_SET = 1  # index of the "isolated" cost set among the sets of _dwell_sets
 
 
-def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in, t_out, measure=None):
+def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in, t_out, turn: bool, measure=None):
     """Candidate plans, each kept as a :class:`Candidate` whose call builds its arrays
     ``(factor, head, tail, full, others, arc_rel)``: feed factors ``(M, 3)`` (head, body, tail),
     head and tail shares ``(M,)``, full-overlap flags ``(M - 1,)``, the tolerance other turns take
@@ -136,6 +136,7 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
         tp, table: the path and its pulse table; F_cmd, base: ``(M,)`` commanded feeds [mm/s] and
             their factors (arcs, limits); delays: ``(n,)`` filter delays [s]; tol_v: ``(M - 1,)``
             vertex tolerances [mm]; t_in, t_out: ``(M, d)`` block tangents at start and end.
+        turn: the dwell corners' speed change (``_fir_overlap.corner_speed_change``).
         measure: called on each candidate's arrays while they are built (once, for the duplicate
             check), or None.
 
@@ -150,7 +151,7 @@ def look_ahead(tp: ToolPath, table: PulseTable, F_cmd, base, delays, tol_v, t_in
     du = t_in[1:] - t_out[:-1]
     s_v = np.cumsum(tp.lengths)[:-1]
     Fv = np.minimum(F[:-1], F[1:])
-    dF = np.linalg.norm(F[1:, None] * t_in[1:] - F[:-1, None] * t_out[:-1], axis=1)
+    dF = speed_change(F[:-1], F[1:], t_out[:-1], t_in[1:], turn)
     h_full = float(kernel_second_integral(0.5 * Td, delays))
     # a vertex held to tolerance 0 whose own turn moves its full-overlap window by at most the
     # verification's absolute slack (VERIFY_ATOL, 1 pm) at its feed is straight to the planner (a

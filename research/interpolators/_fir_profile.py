@@ -113,6 +113,17 @@ def _h_full(delays: tuple) -> np.ndarray:
     return h
 
 
+def speed_change(f_out: np.ndarray, f_in: np.ndarray, t_out: np.ndarray, t_in: np.ndarray,
+                 turn: bool) -> np.ndarray:
+    """``_fir_overlap.corner_speed_change`` on concrete arrays [mm/s] per corner (feeds ``(K,)``
+    [mm/s], unit tangents ``(K, d)``; ``turn`` as there)."""
+    f_out, f_in = np.asarray(f_out, dtype=np.float64), np.asarray(f_in, dtype=np.float64)
+    change = np.linalg.norm(f_in[..., None] * t_in - f_out[..., None] * t_out, axis=-1)
+    if not turn:
+        return change
+    return np.minimum(change, np.maximum(f_out, f_in) * np.linalg.norm(t_in - t_out, axis=-1))
+
+
 def overlaps(tolerance: np.ndarray, speed_change: np.ndarray, delays: np.ndarray) -> np.ndarray:
     """``_fir_overlap.overlap_time`` (eq 13/14) on concrete arrays: the closed forms of one and two
     filters in NumPy; three or more filters by a compiled root search of ``H2(T_k / 2) = eps /
@@ -195,19 +206,18 @@ def _invert_h2(target, shifts, signs, power, denom, half):
     return out
 
 
-def timing(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, full, shrink, others, tol_vertex, delays):
+def timing(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, full, shrink, others, tol_vertex, delays,
+           turn: bool):
     """``_fir_settle._timing_kernel`` on the real corners (``M - 1``), NumPy: the pulse length of every
     piece ``(P,)`` [s] (eq 5 at its feed) and the overlap of every corner ``(M - 1,)`` [s] (eq 13/14,
     or ``T_d`` at full overlap, times its shrink factor). Elementwise for one or two filters: the
     pieces up to a block's first motion piece and the corners before it (``plan_fir``'s
-    ``prefix_bound``) give the same values as the whole path's."""
+    ``prefix_bound``) give the same values as the whole path's. ``turn``: ``_fir_overlap.corner_speed_change``'s."""
     piece_tv = lengths_p[blk] / (feeds_p[blk] * piece_factor)
     M = tol_vertex.size + 1
     f_in = feeds_p[1:M] * piece_factor[motion_ends[0][1:M]]  # entry feed of the block after each corner
     f_out = feeds_p[: M - 1] * piece_factor[motion_ends[1][: M - 1]]  # exit feed of the block before it
-    x = f_in[:, None] * tangents[0][1:M] - f_out[:, None] * tangents[1][: M - 1]
-    s = np.sum(x * x, axis=-1)
-    dF = np.where(s > 0, np.sqrt(np.where(s > 0, s, 1.0)), 0.0)
+    dF = speed_change(f_out, f_in, tangents[1][: M - 1], tangents[0][1:M], turn)
     Td = float(np.sum(delays))
     if M == 1:
         return piece_tv, np.zeros(0)

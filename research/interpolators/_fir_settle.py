@@ -11,6 +11,7 @@ returns its fields for ``fir.FIRPlan``.
 
 from __future__ import annotations
 
+import functools
 import heapq
 import itertools
 from types import SimpleNamespace
@@ -18,7 +19,6 @@ from types import SimpleNamespace
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax import Array
 
 from research._device import device_array
 from research.errors import ConvergenceError, ParameterError
@@ -44,7 +44,7 @@ from research.interpolators._fir_limit_spread import CornerWindows, FeedSteps, s
 from research.interpolators._fir_lookahead import arc_cuts, look_ahead, with_table, without_dwells
 from research.interpolators._fir_staircase import capped_staircase
 from research.interpolators import _fir_profile
-from research.interpolators._fir_overlap import overlap_time
+from research.interpolators._fir_overlap import corner_speed_change, overlap_time
 from research.interpolators._fir_repair import Repairs
 from research.interpolators._fir_round_peaks import RoundPeaks
 from research.interpolators._fir_verify import RoundChecks, charged_repairs, profile_rounding, stop_rounding
@@ -74,9 +74,9 @@ _NO_BISECTION = SimpleNamespace(scale=1.0, bound_scale=1.0)  # plan_fir's Corner
 
 
 def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, check_period: float,
-                traced: bool):
+                traced: bool, turn: bool):
     """:func:`plan_fir` on a path without pauses, block by block (its inputs checked; ``traced``:
-    an input is a JAX tracer). Returns ``(fields, (fraction, piece_tv, first_motion))``: the
+    an input is a JAX tracer; ``turn``: ``corner_speed == "turn"``). Returns ``(fields, (fraction, piece_tv, first_motion))``: the
     arguments of ``fir.FIRPlan`` in order (the plan), the share of its block's pulse and the pulse
     length [s] of each input piece ``(P,)`` (``_fir_profile.ProfileInputs``; the pulse lengths
     traced where the plan is) and the first piece of each block ``(M,)`` (of the plan's table: its
@@ -109,7 +109,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         # reaching into an arc slows the stretch it covers, not the whole sub-arc it ends in. Not
         # under limits: there the branch and bound started ~5x the candidates (their bounds lie
         # closer together) for 5-10 % shorter cycles at 1.65x the planning (benchmarks/README.md)
-        ahead = look_ahead(tp, table, F_np, base, d_np, tv_np, t_in, t_out)
+        ahead = look_ahead(tp, table, F_np, base, d_np, tv_np, t_in, t_out, turn)
         table = table.cut_arcs(tp, arc_cuts(ahead))
     head, tail = np.zeros(M), np.zeros(M)
     full = np.zeros(M - 1, dtype=bool)
@@ -120,7 +120,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
     pad_b = Mp - M  # per-block inputs padded to the bucketed block count (one compiled JAX kernel)
     motion_ends_np = np.stack([np.pad(table.first_motion, (0, pad_b)), np.pad(table.last_motion, (0, pad_b))])
     tangents_np = np.stack([np.pad(t_in, ((0, pad_b), (0, 0))), np.pad(t_out, ((0, pad_b), (0, 0)))])
-    windows = CornerWindows(table, tp.lengths, F_np, t_in, t_out, tv_np, d_np, limits) if limits is not None else None
+    windows = CornerWindows(table, tp.lengths, F_np, t_in, t_out, tv_np, d_np, limits, turn) if limits is not None else None
     steps = FeedSteps(F_np, t_in, tp.is_arc, d_np, limits) if limits is not None else None
 
     def timing(factor, head, tail, full, shrink, others, arc_rel, top=True):
@@ -129,7 +129,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         frac, piece_factor = table.pieces(head, tail, factor, arc_rel)
         cruise = np.maximum.reduceat(piece_factor[: table.last_motion[-1] + 1], table.first_motion) if top else None
         piece_tv, overlaps = _fir_profile.timing(lengths_np, feeds_np, table.block, piece_factor, motion_ends_np,
-                                                 tangents_np, full, shrink, others, tv_np, d_np)
+                                                 tangents_np, full, shrink, others, tv_np, d_np, turn)
         return frac, piece_tv, cruise, overlaps
 
     d_sorted = np.sort(d_np)[::-1]
@@ -151,7 +151,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         arcs, rel = (no_arc, no_rel) if arc_rel is None else (arc_of, arc_rel)
         return float(predicted_cycle(tp.lengths, F_np, table.block, table.role, table.fraction, arcs, rel, factor,
                                      head, tail, table.first_motion,
-                                     table.last_motion, t_in, t_out, full, shrink, others, tv_np, d_sorted, h_full))
+                                     table.last_motion, t_in, t_out, full, shrink, others, tv_np, d_sorted, h_full, turn))
 
     def timing_gaps(*candidate, top=True):
         """:func:`timing` and the dwell after each block (0 after the last and on padding)."""
@@ -181,7 +181,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         overlaps, starts, ends, position, centre, piece_tv = _traced_build(
             lengths_p, feeds_p, blk, jnp.asarray(piece_factor), jnp.asarray(motion_ends_np), jnp.asarray(tangents_np),
             jnp.asarray(corner), tol_vertex_p, delays, jnp.asarray(tp.start), jnp.asarray(table.geo),
-            jnp.asarray(table.gap), jnp.asarray(frac), jnp.arange(Mp - 1) < M - 1)
+            jnp.asarray(table.gap), jnp.asarray(frac), jnp.arange(Mp - 1) < M - 1, turn)
         return (feeds_cmd * jnp.asarray(cruise), overlaps[: M - 1], ends[:M] - starts[:M], starts[:M], position,
                 centre[: M - 1]), (frac, piece_tv)
 
@@ -204,7 +204,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
             frac, piece_factor = table.pieces(head, tail, factor, arc_rel)
             piece_tv, overlaps = _fir_profile.timing(lengths_np, feeds_np, table.block[: c + 1], piece_factor[: c + 1],
                                                      motion_ends_np[:, : K + 1], tangents_np[:, : K + 1], full[:K],
-                                                     shrink[:K], others[:K], tv_np[:K], d_np)
+                                                     shrink[:K], others[:K], tv_np[:K], d_np, turn)
             gaps = np.concatenate([Td_np - overlaps, np.zeros(Mp - K)])
         starts, _, breaks, coeffs, centre = _fir_profile.profile(tp.start, table.geo[:c], table.block[:c],
                                                                  table.gap[:c], frac[:c], piece_tv[:c], gaps, d_np,
@@ -481,7 +481,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
             if ahead is not None and factors is base:  # made before the table was cut
                 out, ahead = with_table(ahead, table, measure=predicted_time), None
                 return out
-            return look_ahead(tp, table, F_np, factors, d_np, tv_np, t_in, t_out, measure=predicted_time)
+            return look_ahead(tp, table, F_np, factors, d_np, tv_np, t_in, t_out, turn, measure=predicted_time)
         return [(lambda: (np.repeat(factors[:, None], 3, axis=1), head, tail, full, others, None), None)]
 
     def verify(candidates, capped):
@@ -632,22 +632,22 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
             float(deviation), int(rounds), tp.axes), pieces + (table.first_motion,)
 
 
-@jax.jit
+@functools.partial(jax.jit, static_argnames="turn")
 def _traced_build(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, corner, tol_vertex, delays, start, geo,
-                  gap, frac, real_corner):
+                  gap, frac, real_corner, turn):
     """:func:`_timing_kernel` and ``build_profile`` in one compiled dispatch (the plan returned when
     an input is a tracer). ``real_corner``: ``(M_pad - 1,)`` True on the path's corners (the others
-    are padding and get no gap). Returns ``(overlaps, block starts, block ends, position, centre)``
+    are padding and get no gap); ``turn``: as :func:`_timing_kernel`. Returns ``(overlaps, block starts, block ends, position, centre)``
     on the padded shapes, and the pulse length [s] of every piece ``(P,)``."""
     piece_tv, overlaps = _timing_kernel(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, corner, tol_vertex,
-                                        delays)
+                                        delays, turn)
     gaps = jnp.concatenate([jnp.where(real_corner, jnp.sum(delays) - overlaps, 0.0), jnp.zeros(1)])
     starts, ends, position, centre = build_profile(start, geo, blk, gap, frac, piece_tv, gaps, delays)
     return overlaps, starts, ends, position, centre, piece_tv
 
 
-@jax.jit
-def _timing_kernel(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, corner, tol_vertex, delays):
+@functools.partial(jax.jit, static_argnames="turn")
+def _timing_kernel(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents, corner, tol_vertex, delays, turn):
     """Pulse length of every piece and overlap of every corner (padded shapes, one dispatch).
 
     Args:
@@ -657,6 +657,7 @@ def _timing_kernel(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents,
         tangents: ``(2, M_pad, d)`` entry and exit tangents of each block.
         corner: ``(3, M_pad - 1)`` full-overlap flag, overlap shrink factor, tolerance other turns take.
         tol_vertex: ``(M_pad - 1,)`` tolerance at each vertex [mm]; ``delays``: ``(n,)`` [s].
+        turn: the corners' speed change (``_fir_overlap.corner_speed_change``).
 
     Returns:
         ``(piece_tv (P,), overlaps (M_pad - 1,))`` [s]: ``L / F`` of each piece's block at the
@@ -666,7 +667,7 @@ def _timing_kernel(lengths_p, feeds_p, blk, piece_factor, motion_ends, tangents,
     nb = motion_ends.shape[1]
     f_in = feeds_p[:nb] * piece_factor[motion_ends[0]]
     f_out = feeds_p[:nb] * piece_factor[motion_ends[1]]
-    dF = _safe_norm(f_in[1:, None] * tangents[0, 1:] - f_out[:-1, None] * tangents[1, :-1])
+    dF = corner_speed_change(f_out[:-1], f_in[1:], tangents[1, :-1], tangents[0, 1:], turn)
     Td = jnp.sum(delays)
     full, shrink, others = corner
     overlaps = jnp.where(full > 0, Td, overlap_time(jnp.maximum(tol_vertex - others, 0.0), dF, delays)) * shrink
@@ -716,10 +717,3 @@ def _primal(x):
                                  "jax.jit; call it outside jit (jax.grad and jax.jacfwd work)")
         x = x.primal
     return x
-
-
-def _safe_norm(x: Array) -> Array:
-    """Euclidean norm along the last axis with a finite gradient at 0."""
-    s = jnp.sum(x * x, axis=-1)
-    positive = s > 0
-    return jnp.where(positive, jnp.sqrt(jnp.where(positive, s, 1.0)), 0.0)

@@ -80,6 +80,7 @@ from research.piecewise import PiecewisePolynomial
 from research.trajectory import Trajectory
 
 CHECK_PERIOD = 1e-3  # default spacing [s] of the path-deviation check: the usual interpolation period
+CORNER_SPEEDS = ("step", "turn")  # plan_fir's corner_speed values
 
 
 class FIRPlan(eqx.Module):
@@ -176,7 +177,7 @@ def fir_interpolate(path, feed, delays, tolerance, sample_period: float = 1e-3, 
 
 
 def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: AxisLimits | None = None,
-             check_period: float = CHECK_PERIOD, pauses=None) -> FIRPlan:
+             check_period: float = CHECK_PERIOD, pauses=None, corner_speed: str = "step") -> FIRPlan:
     """Feeds, overlap times, schedule and exact profile; see :func:`fir_interpolate` for the arguments.
 
     Args:
@@ -192,6 +193,14 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             e.g. a G-code program's ``block_pauses`` (``G4 P`` dwells, ``M0``/``M1`` stops as 0 s):
             the motion stops there (``T_k = 0``) and holds the vertex that long (``_fir_pauses``);
             the cycle time includes the pauses. ``None``: no pauses.
+        corner_speed: the speed change eq 13/14 rounds a corner between unequal feeds for
+            (``_fir_overlap``, "Unequal feeds"; the same at equal feeds): ``"step"`` the velocity
+            step ``|F+ u+ - F- u-|``; ``"turn"`` the smaller of it and the turn at the larger feed
+            ``max(F-, F+) |u+ - u-|``, which leaves a straight feed step no corner (longer
+            overlaps where the feeds step; ``plan_fir_mirror``'s timing). Both bound the corner's
+            error. ``"step"`` is the default because this planner's eps ladder was measured with it:
+            with ``"turn"`` 4 of 200 random programs rose along eps x 1-3 against 2
+            (benchmarks/README.md).
 
     Differentiable with ``jax.grad`` / ``jax.jacfwd`` with respect to ``feed``, ``delays`` and
     ``tolerance``: the discrete choices (which corners dwell, which feeds a window lowers, which
@@ -204,14 +213,18 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     Not under ``jax.jit`` with ``refine`` or ``limits``, which decide on concrete values.
 
     Raises:
-        ParameterError: a bad feed, delay or tolerance (naming which), a tolerance of 0 on an arc.
+        ParameterError: a bad feed, delay, tolerance or corner_speed (naming which), a tolerance of 0
+            on an arc.
         ConvergenceError: the verification did not settle within ``_fir_settle.MAX_ROUNDS`` rounds.
     """
     tp = _as_toolpath(path)
     M = tp.n_blocks
     _check_inputs(delays, feed, tolerance, M)
+    if corner_speed not in CORNER_SPEEDS:
+        raise ParameterError(f"corner_speed must be one of {CORNER_SPEEDS}, got {corner_speed!r}")
+    turn = corner_speed == "turn"
     cut = paused_parts(tp, feed, tolerance, pauses, lambda part, f, t: plan_fir(
-        part, f, delays, t, refine=refine, limits=limits, check_period=check_period))
+        part, f, delays, t, refine=refine, limits=limits, check_period=check_period, corner_speed=corner_speed))
     if cut is not None:
         return joined_plan(tp, *cut)
     traced = any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves((delays, feed, tolerance)))
@@ -225,9 +238,10 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         # every velocity step alone keeps the limits: the plan without limits is made first and
         # returned if its exact peaks keep them
         primal = plan_fir(tp, *((feeds_np, delays_np, tol_np) if traced else (feed, delays, tolerance)),
-                          refine=refine, check_period=check_period)
+                          refine=refine, check_period=check_period, corner_speed=corner_speed)
         if profile_within_limits(primal.position, limits):
-            return plan_fir(tp, feed, delays, tolerance, refine=refine, check_period=check_period) if traced else primal
+            return plan_fir(tp, feed, delays, tolerance, refine=refine, check_period=check_period,
+                            corner_speed=corner_speed) if traced else primal
     feeds_all = xp.broadcast_to(xp.asarray(feed, dtype=np.float64), (M,))
     tol_all = xp.broadcast_to(xp.asarray(tolerance, dtype=np.float64), (M,))
     run = straight_runs(tp, feeds_np, tol_np)  # runs of collinear line blocks planned as one block each (_fir_straight)
@@ -235,11 +249,11 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
         first, _ = run_bounds(run)
         merged_tp = merged_path(tp, run)
         plan, pieces = _plan_blocks(merged_tp, _run_value(feeds_all, run, first), delays,
-                                    _run_value(tol_all, run, first), refine, limits, check_period, traced)
+                                    _run_value(tol_all, run, first), refine, limits, check_period, traced, turn)
         merged = split_plan(plan, pieces[:2], pieces[2], tp, merged_tp, run, FIRPlan)
         if limits is None:
             return merged
-    plans = [_plan_blocks(tp, feed, delays, tolerance, refine, limits, check_period, traced)[0]]
+    plans = [_plan_blocks(tp, feed, delays, tolerance, refine, limits, check_period, traced, turn)[0]]
     if limits is not None:
         # under limits the pieces of a line can be the steps of a staircase ramp
         # (_fir_limit_spread), which one block cannot take: the plans of the path as written,
@@ -262,7 +276,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             if min(float(_primal(p.cycle_time)) for p in plans) > bound:
                 try:
                     plan, _ = _plan_blocks(pieces_tp, recipe.of(feeds_all), delays, tol_all[block], refine, limits,
-                                           check_period, traced)
+                                           check_period, traced, turn)
                 except ConvergenceError as exc:  # another plan of the same path is at hand: this one is not
                     warnings.warn(f"plan_fir: the plan with its {'arcs' if arcs else 'lines'} cut into ramp steps "
                                   f"did not converge and is left out ({exc}); the fastest of the others is returned",
@@ -307,10 +321,10 @@ def _run_value(x, run: np.ndarray, first: np.ndarray):
 
 
 def _plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, check_period: float,
-                 traced: bool):
+                 traced: bool, turn: bool):
     """``(FIRPlan, (fraction, piece_tv, first_motion))`` of ``_fir_settle.plan_blocks`` (a path
     without pauses)."""
-    fields, pieces = plan_blocks(tp, feed, delays, tolerance, refine, limits, check_period, traced)
+    fields, pieces = plan_blocks(tp, feed, delays, tolerance, refine, limits, check_period, traced, turn)
     return FIRPlan(*fields), pieces
 
 

@@ -136,7 +136,7 @@ def test_cuts_are_where_slowing_windows_end_inside_an_arc():
     M = tp.n_blocks
     F = np.full(M, 200.0)
     t_in, t_out = tp.tangents()
-    candidates = look_ahead(tp, table, F, np.ones(M), np.array(DELAYS), np.full(M - 1, 0.01), t_in, t_out)
+    candidates = look_ahead(tp, table, F, np.ones(M), np.array(DELAYS), np.full(M - 1, 0.01), t_in, t_out, False)
     at = arc_cuts(candidates)
     assert at.size and np.all(np.diff(at) > 0)
     a = np.searchsorted(table.arc_span[:, 1], at)

@@ -538,16 +538,19 @@ def _lookahead_candidates(seed, arcs, delays):
     t_in, t_out = tp.tangents()
     table = _pulse_table(tp)
     d = np.asarray(delays)
-    cands = [c() for c, _ in look_ahead(tp, table, np.full(M, feed), np.ones(M), d, np.full(M - 1, eps), t_in, t_out)]
+    cands = [c() for c, _ in look_ahead(tp, table, np.full(M, feed), np.ones(M), d, np.full(M - 1, eps), t_in, t_out,
+                                          False)]
     return tp, table, feed, eps, d, t_in, t_out, cands
 
 
+@pytest.mark.parametrize("turn", [False, True])
 @pytest.mark.parametrize("delays", [(0.06, 0.03), (0.08,)])
 @pytest.mark.parametrize("arcs", [False, True])
-def test_predicted_cycle_matches_the_piece_arrays(delays, arcs):
+def test_predicted_cycle_matches_the_piece_arrays(delays, arcs, turn):
     """``predicted_cycle`` (one pass) against the cycle time summed from the arrays of
     ``PulseTable.pieces`` and ``_fir_profile.timing`` (eq 5 pulses, eq 13/14 overlaps), on the
-    look-ahead's candidates of random programs with random overlap shrinks."""
+    look-ahead's candidates of random programs with random overlap shrinks, for either corner
+    speed (``plan_fir``'s ``corner_speed``)."""
     from research.interpolators import _fir_profile
     from research.interpolators._fir_candidate_kernels import predicted_cycle
 
@@ -567,11 +570,12 @@ def test_predicted_cycle_matches_the_piece_arrays(delays, arcs):
         for factor, head, tail, full, others, arc_rel in cands:
             shrink = np.where(rng.random(M - 1) < 0.3, rng.random(M - 1), 1.0)
             frac, pf = table.pieces(head, tail, factor, arc_rel)
-            tv, ov = _fir_profile.timing(lengths, feeds, table.block, pf, ends, tangents, full, shrink, others, tol_v, d)
+            tv, ov = _fir_profile.timing(lengths, feeds, table.block, pf, ends, tangents, full, shrink, others, tol_v, d,
+                                         turn)
             want = float(np.sum(frac * tv) + np.sum(d.sum() - ov) + d.sum())
             got = predicted_cycle(tp.lengths, np.full(M, feed), table.block, table.role, table.fraction, arc_of,
                                   arc_rel, factor, head, tail, table.first_motion, table.last_motion, t_in, t_out, full,
-                                  shrink, others, tol_v, ds, h_full)
+                                  shrink, others, tol_v, ds, h_full, turn)
             assert abs(got - want) <= 1e-12 * want, (seed, got, want)
 
 

@@ -64,7 +64,8 @@ def _whole_windows(tp, table, F, head, tail, factor, arc_rel, full, shrink, othe
     feeds = np.concatenate([F, np.ones(pad + 1)])
     ends = np.stack([np.pad(table.first_motion, (0, pad)), np.pad(table.last_motion, (0, pad))])
     tangents = np.stack([np.pad(t_in, ((0, pad), (0, 0))), np.pad(t_out, ((0, pad), (0, 0)))])
-    piece_tv, overlaps = _fir_profile.timing(lengths, feeds, table.block, pf, ends, tangents, full, shrink, others, tol, d)
+    piece_tv, overlaps = _fir_profile.timing(lengths, feeds, table.block, pf, ends, tangents, full, shrink, others, tol, d,
+                                             False)
     Td = float(np.sum(d))
     gaps = np.concatenate([Td - overlaps, np.zeros(pad + 1)])
     s, e, breaks, coeffs, _ = _fir_profile.profile(tp.start, table.geo, table.block, table.gap, frac, piece_tv, gaps, d)
@@ -91,7 +92,7 @@ def test_corner_windows_decide_as_the_whole_profile(delays):
                                                limits)
         assert not np.any(np.abs(ratios - thr) < 1e-9)  # no window within rounding of the threshold
         t_in, t_out = tp.tangents()
-        windows = CornerWindows(table, tp.lengths, F, t_in, t_out, tol, d, limits)
+        windows = CornerWindows(table, tp.lengths, F, t_in, t_out, tol, d, limits, False)
         for _ in range(4):
             corners = np.flatnonzero(rng.random(M - 1) < rng.choice([0.05, 0.3, 1.0]))
             got = windows.breaking(corners, head, tail, factor, arc_rel, full, shrink, others)
@@ -117,7 +118,7 @@ def test_first_window_ranges_hold_each_windows_input(delays):
         M = tp.n_blocks
         table, F, head, tail, factor, arc_rel, full, shrink, others, tol = inputs
         t_in, t_out = tp.tangents()
-        windows = CornerWindows(table, tp.lengths, F, t_in, t_out, tol, d, limits)
+        windows = CornerWindows(table, tp.lengths, F, t_in, t_out, tol, d, limits, False)
         corners = np.arange(M - 1)
         plan = (head, tail, factor, arc_rel, full, shrink, others)
         _, _, (back, ahead) = windows._read(corners, *windows._reach(corners), *plan)

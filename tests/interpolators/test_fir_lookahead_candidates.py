@@ -29,7 +29,7 @@ def _candidates(seed: int, arcs: bool, delays=DELAYS):
     M = tp.n_blocks
     t_in, t_out = tp.tangents()
     return lookahead.look_ahead(tp, _pulse_table(tp), np.full(M, feed), np.ones(M), np.asarray(delays),
-                                np.full(M - 1, eps), t_in, t_out)
+                                np.full(M - 1, eps), t_in, t_out, False)
 
 
 @pytest.mark.parametrize("arcs", [False, True])
@@ -245,7 +245,7 @@ def test_window_feeds_are_feasible_roots_on_the_chain_without_the_dwell_turns():
         t_in, t_out = tp.tangents()
         s_v, du = np.cumsum(tp.lengths)[:-1], t_in[1:] - t_out[:-1]
         cands = lookahead.look_ahead(tp, _pulse_table(tp), np.full(M, feed), np.ones(M), np.asarray(DELAYS),
-                                     np.full(M - 1, eps), t_in, t_out)
+                                     np.full(M - 1, eps), t_in, t_out, False)
         grid = np.linspace(0.0, 1.0, n_grid + 1)[1:]
         for c, _ in cands:
             chain = ChainError(s_v[c.full], du[c.full], np.asarray(DELAYS))

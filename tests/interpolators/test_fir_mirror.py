@@ -9,11 +9,12 @@ from scipy.optimize import brentq, minimize_scalar
 from research import metrics
 from research.errors import ParameterError
 from research.interpolators import plan_fir, plan_fir_mirror
-from research.interpolators._fir_mirror import _input_vertices, compensate
+from research.interpolators._fir_mirror import SAMPLE_MARGIN, _input_vertices, compensate, sample_period
 from research.limits import AxisLimits
 from research.paths import Polyline
 from research.paths.toolpath import ToolPath
 from research.paths.library import random_program
+from research.piecewise import NumpyPiecewise
 from tests.interpolators._paths import turning_path
 
 F, DELAYS, EPS = 200.0, (0.06, 0.03), 0.05  # benchmarks/bench_cam.py's setting [mm/s, s, mm]
@@ -312,3 +313,24 @@ def test_the_raise_phase_is_never_slower(seed, monkeypatch):
     monkeypatch.setattr(fm, "raise_factors", lambda starts, *args: np.ones(starts.size))
     lowered_only = plan_fir_mirror(path, F, DELAYS, EPS, limits=limits)
     assert m.cycle_time <= lowered_only.cycle_time * (1 + 1e-12)
+
+
+def test_the_sampled_path_check_misses_at_most_its_margin_between_samples():
+    """``sample_period``: a distance to the path ``y(t) = y0 - a (t - t*)^2 / 2`` (a peak at a
+    random ``t*``, curvature ``a`` [mm/s^2]) sampled every ``period`` from 0: its largest sample
+    plus the margin reaches the true peak ``y0``, over 200 seeded ``t*``; the margin is at most
+    ``SAMPLE_MARGIN`` of the tolerance; a tolerance of 0 keeps the period and no margin."""
+    rng = np.random.default_rng(0)
+    for a, tol in [(3333.0, 0.05), (3333.0, 0.01), (2.0e5, 0.05), (10.0, 0.05)]:
+        for _ in range(50):
+            t_star, y0 = rng.uniform(0.2, 0.8), 0.05
+            coeffs = np.array([[[y0 - a * t_star**2 / 2], [a * t_star], [-a / 2]]])  # ascending, from t = 0
+            pos = NumpyPiecewise(np.array([0.0, 1.0]), coeffs)
+            period, margin = sample_period(pos, 1e-3, tol)
+            assert margin <= SAMPLE_MARGIN * tol * (1 + 1e-12)
+            assert 1e-3 / period == pytest.approx(round(1e-3 / period), rel=1e-12)  # a whole share of it
+            t = np.arange(0.0, 1.0, period)
+            sampled = np.max(y0 - a * (t - t_star) ** 2 / 2)
+            assert sampled + margin >= y0 - 1e-15
+    pos = NumpyPiecewise(np.array([0.0, 1.0]), np.array([[[0.0], [0.0], [1.0]]]))
+    assert sample_period(pos, 1e-3, 0.0) == (1e-3, 0.0)

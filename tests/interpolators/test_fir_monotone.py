@@ -95,7 +95,7 @@ def _look_ahead(tp, feed, tol):
     t_in, t_out = tp.tangents()
     M = tp.n_blocks
     return [c() for c, _ in lookahead.look_ahead(tp, _pulse_table(tp), np.full(M, feed), np.ones(M), np.asarray(DELAYS),
-                                                 np.full(M - 1, tol), t_in, t_out)]
+                                                 np.full(M - 1, tol), t_in, t_out, False)]
 
 
 def test_dwell_sets_of_tighter_tolerances_are_offered(monkeypatch):

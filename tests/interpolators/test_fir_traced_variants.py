@@ -51,7 +51,7 @@ def test_traced_plan_is_the_untraced_plan_under_limits(seed):
     lim = AxisLimits.uniform(2, 150.0, 3000.0, 2e4 if seed % 2 == 0 else 6e4)
     plain = plan_fir(path, feed, DELAYS, tol, limits=lim)
     as_written = fir._plan_blocks(fir._as_toolpath(path), feed, np.array(DELAYS), tol, True, lim, fir.CHECK_PERIOD,
-                                  False)[0]
+                                  False, False)[0]
     assert float(plain.cycle_time) < float(as_written.cycle_time) * (1.0 - 1e-3)
 
     def arrays(F, eps, d):
