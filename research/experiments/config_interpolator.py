@@ -36,6 +36,10 @@ class FIRConfig(_Strict):
                                             "keeps the programmed path at higher feeds "
                                             "(research.interpolators.plan_fir_mirror, beyond the paper; never "
                                             "slower than plan_fir)")
+    corner_speed: Literal["step", "turn"] = Field(
+        "step", description="the speed change eq 13/14 rounds a corner between unequal feeds for (plan_fir's "
+                            "corner_speed): 'step' the velocity step, 'turn' the turn at the larger feed (a straight "
+                            "feed step is no corner); the same at equal feeds")
 
     @model_validator(mode="after")
     def _positive_delays(self):
@@ -45,9 +49,12 @@ class FIRConfig(_Strict):
         _plausible_units(self.feed_mm_per_s, self.delays_ms, self.sample_period_ms, "delays_ms")
         if self.optimized and not self.tolerance_um > 0:
             raise ValueError("optimized = true needs a cornering tolerance tolerance_um > 0 um (optimize_fir)")
-        if self.mirror and (self.optimized or not self.refine):
+        if self.mirror and (self.optimized or not self.refine or self.corner_speed != "step"):
             raise ValueError("mirror = true plans by plan_fir_mirror's own verified search: it takes neither "
-                             "optimized = true nor refine = false")
+                             "optimized = true, refine = false nor corner_speed (it plans with 'turn')")
+        if self.optimized and self.corner_speed != "step":
+            raise ValueError("optimized = true chooses every corner's overlap itself (optimize_fir): it takes no "
+                             "corner_speed")
         return self
 
 

@@ -93,7 +93,7 @@ def interpolate(ic, path, program_feeds, blocks=None, pauses=None):
                                    pauses=block_pauses).plan
         else:
             plan = plan_fir(target, feed, np.asarray(ic.delays_ms) * 1e-3, tolerance, refine=ic.refine, limits=limits,
-                            pauses=block_pauses)
+                            pauses=block_pauses, corner_speed=ic.corner_speed)
         info = {"planner": "optimize_fir" if ic.optimized else "plan_fir_mirror" if ic.mirror else "plan_fir", "feeds": np.asarray(plan.feeds).tolist(), "overlap_times": np.asarray(plan.overlaps).tolist(),
                 "corner_errors": np.asarray(plan.corner_errors).tolist()}
         return plan.trajectory(Ts), info, plan

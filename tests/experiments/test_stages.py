@@ -300,6 +300,30 @@ def test_mirror_fir_from_a_config_keeps_eps_and_limits_and_is_no_slower(tmp_path
                   "interpolator": ic | {"optimized": True}}, tmp_path / "t.toml")
 
 
+def test_corner_speed_from_a_config_reaches_plan_fir(tmp_path):
+    """``corner_speed = "turn"`` plans by ``plan_fir(..., corner_speed="turn")``: on a random chain
+    of 0.3-3 mm lines whose look-ahead steps the feed between blocks, the config's overlaps are that
+    call's and differ from the default's; an unknown value, and one with ``mirror``, are refused
+    naming the field."""
+    from research.interpolators import plan_fir
+    from research.paths import Polyline
+    from tests.interpolators._paths import turning_path
+
+    pts = np.asarray(turning_path(3, 30, (0.3, 3.0), 20.0).points)
+    ic = {"kind": "fir", "label": "f", "feed_mm_per_s": 200.0, "delays_ms": [60.0, 30.0], "tolerance_um": 50.0,
+          "corner_speed": "turn"}
+    _, ev = run(path={"points_mm": pts.tolist()}, interpolator=ic)
+    want = plan_fir(Polyline(pts), 200.0, np.array([0.06, 0.03]), 0.05, corner_speed="turn")
+    step = plan_fir(Polyline(pts), 200.0, np.array([0.06, 0.03]), 0.05)
+    got = np.asarray(ev.record["details"]["f"]["overlap_times"])
+    np.testing.assert_allclose(got, np.asarray(want.overlaps), rtol=0, atol=1e-12)
+    assert np.max(np.abs(got - np.asarray(step.overlaps))) > 1e-4
+    for bad in ({"corner_speed": "normal"}, {"corner_speed": "turn", "mirror": True}):
+        with pytest.raises(ConfigError, match="corner_speed"):
+            validate({"name": "t", "reproduces": "-", "path": {"points_mm": pts.tolist()},
+                      "interpolator": ic | bad}, tmp_path / "t.toml")
+
+
 def test_time_optimal_windows_take_a_braking_lookahead(tmp_path):
     """``[interpolator] kind = "time_optimal"`` with ``window`` and ``lookahead = "braking"``: a window
     commits only where the braking distance of its own path is left (9 mm at 200 mm/s under the
