@@ -52,12 +52,18 @@ What this module does:
    on its exact peaks. A limit
    violation lowers the feeds of the blocks whose input makes the profile at its instant
    (``_fir_mirror_feeds.limit_factors``; at a jerk peak of a cubic profile, only those whose term
-   has the peak's sign). A tolerance violation halves the relaxation of the
-   corner nearest it towards 1 (``g <- 1 + (g - 1) / 2``, to 1 below
-   :data:`_LAST_STEP`; at a sharp corner eq 13/14 then dwells), and once it is at 1 its vertices
-   stop being moved; and it lowers the feeds of the blocks whose window holds it by
-   ``TOLERANCE_STEP`` (the mirror's residual falls with the feed where it does not with ``g``). Then the next round re-plans, at
-   most ``rounds`` rounds per timing.
+   has the peak's sign). A tolerance violation lowers the feeds of the blocks whose window holds
+   it by ``TOLERANCE_STEP`` (the mirror's residual falls with the feed where it does not with
+   ``g``); where the corner nearest it was the nearest to one in the round before as well, it
+   halves that corner's relaxation towards 1 (``g <- 1 + (g - 1) / 2``, to 1 below
+   :data:`_LAST_STEP`; at a sharp corner eq 13/14 then dwells), and once that is at 1 its
+   vertices stop being moved. Halving at the first violation moved the violation on: the halved
+   corner's blocks slow against their neighbours, whose corner broke next, and round by round a
+   low relaxation spread along the path (bench_cam's file from block 9830 as a program: the
+   violations moved on by one to five blocks a round for five rounds, leaving ``g`` 2-3 over 20
+   blocks). Halving at the second violation instead: the 10^4-chord file 43.6683 -> 43.6014 s,
+   the quick file's eps ladder summed 94.00 -> 93.47 s (at 10 um 29.33 -> 29.62 s, slower). Then
+   the next round re-plans, at most ``rounds`` rounds per timing.
 4. **Raise phase** (with limits). Steps down overshoot: a block lowered for a peak that its
    neighbours' lowering then removed stays low (bench_cam's first 100 CAM chords: about 40 blocks
    left at 0.93-0.99 of their caps where nothing in their spans reached a limit). Once a plan
@@ -127,8 +133,10 @@ def default_rounds(relax: float) -> int:
     halvings (to :data:`_LAST_STEP`, then 1) and stop moving its vertices, since a violation moves
     on to the neighbours of the blocks it changed, plus those that halve a feed by
     ``TOLERANCE_STEP`` steps (relax 32: 18 + 23 = 41 rounds at a step of 0.03), for each of the two
-    timings. bench_cam's CAM files verified in 14-17 rounds in all, its quick file's eps ladder
-    (10-200 um) in 15-55."""
+    timings. The search stops earlier once a timing cannot beat the best plan, or nothing is left
+    to raise; with the raise phase (step 4) bench_cam's CAM files took 25-47 rounds in all, its
+    quick file's eps ladder (10-200 um) 43-59, the 10^4-chord file 46 (the first timing's 41 the
+    budget's: its last raise was cut off, worth about 0.1 %)."""
     halvings = 0 if relax <= _LAST_STEP else math.ceil(math.log2((relax - 1.0) / (_LAST_STEP - 1.0)))
     return 2 * (halvings + 2) + math.ceil(math.log(0.5) / math.log(1.0 - TOLERANCE_STEP))
 
@@ -253,6 +261,7 @@ def _search(tp: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray,
     frozen = np.zeros(M, dtype=bool)  # programmed blocks whose planned vertices are not moved
     tangents = tp.tangents()[0]
     verified = None  # the search's factors of the last verified plan (raise phase)
+    struck = np.zeros(M, dtype=bool)  # the blocks of the corners nearest a tolerance violation last round
     step = np.full(M, RAISE_STEP)  # each block's largest raise a round, halved where a raise broke something
     r = 0
     while r < rounds:
@@ -293,14 +302,17 @@ def _search(tp: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray,
         scale *= limit_factors(np.asarray(moved.start_times), np.asarray(moved.pulse_times), found.limits,
                                found.ratios, delays, push)
         if found.tolerance.size:
-            if M > 1:  # the nearest corner's eq 13/14 tolerance back towards eps
+            if M > 1:  # the nearest corner's eq 13/14 tolerance back towards eps, the second round in a row
                 at = _nearest_corner(moved, found.tolerance)
-                blocks = np.zeros(M, dtype=bool)
-                blocks[at] = blocks[at + 1] = True
+                near = np.zeros(M, dtype=bool)
+                near[at] = near[at + 1] = True
+                blocks, struck = near & struck, near
                 relaxed = blocks & (g > 1.0)
                 g[relaxed] = np.where(g[relaxed] < _LAST_STEP, 1.0, 1.0 + 0.5 * (g[relaxed] - 1.0))
                 frozen |= blocks & ~relaxed  # at the tolerance already: stop moving its vertices
             scale[_blocks_near(moved, found.tolerance)] *= 1.0 - TOLERANCE_STEP
+        else:
+            struck[:] = False
     return best, r
 
 

@@ -334,3 +334,44 @@ def test_the_sampled_path_check_misses_at_most_its_margin_between_samples():
             assert sampled + margin >= y0 - 1e-15
     pos = NumpyPiecewise(np.array([0.0, 1.0]), np.array([[[0.0], [0.0], [1.0]]]))
     assert sample_period(pos, 1e-3, 0.0) == (1e-3, 0.0)
+
+
+@pytest.mark.parametrize("rounds_hit, halved", [(1, False), (2, True)])
+def test_a_corner_is_relaxed_less_only_when_its_violation_persists(monkeypatch, rounds_hit, halved):
+    """Step 3 of the search: a tolerance violation lowers the feeds of its window at once, but
+    halves the relaxation of the corner nearest it (``g <- 1 + (g - 1) / 2``) only where the same
+    corner was nearest to one in the round before as well. A half circle of 0.5 mm chords (R 20
+    mm, F 200 mm/s, eps 50 um, no limits) verifies in one round at ``g = RELAX`` everywhere; a
+    violation injected at corner 60's instant in the first round (of each timing's search) only
+    leaves its blocks at ``RELAX``, in the first two rounds at ``1 + (RELAX - 1) / 2``; the blocks
+    far from it keep ``RELAX`` either way."""
+    import research.interpolators._fir_mirror as fm
+
+    n = int(np.pi * 20.0 / 0.5)
+    a = np.linspace(0.0, np.pi, n)
+    path = Polyline(np.stack([20.0 * np.cos(a), 20.0 * np.sin(a)], axis=1))
+    real, real_plan = fm.violations, fm.plan_fir
+    timing, calls = [], {False: [], True: []}
+
+    def planned(*args, **kwargs):  # which of the two timings' searches the round belongs to
+        timing.append(kwargs.get("refine", True))
+        return real_plan(*args, **kwargs)
+
+    def injected(plan, tp, tol, limits, check_period):
+        found = real(plan, tp, tol, limits, check_period)
+        rounds = calls[timing[-1]]
+        rounds.append(found.tolerance.size)
+        if len(rounds) <= rounds_hit:
+            at = float(np.asarray(plan.corner_times)[60])
+            found = fm.Violations(np.sort(np.append(found.tolerance, at)), found.limits, found.ratios,
+                                  found.deviation, found.peaks)
+        return found
+
+    monkeypatch.setattr(fm, "violations", injected)
+    monkeypatch.setattr(fm, "plan_fir", planned)
+    m = plan_fir_mirror(path, F, DELAYS, EPS)
+    assert calls[False][0] == 0  # the real first round was clean: only the injected violation
+    want = 1.0 + 0.5 * (fm.RELAX - 1.0) if halved else fm.RELAX
+    np.testing.assert_allclose(m.relaxation[60:62], want, rtol=1e-12)
+    assert np.all(m.relaxation[:30] == fm.RELAX) and np.all(m.relaxation[92:] == fm.RELAX)
+    assert_keeps(m, np.asarray(path.points), EPS, None)
