@@ -238,7 +238,8 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
     best = MirrorPlan(plain, _input_vertices(plain), np.ones(M), np.ones(M), False, 0, T_plain)
     corners = np.zeros(max(M - 1, 0), dtype=bool)
     if M > 1:  # eq 13/14 dwells there at the relaxed tolerance: a corner, not a curve (no curvature cap)
-        corners = np.asarray(plan_fir(tp, feed, delays, tol * relax, refine=False, corner_speed="turn").overlaps) < Td * (1.0 - 1e-12)
+        first = plan_fir(tp, feed, delays, tol * relax, refine=False, corner_speed="turn")
+        corners = np.asarray(first.overlaps) < Td * (1.0 - 1e-12)
     kappa = vertex_curvature(tp, feed, corners, delays)
     caps = curvature_caps(tp, feed, kappa, delays, limits)
     total = 0
@@ -457,8 +458,12 @@ def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits 
         tol_v = np.minimum(tol[:-1], tol[1:])
         errors = vertex_distances(pos, np.asarray(tp.vertices), centre, 0.5 * Td, tol_v)
         times.append(centre[errors > verified_bound(tol_v) + slack])
-    period, margin = sample_period(pos, check_period, float(np.min(tol)))
-    deviation, at_vertex, at_block = path_deviations(pos, tp, starts, centre, Td, tol - margin, period, slack=slack)
+    positive = tol[tol > 0]
+    period, margin = sample_period(pos, check_period, float(np.min(positive)) if positive.size else 0.0)
+    held = np.where(tol > 0, tol - margin, tol)  # an exact stop's 0 stays 0 (its output is on the path)
+    stopped = np.asarray(plan.overlaps) == 0.0  # exact stops: samples by them are their blocks' own (plan_fir's check)
+    deviation, at_vertex, at_block = path_deviations(pos, tp, starts, centre, Td, held, period, slack=slack,
+                                                     stopped=stopped)
     times.append(centre[sorted(at_vertex)] if at_vertex else np.zeros(0))
     middle = starts + 0.5 * np.asarray(plan.pulse_times) + 0.5 * Td  # the window centred on the block
     times.append(middle[sorted(at_block)] if at_block else np.zeros(0))
@@ -480,10 +485,10 @@ def sample_period(position, check_period: float, tolerance: float) -> tuple[floa
     the plane of the trajectory and the line), so between samples ``h`` apart it exceeds the
     larger sample by at most ``|a|_max h^2 / 8``. The check samples ``check_period / k``
     apart, ``k`` the least integer that makes that allowance at most ``SAMPLE_MARGIN`` of the
-    ``tolerance`` [mm] (its smallest over the blocks), and holds the samples to the tolerance less
-    the allowance (the margin). ``|a|_max`` [mm/s^2] is bounded over each piece of ``position``
+    ``tolerance`` [mm] (the smallest positive one over the blocks), and holds the samples to the
+    tolerance less the allowance (the margin; a block of tolerance 0, an exact stop, keeps 0). ``|a|_max`` [mm/s^2] is bounded over each piece of ``position``
     (a ``NumpyPiecewise``) by its local coefficients, ``sum_m m (m - 1) |c_m| dt^(m - 2)`` per
-    axis. A tolerance of 0 (exact stops only) keeps ``check_period`` and no margin."""
+    axis. A tolerance of 0 (every block an exact stop) keeps ``check_period`` and no margin."""
     if tolerance <= 0:
         return check_period, 0.0
     c = np.abs(position.coeffs)

@@ -197,7 +197,7 @@ def charged_repairs(j: int, deviation: float, stops: np.ndarray, centre: np.ndar
 
 
 def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray, centre: np.ndarray, Td: float,
-                    tol_block: np.ndarray, check_period: float, durations=None, slack: float = 0.0):
+                    tol_block: np.ndarray, check_period: float, durations=None, slack: float = 0.0, stopped=None):
     """Largest sampled distance from the trajectory to ``path`` and where it breaks the tolerance.
 
     Args:
@@ -209,6 +209,8 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
             to thin the grid over steady spans (:func:`steady_spans`); None: the full grid.
         slack: rounding [mm] allowed above ``verified_bound`` of each tolerance
             (:func:`profile_rounding`).
+        stopped: ``(M - 1,)`` the corners that are exact stops (``T_k = 0``: no blend; a sample by
+            one is charged to its block on that side, as ``RoundChecks`` does), or None: none.
 
     Returns:
         ``(max_deviation [mm], {vertex: deviation}, {block: deviation})``; distances are upper
@@ -225,7 +227,7 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
     worst, bad = np.full(2 * M - 1, -np.inf), np.full(2 * M - 1, -np.inf)
     steady = None if durations is None else steady_spans(starts, durations, t0, Td, check_period)
     _, times = _sample_times(np.zeros(1, np.int64), np.array([n - 1]), t0, t1, check_period, centre, steady)
-    deviation = _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, None, slack)
+    deviation = _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, None, slack, stopped)
     at_vertex = {int(v): float(bad[v]) for v in np.flatnonzero(bad[: M - 1] > -np.inf)}
     at_block = {int(b): float(bad[M - 1 + b]) for b in np.flatnonzero(bad[M - 1:] > -np.inf)}
     return deviation, at_vertex, at_block

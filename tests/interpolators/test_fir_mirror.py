@@ -375,3 +375,31 @@ def test_a_corner_is_relaxed_less_only_when_its_violation_persists(monkeypatch, 
     np.testing.assert_allclose(m.relaxation[60:62], want, rtol=1e-12)
     assert np.all(m.relaxation[:30] == fm.RELAX) and np.all(m.relaxation[92:] == fm.RELAX)
     assert_keeps(m, np.asarray(path.points), EPS, None)
+
+
+
+def test_the_mirror_check_passes_a_plan_fir_plan_with_exact_stops_among_its_blocks():
+    """``violations`` (the mirror's check, denser than ``plan_fir``'s and holding eps less its
+    margin) on a half circle of 0.5 mm chords (R 20 mm, F 200 mm/s) with per-block tolerances, eps
+    50 um but 0 on one block (an exact stop at both its ends, eq 11): ``plan_fir``'s plan at half
+    those tolerances (its distances at most 25 um, well inside eps less the margin) has no
+    violation, the exact-stop block's output being on its line (a margin taken off its 0 would
+    flag it), and samples by a stop charged to their own block as ``plan_fir``'s check charges
+    them (the stop's tolerance 0 within ``T_d / 2`` of it flagged this plan at 0.46 um). The
+    mirror then compensates the path: faster than ``plan_fir`` at eps (0.6856 s against 1.2413 s;
+    before, no round verified and the plain plan was returned), keeping eps and the stops."""
+    from research.interpolators._fir_mirror import violations
+
+    n = int(np.pi * 20.0 / 0.5)
+    a = np.linspace(0.0, np.pi, n)
+    points = np.stack([20.0 * np.cos(a), 20.0 * np.sin(a)], axis=1)
+    tol = np.full(n - 1, EPS)
+    tol[60] = 0.0
+    tight = plan_fir(Polyline(points), F, DELAYS, 0.5 * tol)
+    found = violations(tight, ToolPath.from_polyline(Polyline(points)), tol, None, 1e-3)
+    assert found.tolerance.size == 0 and found.limits.size == 0 and found.deviation <= 0.5 * EPS * (1 + 1e-6)
+    plain = plan_fir(Polyline(points), F, DELAYS, tol)
+    m = plan_fir_mirror(Polyline(points), F, DELAYS, tol)
+    assert m.compensated and m.cycle_time < float(plain.cycle_time)
+    assert vertex_distances(m.plan, points[60:62]).max() <= 1e-9
+    assert_keeps(m, points, EPS, None)
