@@ -486,9 +486,9 @@ def sample_period(position, check_period: float, tolerance: float) -> tuple[floa
     larger sample by at most ``|a|_max h^2 / 8``. The check samples ``check_period / k``
     apart, ``k`` the least integer that makes that allowance at most ``SAMPLE_MARGIN`` of the
     ``tolerance`` [mm] (the smallest positive one over the blocks), and holds the samples to the
-    tolerance less the allowance (the margin; a block of tolerance 0, an exact stop, keeps 0). ``|a|_max`` [mm/s^2] is bounded over each piece of ``position``
-    (a ``NumpyPiecewise``) by its local coefficients, ``sum_m m (m - 1) |c_m| dt^(m - 2)`` per
-    axis. A tolerance of 0 (every block an exact stop) keeps ``check_period`` and no margin."""
+    tolerance less the allowance (the margin; a block of tolerance 0, an exact stop, keeps 0).
+    ``|a|_max`` [mm/s^2] is bounded over each piece of ``position`` (a ``NumpyPiecewise``) by its
+    local coefficients, ``sum_m m (m - 1) |c_m| dt^(m - 2)`` per axis. A tolerance of 0 (every block an exact stop) keeps ``check_period`` and no margin."""
     if tolerance <= 0:
         return check_period, 0.0
     c = np.abs(position.coeffs)

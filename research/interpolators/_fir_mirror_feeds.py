@@ -155,13 +155,6 @@ def triangle_sum(s: np.ndarray, step: np.ndarray, b: np.ndarray) -> np.ndarray:
     return (left + right) / b[:, None]
 
 
-def kernel_shifts(delays: np.ndarray) -> np.ndarray:
-    """The sums of every subset of the ``delays`` [s] (``2^n`` of them, 0 included): the filter
-    chain's highest derivative at ``t`` is a signed sum of its input at ``t`` less each of them
-    (``_fir_profile._subsets``, which holds their signs ``(-1)^|S|`` as well)."""
-    return _subsets(tuple(np.asarray(delays, dtype=np.float64).reshape(-1).tolist()))[0]
-
-
 def jerk_push(position, times: np.ndarray, ratios: np.ndarray, limits: AxisLimits, delays: np.ndarray,
               tangents: np.ndarray):
     """:func:`limit_factors`' ``push`` for the limit violations at ``times`` [s] with ``ratios`` on
@@ -181,9 +174,10 @@ def limit_factors(starts: np.ndarray, pulses: np.ndarray, times: np.ndarray, rat
                   delays: np.ndarray, push=None) -> np.ndarray:
     """``(M,)`` factors ``<= 1`` on the block feeds for limit violations at ``times`` [s] with
     ``peak / limit`` ``ratios`` (module docstring): each violation lowers the blocks whose input
-    was in use within ``LIMIT_REACH min T_i`` of ``times - s`` for each shift ``s`` of
-    :func:`kernel_shifts` (pulses from ``starts`` ``(M,)`` [s] for ``pulses`` ``(M,)`` [s]; the
-    block whose pulse started last before then, in a dwell), by ``min(r^-LIMIT_EXPONENT, 1 -
+    was in use within ``LIMIT_REACH min T_i`` of ``times - s`` for each sum ``s`` of a subset of
+    the delays (``_fir_profile._subsets``: the filter chain's highest derivative at ``t`` is a
+    signed sum of its input at ``t`` less each of them; pulses from ``starts`` ``(M,)`` [s] for
+    ``pulses`` ``(M,)`` [s]; the block whose pulse started last before then, in a dwell), by ``min(r^-LIMIT_EXPONENT, 1 -
     LEAST_STEP)`` for the largest ``r`` that reaches it. A span, not the one block: lowering one
     short block among its neighbours steps the input's speed down and up within the filters'
     memory, and those steps are jerk of their own.

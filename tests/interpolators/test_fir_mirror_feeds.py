@@ -5,8 +5,9 @@ import numpy as np
 import pytest
 
 from research.interpolators._fir_mirror_feeds import (LEAST_STEP, LIMIT_EXPONENT, LIMIT_REACH, RAISE_STEP,
-                                                      curvature_caps, kernel_shifts, limit_factors, raise_factors,
-                                                      shrink_caps, span_ratios, vertex_curvature)
+                                                      curvature_caps, limit_factors, raise_factors, shrink_caps,
+                                                      span_ratios, vertex_curvature)
+from research.interpolators._fir_profile import _subsets
 from research.interpolators._fir_piece_peaks import PiecePeaks
 from research.interpolators._fir_verify import nearest_instants
 from research.limits import AxisLimits
@@ -98,6 +99,11 @@ def test_an_arc_block_takes_its_radius():
     caps = caps_of(tp, np.array([500.0, 500.0]), np.array([True]), LIMITS)
     R = 8.0
     assert caps[1] == pytest.approx(min(150.0, np.sqrt(2000.0 * R), np.cbrt(8e4 * R**2)), rel=1e-12)
+
+
+def kernel_shifts(delays):
+    """The shifts ``limit_factors`` reads the kernel at: ``_fir_profile._subsets``' subset sums."""
+    return _subsets(tuple(float(d) for d in delays))[0]
 
 
 def test_kernel_shifts_are_the_subset_sums():
