@@ -218,7 +218,7 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
         raise ParameterError(f"rounds must be an integer >= 1 (re-plans at most), got {rounds!r}")
     tp = _as_toolpath(path)
     M = tp.n_blocks
-    _check_inputs(delays, feed, tolerance, M)
+    _check_inputs(delays, feed, tolerance, M, limits, tp.dim)
     cut = paused_parts(tp, feed, tolerance, pauses, lambda part, f, t: plan_fir_mirror(
         part, f, delays, t, limits=limits, relax=relax, passes=passes, rounds=rounds, check_period=check_period))
     if cut is not None:

@@ -99,9 +99,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
 
     # feed factors (NumPy, decided on primal values): (M, 3) for the head, body and tail of each block
     base = _arc_factor(tp, d_np, tb_np, F_np)
-    if limits is not None:
-        if limits.n_axes != tp.dim:
-            raise ParameterError(f"limits have {limits.n_axes} axes but the path has {tp.dim}")
+    if limits is not None:  # one limit per axis (checked by plan_fir)
         safe_feed = np.where(tp.is_arc, arc_limit_caps(tp.radii, d_np, limits), feed_caps(tp.lengths, t_in, d_np, limits))
     ahead = None  # the look-ahead's candidates at ``base``, made on the table before its sub-arcs are cut
     if refine and M > 1 and tp.is_arc.any() and limits is None:

@@ -219,7 +219,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     """
     tp = _as_toolpath(path)
     M = tp.n_blocks
-    _check_inputs(delays, feed, tolerance, M)
+    _check_inputs(delays, feed, tolerance, M, limits, tp.dim)
     if corner_speed not in CORNER_SPEEDS:
         raise ParameterError(f"corner_speed must be one of {CORNER_SPEEDS}, got {corner_speed!r}")
     turn = corner_speed == "turn"
@@ -369,8 +369,11 @@ def _as_toolpath(path) -> ToolPath:
     raise ParameterError(f"path must be a Polyline or a ToolPath, got {type(path).__name__}")
 
 
-def _check_inputs(delays, feed, tolerance, n_blocks: int) -> None:
-    """Domain checks on the primal values."""
+def _check_inputs(delays, feed, tolerance, n_blocks: int, limits=None, dim: int | None = None) -> None:
+    """Domain checks on the primal values (and, given ``limits``, one limit per axis of the path's
+    ``dim`` axes)."""
+    if limits is not None and limits.n_axes != dim:
+        raise ParameterError(f"limits have {limits.n_axes} axes but the path has {dim}")
     delays, feed, tolerance = (_primal(x) for x in (delays, feed, tolerance))
     check_delays(delays)
     f = np.asarray(feed, dtype=np.float64)

@@ -226,6 +226,18 @@ def test_bad_settings_are_named(kwargs, name):
         plan_fir_mirror(circle_of_chords(5.0, 0.5), F, DELAYS, EPS, **kwargs)
 
 
+@pytest.mark.parametrize("planner", [plan_fir, plan_fir_mirror])
+@pytest.mark.parametrize("paused", [False, True])
+def test_limits_of_another_axis_count_are_named(planner, paused):
+    """Limits for two axes on a 3-D path (a G-code program's blocks are 3-D) are refused before any
+    planning, with the counts named: before, the first limit check broadcast them and raised a bare
+    NumPy ``ValueError``."""
+    path = Polyline([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [10.0, 10.0, 0.0], [0.0, 10.0, 1.0]])
+    pauses = np.array([np.nan, np.nan, 0.1, np.nan]) if paused else None
+    with pytest.raises(ParameterError, match="limits have 2 axes but the path has 3"):
+        planner(path, F, DELAYS, EPS, limits=AxisLimits.fir_envelope(2, F, DELAYS), pauses=pauses)
+
+
 def test_frozen_blocks_keep_their_vertices_where_the_path_passes_twice():
     """Vertices of frozen programmed blocks stay where they are, found by their pulse times, not by
     position: on two laps of one circle every vertex of the second lap is also one of the first, and
