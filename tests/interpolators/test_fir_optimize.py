@@ -72,6 +72,31 @@ def test_smooth_search_keeps_the_beams_quiet():
     assert info["runs"][0]["start"] == "smooth" and info["runs"][0]["rounds"]
 
 
+def test_never_slower_than_the_plain_plan_where_it_holds_the_limits_and_the_residual():
+    """The optimality study's convention (a): limits are the plain FIR's own peaks and the residual
+    bound its own residual (Sencer 2015 beams), so the plain ``plan_fir`` plan is admissible. On
+    the 6-block ``cam_like_path(6, seed=1)`` at the study's setting the smooth search verified only
+    a slower plan (0.6936 s) and the limit-holding plan (0.6268 s) rings more on Y (20.5 against
+    15.7 um), so 0.6936 s came back against the plain plan's 0.6146 s (bench_fir_optimal's cam30
+    (a): 3.5051 against 2.4942 s). The result is now never slower
+    than the plain plan there, and holds the limits and the residual (re-simulated)."""
+    from research.experiments.optimality import BEAMS, PAPER, cam_like_path
+    from research.metrics import peak_axis_values
+    from research.optimal import trajectory_vibration
+
+    path = cam_like_path(6, seed=1)
+    F_s, D_s, eps = PAPER["feed"], PAPER["delays"], PAPER["tolerance"]
+    plain = plan_fir(path, F_s, D_s, eps)
+    ref = plain.trajectory(1e-3)
+    limits = AxisLimits(*(peak_axis_values(ref, nu) for nu in (1, 2, 3)))
+    plan, info = optimize_fir(path, F_s, D_s, eps, limits, starts=("smooth",), rounds=2, modes=BEAMS, full_output=True)
+    assert float(plan.cycle_time) <= float(plain.cycle_time) * (1 + 1e-12)
+    tr = plan.trajectory(1e-3)
+    assert all(np.all(r <= 1 + 1e-6) for r in limit_ratios(tr, limits).values())
+    left, bound = trajectory_vibration(tr, BEAMS)[0], trajectory_vibration(ref, BEAMS)[0]
+    assert info["quiet"] and np.all(left <= bound * (1 + 1e-5) + 1e-9)
+
+
 def test_piece_peaks_match_the_planner_root_finder():
     """The NLP's closed-form per-piece peaks equal the exact check's (companion-matrix roots)."""
     path = random_path(13)
