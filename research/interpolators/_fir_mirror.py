@@ -39,11 +39,17 @@ What this module does:
    vertex, less its component along the path's tangent there. The point at the corner instant
    instead lagged behind the vertex where the feed changes, and its mirror moved the vertex along
    the curve; on the first 100 chords of bench_cam's CAM file that input broke the jerk limit by
-   4.3x after five passes, the nearest point's by 1.5x. An arc between two lines is scaled about
-   its centre instead (eq 8's shrink is radial): its radius takes the mirror of the output's radial
-   error at the instant the window is centred on the arc's middle, and its ends move with it; an
-   arc next to an arc keeps its radius (both cannot scale about their own centres and still meet).
-   Fixed: the path's two ends and exact stops (the output rests on them).
+   4.3x after five passes, the nearest point's by 1.5x. Fixed: the path's two ends and exact stops
+   (the output rests on them).
+
+   **Arcs** are searched as chords (:func:`chorded`: sagitta :data:`CHORD_SHARE` of the
+   tolerance) and checked as the programmed arcs. Each arc block was once scaled about its own
+   centre (eq 8's shrink is radial), which only an arc between two lines can be: two arcs that
+   meet cannot both scale about their centres and still meet. On chains of tangent arcs (CAM
+   arc fitting) nothing verified and the plain plan came back: a 54-block program of 40 such arcs
+   (R 5-40 mm) at bench_cam's setting kept ``plan_fir``'s 10.2124 s after 8.4 s of search, and
+   4.6292 s as chords; over it, 30 arcs between lines and eight ``random_program`` programs, the
+   cycles summed 30.81 -> 18.48 s (benchmarks/README.md).
 3. **Checks and search.** The exact profile of the moved input is checked against the
    *programmed* path as ``plan_fir`` checks its own (vertex distances at every corner, the
    trajectory sampled), but more densely: the mirror holds the output's distance near eps all
@@ -126,6 +132,12 @@ RAISE_LEAST = 1e-3  # the raise phase ends when no block can be raised by more t
 #: the samples per ``check_period`` grow as its inverse square root (3 at eps 50 um under bench_cam's
 #: envelope: the 10^4-chord file's planning 8.0 -> 9.5 s); plan_fir's own check allows none
 SAMPLE_MARGIN = 1e-3
+#: sagitta of the chords the search plans for arcs, as a share of the least arc tolerance
+#: (:func:`chorded`). Swept (benchmarks/README.md) at 0.01-0.5 on ten programs with arcs (a chain
+#: of 40 tangent arcs, 30 arcs between lines, ``random_program`` seeds 100-107) under bench_cam's
+#: setting and envelope: cycles summed 18.59 / 18.48 / 18.49 / 18.81 / 18.65 s at 0.05 / 0.1 /
+#: 0.2 / 0.35 / 0.5, planning 9.0 / 7.6 / 7.1 / 7.4 / 7.7 s; 0.1 is in the middle of the flat stretch
+CHORD_SHARE = 0.1
 
 
 def default_rounds(relax: float) -> int:
@@ -146,17 +158,20 @@ class MirrorPlan:
     """A FIR plan whose filters' input is moved so that their output keeps the programmed path.
 
     Attributes:
-        plan: the :class:`FIRPlan` (its timing, programmed vertices and corner instants; its
-            profile the filtered moved input, verified against the programmed path:
-            :attr:`FIRPlan.path_deviation` is the largest sampled distance [mm]).
+        plan: the :class:`FIRPlan` (its timing, vertices and corner instants; its profile the
+            filtered moved input, verified against the programmed path:
+            :attr:`FIRPlan.path_deviation` is the largest sampled distance [mm]). Where the
+            program has arcs and the plan is compensated, its blocks are the arcs' chords
+            (:func:`chorded`; the programmed vertices among their vertices).
         input_vertices: ``(B + 1, d)`` the path the filters average [mm]: the vertices of the
-            planned blocks (straight runs merged, lines cut into ramp pieces where ``plan_fir``
-            did), moved; an arc block keeps its centre and axis, its radius the distance from the
-            centre to its moved ends; the programmed vertices where nothing was compensated.
+            planned blocks (arcs as chords, straight runs merged, lines cut into ramp pieces where
+            ``plan_fir`` did), moved; the programmed vertices where nothing was compensated.
         relaxation: ``(M,)`` factor ``g_k >= 1`` on each programmed block's tolerance at which the
-            timing was planned (1 everywhere when the plain plan was kept).
+            timing was planned (an arc's: the least over its chords; 1 everywhere when the plain
+            plan was kept).
         feed_factors: ``(M,)`` each block's feed in the timing over its commanded feed (the
-            curvature caps times the search's factors; 1 everywhere when the plain plan was kept).
+            curvature caps times the search's factors; an arc's: the least over its chords; 1
+            everywhere when the plain plan was kept).
         compensated: False when ``plan_fir``'s own plan was kept (it was as fast, or no round
             verified).
         rounds: re-plans made.
@@ -236,20 +251,49 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
     plain = plan_fir(tp, feed, delays, tol, limits=limits, check_period=check_period)
     T_plain = float(plain.cycle_time)
     best = MirrorPlan(plain, _input_vertices(plain), np.ones(M), np.ones(M), False, 0, T_plain)
-    corners = np.zeros(max(M - 1, 0), dtype=bool)
-    if M > 1:  # eq 13/14 dwells there at the relaxed tolerance: a corner, not a curve (no curvature cap)
-        first = plan_fir(tp, feed, delays, tol * relax, refine=False, corner_speed="turn")
+    # the search plans chords where the program has arcs, and checks the arcs themselves (chorded)
+    planned, checked, owner = chorded(tp, tol)
+    feed, tol = feed[owner], tol[owner]
+    B = planned.n_blocks
+    corners = np.zeros(max(B - 1, 0), dtype=bool)
+    if B > 1:  # eq 13/14 dwells there at the relaxed tolerance: a corner, not a curve (no curvature cap)
+        first = plan_fir(planned, feed, delays, tol * relax, refine=False, corner_speed="turn")
         corners = np.asarray(first.overlaps) < Td * (1.0 - 1e-12)
-    kappa = vertex_curvature(tp, feed, corners, delays)
-    caps = curvature_caps(tp, feed, kappa, delays, limits)
+    kappa = vertex_curvature(planned, feed, corners, delays)
+    caps = curvature_caps(planned, feed, kappa, delays, limits)
     total = 0
     for refine in (False, True):  # eq 13/14 at the caps, then plan_fir's look-ahead (module docstring)
-        best, r = _search(tp, feed, delays, tol, limits, relax, passes, rounds, check_period, refine, kappa, caps, best)
+        best, r = _search(planned, checked, feed, delays, tol, limits, relax, passes, rounds, check_period, refine,
+                          kappa, caps, best)
         total += r
+    if best.compensated and planned is not tp:  # per programmed block: the least over its chords
+        first = np.concatenate([[0], np.flatnonzero(np.diff(owner)) + 1])
+        best = dataclasses.replace(best, relaxation=np.minimum.reduceat(best.relaxation, first),
+                                   feed_factors=np.minimum.reduceat(best.feed_factors, first))
     return dataclasses.replace(best, rounds=total)
 
 
-def _search(tp: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray, limits: AxisLimits | None,
+def chorded(tp: ToolPath, tol: np.ndarray) -> tuple[ToolPath, ToolPath, np.ndarray]:
+    """The path the mirror's search plans and the one it checks: ``(planned, checked, owner)``.
+
+    On a path of lines both are ``tp`` and ``owner`` is ``arange(M)``. With arcs, ``planned`` holds
+    every arc as chords of equal angle (``ToolPath.to_polyline``) of sagitta at most
+    :data:`CHORD_SHARE` of the least arc tolerance in ``tol`` ``(M,)`` [mm], and ``checked`` the
+    same blocks as sub-arcs of the programmed arcs (the same centre and axis, the sweep split
+    evenly: radius and axial offset are linear in the angle, so each is the programmed arc's own
+    piece): the search moves and times the chords' vertices and checks the programmed arcs
+    themselves. ``owner`` ``(B,)`` is each planned block's programmed block."""
+    M = tp.n_blocks
+    if not tp.is_arc.any():
+        return tp, tp, np.arange(M)
+    chords, owner = tp.to_polyline(CHORD_SHARE * float(np.min(tol[tp.is_arc])))
+    count = np.bincount(owner, minlength=M)[owner]
+    checked = ToolPath(tp.start, chords.points[1:], tp.centers[owner], tp.normals[owner],
+                       np.where(tp.is_arc[owner], tp.sweeps[owner] / count, 0.0), tp.axes)
+    return ToolPath.from_polyline(chords), checked, owner
+
+
+def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray, limits: AxisLimits | None,
             relax: float, passes: int, rounds: int, check_period: float, refine: bool, kappa: np.ndarray,
             caps: np.ndarray, best: MirrorPlan) -> tuple[MirrorPlan, int]:
     """One timing's search (module docstring, steps 1-3): ``(the faster of best and what it
@@ -274,8 +318,8 @@ def _search(tp: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray,
                         corner_speed="turn")
         if float(plan.cycle_time) >= float(best.plan.cycle_time):
             break  # this timing cannot beat the plan at hand, moved or not
-        moved, vertices = compensate(plan, tp, passes, frozen)
-        found = violations(moved, tp, tol, limits, check_period)
+        moved, vertices = compensate(plan, passes, frozen)
+        found = violations(moved, checked, tol, limits, check_period)
         if found.tolerance.size == 0 and found.limits.size == 0:
             best = MirrorPlan(dataclasses.replace(moved, path_deviation=found.deviation), vertices, g.copy(),
                               top * scale / feed, True, r, best.plain_cycle_time)
@@ -317,12 +361,12 @@ def _search(tp: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray,
     return best, r
 
 
-def compensate(plan: FIRPlan, tp: ToolPath, passes: int, frozen: np.ndarray) -> tuple[FIRPlan, np.ndarray]:
+def compensate(plan: FIRPlan, passes: int, frozen: np.ndarray) -> tuple[FIRPlan, np.ndarray]:
     """``passes`` mirror passes on ``plan``'s input, its timing held (module docstring, step 2).
 
     Args:
-        plan: a concrete plan of ``tp`` (its profile a ``ProfileInputs``).
-        tp: the programmed path (its arcs' centres and axes).
+        plan: a concrete plan of a path of lines (its profile a ``ProfileInputs``; the search plans
+            arcs as chords, :func:`chorded`).
         passes: mirror passes (0: the plan's own input).
         frozen: ``(M,)`` programmed blocks whose planned vertices are not moved.
 
@@ -331,46 +375,28 @@ def compensate(plan: FIRPlan, tp: ToolPath, passes: int, frozen: np.ndarray) -> 
     """
     inputs = plan.profile
     table = inputs.pieces.table
+    if table.arc_pieces.size:
+        raise ParameterError("compensate moves the vertices of lines; plan arcs as chords (chorded)")
     B = table.n_blocks
     Td = float(np.sum(inputs.delays))
     target = _input_vertices(plan)
-    arc = np.zeros(B, dtype=bool)
-    arc[table.block[table.arc_pieces]] = True
     normal = _normal_projectors(target)
     moved = target.copy()
-    motion = ~table.gap & (table.block < B)
-    owner = np.minimum(table.block, B - 1)
-    line, arc_rows = motion & ~arc[owner], motion & arc[owner]
-    fixed = scaled = plane = centres = middle = radius = smooth = None
-    scale = np.ones(B)
+    line = ~table.gap & (table.block < B)
+    fixed = smooth = None
     for k in range(passes + 1):
         geo = table.geo.copy()
         geo[line, 0, :] = np.diff(moved, axis=0)[table.block[line]]
-        if scaled is not None and scaled.any():  # an arc's in-plane part scaled about its centre
-            rows = arc_rows & scaled[owner]
-            b = table.block[rows]
-            geo[rows] += (scale[b] - 1.0)[:, None, None] * np.einsum("nmd,nde->nme", geo[rows], plane[b])
         starts, ends, breaks, coeffs, centre = profile(inputs.start, geo, table.block, table.gap, inputs.fraction,
                                                        inputs.piece_tv, inputs.gaps, inputs.delays, table.joins)
         if k == passes or B < 2:
             break
         if fixed is None:  # the timing is held: the planned pulses start and end where they did here
             fixed = _fixed_vertices(inputs, plan, frozen, ends[: B - 1])
-            scaled, middle, centres, plane, radius = _scalable_arcs(plan, tp, target, arc, fixed, starts[:B], ends[:B],
-                                                                    Td)
-            fixed[:-1] |= arc  # an arc's ends follow its scale, not the vertices' mirror
-            fixed[1:] |= arc
             smooth = _smoothing(target, fixed, ends[:B] - starts[:B], float(np.min(inputs.delays)))
         pos = NumpyPiecewise(breaks, coeffs)
         error = target[1:-1] - pos(nearest_instants(pos, target[1:-1], centre[: B - 1], 0.5 * Td))
         moved[1:-1] += smooth(np.einsum("kij,kj->ki", normal, error))  # its part across the path, smoothed
-        if scaled.any():  # the mirror of an arc's radial error at its middle instant (eq 8's shrink)
-            bs = np.flatnonzero(scaled)
-            out = np.linalg.norm(np.einsum("nde,ne->nd", plane[bs], pos(middle[bs]) - centres[bs]), axis=1)
-            scale[bs] += (radius[bs] - out) / radius[bs]
-            for end in (bs, bs + 1):
-                moved[end] = target[end] + (scale[bs] - 1.0)[:, None] * np.einsum(
-                    "nde,ne->nd", plane[bs], target[end] - centres[bs])
     moved_inputs = ProfileInputs(dataclasses.replace(table, geo=geo), inputs.fraction, inputs.piece_tv, inputs.gaps,
                                  inputs.delays, inputs.start, np.asarray(inputs.span))
     return dataclasses.replace(plan, profile=moved_inputs), moved
@@ -396,30 +422,6 @@ def _smoothing(target: np.ndarray, fixed: np.ndarray, pulses: np.ndarray, shorte
         return out
 
     return smooth
-
-
-def _scalable_arcs(plan: FIRPlan, tp: ToolPath, target: np.ndarray, arc: np.ndarray, fixed: np.ndarray,
-                   starts: np.ndarray, ends: np.ndarray, Td: float):
-    """The planned arc blocks whose radius the mirror scales about their centre: those between two
-    lines (an arc next to an arc keeps its radius: both cannot scale about their own centres and
-    still meet) whose ends move (not the path's ends, exact stops or frozen); ``target`` ``(B + 1, d)``
-    their planned vertices [mm] (:func:`_input_vertices`). Returns ``(scaled
-    (B,), middle instants (B,) [s], centres (B, d) [mm], in-plane projectors (B, d, d), radii (B,)
-    [mm])``: each arc's programmed block is the one whose pulse holds the middle of its own
-    (:func:`_programmed_blocks`), the instant its window is centred on that middle."""
-    B, d = arc.size, tp.dim
-    middle = 0.5 * (starts + ends) + 0.5 * Td
-    scaled = arc.copy()
-    scaled[1:] &= ~arc[:-1]
-    scaled[:-1] &= ~arc[1:]
-    scaled &= ~fixed[:-1] & ~fixed[1:]
-    block = _programmed_blocks(plan, 0.5 * (starts + ends))
-    scaled &= tp.is_arc[block]
-    centres = np.where(scaled[:, None], tp.centers[block], 0.0)
-    axis = np.where(scaled[:, None], tp.normals[block], 0.0)[:, :d] if d == 3 else np.zeros((B, d))
-    plane = np.eye(d)[None] - axis[:, :, None] * axis[:, None, :]
-    radius = np.where(scaled, np.linalg.norm(np.einsum("nde,ne->nd", plane, target[:-1] - centres), axis=1), 1.0)
-    return scaled, middle, centres, plane, radius
 
 
 @dataclass(frozen=True)
