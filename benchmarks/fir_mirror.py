@@ -2,7 +2,7 @@
 
 Usage::
 
-    python benchmarks/fir_mirror.py [--quick] [--sweep] [--sweep-feeds] [--sweep-raise]
+    python benchmarks/fir_mirror.py [--quick] [--sweep] [--sweep-feeds] [--sweep-raise] [--sweep-chords]
 
 1. ``--sweep``: the two constants of ``research/interpolators/_fir_mirror.py`` (``RELAX``, the
    tolerance factor the first round's timing is planned at, and ``PASSES``, the mirror passes per
@@ -15,9 +15,14 @@ Usage::
    ``--sweep-raise``: the raise phase's step (``RAISE_STEP``, 0: no raise phase) on the first 100,
    300 and 1,000 chords, the quick file at eps 10-200 um and the micro-chord program at 0.1 and
    2.54 um: cycle times, rounds, sum.
-2. The defaults on bench_cam's CAM files (quick; the 10^4-chord file unless ``--quick``), on cam30
-   and on the paper paths (``corner90``, ``diamond``, ``zigzag``) at bench_cam's setting, with the
-   envelope's limits and without: cycle times, the ratio mirror / plain, the largest distance to the
+   ``--sweep-chords``: the sagitta of the chords the search plans arcs as (``CHORD_SHARE``) on the
+   programs with arcs of part 2 (one arc-fitted pass): cycle times, sum, planning time.
+2. The defaults on bench_cam's CAM files (quick; the 10^4-chord file unless ``--quick``), on
+   programs with arcs (``arc_programs``: chains of tangent arcs, the freeform curve's flat passes
+   arc-fitted like a CAM post's arc filter, next to the chords they were fitted to, and
+   ``random_program`` seeds 100-107; the envelope's limits), and on cam30 and the paper paths
+   (``corner90``, ``diamond``, ``zigzag``) at bench_cam's setting, with the envelope's limits and
+   without: cycle times, the ratio mirror / plain, the largest distance to the
    programmed path and the worst limit ratio of the mirror plan (``metrics``, on samples every
    0.5 ms), and the planning time of both (process time; the mirror's includes its plain plan).
 
@@ -43,6 +48,9 @@ from research.interpolators import plan_fir, plan_fir_mirror  # noqa: E402
 from research.interpolators import _fir_mirror, _fir_mirror_feeds  # noqa: E402
 from research.limits import AxisLimits  # noqa: E402
 from research.paths import Polyline, named_path  # noqa: E402
+from research.paths.gcode import parse_gcode  # noqa: E402
+from research.paths.library import random_program  # noqa: E402
+import arc_programs  # noqa: E402
 from research.paths.toolpath import ToolPath  # noqa: E402
 
 SWEEP_RELAX = (2.0, 4.0, 8.0, 16.0, 32.0, 64.0)
@@ -54,6 +62,9 @@ SWEEP_REACH = (0.0, 0.05, 0.1, 0.25, 0.5)
 SWEEP_SMOOTH = (0.0, 0.1, 0.15, 0.25, 0.35, 0.5, 1.0)
 SWEEP_RAISE = (0.0, 0.01, 0.03, 0.05, 0.1, 0.2)
 SWEEP_RAISE_EPS = (0.01, 0.02, 0.03, 0.05, 0.075, 0.1, 0.15, 0.2)  # the quick file's eps ladder [mm]
+SWEEP_CHORDS = (0.01, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5)  # CHORD_SHARE
+ARC_SEEDS = range(100, 108)  # random_program seeds of the arc programs (test_fir_mirror's are 100-103)
+FIT_CHORD_TOL, FIT_TOL = 2e-3, 5e-3  # the arc-fitted passes: source chords' sagitta, arc filter tolerance [mm]
 
 
 def timed(fn, *args, **kwargs):
@@ -144,7 +155,44 @@ def sweep_raise(table: Table) -> None:
         _fir_mirror.RAISE_STEP = kept
 
 
-def compare(table: Table, name: str, path, feed, delays, eps, limits) -> None:
+def arc_cases(levels: int) -> dict:
+    """``{name: (path, its chord source or None)}``: the programs with arcs (arc_programs): a chain
+    of 40 tangent arcs (a line before every third), 30 arcs between lines, the freeform curve's
+    flat passes arc-fitted (with the chords they were fitted to), and ``random_program`` seeds
+    ``ARC_SEEDS`` (lines and arcs)."""
+    pts = arc_programs.freeform_passes(levels, FIT_CHORD_TOL)
+    text, counts = arc_programs.arc_fitted(pts, FIT_TOL, bench_cam.FEED * 60.0)
+    fitted = parse_gcode(text, start=tuple(pts[0])).blocks
+    cases = {"40 tangent arcs, a line every 3rd": (arc_programs.arc_chain(40, 3, 3), None),
+             "30 tangent arcs between lines": (arc_programs.arc_chain(30, 3, 1), None),
+             f"freeform x {levels} flat passes arc-fitted at {FIT_TOL * 1e3:g} um ({counts['arcs']} arcs, "
+             f"{counts['lines']} lines)": (fitted, Polyline(pts))}
+    cases.update({f"random_program seed {s}": (random_program(np.random.default_rng(s)), None) for s in ARC_SEEDS})
+    return cases
+
+
+def sweep_chords(table: Table) -> None:
+    F, D, eps = bench_cam.FEED, bench_cam.DELAYS, bench_cam.EPS
+    cases = arc_cases(1)
+    table.section("Sweep of the arcs' chord sagitta (CHORD_SHARE of eps), limits = envelope: cycle times [s] of "
+                  + ", ".join(cases))
+    kept = _fir_mirror.CHORD_SHARE
+    try:
+        for share in SWEEP_CHORDS:
+            _fir_mirror.CHORD_SHARE = share
+            out, t = [], 0.0
+            for path, _ in cases.values():
+                m, dt = timed(plan_fir_mirror, path, F, D, eps, limits=AxisLimits.fir_envelope(path.dim, F, D))
+                out.append(m.cycle_time)
+                t += dt
+            table.row(f"  CHORD_SHARE {share:g}", " / ".join(f"{x:.4f}" for x in out),
+                      f"sum {sum(out):.4f} s", f"planning {t:.1f} s")
+    finally:
+        _fir_mirror.CHORD_SHARE = kept
+
+
+def compare(table: Table, name: str, path, feed, delays, eps, limits) -> tuple[float, float]:
+    """One row: ``plan_fir`` and ``plan_fir_mirror`` on ``path``; returns their cycle times [s]."""
     args = (path, feed, delays, eps)
     plan_fir(*args, limits=limits)  # compiled kernels warm for both timings
     plain, t_plain = timed(plan_fir, *args, limits=limits)
@@ -154,6 +202,7 @@ def compare(table: Table, name: str, path, feed, delays, eps, limits) -> None:
     table.row(f"{name}{'' if limits is None else ', limits = envelope'}", f"{T:.4f} -> {m.cycle_time:.4f} s",
               f"{m.cycle_time / T:.4f}x plain", f"dist {dist * 1e3:.2f} um / eps {eps * 1e3:g}, limits {ratio:.3f}",
               f"planning {t_plain:.2f} -> {t:.2f} s ({m.rounds} rounds)")
+    return T, m.cycle_time
 
 
 def main(argv=None) -> int:
@@ -162,6 +211,7 @@ def main(argv=None) -> int:
     ap.add_argument("--sweep", action="store_true", help="sweep RELAX x PASSES on the quick CAM file first")
     ap.add_argument("--sweep-feeds", action="store_true", help="sweep the feed steps of _fir_mirror_feeds first")
     ap.add_argument("--sweep-raise", action="store_true", help="sweep the raise phase's step first")
+    ap.add_argument("--sweep-chords", action="store_true", help="sweep the arcs' chord sagitta (CHORD_SHARE) first")
     args = ap.parse_args(argv)
     table = Table(f"plan_fir_mirror (RELAX {_fir_mirror.RELAX:g}, PASSES {_fir_mirror.PASSES}) against plan_fir")
     if args.sweep:
@@ -170,6 +220,8 @@ def main(argv=None) -> int:
         sweep_feeds(table)
     if args.sweep_raise:
         sweep_raise(table)
+    if args.sweep_chords:
+        sweep_chords(table)
     F, D, eps = bench_cam.FEED, bench_cam.DELAYS, bench_cam.EPS
     table.section(f"Defaults, F {F:g} mm/s, T {D[0] * 1e3:g}/{D[1] * 1e3:g} ms, eps {eps * 1e3:g} um: "
                   "plain -> mirror cycle time")
@@ -178,6 +230,15 @@ def main(argv=None) -> int:
         path = cam_file(levels)
         lim = AxisLimits.fir_envelope(path.dim, F, D)
         compare(table, f"CAM file, {path.n_segments} chords", path, F, D, eps, lim)
+    table.section(f"Programs with arcs (CHORD_SHARE {_fir_mirror.CHORD_SHARE:g}), limits = envelope")
+    plain_sum = mirror_sum = 0.0
+    for name, (path, source) in arc_cases(1 if args.quick else bench_cam.LEVELS_QUICK).items():
+        lim = AxisLimits.fir_envelope(path.dim, F, D)
+        T, Tm = compare(table, name, path, F, D, eps, lim)
+        plain_sum, mirror_sum = plain_sum + T, mirror_sum + Tm
+        if source is not None:
+            compare(table, "  the chords it was fitted to", source, F, D, eps, lim)
+    table.row("  programs with arcs, summed", f"{plain_sum:.4f} -> {mirror_sum:.4f} s", f"{mirror_sum / plain_sum:.4f}x plain")
     for name, path in (("cam30", bench_cam.cam30_path()), ("corner90", named_path("corner90")),
                        ("diamond", named_path("diamond")), ("zigzag", named_path("zigzag"))):
         for lim in (None, AxisLimits.fir_envelope(path.dim, F, D)):

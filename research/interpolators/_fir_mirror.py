@@ -48,8 +48,8 @@ What this module does:
    meet cannot both scale about their centres and still meet. On chains of tangent arcs (CAM
    arc fitting) nothing verified and the plain plan came back: a 54-block program of 40 such arcs
    (R 5-40 mm) at bench_cam's setting kept ``plan_fir``'s 10.2124 s after 8.4 s of search, and
-   4.6292 s as chords; over it, 30 arcs between lines and eight ``random_program`` programs, the
-   cycles summed 30.81 -> 18.48 s (benchmarks/README.md).
+   4.6292 s as chords; over eleven programs with arcs (``benchmarks/fir_mirror.py``) the cycles
+   summed 33.71 -> 19.60 s (benchmarks/README.md).
 3. **Checks and search.** The exact profile of the moved input is checked against the
    *programmed* path as ``plan_fir`` checks its own (vertex distances at every corner, the
    trajectory sampled), but more densely: the mirror holds the output's distance near eps all
@@ -133,10 +133,10 @@ RAISE_LEAST = 1e-3  # the raise phase ends when no block can be raised by more t
 #: envelope: the 10^4-chord file's planning 8.0 -> 9.5 s); plan_fir's own check allows none
 SAMPLE_MARGIN = 1e-3
 #: sagitta of the chords the search plans for arcs, as a share of the least arc tolerance
-#: (:func:`chorded`). Swept (benchmarks/README.md) at 0.01-0.5 on ten programs with arcs (a chain
-#: of 40 tangent arcs, 30 arcs between lines, ``random_program`` seeds 100-107) under bench_cam's
-#: setting and envelope: cycles summed 18.59 / 18.48 / 18.49 / 18.81 / 18.65 s at 0.05 / 0.1 /
-#: 0.2 / 0.35 / 0.5, planning 9.0 / 7.6 / 7.1 / 7.4 / 7.7 s; 0.1 is in the middle of the flat stretch
+#: (:func:`chorded`). Swept (``benchmarks/fir_mirror.py --sweep-chords``) at 0.01 / 0.02 / 0.05 /
+#: 0.1 / 0.2 / 0.35 / 0.5 on eleven programs with arcs under bench_cam's setting and envelope: cycles
+#: summed 20.20 / 20.12 / 19.71 / 19.60 / 19.62 / 19.94 / 19.78 s, planning 11.7 / 9.8 / 8.9 / 8.1 /
+#: 7.7 / 7.8 / 8.3 s
 CHORD_SHARE = 0.1
 
 
