@@ -89,7 +89,8 @@ def curvature_caps(tp: ToolPath, feed: np.ndarray, kappa: np.ndarray, delays: np
     of radius ``R`` takes ``sqrt(min A R)`` and ``(min J R^2)^(1/3)`` (its normal sweeps its
     plane); a line block ``min_a V_a / |u_a|``, ``u`` the direction from the path ``F sigma``
     before its start to ``F sigma`` after its end (the filters' averaged direction: a rounded
-    chord's own zigzags by degrees); an arc ``min V``. Without ``limits``: ``feed``.
+    chord's own zigzags by degrees; ``min V`` where those two points meet, a circle within the
+    reach); an arc ``min V``. Without ``limits``: ``feed``.
     """
     feed = np.asarray(feed, dtype=np.float64)
     if limits is None:
@@ -103,7 +104,10 @@ def curvature_caps(tp: ToolPath, feed: np.ndarray, kappa: np.ndarray, delays: np
         hi = np.searchsorted(S, S[1:] + reach, side="right") - 1
         points = np.vstack([np.asarray(tp.start, dtype=np.float64)[None], np.asarray(tp.ends, dtype=np.float64)])
         chord = points[hi] - points[lo]
-        direction = np.abs(chord) / np.linalg.norm(chord, axis=1, keepdims=True)
+        size = np.linalg.norm(chord, axis=1, keepdims=True)
+        # a span that comes back to where it started (a circle smaller than the reach) has no
+        # direction: its cap is then the least velocity limit, which every direction keeps
+        direction = np.where(size > 0, np.abs(chord) / np.where(size > 0, size, 1.0), 1.0)
         cap = np.minimum(feed, np.where(arc, np.min(V), np.min(V[None] / direction, axis=1)))
         r = tp.radii[arc]
         cap[arc] = np.minimum.reduce([cap[arc], np.sqrt(np.min(A) * r), np.cbrt(np.min(J) * r**2)])

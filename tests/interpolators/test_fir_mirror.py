@@ -215,6 +215,29 @@ def test_a_chain_of_tangent_arcs_is_compensated():
     assert all(np.max(r) <= 1.0 + 1e-6 for r in metrics.limit_ratios(tr, limits).values())
 
 
+@pytest.mark.parametrize("as_arc", [False, True])
+def test_a_circle_smaller_than_the_filters_reach_is_planned(as_arc):
+    """A whole circle of R 0.5 mm (3.1 mm around, less than the reach ``F sigma`` = 3.9 mm each
+    side) as one full-turn G3 arc between two lines (planned as chords), and as a closed circle of
+    0.05 mm chords, under the envelope's limits: the curvature caps read the direction from the
+    path a reach before a block to a reach after it, which on the arc's chords is the same point
+    (its NaN feed raised a ParameterError from the search). The plan keeps eps
+    (``ToolPath.distance``) and the limits, and is never slower than ``plan_fir``."""
+    R = 0.5
+    if as_arc:
+        tp = ToolPath.from_polyline(Polyline([[R, -2.0], [R, 0.0]])).then_arc([R, 0.0], [0.0, 0.0], ccw=True, turns=1)
+        tp = ToolPath(tp.start, np.vstack([tp.ends, [R, 2.0]]), np.vstack([tp.centers, [[np.nan, np.nan]]]),
+                      np.vstack([tp.normals, [[np.nan] * 3]]), np.concatenate([tp.sweeps, [0.0]]))
+    else:
+        tp = ToolPath.from_polyline(circle_of_chords(R, 0.05))
+    limits = AxisLimits.fir_envelope(2, F, DELAYS)
+    m = plan_fir_mirror(tp, F, DELAYS, EPS, limits=limits)
+    tr = m.plan.trajectory(2e-4)
+    assert np.max(tp.distance(np.asarray(tr.q))) <= EPS * (1 + 1e-6) + 1e-8
+    assert all(np.max(r) <= 1.0 + 1e-6 for r in metrics.limit_ratios(tr, limits).values())
+    assert m.cycle_time <= m.plain_cycle_time
+
+
 def test_chorded_plans_chords_within_their_sagitta_and_checks_the_arcs_own_pieces():
     """``chorded``: a line, a helical arc (R 6 mm, 1.2 rad, rising 2 mm) and a spiral arc (radius 4 ->
     5 mm): the planned path is lines through points on the arcs, each chord within ``CHORD_SHARE``
