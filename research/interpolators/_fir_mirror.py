@@ -58,7 +58,9 @@ What this module does:
    on its exact peaks. A limit
    violation lowers the feeds of the blocks whose input makes the profile at its instant
    (``_fir_mirror_feeds.limit_factors``; at a jerk peak of a cubic profile, only those whose term
-   has the peak's sign). A tolerance violation lowers the feeds of the blocks whose window holds
+   has the peak's sign, until the peak has stayed as high for :data:`STUCK_ROUNDS` rounds: the
+   signed lowering can miss what makes a peak, where the moved input's direction is not the
+   path's). A tolerance violation lowers the feeds of the blocks whose window holds
    it by ``TOLERANCE_STEP`` (the mirror's residual falls with the feed where it does not with
    ``g``); where the corner nearest it was the nearest to one in the round before as well, it
    halves that corner's relaxation towards 1 (``g <- 1 + (g - 1) / 2``, to 1 below
@@ -127,6 +129,13 @@ RELAX, PASSES = 32.0, 5
 #: envelope; 0.15-0.35 is flat, 0 never verifies the rounded program
 SMOOTH = 0.25
 _LAST_STEP = 1.25  # a relaxation below this goes to 1 on the next violation (one round, not many)
+#: rounds in a row a jerk peak may stay as high under the signed lowering (step 3) before it
+#: lowers every block in its reach. Swept (benchmarks/README.md) at 1-5 on the first 100 / 300 /
+#: 1,000 chords, the quick file at eps 10 / 20 / 50 / 100 um, the micro-chord program, the 10^4-chord
+#: file, and the fuzz run's program of seed 25 (stuck at 1.05x the jerk limit for 40 rounds, the
+#: plain plan returned): 4 is the least count that leaves every bench_cam case as it was (1-3
+#: moved them by -0.4 to +1.1 %) and plans seed 25 at 10.5706 s against 12.2763 s
+STUCK_ROUNDS = 4
 RAISE_LEAST = 1e-3  # the raise phase ends when no block can be raised by more than this share
 #: share of the tolerance the sampled path check may miss between two samples (:func:`sample_period`):
 #: the samples per ``check_period`` grow as its inverse square root (3 at eps 50 um under bench_cam's
@@ -308,6 +317,7 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
     verified = None  # the search's factors of the last verified plan (raise phase)
     struck = np.zeros(M, dtype=bool)  # the blocks of the corners nearest a tolerance violation last round
     step = np.full(M, RAISE_STEP)  # each block's largest raise a round, halved where a raise broke something
+    last_limits = (np.zeros(0), np.zeros(0), np.zeros(0, dtype=int))  # the last round's limit violations
     r = 0
     while r < rounds:
         r += 1
@@ -344,6 +354,12 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
                 continue
         push = None if found.limits.size == 0 else jerk_push(moved.position.numpy_evaluator(), found.limits,
                                                              found.ratios, limits, delays, tangents)
+        held = _persisting(found.limits, found.ratios, last_limits, float(np.min(delays)))
+        if push is not None:
+            # a jerk peak that the signed lowering left as high as it was for STUCK_ROUNDS rounds
+            # lowers every block in reach
+            push = (np.where((held >= STUCK_ROUNDS)[:, None], 0.0, push[0]), push[1])
+        last_limits = (found.limits, found.ratios, held)
         scale *= limit_factors(np.asarray(moved.start_times), np.asarray(moved.pulse_times), found.limits,
                                found.ratios, delays, push)
         if found.tolerance.size:
@@ -569,6 +585,21 @@ def _normal_projectors(vertices: np.ndarray) -> np.ndarray:
     tau = np.where(n > 1e-9, tau / np.maximum(n, 1e-300), 0.0)
     d = vertices.shape[1]
     return np.eye(d)[None] - tau[:, :, None] * tau[:, None, :]
+
+
+def _persisting(times: np.ndarray, ratios: np.ndarray, last, within: float) -> np.ndarray:
+    """``(N,)`` rounds in a row that the violations at ``times`` [s] with ``ratios`` have been held
+    as high: one more than a violation of the last round's (``last``: its times, sorted, ratios and
+    counts) within ``within`` [s] and not above ``ratios`` by more than 0.1 %, else 0."""
+    before, was, count = last
+    out = np.zeros(times.size, dtype=int)
+    if not before.size:
+        return out
+    j = np.searchsorted(before, times)
+    for k in (np.clip(j - 1, 0, before.size - 1), np.clip(j, 0, before.size - 1)):
+        same = (np.abs(before[k] - times) <= within) & (ratios >= was[k] * (1.0 - 1e-3))
+        out = np.where(same, np.maximum(out, count[k] + 1), out)
+    return out
 
 
 def _blocks_near(plan: FIRPlan, times: np.ndarray) -> np.ndarray:
