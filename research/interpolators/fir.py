@@ -66,6 +66,7 @@ from research._device import device_array
 from research.errors import ConvergenceError, ParameterError
 from research.interpolators._fir_candidates import FIRSweep, envelope
 from research.interpolators._fir_chain import check_delays
+from research.interpolators._fir_feed import arc_feed_caps
 from research.interpolators._fir_limits import profile_within_limits, steps_within_limits
 from research.interpolators import _fir_pauses
 from research.interpolators._fir_settle import _primal, plan_blocks
@@ -185,9 +186,12 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             whose own exact peaks break them is slowed, and the overlap of any corner whose exact
             peaks break them is bisected, down to an exact stop if need be; a plan that holds them
             is returned unchanged. Where every velocity step of the path alone keeps them
-            (``_fir_limits.steps_within_limits``), the plan without limits is made first and
-            returned as it is if its exact peaks keep them (the limit-holding search, 2-3x its
-            planning time, is then not run).
+            (``_fir_limits.steps_within_limits``, at the feeds the plan can run: arcs at their eq 8
+            feed), the plan without limits is made first and returned as it is if its exact peaks
+            keep them (the limit-holding search, 2-3x its planning time, is then not run); where
+            that prediction fails, it is made after the search and returned if it keeps them and
+            is faster, so the result is never slower than the plan without limits where that
+            holds them.
         check_period: spacing [s] of the trajectory samples whose distance to the path is checked.
         pauses: ``(M + 1,)`` pause at each vertex [s] (index 0 the start, ``M`` the end; NaN: none),
             e.g. a G-code program's ``block_pauses`` (``G4 P`` dwells, ``M0``/``M1`` stops as 0 s):
@@ -234,14 +238,25 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
     feeds_np = np.broadcast_to(np.asarray(_primal(feed), dtype=np.float64), (M,))
     tol_np = np.broadcast_to(np.asarray(_primal(tolerance), dtype=np.float64), (M,))
     delays_np = np.asarray(_primal(delays), dtype=np.float64).reshape(-1)
-    if limits is not None and steps_within_limits(tp, feeds_np, *tp.tangents(), delays_np, limits):
-        # every velocity step alone keeps the limits: the plan without limits is made first and
-        # returned if its exact peaks keep them
-        primal = plan_fir(tp, *((feeds_np, delays_np, tol_np) if traced else (feed, delays, tolerance)),
-                          refine=refine, check_period=check_period, corner_speed=corner_speed)
-        if profile_within_limits(primal.position, limits):
+    unlimited = None  # the plan without limits where it keeps them (never slower than one that holds them)
+    if limits is not None:
+        # the plan without limits, on primal values, and whether its exact peaks keep the limits
+        def without_limits():
+            p = plan_fir(tp, *((feeds_np, delays_np, tol_np) if traced else (feed, delays, tolerance)),
+                         refine=refine, check_period=check_period, corner_speed=corner_speed)
+            return p if profile_within_limits(p.position, limits) else None
+
+        def returned(p):  # the traced form of the plan without limits, where the call is traced
             return plan_fir(tp, feed, delays, tolerance, refine=refine, check_period=check_period,
-                            corner_speed=corner_speed) if traced else primal
+                            corner_speed=corner_speed) if traced else p
+
+        # every velocity step alone keeps the limits (the steps of the feeds the plan can run: an
+        # arc no faster than its eq 8 feed): that plan is made first and returned if it keeps them
+        steps_keep = steps_within_limits(tp, arc_feed_caps(tp.radii, delays_np, tol_np, feeds_np), *tp.tangents(),
+                                         delays_np, limits)
+        unlimited = without_limits() if steps_keep else None
+        if unlimited is not None:
+            return returned(unlimited)
     feeds_all = xp.broadcast_to(xp.asarray(feed, dtype=np.float64), (M,))
     tol_all = xp.broadcast_to(xp.asarray(tolerance, dtype=np.float64), (M,))
     run = straight_runs(tp, feeds_np, tol_np)  # runs of collinear line blocks planned as one block each (_fir_straight)
@@ -283,6 +298,13 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
                                   RuntimeWarning, stacklevel=2)
                     continue
                 plans.append(join_plan(plan, tp, block, FIRPlan))
+        best = min(plans, key=lambda p: float(_primal(p.cycle_time)))
+        # the step prediction is no proof either way (steps closer than T_d add or cancel): where it
+        # failed, the plan without limits is made as well and kept where it holds them and is faster
+        unlimited = None if steps_keep else without_limits()
+        if unlimited is not None and float(unlimited.cycle_time) < float(_primal(best.cycle_time)):
+            return returned(unlimited)
+        return best
     return min(plans, key=lambda p: float(_primal(p.cycle_time)))
 
 

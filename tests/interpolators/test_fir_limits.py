@@ -62,6 +62,32 @@ def test_steps_within_limits_closed_form(points, factor, expected):
     assert steps_within_limits(tp, np.full(tp.n_blocks, 200.0), *tp.tangents(), np.array([0.06, 0.03]), limits) is expected
 
 
+def test_plain_plan_returned_where_it_holds_the_limits_though_a_step_alone_would_not():
+    """The first eight blocks of an arc-fitted CAM pass (``benchmarks/arc_programs.py``: G2/G3 of
+    R 7-110 mm with small kinks, 4 decimals) at F 200 mm/s, T 60/30 ms, eps 50 um, under the FIR
+    envelope: an arc of R >= 20 mm starting from rest at F would break the envelope (its
+    centripetal acceleration on top of the ramp), so the step prediction fails, but in the chain no
+    arc starts from rest and the plan without limits keeps them (sampled and refined peaks here).
+    The limit-holding planner repaired it all the same (0.4167 s against 0.4003 s); the plan
+    without limits is now made where the prediction fails and returned where it holds them and is
+    faster: never slower than the plain plan where that holds the limits."""
+    from research.paths.gcode import parse_gcode
+
+    prog = parse_gcode("G21 G90 G17 G94\nG1 X29.9364 Y0.0000 Z0.0000 F12000.0\n"
+                       "G3 X29.5571 Y2.7378 I-7.4568 J0.3621\nG3 X28.4753 Y5.0455 I-10.6005 J-3.5619\n"
+                       "G3 X27.5045 Y6.5028 I-17.1298 J-10.3592\nG3 X26.0931 Y8.3917 I-88.4754 J-64.6377\n"
+                       "G2 X24.7025 Y10.4391 I17.8985 J13.6527\nG2 X23.4303 Y13.1839 I13.2391 J7.8035\n"
+                       "G2 X22.9831 Y14.5455 I29.2202 J10.3513\nG3 X22.0426 Y17.5553 I-77.4033 J-22.5351\nM2\n",
+                       start=(29.9364, 0.0, 0.0))
+    tp = prog.blocks
+    env = AxisLimits.fir_envelope(3, 200.0, (0.06, 0.03))
+    plain = plan_fir(tp, 200.0, (0.06, 0.03), 0.05)
+    assert all(np.all(r <= 1 + 1e-6) for r in limit_ratios(plain.trajectory(1e-3), env).values())
+    held = plan_fir(tp, 200.0, (0.06, 0.03), 0.05, limits=env)
+    assert float(held.cycle_time) <= float(plain.cycle_time) * (1 + 1e-12)
+    assert all(np.all(r <= 1 + 1e-6) for r in limit_ratios(held.trajectory(1e-3), env).values())
+
+
 def test_plain_plan_returned_where_it_holds_the_limits():
     """Where every velocity step alone keeps the limits and the plan without limits keeps them
     (sampled check here), the limit-holding call returns that very plan: a circle of 1 deg chords
