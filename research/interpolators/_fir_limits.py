@@ -146,12 +146,12 @@ def _ramp_caps(is_arc: np.ndarray, radii: np.ndarray, directions: np.ndarray, de
                     feed_caps(np.full(is_arc.size, np.inf), directions, delays, limits))
 
 
-def profile_within_limits(position, limits: AxisLimits) -> bool:
-    """Whether a whole profile (``PiecewisePolynomial`` or its NumPy evaluator) keeps the limits up
-    to :data:`LIMIT_RTOL`, on its exact peaks (``_fir_piece_peaks.PiecePeaks``)."""
+def profile_peak_ratio(position, limits: AxisLimits) -> float:
+    """The largest ``peak / limit`` of a whole profile (``PiecewisePolynomial`` or its NumPy
+    evaluator) over orders and axes, on its exact peaks (``_fir_piece_peaks.PiecePeaks``); it
+    keeps the limits where this is at most ``1 + LIMIT_RTOL``."""
     breaks = np.asarray(position.breaks, dtype=np.float64)
-    worst = PiecePeaks(position, limits).over(breaks[:1], breaks[-1:])
-    return bool(worst[0] <= 1.0 + LIMIT_RTOL)
+    return float(PiecePeaks(position, limits).over(breaks[:1], breaks[-1:])[0])
 
 
 def end_ramp_scale(tp, feeds: np.ndarray, t_in: np.ndarray, t_out: np.ndarray, delays: np.ndarray,
