@@ -316,9 +316,11 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
             relax: float, passes: int, rounds: int, check_period: float, refine: bool, kappa: np.ndarray,
             caps: np.ndarray, best: MirrorPlan, corners: np.ndarray) -> tuple[MirrorPlan, int]:
     """One timing's search (module docstring, steps 1-3): ``(the faster of best and what it
-    verified, rounds made)``. ``refine``: the timing is ``plan_fir``'s look-ahead plan, else its eq
-    13/14 plan capped by :func:`shrink_caps` as well; ``kappa`` ``(M - 1, d)`` the vertices'
-    curvature [1/mm], ``caps`` ``(M,)`` the blocks' curvature caps [mm/s]."""
+    verified, rounds made)``. ``tp``: the planned path (arcs as chords), ``checked``: the path its
+    plans are checked against (the programmed arcs' pieces, :func:`chorded`); ``refine``: the
+    timing is ``plan_fir``'s look-ahead plan, else its eq 13/14 plan capped by :func:`shrink_caps`
+    as well; ``kappa`` ``(M - 1, d)`` the vertices' curvature [1/mm], ``caps`` ``(M,)`` the blocks'
+    curvature caps [mm/s]; ``corners`` ``(M - 1,)`` the sharp corners (step 3)."""
     M = tp.n_blocks
     g = np.full(M, float(relax))
     scale = np.ones(M)  # the search's factors on the caps
