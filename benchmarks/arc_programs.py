@@ -103,17 +103,9 @@ def arc_fitted(points: np.ndarray, fit_tol: float, feed_mm_per_min: float) -> tu
 
 
 def freeform_passes(levels: int, chord_tol: float, seed: int = 0) -> np.ndarray:
-    """bench_cam's freeform curve as ``levels`` flat passes (each 0.2 mm lower, 0.5 % smaller),
-    tessellated with sagitta ``chord_tol`` [mm] and rounded to 4 decimals: points (n, 3) [mm]."""
-    base = bench_cam.freeform_curve(seed)
-    base[:, 2] = 0.0
-    chunks = []
-    for lev in range(levels):
-        p = base * np.array([1 - 0.005 * lev, 1 - 0.005 * lev, 1.0]) - np.array([0.0, 0.0, 0.2 * lev])
-        chunks.append(bench_cam.tessellate(p, np.full(len(p), chord_tol)))
-    pts = np.round(np.vstack(chunks), 4)
-    keep = np.concatenate([[True], np.linalg.norm(np.diff(pts, axis=0), axis=1) > 1e-4])
-    return pts[keep]
+    """bench_cam's waterline program (``cam_program``) with flat passes (each 0.2 mm lower, 0.5 %
+    smaller), tessellated with sagitta ``chord_tol`` [mm] and rounded to 4 decimals: points (n, 3) [mm]."""
+    return np.asarray(bench_cam.cam_program(seed, levels, chord_tol=chord_tol, flat=True)[0].points)
 
 
 def arc_chain(n_arcs: int, seed: int, line_every: int) -> ToolPath:

@@ -181,14 +181,17 @@ def tessellate(p: np.ndarray, tol: np.ndarray) -> np.ndarray:
     return (1 - w) * p[idx - 1] + w * p[idx]
 
 
-def cam_program(seed: int, levels: int, chord_tol=None) -> tuple[Polyline, dict]:
+def cam_program(seed: int, levels: int, chord_tol=None, flat: bool = False) -> tuple[Polyline, dict]:
     """Waterline finishing program: ``levels`` passes of the freeform curve, joined by step-downs.
 
-    ``chord_tol``: one tolerance [mm] for every pass, or ``None`` for the mixed per-sector one.
+    ``chord_tol``: one tolerance [mm] for every pass, or ``None`` for the mixed per-sector one;
+    ``flat``: each pass at one ``z`` (the curve's waviness left out, as G17 arcs need it).
     Returns the rounded polyline and facts about the curve.
     """
     rng = np.random.default_rng(seed + 1)
     base = freeform_curve(seed)
+    if flat:
+        base[:, 2] = 0.0
     n = base.shape[0]
     s, k = curvature(base)
     sectors = 8

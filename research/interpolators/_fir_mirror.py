@@ -276,8 +276,8 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
     B = planned.n_blocks
     corners = np.zeros(max(B - 1, 0), dtype=bool)
     if B > 1:  # eq 13/14 dwells there at the relaxed tolerance: a corner, not a curve (no curvature cap)
-        first = plan_fir(planned, feed, delays, tol * relax, refine=False, corner_speed="turn")
-        corners = np.asarray(first.overlaps) < Td * (1.0 - 1e-12)
+        eq13 = plan_fir(planned, feed, delays, tol * relax, refine=False, corner_speed="turn")
+        corners = np.asarray(eq13.overlaps) < Td * (1.0 - 1e-12)
     kappa = vertex_curvature(planned, feed, corners, delays)
     caps = curvature_caps(planned, feed, kappa, delays, limits)
     total = 0
@@ -286,9 +286,9 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
                           kappa, caps, best, corners)
         total += r
     if best.compensated and planned is not tp:  # per programmed block: the least over its chords
-        first = np.concatenate([[0], np.flatnonzero(np.diff(owner)) + 1])
-        best = dataclasses.replace(best, relaxation=np.minimum.reduceat(best.relaxation, first),
-                                   feed_factors=np.minimum.reduceat(best.feed_factors, first))
+        own_first = np.concatenate([[0], np.flatnonzero(np.diff(owner)) + 1])  # each programmed block's first chord
+        best = dataclasses.replace(best, relaxation=np.minimum.reduceat(best.relaxation, own_first),
+                                   feed_factors=np.minimum.reduceat(best.feed_factors, own_first))
     return dataclasses.replace(best, rounds=total)
 
 
