@@ -50,6 +50,21 @@ What this module does:
    (R 5-40 mm) at bench_cam's setting kept ``plan_fir``'s 10.2124 s after 8.4 s of search, and
    4.6292 s as chords; over eleven programs with arcs (``benchmarks/fir_mirror.py``) the cycles
    summed 33.71 -> 19.60 s (benchmarks/README.md).
+
+   **Short arcs** (:func:`cornered`), shorter than the filters' reach at their feed (``L <= F
+   T_d``), are not followed as curves at all: the window averages such an arc with the blocks
+   either side, yet ``plan_fir`` slows it to its eq 8 feed as if it were a long circle. A fillet
+   of R 1 mm between two lines at bench_cam's setting: 0.7283 s, against 0.6552 s for the sharp
+   corner without it. Where the program has such arcs the search is run a second time (and the
+   faster verified plan kept) with each of them planned as the corner ``V`` of its end tangents
+   and checked as the arc: eq 13/14 rounds ``V`` at ``|V - P| + (2 h - 1) eps`` (``P`` the arc's
+   point at half its sweep, :func:`planned_tolerance`), and ``h`` is bisected per arc on which
+   side of ``P`` the output passes (:func:`_bisect`, to :data:`SHORT_LEAST`); the mirror passes
+   leave ``V`` and the arc's ends where they are (moving ``V`` towards ``P`` by the mirror of its
+   error broke the lines beside it). The fillet: 0.6298 s; a rectangle of lines with three such
+   fillets (R 0.3 mm) 1.5825 -> 1.3900 s. Left: an offset pocket (8 such rings joined by 2.8 mm
+   links) verifies with neither planned path (the links' corners and the fillets share one
+   window), and a fillet of R 2 mm has no rounding of ``V`` within eps of it.
 3. **Checks and search.** The exact profile of the moved input is checked against the
    *programmed* path as ``plan_fir`` checks its own (vertex distances at every corner, the
    trajectory sampled), but more densely: the mirror holds the output's distance near eps all
@@ -109,6 +124,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from research.errors import ParameterError
 from research.interpolators._fir_kernels import verified_bound
@@ -122,6 +138,7 @@ from research.interpolators._fir_verify import nearest_instants, path_deviations
 from research.interpolators.fir import (CHECK_PERIOD, FIRPlan, _as_toolpath, _check_inputs, joined_plan, paused_parts,
                                        plan_fir)
 from research.limits import AxisLimits
+from research.paths.polyline import Polyline
 from research.paths.toolpath import ToolPath
 from research.piecewise import NumpyPiecewise
 
@@ -157,6 +174,15 @@ SAMPLE_MARGIN = 1e-3
 #: summed 20.20 / 20.12 / 19.71 / 19.60 / 19.62 / 19.94 / 19.78 s, planning 11.7 / 9.8 / 8.9 / 8.1 /
 #: 7.7 / 7.8 / 8.3 s
 CHORD_SHARE = 0.1
+#: the largest turn [rad] of a short arc planned as a corner (:func:`cornered`)
+CORNER_TURN = 2.0 * math.pi / 3.0
+#: a turn [rad] up to which a short arc's start or end counts as tangent (:func:`cornered`)
+TANGENT_TURN = 1e-3
+#: the bracket width on a short arc's rounding below which its bisection stops (:func:`planned_tolerance`)
+SHORT_LEAST = 1.0 / 64.0
+#: the shortest tangent piece [mm] from a short arc's end to its corner (:func:`cornered`): below it
+#: the arc barely turns and stays as chords
+SHORT_LEG = 1e-6
 
 
 def default_rounds(relax: float) -> int:
@@ -181,12 +207,15 @@ class MirrorPlan:
             filtered moved input, verified against the programmed path:
             :attr:`FIRPlan.path_deviation` is the largest sampled distance [mm]). Where the
             program has arcs and the plan is compensated, its blocks are the arcs' chords
-            (:func:`chorded`; the programmed vertices among their vertices).
+            (:func:`chorded`; the programmed vertices among their vertices), or for a short arc
+            the two tangent pieces to its corner (:func:`cornered`).
         input_vertices: ``(B + 1, d)`` the path the filters average [mm]: the vertices of the
-            planned blocks (arcs as chords, straight runs merged, lines cut into ramp pieces where
-            ``plan_fir`` did), moved; the programmed vertices where nothing was compensated.
+            planned blocks (arcs as chords or short arcs as corners, straight runs merged, lines
+            cut into ramp pieces where ``plan_fir`` did), moved; the programmed vertices where
+            nothing was compensated.
         relaxation: ``(M,)`` factor ``g_k >= 1`` on each programmed block's tolerance at which the
-            timing was planned (an arc's: the least over its chords; 1 everywhere when the plain
+            timing was planned (an arc's: the least over its chords; a short arc planned as a
+            corner is rounded by :func:`planned_tolerance` instead; 1 everywhere when the plain
             plan was kept).
         feed_factors: ``(M,)`` each block's feed in the timing over its commanded feed (the
             curvature caps times the search's factors; an arc's: the least over its chords; 1
@@ -270,23 +299,33 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
     plain = plan_fir(tp, feed, delays, tol, limits=limits, check_period=check_period)
     T_plain = float(plain.cycle_time)
     best = MirrorPlan(plain, _input_vertices(plain), np.ones(M), np.ones(M), False, 0, T_plain)
-    # the search plans chords where the program has arcs, and checks the arcs themselves (chorded)
-    planned, checked, owner = chorded(tp, tol)
-    feed, tol = feed[owner], tol[owner]
-    B = planned.n_blocks
-    corners = np.zeros(max(B - 1, 0), dtype=bool)
-    if B > 1:  # eq 13/14 dwells there at the relaxed tolerance: a corner, not a curve (no curvature cap)
-        eq13 = plan_fir(planned, feed, delays, tol * relax, refine=False, corner_speed="turn")
-        corners = np.asarray(eq13.overlaps) < Td * (1.0 - 1e-12)
-    kappa = vertex_curvature(planned, feed, corners, delays)
-    caps = curvature_caps(planned, feed, kappa, delays, limits)
-    total = 0
-    for refine in (False, True):  # eq 13/14 at the caps, then plan_fir's look-ahead (module docstring)
-        best, r = _search(planned, checked, feed, delays, tol, limits, relax, passes, rounds, check_period, refine,
-                          kappa, caps, best, corners)
-        total += r
-    if best.compensated and planned is not tp:  # per programmed block: the least over its chords
-        own_first = np.concatenate([[0], np.flatnonzero(np.diff(owner)) + 1])  # each programmed block's first chord
+    # the search plans chords where the program has arcs, and checks the arcs themselves (chorded);
+    # where some arcs are shorter than the filters' reach, also those arcs as corners (cornered)
+    variants = [chorded(tp, tol) + (None,)]
+    short = cornered(tp, tol, feed, Td)
+    if short is not None:
+        variants.append(short)
+    total, owner_best = 0, None
+    for planned, checked, owner, short in variants:
+        f, t = feed[owner], tol[owner]
+        B = planned.n_blocks
+        corners = np.zeros(max(B - 1, 0), dtype=bool)
+        if B > 1:  # eq 13/14 dwells there at the relaxed tolerance: a corner, not a curve (no curvature cap)
+            h = None if short is None else np.ones(short.first.size)
+            eq13 = plan_fir(planned, f, delays, planned_tolerance(t, np.full(B, relax), short, h), refine=False,
+                            corner_speed="turn")
+            corners = np.asarray(eq13.overlaps) < Td * (1.0 - 1e-12)
+        kappa = vertex_curvature(planned, f, corners, delays)
+        caps = curvature_caps(planned, f, kappa, delays, limits)
+        for refine in (False, True):  # eq 13/14 at the caps, then plan_fir's look-ahead (module docstring)
+            found, r = _search(planned, checked, f, delays, t, limits, relax, passes, rounds, check_period, refine,
+                               kappa, caps, best, corners, short)
+            if found is not best:
+                best, owner_best = found, (owner if planned is not tp else None)
+            total += r
+    if best.compensated and owner_best is not None:  # per programmed block: the least over its chords
+        # each programmed block's first planned block
+        own_first = np.concatenate([[0], np.flatnonzero(np.diff(owner_best)) + 1])
         best = dataclasses.replace(best, relaxation=np.minimum.reduceat(best.relaxation, own_first),
                                    feed_factors=np.minimum.reduceat(best.feed_factors, own_first))
     return dataclasses.replace(best, rounds=total)
@@ -312,9 +351,109 @@ def chorded(tp: ToolPath, tol: np.ndarray) -> tuple[ToolPath, ToolPath, np.ndarr
     return ToolPath.from_polyline(chords), checked, owner
 
 
+def cornered(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, window: float):
+    """:func:`chorded` with the short arcs planned as the corner of their end tangents:
+    ``(planned, checked, owner, short)`` (``short`` a :class:`ShortArcs`), or None where no arc is
+    short (module docstring, step 2).
+
+    An arc shorter than the filters' reach at its feed (length ``<= feed window``, ``window`` the
+    delays' sum [s]) is never followed as a curve: the window averages it with the blocks either
+    side, and its eq 8 feed (``arc_feed_caps``) slows it as if it were a long one. Such an arc turns
+    like a corner, so it is planned as one: its chords give way to the two tangent lines from its
+    start and its end to where they meet (``V``), a sharp corner that eq 13/14 rounds; ``checked``
+    holds the arc as its two halves (the split point ``P`` at half its sweep). Planar arcs (not
+    helical) that turn by at most :data:`CORNER_TURN` qualify (``V`` runs off to infinity as the
+    turn nears pi), except the path's first and last blocks (the output rests on its ends).
+    ``tol`` ``(M,)`` [mm] as :func:`chorded`'s, ``feed`` ``(M,)`` [mm/s]."""
+    Td = float(window)
+    arc = tp.is_arc & (tp.sweeps <= CORNER_TURN) & (tp.lengths <= feed * Td)
+    arc[[0, -1]] = False  # the output rests on the path's ends: no corner to round there
+    if not arc.any():
+        return None
+    k = np.flatnonzero(arc)
+    S, E = tp.starts[k], tp.ends[k]
+    t_s, t_e = tp.tangents()
+    u, w, d = t_s[k], t_e[k], E - S  # V = S + a u = E - b w: a u + b w = d, by least squares
+    uw = np.sum(u * w, axis=1)
+    det = 1.0 - uw**2  # the tangents are unit vectors, not parallel (turn <= CORNER_TURN < pi)
+    du, dw = np.sum(d * u, axis=1), np.sum(d * w, axis=1)
+    a, b = (du - uw * dw) / det, (dw - uw * du) / det
+    V = S + a[:, None] * u
+    planar = np.linalg.norm(V - (E - b[:, None] * w), axis=1) <= 1e-9 * (1.0 + np.linalg.norm(d, axis=1))
+    keep = planar & (a > SHORT_LEG) & (b > SHORT_LEG)
+    if not keep.any():
+        return None
+    k, V = k[keep], V[keep]
+    arc = np.zeros(tp.n_blocks, dtype=bool)
+    arc[k] = True
+    P = tp.arc_points(k, 0.5 * tp.sweeps[k])
+    planned, checked, owner = chorded(tp, tol)
+    points = checked.ends
+    last = np.r_[owner[1:] != owner[:-1], True]
+    stay = ~arc[owner] | last  # a short arc keeps its end point; V goes in before it
+    points, owner = points[stay], owner[stay]
+    at = np.flatnonzero(arc[owner])  # the short arcs' end points, in the order of k
+    plan_pts = np.insert(points, at, V, axis=0)
+    check_pts = np.insert(points, at, P, axis=0)
+    owner = np.insert(owner, at, owner[at])
+    count = np.bincount(owner, minlength=tp.n_blocks)[owner]
+    planned = ToolPath.from_polyline(Polyline(np.vstack([tp.start[None], plan_pts])))
+    checked = ToolPath(tp.start, check_pts, tp.centers[owner], tp.normals[owner],
+                       np.where(tp.is_arc[owner], tp.sweeps[owner] / count, 0.0), tp.axes)
+    first = at + np.arange(at.size)  # each short arc's first planned block (start to V); V is corner `first`
+    corner_of = np.full(owner.size - 1, -1)
+    tangent = planned.turning_angles() <= TANGENT_TURN
+    for shift in (-1, 1, 0):  # its start and end where the arc is tangent there, and its corner V
+        c = first + shift
+        ok = (c >= 0) & (c < corner_of.size)
+        c, i = c[ok], np.flatnonzero(ok)
+        ok = tangent[c] | (shift == 0)
+        corner_of[c[ok]] = i[ok]
+    return planned, checked, owner, ShortArcs(V, P, np.concatenate([V, S[keep], E[keep]]), first,
+                                              np.linalg.norm(V - P, axis=1), corner_of)
+
+
+@dataclass(frozen=True)
+class ShortArcs:
+    """The short arcs :func:`cornered` plans as corners (``n`` of them).
+
+    Attributes:
+        corners: ``(n, d)`` where each arc's end tangents meet (``V``) [mm].
+        splits: ``(n, d)`` each arc's point at half its sweep (``P``) [mm].
+        pinned: ``(3 n, d)`` the planned vertices the mirror passes leave where they are: ``V`` and
+            each arc's start and end [mm].
+        first: ``(n,)`` each arc's first planned block (start to ``V``; ``V`` is planned corner
+            ``first``, the block after it runs from ``V`` to the arc's end).
+        offset: ``(n,)`` ``|V - P|`` [mm].
+        corner_of: ``(B - 1,)`` the arc whose ``V``, or whose start or end where it is tangent, each
+            planned corner is; -1 for the others.
+    """
+
+    corners: np.ndarray
+    splits: np.ndarray
+    pinned: np.ndarray
+    first: np.ndarray
+    offset: np.ndarray
+    corner_of: np.ndarray
+
+
+def planned_tolerance(tol: np.ndarray, g: np.ndarray, short: ShortArcs | None, h: np.ndarray | None) -> np.ndarray:
+    """``(B,)`` the tolerance [mm] a round plans its timing at: ``g tol`` on every planned block
+    (``tol``, ``g`` ``(B,)``), and on a short arc's two blocks (``short``, :func:`cornered`) ``|V - P|
+    + (2 h - 1) tol`` (at least 0; ``h`` ``(n,)`` in ``[0, 1]``): eq 13/14 rounds the corner ``V``
+    ``tol`` outside ``P`` at ``h = 1``, through it at ``1/2``, ``tol`` inside at 0; the search
+    bisects ``h`` per arc on which side of ``P`` the output passes."""
+    out = tol * g
+    if short is None:
+        return out
+    for b in (short.first, short.first + 1):
+        out[b] = np.maximum(short.offset + (2.0 * h - 1.0) * tol[b], 0.0)
+    return out
+
+
 def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray, limits: AxisLimits | None,
             relax: float, passes: int, rounds: int, check_period: float, refine: bool, kappa: np.ndarray,
-            caps: np.ndarray, best: MirrorPlan, corners: np.ndarray) -> tuple[MirrorPlan, int]:
+            caps: np.ndarray, best: MirrorPlan, corners: np.ndarray, short=None) -> tuple[MirrorPlan, int]:
     """One timing's search (module docstring, steps 1-3): ``(the faster of best and what it
     verified, rounds made)``. ``tp``: the planned path (arcs as chords), ``checked``: the path its
     plans are checked against (the programmed arcs' pieces, :func:`chorded`); ``refine``: the
@@ -330,17 +469,19 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
     struck = np.zeros(M, dtype=bool)  # the blocks of the corners nearest a tolerance violation last round
     step = np.full(M, RAISE_STEP)  # each block's largest raise a round, halved where a raise broke something
     last_limits = (np.zeros(0), np.zeros(0), np.zeros(0, dtype=int))  # the last round's limit violations
+    n_short = 0 if short is None else short.first.size
+    h, lo, hi = np.ones(n_short), np.zeros(n_short), np.ones(n_short)  # short arcs' roundings (planned_tolerance)
     r = 0
     while r < rounds:
         r += 1
-        relaxed_tol = tol * g
+        relaxed_tol = planned_tolerance(tol, g, short, h)
         top = caps if refine else np.minimum(caps, shrink_caps(kappa, np.minimum(relaxed_tol[:-1], relaxed_tol[1:]),
                                                                 delays))
         plan = plan_fir(tp, top * scale, delays, relaxed_tol, refine=refine, check_period=check_period,
                         corner_speed="turn")
         if float(plan.cycle_time) >= float(best.plan.cycle_time):
             break  # this timing cannot beat the plan at hand, moved or not
-        moved, vertices = compensate(plan, passes, frozen)
+        moved, vertices = compensate(plan, passes, frozen, None if short is None else short.pinned)
         found = violations(moved, checked, tol, limits, check_period)
         if found.tolerance.size == 0 and found.limits.size == 0:
             best = MirrorPlan(dataclasses.replace(moved, path_deviation=found.deviation), vertices, g.copy(),
@@ -374,10 +515,17 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
         last_limits = (found.limits, found.ratios, held)
         scale *= limit_factors(np.asarray(moved.start_times), np.asarray(moved.pulse_times), found.limits,
                                found.ratios, delays, push)
-        if found.tolerance.size:
+        late = found.tolerance
+        if late.size and n_short:  # a violation by a short arc still bisected: its rounding moves instead
+            arc = short.corner_of[_nearest_corner(moved, late)]
+            mine = (arc >= 0) & (hi[arc] - lo[arc] > SHORT_LEAST)
+            if mine.any():
+                _bisect(moved, short, np.unique(arc[mine]), h, lo, hi)
+                late = late[~mine]
+        if late.size:
             if M > 1:  # the nearest corner's eq 13/14 tolerance back towards eps, the second round in a row
                 # (a sharp corner's at once)
-                at = _nearest_corner(moved, found.tolerance)
+                at = _nearest_corner(moved, late)
                 near = np.zeros(M, dtype=bool)
                 near[at] = near[at + 1] = True
                 sharp = np.zeros(M, dtype=bool)
@@ -390,16 +538,32 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
                 relaxed = blocks & (g > 1.0)
                 g[relaxed] = np.where(g[relaxed] < _LAST_STEP, 1.0, 1.0 + 0.5 * (g[relaxed] - 1.0))
                 frozen |= blocks & ~relaxed  # at the tolerance already: stop moving its vertices
-                lower = found.tolerance[~hit]
+                lower = late[~hit]
             else:
-                lower = found.tolerance
+                lower = late
             scale[_blocks_near(moved, lower)] *= 1.0 - TOLERANCE_STEP
         else:
             struck[:] = False
     return best, r
 
 
-def compensate(plan: FIRPlan, passes: int, frozen: np.ndarray) -> tuple[FIRPlan, np.ndarray]:
+def _bisect(plan: FIRPlan, short: ShortArcs, arcs: np.ndarray, h: np.ndarray, lo: np.ndarray, hi: np.ndarray):
+    """One bisection step of the rounding ``h`` of each short arc in ``arcs`` (in place, with its
+    bracket ``[lo, hi]``): up where the output's point nearest the arc's split point ``P`` lies
+    between ``P`` and the corner ``V`` (rounded too little), down where it lies inside ``P`` (cut too
+    much)."""
+    pos = plan.position.numpy_evaluator()
+    centre = np.asarray(plan.corner_times)[short.first[arcs]]
+    Td = float(np.sum(np.asarray(plan.delays)))
+    P = short.splits[arcs]
+    q = pos(nearest_instants(pos, P, centre, 0.5 * Td))
+    outside = np.linalg.norm(q - short.corners[arcs], axis=1) < short.offset[arcs]
+    lo[arcs] = np.where(outside, h[arcs], lo[arcs])
+    hi[arcs] = np.where(outside, hi[arcs], h[arcs])
+    h[arcs] = 0.5 * (lo[arcs] + hi[arcs])
+
+
+def compensate(plan: FIRPlan, passes: int, frozen: np.ndarray, pinned=None) -> tuple[FIRPlan, np.ndarray]:
     """``passes`` mirror passes on ``plan``'s input, its timing held (module docstring, step 2).
 
     Args:
@@ -407,6 +571,8 @@ def compensate(plan: FIRPlan, passes: int, frozen: np.ndarray) -> tuple[FIRPlan,
             arcs as chords, :func:`chorded`).
         passes: mirror passes (0: the plan's own input).
         frozen: ``(M,)`` programmed blocks whose planned vertices are not moved.
+        pinned: None, or ``(n, d)`` points [mm] (short arcs' corners, :func:`cornered`): planned
+            vertices there are not moved.
 
     Returns:
         ``(plan with the moved input's profile, its input vertices (B + 1, d) [mm])``.
@@ -430,7 +596,7 @@ def compensate(plan: FIRPlan, passes: int, frozen: np.ndarray) -> tuple[FIRPlan,
         if k == passes or B < 2:
             break
         if fixed is None:  # the timing is held: the planned pulses start and end where they did here
-            fixed = _fixed_vertices(inputs, plan, frozen, ends[: B - 1])
+            fixed = _fixed_vertices(inputs, plan, frozen, ends[: B - 1]) | _at(target, pinned)
             smooth = _smoothing(target, fixed, ends[:B] - starts[:B], float(np.min(inputs.delays)))
         pos = NumpyPiecewise(breaks, coeffs)
         error = target[1:-1] - pos(nearest_instants(pos, target[1:-1], centre[: B - 1], 0.5 * Td))
@@ -438,6 +604,15 @@ def compensate(plan: FIRPlan, passes: int, frozen: np.ndarray) -> tuple[FIRPlan,
     moved_inputs = ProfileInputs(dataclasses.replace(table, geo=geo), inputs.fraction, inputs.piece_tv, inputs.gaps,
                                  inputs.delays, inputs.start, np.asarray(inputs.span))
     return dataclasses.replace(plan, profile=moved_inputs), moved
+
+
+def _at(vertices: np.ndarray, points) -> np.ndarray:
+    """``(B + 1,)`` True for the ``vertices`` [mm] at one of ``points`` ``(n, d)`` (None: none), within
+    1e-9 of the path's extent (the vertices are read back from the pulse table by sums)."""
+    if points is None or not len(points):
+        return np.zeros(vertices.shape[0], dtype=bool)
+    dist, _ = cKDTree(points).query(vertices)
+    return dist <= 1e-9 * (1.0 + float(np.max(np.abs(vertices))))
 
 
 def _smoothing(target: np.ndarray, fixed: np.ndarray, pulses: np.ndarray, shortest: float):

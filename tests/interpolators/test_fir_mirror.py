@@ -10,7 +10,7 @@ from research import metrics
 from research.errors import ParameterError
 from research.interpolators import plan_fir, plan_fir_mirror
 from research.interpolators._fir_mirror import (CHORD_SHARE, SAMPLE_MARGIN, _input_vertices, chorded, compensate,
-                                               sample_period)
+                                               cornered, sample_period)
 from research.limits import AxisLimits
 from research.paths import Polyline
 from research.paths.gcode import parse_gcode
@@ -557,3 +557,60 @@ def test_the_mirror_check_passes_a_plan_fir_plan_with_exact_stops_among_its_bloc
     assert m.compensated and m.cycle_time < float(plain.cycle_time)
     assert vertex_distances(m.plan, points[60:62]).max() <= 1e-9
     assert_keeps(m, points, EPS, None)
+
+
+def fillet(radius: float, length: float = 50.0, feed_mm_min: float = 12000.0) -> ToolPath:
+    """A 90 deg corner of two lines of ``length`` [mm] rounded by a G3 fillet of ``radius`` [mm], as a
+    CAM post writes it: (-length, 0) -> (-R, 0), G3 about (-R, R) to (0, R), -> (0, length)."""
+    g = (f"G21 G90 G17\nG1 X{-radius:.4f} Y0 F{feed_mm_min:g}\nG3 X0 Y{radius:.4f} I0 J{radius:.4f}\n"
+         f"G1 X0 Y{length:.4f}\nM2")
+    return parse_gcode(g, start=(-length, 0.0, 0.0)).blocks
+
+
+def test_cornered_plans_a_short_arc_as_the_corner_of_its_end_tangents():
+    """``cornered`` on a fillet of R 1 mm (1.57 mm long, against ``F T_d`` = 18 mm): the planned path
+    runs through ``V`` = (0, 0, 0), where the lines y = 0 and x = 0 meet, and keeps the arc's ends;
+    the checked path splits the arc at ``P`` = centre + R (1, -1) / sqrt 2 into two sub-arcs on the
+    programmed circle; ``offset`` = |V - P| = (sqrt 2 - 1) R. Not cornered: a fillet of R 20 mm
+    (31.4 mm long), an arc that ends the path, a helical arc."""
+    tp = fillet(1.0)
+    tol = np.full(tp.n_blocks, EPS)
+    planned, checked, owner, short = cornered(tp, tol, np.full(tp.n_blocks, F), float(np.sum(DELAYS)))
+    V = np.zeros(3)
+    P = np.array([-1.0 + 0.5**0.5, 1.0 - 0.5**0.5, 0.0])
+    np.testing.assert_allclose(planned.ends, [[-1.0, 0, 0], V, [0, 1.0, 0], [0, 50.0, 0]], atol=1e-12)
+    np.testing.assert_allclose(checked.ends, [[-1.0, 0, 0], P, [0, 1.0, 0], [0, 50.0, 0]], atol=1e-12)
+    assert owner.tolist() == [0, 1, 1, 2] and checked.is_arc.tolist() == [False, True, True, False]
+    u = np.linspace(0.0, 1.0, 21)
+    for k in (1, 2):  # the two halves lie on the programmed arc
+        assert np.max(tp.distance(checked.arc_points(np.full(u.size, k), checked.sweeps[k] * u))) <= 1e-12
+    np.testing.assert_allclose(short.corners, [V], atol=1e-12)
+    np.testing.assert_allclose(short.splits, [P], atol=1e-12)
+    np.testing.assert_allclose(short.offset, [2**0.5 - 1.0], rtol=1e-12)
+    assert short.first.tolist() == [1] and short.corner_of.tolist() == [0, 0, 0]
+    assert cornered(fillet(20.0), tol, np.full(3, F), float(np.sum(DELAYS))) is None
+    tp = ToolPath.from_polyline(Polyline([[-10.0, 0.0, 0.0], [0.0, 0.0, 0.0]]))
+    end = tp.then_arc([1.0, 1.0, 0.0], [0.0, 1.0, 0.0], ccw=True)
+    assert cornered(end, tol[:2], np.full(2, F), float(np.sum(DELAYS))) is None
+    helix = tp.then_arc([1.0, 1.0, 0.5], [0.0, 1.0, 0.0], ccw=True)
+    helix = ToolPath(helix.start, np.vstack([helix.ends, [1.0, 10.0, 0.5]]), np.vstack([helix.centers, [[np.nan] * 3]]),
+                     np.vstack([helix.normals, [[np.nan] * 3]]), np.concatenate([helix.sweeps, [0.0]]))
+    assert cornered(helix, tol, np.full(3, F), float(np.sum(DELAYS))) is None
+
+
+@pytest.mark.parametrize("limits", [False, True])
+def test_a_short_fillet_runs_as_a_corner(limits):
+    """A fillet of R 1 mm between two 50 mm lines (bench_cam's setting): ``plan_fir`` slows the arc
+    to its eq 8 feed (0.7283 s), as if the filters followed it as a circle; the 1.57 mm arc sits
+    inside the 18 mm window, and the mirror plans it as the corner of its end tangents, rounded
+    through it. Faster by more than 10 % (the eq 13/14 plan of the sharp corner at eps takes 0.6552
+    s, 10 % below), eps held by the exact distance to the programmed arc every 0.2 ms, and the
+    envelope's limits held on the sampled trajectory (``metrics.limit_ratios``)."""
+    tp = fillet(1.0)
+    lim = AxisLimits.fir_envelope(3, F, DELAYS) if limits else None
+    m = plan_fir_mirror(tp, F, DELAYS, EPS, limits=lim)
+    assert m.compensated and m.cycle_time < 0.9 * m.plain_cycle_time
+    tr = m.plan.trajectory(2e-4)
+    assert np.max(tp.distance(np.asarray(tr.q))) <= EPS * (1 + 1e-6) + 1e-8
+    if limits:
+        assert max(float(np.max(r)) for r in metrics.limit_ratios(tr, lim).values()) <= 1.0 + 1e-3
