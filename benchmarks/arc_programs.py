@@ -8,6 +8,8 @@
 * :func:`freeform_passes` gives bench_cam's freeform curve as flat waterline passes (``z`` of each
   pass constant: G17 arcs cannot follow the 3-D curve's waviness), tessellated at one chord
   tolerance.
+* :func:`offset_pocket` is a rectangular pocket of offset rings with small corner fillets (CAM
+  corner smoothing) joined by stepovers.
 * :func:`arc_chain` is a seeded chain of tangent arcs of alternating sense with a line every
   ``line_every`` arcs (``1``: every arc between two lines), the shape of arc-fitted contours.
 
@@ -127,3 +129,24 @@ def arc_chain(n_arcs: int, seed: int, line_every: int) -> ToolPath:
         p = end
     lines.append("M2")
     return parse_gcode("\n".join(lines)).blocks
+
+
+def offset_pocket(rings: int, width: float = 60.0, height: float = 40.0, step: float = 2.0,
+                  radius: float = 1.0) -> str:
+    """G-code of a rectangular pocket cleared by ``rings`` offset contours, as a CAM post writes it:
+    ring ``k`` is the ``width x height`` [mm] rectangle offset ``k step`` inwards, its corners
+    rounded by G3 fillets of ``max(radius - 0.1 k, 0.3)`` mm (CAM corner smoothing), run counter-
+    clockwise from the middle of its bottom side back to it; a G1 stepover joins each ring to the
+    next (G17, 4 decimals, F 12000 mm/min). Read it with ``parse_gcode(text, start=(width / 2, 0, 0))``."""
+    lines = ["G21 G90 G17 G94 F12000"]
+    for k in range(rings):
+        a = k * step
+        w, h, r = width - 2 * a, height - 2 * a, max(radius - 0.1 * k, 0.3)
+        if k:
+            lines.append(f"G1 X{a + w / 2:.4f} Y{a:.4f}")
+        lines += [f"G1 X{a + w - r:.4f} Y{a:.4f}", f"G3 X{a + w:.4f} Y{a + r:.4f} I0 J{r:.4f}",
+                  f"G1 X{a + w:.4f} Y{a + h - r:.4f}", f"G3 X{a + w - r:.4f} Y{a + h:.4f} I{-r:.4f} J0",
+                  f"G1 X{a + r:.4f} Y{a + h:.4f}", f"G3 X{a:.4f} Y{a + h - r:.4f} I0 J{-r:.4f}",
+                  f"G1 X{a:.4f} Y{a + r:.4f}", f"G3 X{a + r:.4f} Y{a:.4f} I{r:.4f} J0", f"G1 X{a + w / 2:.4f} Y{a:.4f}"]
+    lines.append("M2")
+    return "\n".join(lines)

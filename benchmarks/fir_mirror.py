@@ -158,8 +158,9 @@ def sweep_raise(table: Table) -> None:
 def arc_cases(levels: int) -> dict:
     """``{name: (path, its chord source or None)}``: the programs with arcs (arc_programs): a chain
     of 40 tangent arcs (a line before every third), 30 arcs between lines, the freeform curve's
-    flat passes arc-fitted (with the chords they were fitted to), and ``random_program`` seeds
-    ``ARC_SEEDS`` (lines and arcs)."""
+    flat passes arc-fitted (with the chords they were fitted to), ``random_program`` seeds
+    ``ARC_SEEDS`` (lines and arcs), and offset pockets of 1 and 8 rings with small corner fillets
+    (``arc_programs.offset_pocket``)."""
     pts = arc_programs.freeform_passes(levels, FIT_CHORD_TOL)
     text, counts = arc_programs.arc_fitted(pts, FIT_TOL, bench_cam.FEED * 60.0)
     fitted = parse_gcode(text, start=tuple(pts[0])).blocks
@@ -168,6 +169,10 @@ def arc_cases(levels: int) -> dict:
              f"freeform x {levels} flat passes arc-fitted at {FIT_TOL * 1e3:g} um ({counts['arcs']} arcs, "
              f"{counts['lines']} lines)": (fitted, Polyline(pts))}
     cases.update({f"random_program seed {s}": (random_program(np.random.default_rng(s)), None) for s in ARC_SEEDS})
+    for rings in (1, 8):  # fillets far shorter than the filters' reach (plan_fir_mirror's short arcs)
+        text = arc_programs.offset_pocket(rings)
+        cases[f"offset pocket, {rings} ring{'s' if rings > 1 else ''}, G3 fillets R 0.3-1 mm"] = (
+            parse_gcode(text, start=(30.0, 0.0, 0.0)).blocks, None)
     return cases
 
 

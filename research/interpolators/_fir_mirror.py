@@ -51,20 +51,22 @@ What this module does:
    4.6292 s as chords; over eleven programs with arcs (``benchmarks/fir_mirror.py``) the cycles
    summed 33.71 -> 19.60 s (benchmarks/README.md).
 
-   **Short arcs** (:func:`cornered`), shorter than the filters' reach at their feed (``L <= F
-   T_d``), are not followed as curves at all: the window averages such an arc with the blocks
+   **Short arcs** (:func:`cornered`), fillets shorter than the filters' reach at their feed (``L
+   <= F T_d``), are not followed as curves at all: the window averages such an arc with the blocks
    either side, yet ``plan_fir`` slows it to its eq 8 feed as if it were a long circle. A fillet
-   of R 1 mm between two lines at bench_cam's setting: 0.7283 s, against 0.6552 s for the sharp
-   corner without it. Where the program has such arcs the search is run a second time (and the
-   faster verified plan kept) with each of them planned as the corner ``V`` of its end tangents
-   and checked as the arc: eq 13/14 rounds ``V`` at ``|V - P| + (2 h - 1) eps`` (``P`` the arc's
-   point at half its sweep, :func:`planned_tolerance`), and ``h`` is bisected per arc on which
-   side of ``P`` the output passes (:func:`_bisect`, to :data:`SHORT_LEAST`); the mirror passes
-   leave ``V`` and the arc's ends where they are (moving ``V`` towards ``P`` by the mirror of its
-   error broke the lines beside it). The fillet: 0.6298 s; a rectangle of lines with three such
-   fillets (R 0.3 mm) 1.5825 -> 1.3900 s. Left: an offset pocket (8 such rings joined by 2.8 mm
-   links) verifies with neither planned path (the links' corners and the fillets share one
-   window), and a fillet of R 2 mm has no rounding of ``V`` within eps of it.
+   of R 1 mm between two 50 mm lines at bench_cam's setting: 0.7283 s, against 0.6552 s for the
+   sharp corner without it. Where the program has such arcs the search runs a second time (and
+   the faster verified plan is kept) with each of them planned as the corner ``V`` of its end
+   tangents and checked as the arc: eq 13/14 rounds ``V`` at ``|V - P| + (2 h - 1) eps`` (``P``
+   the arc's point at half its sweep, :func:`planned_tolerance`), and ``h`` is bisected per arc on
+   which side of ``P`` the output passes (:func:`_bisect`, to :data:`SHORT_LEAST`); the mirror
+   passes leave ``V`` and the arc's ends where they are (moving ``V`` towards ``P`` by the mirror
+   of its error broke the lines beside it). The fillet: 0.6298 s; a closed 60 x 40 mm rectangle
+   with R 1 mm fillets 1.6384 -> 1.2492 s; an offset pocket of 8 such rings (R 1-0.3 mm, 2 mm
+   stepovers) 10.8623 -> 8.3186 s, under the envelope's limits 11.0126 -> 9.0319 s. Fillets of
+   R 2 mm and more (at 200 mm/s, 60/30 ms, 50 um) have no rounding of ``V`` within eps of them;
+   nor have turns beyond 120 deg.
+
 3. **Checks and search.** The exact profile of the moved input is checked against the
    *programmed* path as ``plan_fir`` checks its own (vertex distances at every corner, the
    trajectory sampled), but more densely: the mirror holds the output's distance near eps all
@@ -174,11 +176,22 @@ SAMPLE_MARGIN = 1e-3
 #: summed 20.20 / 20.12 / 19.71 / 19.60 / 19.62 / 19.94 / 19.78 s, planning 11.7 / 9.8 / 8.9 / 8.1 /
 #: 7.7 / 7.8 / 8.3 s
 CHORD_SHARE = 0.1
-#: the largest turn [rad] of a short arc planned as a corner (:func:`cornered`)
+#: an arc up to this share of the filters' reach at its feed (``F T_d``) is short (:func:`cornered`): the
+#: window averages it whole. Swept 0.5 / 1 / 2 on bench_cam's setting (offset pocket of 8 rings, rings
+#: and corners with fillets of R 0.3-15 mm, arc chains; with and without the envelope's limits): the
+#: same cycle times (fillets of R 2 mm and more never verify as corners there), planning 11.9 / 11.5 /
+#: 11.8 s; at 0 (no short arcs) the pocket 10.8623 s against 8.3186 s
+SHORT_REACH = 1.0
+#: the largest turn [rad] of a short arc planned as a corner (:func:`cornered`). Fillets of R 0.3 / 1 mm
+#: between 50 mm lines turning 60-170 deg (bench_cam's setting) verify as corners up to 120 deg
+#: (R 0.3 mm: 0.7439 -> 0.6431 s) and never beyond (150, 170 deg)
 CORNER_TURN = 2.0 * math.pi / 3.0
-#: a turn [rad] up to which a short arc's start or end counts as tangent (:func:`cornered`)
+#: a turn [rad] up to which a short arc's start or end counts as tangent (:func:`cornered`): 4-decimal
+#: coordinates of a fillet of R >= 0.1 mm turn by less than 1e-3 rad where it is tangent
 TANGENT_TURN = 1e-3
-#: the bracket width on a short arc's rounding below which its bisection stops (:func:`planned_tolerance`)
+#: the bracket width on a short arc's rounding below which its bisection stops (:func:`planned_tolerance`).
+#: Swept 1/8, 1/16, 1/64, 1/256 on SHORT_REACH's cases: the pocket 9.1704 / 9.0866 / 9.0319 / 9.0319 s
+#: (limits) and 8.3700 / 8.3407 / 8.3186 / 8.3186 s, the others the same
 SHORT_LEAST = 1.0 / 64.0
 #: the shortest tangent piece [mm] from a short arc's end to its corner (:func:`cornered`): below it
 #: the arc barely turns and stays as chords
@@ -362,12 +375,16 @@ def cornered(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, window: float):
     like a corner, so it is planned as one: its chords give way to the two tangent lines from its
     start and its end to where they meet (``V``), a sharp corner that eq 13/14 rounds; ``checked``
     holds the arc as its two halves (the split point ``P`` at half its sweep). Planar arcs (not
-    helical) that turn by at most :data:`CORNER_TURN` qualify (``V`` runs off to infinity as the
-    turn nears pi), except the path's first and last blocks (the output rests on its ends).
+    helical) that turn by at most :data:`CORNER_TURN` and are tangent to the blocks either side (a
+    fillet; an arc that meets a corner shares its window with that corner's dwell) qualify, except
+    the path's first and last blocks (the output rests on its ends).
     ``tol`` ``(M,)`` [mm] as :func:`chorded`'s, ``feed`` ``(M,)`` [mm/s]."""
     Td = float(window)
-    arc = tp.is_arc & (tp.sweeps <= CORNER_TURN) & (tp.lengths <= feed * Td)
+    arc = tp.is_arc & (tp.sweeps <= CORNER_TURN) & (tp.lengths <= SHORT_REACH * feed * Td)
     arc[[0, -1]] = False  # the output rests on the path's ends: no corner to round there
+    turn = tp.turning_angles()
+    arc[1:] &= turn <= TANGENT_TURN  # a fillet: tangent to the blocks either side
+    arc[:-1] &= turn <= TANGENT_TURN
     if not arc.any():
         return None
     k = np.flatnonzero(arc)

@@ -614,3 +614,24 @@ def test_a_short_fillet_runs_as_a_corner(limits):
     assert np.max(tp.distance(np.asarray(tr.q))) <= EPS * (1 + 1e-6) + 1e-8
     if limits:
         assert max(float(np.max(r)) for r in metrics.limit_ratios(tr, lim).values()) <= 1.0 + 1e-3
+
+
+def test_a_filleted_rectangle_runs_its_fillets_as_corners_under_limits():
+    """A closed 60 x 40 mm rectangle with G3 fillets of R 0.5 mm (CAM corner smoothing), run from the
+    middle of its bottom side back to it, under the FIR's envelope limits: each fillet (0.79 mm
+    against the 18 mm window) is planned as a corner rounded through it. Faster than ``plan_fir``
+    by more than 15 % (three corners, each about 0.1 s of dwell and slow arc that the sharp
+    corner's eq 13/14 plan does not pay); eps by the exact distance to the programmed fillets,
+    limits on the sampled trajectory; the path's end reached."""
+    r, w, h = 0.5, 60.0, 40.0
+    g = (f"G21 G90 G17 F12000\nG1 X{w - r} Y0\nG3 X{w} Y{r} I0 J{r}\nG1 X{w} Y{h - r}\nG3 X{w - r} Y{h} I{-r} J0\n"
+         f"G1 X{r} Y{h}\nG3 X0 Y{h - r} I0 J{-r}\nG1 X0 Y{r}\nG3 X{r} Y0 I{r} J0\nG1 X{w / 2} Y0\nM2")
+    tp = parse_gcode(g, start=(w / 2, 0.0, 0.0)).blocks
+    lim = AxisLimits.fir_envelope(3, F, DELAYS)
+    m = plan_fir_mirror(tp, F, DELAYS, EPS, limits=lim)
+    assert m.compensated and m.cycle_time < 0.85 * m.plain_cycle_time
+    tr = m.plan.trajectory(2e-4)
+    q = np.asarray(tr.q)
+    assert np.max(tp.distance(q)) <= EPS * (1 + 1e-6) + 1e-8
+    assert max(float(np.max(v)) for v in metrics.limit_ratios(tr, lim).values()) <= 1.0 + 1e-3
+    np.testing.assert_allclose(q[-1], tp.ends[-1], atol=1e-9)
