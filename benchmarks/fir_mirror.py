@@ -45,7 +45,7 @@ import bench_cam  # noqa: E402
 from bench_fir import Table  # noqa: E402
 from research import metrics  # noqa: E402
 from research.interpolators import plan_fir, plan_fir_mirror  # noqa: E402
-from research.interpolators import _fir_mirror, _fir_mirror_feeds  # noqa: E402
+from research.interpolators import _fir_mirror, _fir_mirror_feeds, _fir_mirror_paths  # noqa: E402
 from research.limits import AxisLimits  # noqa: E402
 from research.paths import Polyline, named_path  # noqa: E402
 from research.paths.gcode import parse_gcode  # noqa: E402
@@ -181,10 +181,10 @@ def sweep_chords(table: Table) -> None:
     cases = arc_cases(1)
     table.section("Sweep of the arcs' chord sagitta (CHORD_SHARE of eps), limits = envelope: cycle times [s] of "
                   + ", ".join(cases))
-    kept = _fir_mirror.CHORD_SHARE
+    kept = _fir_mirror_paths.CHORD_SHARE
     try:
         for share in SWEEP_CHORDS:
-            _fir_mirror.CHORD_SHARE = share
+            _fir_mirror_paths.CHORD_SHARE = share
             out, t = [], 0.0
             for path, _ in cases.values():
                 m, dt = timed(plan_fir_mirror, path, F, D, eps, limits=AxisLimits.fir_envelope(path.dim, F, D))
@@ -193,7 +193,7 @@ def sweep_chords(table: Table) -> None:
             table.row(f"  CHORD_SHARE {share:g}", " / ".join(f"{x:.4f}" for x in out),
                       f"sum {sum(out):.4f} s", f"planning {t:.1f} s")
     finally:
-        _fir_mirror.CHORD_SHARE = kept
+        _fir_mirror_paths.CHORD_SHARE = kept
 
 
 def compare(table: Table, name: str, path, feed, delays, eps, limits) -> tuple[float, float]:
@@ -235,7 +235,7 @@ def main(argv=None) -> int:
         path = cam_file(levels)
         lim = AxisLimits.fir_envelope(path.dim, F, D)
         compare(table, f"CAM file, {path.n_segments} chords", path, F, D, eps, lim)
-    table.section(f"Programs with arcs (CHORD_SHARE {_fir_mirror.CHORD_SHARE:g}), limits = envelope")
+    table.section(f"Programs with arcs (CHORD_SHARE {_fir_mirror_paths.CHORD_SHARE:g}), limits = envelope")
     plain_sum = mirror_sum = 0.0
     for name, (path, source) in arc_cases(1 if args.quick else bench_cam.LEVELS_QUICK).items():
         lim = AxisLimits.fir_envelope(path.dim, F, D)

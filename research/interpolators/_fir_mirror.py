@@ -133,6 +133,8 @@ from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_limits import LIMIT_RTOL
 from research.interpolators._fir_piece_peaks import PiecePeaks
 from research.interpolators._fir_profile import ProfileInputs, profile
+from research.interpolators._fir_mirror_paths import (SHORT_LEAST, Fillets, bisect_rounding, chorded, cornered,
+                                                      planned_tolerance)
 from research.interpolators._fir_mirror_feeds import (RAISE_STEP, TOLERANCE_STEP, curvature_caps, jerk_push,
                                                       limit_factors, raise_factors, shrink_caps, span_ratios,
                                                       triangle_sum, vertex_curvature)
@@ -140,7 +142,6 @@ from research.interpolators._fir_verify import nearest_instants, path_deviations
 from research.interpolators.fir import (CHECK_PERIOD, FIRPlan, _as_toolpath, _check_inputs, joined_plan, paused_parts,
                                        plan_fir)
 from research.limits import AxisLimits
-from research.paths.polyline import Polyline
 from research.paths.toolpath import ToolPath
 from research.piecewise import NumpyPiecewise
 
@@ -170,32 +171,6 @@ RAISE_LEAST = 1e-3  # the raise phase ends when no block can be raised by more t
 #: the samples per ``check_period`` grow as its inverse square root (3 at eps 50 um under bench_cam's
 #: envelope: the 10^4-chord file's planning 8.0 -> 9.5 s); plan_fir's own check allows none
 SAMPLE_MARGIN = 1e-3
-#: sagitta of the chords the search plans for arcs, as a share of the least arc tolerance
-#: (:func:`chorded`). Swept (``benchmarks/fir_mirror.py --sweep-chords``) at 0.01 / 0.02 / 0.05 /
-#: 0.1 / 0.2 / 0.35 / 0.5 on eleven programs with arcs under bench_cam's setting and envelope: cycles
-#: summed 20.20 / 20.12 / 19.71 / 19.60 / 19.62 / 19.94 / 19.78 s, planning 11.7 / 9.8 / 8.9 / 8.1 /
-#: 7.7 / 7.8 / 8.3 s
-CHORD_SHARE = 0.1
-#: an arc up to this share of the filters' reach at its feed (``F T_d``) is short (:func:`cornered`): the
-#: window averages it whole. Swept 0.5 / 1 / 2 on bench_cam's setting (offset pocket of 8 rings, rings
-#: and corners with fillets of R 0.3-15 mm, arc chains; with and without the envelope's limits): the
-#: same cycle times (fillets of R 2 mm and more never verify as corners there), planning 11.9 / 11.5 /
-#: 11.8 s; at 0 (no short arcs) the pocket 10.8623 s against 8.3186 s
-SHORT_REACH = 1.0
-#: the largest turn [rad] of a short arc planned as a corner (:func:`cornered`). Fillets of R 0.3 / 1 mm
-#: between 50 mm lines turning 60-170 deg (bench_cam's setting) verify as corners up to 120 deg
-#: (R 0.3 mm: 0.7439 -> 0.6431 s) and never beyond (150, 170 deg)
-CORNER_TURN = 2.0 * math.pi / 3.0
-#: a turn [rad] up to which a short arc's start or end counts as tangent (:func:`cornered`): 4-decimal
-#: coordinates of a fillet of R >= 0.1 mm turn by less than 1e-3 rad where it is tangent
-TANGENT_TURN = 1e-3
-#: the bracket width on a short arc's rounding below which its bisection stops (:func:`planned_tolerance`).
-#: Swept 1/8, 1/16, 1/64, 1/256 on SHORT_REACH's cases: the pocket 9.1704 / 9.0866 / 9.0319 / 9.0319 s
-#: (limits) and 8.3700 / 8.3407 / 8.3186 / 8.3186 s, the others the same
-SHORT_LEAST = 1.0 / 64.0
-#: the shortest tangent piece [mm] from a short arc's end to its corner (:func:`cornered`): below it
-#: the arc barely turns and stays as chords
-SHORT_LEG = 1e-6
 
 
 def default_rounds(relax: float) -> int:
@@ -313,26 +288,26 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
     T_plain = float(plain.cycle_time)
     best = MirrorPlan(plain, _input_vertices(plain), np.ones(M), np.ones(M), False, 0, T_plain)
     # the search plans chords where the program has arcs, and checks the arcs themselves (chorded);
-    # where some arcs are shorter than the filters' reach, also those arcs as corners (cornered)
+    # where it has fillets shorter than the filters' reach, also those as corners (cornered)
     variants = [chorded(tp, tol) + (None,)]
-    short = cornered(tp, tol, feed, Td)
-    if short is not None:
-        variants.append(short)
+    rounded = cornered(tp, tol, feed, Td)
+    if rounded is not None:
+        variants.append(rounded)
     total, owner_best = 0, None
-    for planned, checked, owner, short in variants:
+    for planned, checked, owner, fillets in variants:
         f, t = feed[owner], tol[owner]
         B = planned.n_blocks
         corners = np.zeros(max(B - 1, 0), dtype=bool)
         if B > 1:  # eq 13/14 dwells there at the relaxed tolerance: a corner, not a curve (no curvature cap)
-            h = None if short is None else np.ones(short.first.size)
-            eq13 = plan_fir(planned, f, delays, planned_tolerance(t, np.full(B, relax), short, h), refine=False,
+            h = None if fillets is None else np.ones(fillets.first.size)
+            eq13 = plan_fir(planned, f, delays, planned_tolerance(t, np.full(B, relax), fillets, h), refine=False,
                             corner_speed="turn")
             corners = np.asarray(eq13.overlaps) < Td * (1.0 - 1e-12)
         kappa = vertex_curvature(planned, f, corners, delays)
         caps = curvature_caps(planned, f, kappa, delays, limits)
         for refine in (False, True):  # eq 13/14 at the caps, then plan_fir's look-ahead (module docstring)
             found, r = _search(planned, checked, f, delays, t, limits, relax, passes, rounds, check_period, refine,
-                               kappa, caps, best, corners, short)
+                               kappa, caps, best, corners, fillets)
             if found is not best:
                 best, owner_best = found, (owner if planned is not tp else None)
             total += r
@@ -344,133 +319,10 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
     return dataclasses.replace(best, rounds=total)
 
 
-def chorded(tp: ToolPath, tol: np.ndarray) -> tuple[ToolPath, ToolPath, np.ndarray]:
-    """The path the mirror's search plans and the one it checks: ``(planned, checked, owner)``.
-
-    On a path of lines both are ``tp`` and ``owner`` is ``arange(M)``. With arcs, ``planned`` holds
-    every arc as chords of equal angle (``ToolPath.to_polyline``) of sagitta at most
-    :data:`CHORD_SHARE` of the least arc tolerance in ``tol`` ``(M,)`` [mm], and ``checked`` the
-    same blocks as sub-arcs of the programmed arcs (the same centre and axis, the sweep split
-    evenly: radius and axial offset are linear in the angle, so each is the programmed arc's own
-    piece): the search moves and times the chords' vertices and checks the programmed arcs
-    themselves. ``owner`` ``(B,)`` is each planned block's programmed block."""
-    M = tp.n_blocks
-    if not tp.is_arc.any():
-        return tp, tp, np.arange(M)
-    chords, owner = tp.to_polyline(CHORD_SHARE * float(np.min(tol[tp.is_arc])))
-    count = np.bincount(owner, minlength=M)[owner]
-    checked = ToolPath(tp.start, chords.points[1:], tp.centers[owner], tp.normals[owner],
-                       np.where(tp.is_arc[owner], tp.sweeps[owner] / count, 0.0), tp.axes)
-    return ToolPath.from_polyline(chords), checked, owner
-
-
-def cornered(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, window: float):
-    """:func:`chorded` with the short arcs planned as the corner of their end tangents:
-    ``(planned, checked, owner, short)`` (``short`` a :class:`ShortArcs`), or None where no arc is
-    short (module docstring, step 2).
-
-    An arc shorter than the filters' reach at its feed (length ``<= feed window``, ``window`` the
-    delays' sum [s]) is never followed as a curve: the window averages it with the blocks either
-    side, and its eq 8 feed (``arc_feed_caps``) slows it as if it were a long one. Such an arc turns
-    like a corner, so it is planned as one: its chords give way to the two tangent lines from its
-    start and its end to where they meet (``V``), a sharp corner that eq 13/14 rounds; ``checked``
-    holds the arc as its two halves (the split point ``P`` at half its sweep). Planar arcs (not
-    helical) that turn by at most :data:`CORNER_TURN` and are tangent to the blocks either side (a
-    fillet; an arc that meets a corner shares its window with that corner's dwell) qualify, except
-    the path's first and last blocks (the output rests on its ends).
-    ``tol`` ``(M,)`` [mm] as :func:`chorded`'s, ``feed`` ``(M,)`` [mm/s]."""
-    Td = float(window)
-    arc = tp.is_arc & (tp.sweeps <= CORNER_TURN) & (tp.lengths <= SHORT_REACH * feed * Td)
-    arc[[0, -1]] = False  # the output rests on the path's ends: no corner to round there
-    turn = tp.turning_angles()
-    arc[1:] &= turn <= TANGENT_TURN  # a fillet: tangent to the blocks either side
-    arc[:-1] &= turn <= TANGENT_TURN
-    if not arc.any():
-        return None
-    k = np.flatnonzero(arc)
-    S, E = tp.starts[k], tp.ends[k]
-    t_s, t_e = tp.tangents()
-    u, w, d = t_s[k], t_e[k], E - S  # V = S + a u = E - b w: a u + b w = d, by least squares
-    uw = np.sum(u * w, axis=1)
-    det = 1.0 - uw**2  # the tangents are unit vectors, not parallel (turn <= CORNER_TURN < pi)
-    du, dw = np.sum(d * u, axis=1), np.sum(d * w, axis=1)
-    a, b = (du - uw * dw) / det, (dw - uw * du) / det
-    V = S + a[:, None] * u
-    planar = np.linalg.norm(V - (E - b[:, None] * w), axis=1) <= 1e-9 * (1.0 + np.linalg.norm(d, axis=1))
-    keep = planar & (a > SHORT_LEG) & (b > SHORT_LEG)
-    if not keep.any():
-        return None
-    k, V = k[keep], V[keep]
-    arc = np.zeros(tp.n_blocks, dtype=bool)
-    arc[k] = True
-    P = tp.arc_points(k, 0.5 * tp.sweeps[k])
-    planned, checked, owner = chorded(tp, tol)
-    points = checked.ends
-    last = np.r_[owner[1:] != owner[:-1], True]
-    stay = ~arc[owner] | last  # a short arc keeps its end point; V goes in before it
-    points, owner = points[stay], owner[stay]
-    at = np.flatnonzero(arc[owner])  # the short arcs' end points, in the order of k
-    plan_pts = np.insert(points, at, V, axis=0)
-    check_pts = np.insert(points, at, P, axis=0)
-    owner = np.insert(owner, at, owner[at])
-    count = np.bincount(owner, minlength=tp.n_blocks)[owner]
-    planned = ToolPath.from_polyline(Polyline(np.vstack([tp.start[None], plan_pts])))
-    checked = ToolPath(tp.start, check_pts, tp.centers[owner], tp.normals[owner],
-                       np.where(tp.is_arc[owner], tp.sweeps[owner] / count, 0.0), tp.axes)
-    first = at + np.arange(at.size)  # each short arc's first planned block (start to V); V is corner `first`
-    corner_of = np.full(owner.size - 1, -1)
-    tangent = planned.turning_angles() <= TANGENT_TURN
-    for shift in (-1, 1, 0):  # its start and end where the arc is tangent there, and its corner V
-        c = first + shift
-        ok = (c >= 0) & (c < corner_of.size)
-        c, i = c[ok], np.flatnonzero(ok)
-        ok = tangent[c] | (shift == 0)
-        corner_of[c[ok]] = i[ok]
-    return planned, checked, owner, ShortArcs(V, P, np.concatenate([V, S[keep], E[keep]]), first,
-                                              np.linalg.norm(V - P, axis=1), corner_of)
-
-
-@dataclass(frozen=True)
-class ShortArcs:
-    """The short arcs :func:`cornered` plans as corners (``n`` of them).
-
-    Attributes:
-        corners: ``(n, d)`` where each arc's end tangents meet (``V``) [mm].
-        splits: ``(n, d)`` each arc's point at half its sweep (``P``) [mm].
-        pinned: ``(3 n, d)`` the planned vertices the mirror passes leave where they are: ``V`` and
-            each arc's start and end [mm].
-        first: ``(n,)`` each arc's first planned block (start to ``V``; ``V`` is planned corner
-            ``first``, the block after it runs from ``V`` to the arc's end).
-        offset: ``(n,)`` ``|V - P|`` [mm].
-        corner_of: ``(B - 1,)`` the arc whose ``V``, or whose start or end where it is tangent, each
-            planned corner is; -1 for the others.
-    """
-
-    corners: np.ndarray
-    splits: np.ndarray
-    pinned: np.ndarray
-    first: np.ndarray
-    offset: np.ndarray
-    corner_of: np.ndarray
-
-
-def planned_tolerance(tol: np.ndarray, g: np.ndarray, short: ShortArcs | None, h: np.ndarray | None) -> np.ndarray:
-    """``(B,)`` the tolerance [mm] a round plans its timing at: ``g tol`` on every planned block
-    (``tol``, ``g`` ``(B,)``), and on a short arc's two blocks (``short``, :func:`cornered`) ``|V - P|
-    + (2 h - 1) tol`` (at least 0; ``h`` ``(n,)`` in ``[0, 1]``): eq 13/14 rounds the corner ``V``
-    ``tol`` outside ``P`` at ``h = 1``, through it at ``1/2``, ``tol`` inside at 0; the search
-    bisects ``h`` per arc on which side of ``P`` the output passes."""
-    out = tol * g
-    if short is None:
-        return out
-    for b in (short.first, short.first + 1):
-        out[b] = np.maximum(short.offset + (2.0 * h - 1.0) * tol[b], 0.0)
-    return out
-
-
 def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray, limits: AxisLimits | None,
             relax: float, passes: int, rounds: int, check_period: float, refine: bool, kappa: np.ndarray,
-            caps: np.ndarray, best: MirrorPlan, corners: np.ndarray, short=None) -> tuple[MirrorPlan, int]:
+            caps: np.ndarray, best: MirrorPlan, corners: np.ndarray,
+            fillets: Fillets | None = None) -> tuple[MirrorPlan, int]:
     """One timing's search (module docstring, steps 1-3): ``(the faster of best and what it
     verified, rounds made)``. ``tp``: the planned path (arcs as chords), ``checked``: the path its
     plans are checked against (the programmed arcs' pieces, :func:`chorded`); ``refine``: the
@@ -486,19 +338,19 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
     struck = np.zeros(M, dtype=bool)  # the blocks of the corners nearest a tolerance violation last round
     step = np.full(M, RAISE_STEP)  # each block's largest raise a round, halved where a raise broke something
     last_limits = (np.zeros(0), np.zeros(0), np.zeros(0, dtype=int))  # the last round's limit violations
-    n_short = 0 if short is None else short.first.size
-    h, lo, hi = np.ones(n_short), np.zeros(n_short), np.ones(n_short)  # short arcs' roundings (planned_tolerance)
+    n_fillets = 0 if fillets is None else fillets.first.size
+    h, lo, hi = np.ones(n_fillets), np.zeros(n_fillets), np.ones(n_fillets)  # their roundings (planned_tolerance)
     r = 0
     while r < rounds:
         r += 1
-        relaxed_tol = planned_tolerance(tol, g, short, h)
+        relaxed_tol = planned_tolerance(tol, g, fillets, h)
         top = caps if refine else np.minimum(caps, shrink_caps(kappa, np.minimum(relaxed_tol[:-1], relaxed_tol[1:]),
                                                                 delays))
         plan = plan_fir(tp, top * scale, delays, relaxed_tol, refine=refine, check_period=check_period,
                         corner_speed="turn")
         if float(plan.cycle_time) >= float(best.plan.cycle_time):
             break  # this timing cannot beat the plan at hand, moved or not
-        moved, vertices = compensate(plan, passes, frozen, None if short is None else short.pinned)
+        moved, vertices = compensate(plan, passes, frozen, None if fillets is None else fillets.pinned)
         found = violations(moved, checked, tol, limits, check_period)
         if found.tolerance.size == 0 and found.limits.size == 0:
             best = MirrorPlan(dataclasses.replace(moved, path_deviation=found.deviation), vertices, g.copy(),
@@ -533,11 +385,12 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
         scale *= limit_factors(np.asarray(moved.start_times), np.asarray(moved.pulse_times), found.limits,
                                found.ratios, delays, push)
         late = found.tolerance
-        if late.size and n_short:  # a violation by a short arc still bisected: its rounding moves instead
-            arc = short.corner_of[_nearest_corner(moved, late)]
-            mine = (arc >= 0) & (hi[arc] - lo[arc] > SHORT_LEAST)
+        if late.size and n_fillets:  # a violation by a fillet still bisected: its rounding moves instead
+            which = fillets.corner_of[_nearest_corner(moved, late)]
+            mine = (which >= 0) & (hi[which] - lo[which] > SHORT_LEAST)
             if mine.any():
-                _bisect(moved, short, np.unique(arc[mine]), h, lo, hi)
+                bisect_rounding(moved.position.numpy_evaluator(), np.asarray(moved.corner_times), moved.delays, fillets,
+                                np.unique(which[mine]), h, lo, hi)
                 late = late[~mine]
         if late.size:
             if M > 1:  # the nearest corner's eq 13/14 tolerance back towards eps, the second round in a row
@@ -564,22 +417,6 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
     return best, r
 
 
-def _bisect(plan: FIRPlan, short: ShortArcs, arcs: np.ndarray, h: np.ndarray, lo: np.ndarray, hi: np.ndarray):
-    """One bisection step of the rounding ``h`` of each short arc in ``arcs`` (in place, with its
-    bracket ``[lo, hi]``): up where the output's point nearest the arc's split point ``P`` lies
-    between ``P`` and the corner ``V`` (rounded too little), down where it lies inside ``P`` (cut too
-    much)."""
-    pos = plan.position.numpy_evaluator()
-    centre = np.asarray(plan.corner_times)[short.first[arcs]]
-    Td = float(np.sum(np.asarray(plan.delays)))
-    P = short.splits[arcs]
-    q = pos(nearest_instants(pos, P, centre, 0.5 * Td))
-    outside = np.linalg.norm(q - short.corners[arcs], axis=1) < short.offset[arcs]
-    lo[arcs] = np.where(outside, h[arcs], lo[arcs])
-    hi[arcs] = np.where(outside, hi[arcs], h[arcs])
-    h[arcs] = 0.5 * (lo[arcs] + hi[arcs])
-
-
 def compensate(plan: FIRPlan, passes: int, frozen: np.ndarray, pinned=None) -> tuple[FIRPlan, np.ndarray]:
     """``passes`` mirror passes on ``plan``'s input, its timing held (module docstring, step 2).
 
@@ -588,8 +425,8 @@ def compensate(plan: FIRPlan, passes: int, frozen: np.ndarray, pinned=None) -> t
             arcs as chords, :func:`chorded`).
         passes: mirror passes (0: the plan's own input).
         frozen: ``(M,)`` programmed blocks whose planned vertices are not moved.
-        pinned: None, or ``(n, d)`` points [mm] (short arcs' corners, :func:`cornered`): planned
-            vertices there are not moved.
+        pinned: None, or ``(n, d)`` points [mm] (the fillets' corners and ends, :func:`cornered`):
+            planned vertices there are not moved.
 
     Returns:
         ``(plan with the moved input's profile, its input vertices (B + 1, d) [mm])``.

@@ -1,0 +1,291 @@
+"""The paths ``plan_fir_mirror``'s search plans and checks: arcs as chords, fillets as corners.
+
+The search times and moves the vertices of a path of lines (the *planned* path) and checks the
+filtered result against the program (the *checked* path, block for block the same count, so that
+each checked vertex has the planned corner's instant).
+
+* :func:`chorded`: every arc as chords of equal angle, checked as the arc's own pieces.
+* :func:`cornered`: besides, every *fillet* shorter than the filters' reach is planned as the
+  corner ``V`` where the lines either side of it meet, and checked as the fillet. A fillet is a
+  short arc tangent to its neighbours (CAM corner smoothing, a tool-radius arc), or a run of
+  short chords between two long blocks that turns one way (the same written as ``G1`` chords).
+  The FIR's window averages such a fillet whole, so ``plan_fir`` cannot follow it as a curve; it
+  slows it to its eq 8 feed (an arc) or to its chords' window feeds, as if it were a long curve.
+  As a corner, eq 13/14 rounds it at a tolerance :func:`planned_tolerance` that the search
+  bisects (:func:`bisect_rounding`) until the rounding passes within eps of the fillet.
+
+The search keeps whichever of the two planned paths verifies faster (``_fir_mirror``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from research.paths.polyline import Polyline
+from research.paths.toolpath import ToolPath
+from research.interpolators._fir_verify import nearest_instants
+
+#: sagitta of the chords the search plans for arcs, as a share of the least arc tolerance
+#: (:func:`chorded`). Swept (``benchmarks/fir_mirror.py --sweep-chords``) at 0.01 / 0.02 / 0.05 /
+#: 0.1 / 0.2 / 0.35 / 0.5 on eleven programs with arcs under bench_cam's setting and envelope: cycles
+#: summed 20.20 / 20.12 / 19.71 / 19.60 / 19.62 / 19.94 / 19.78 s, planning 11.7 / 9.8 / 8.9 / 8.1 /
+#: 7.7 / 7.8 / 8.3 s
+CHORD_SHARE = 0.1
+#: a fillet up to this share of the filters' reach at its feed (``F T_d``) is short (:func:`cornered`): the
+#: window averages it whole. Swept 0.5 / 1 / 2 on bench_cam's setting (offset pocket of 8 rings, rings
+#: and corners with fillets of R 0.3-15 mm, arc chains; with and without the envelope's limits): the
+#: same cycle times (fillets of R 2 mm and more never verify as corners there), planning 11.9 / 11.5 /
+#: 11.8 s; at 0 (no fillets) the pocket 10.8623 s against 8.3186 s
+SHORT_REACH = 1.0
+#: the largest turn [rad] of a fillet planned as a corner (:func:`cornered`). Fillets of R 0.3 / 1 mm
+#: between 50 mm lines turning 60-170 deg (bench_cam's setting) verify as corners up to 120 deg
+#: (R 0.3 mm: 0.7439 -> 0.6431 s) and never beyond (150, 170 deg)
+CORNER_TURN = 2.0 * math.pi / 3.0
+#: a turn [rad] up to which an arc's start or end counts as tangent (:func:`cornered`): 4-decimal
+#: coordinates of a fillet of R >= 0.1 mm turn by less than 1e-3 rad where it is tangent
+TANGENT_TURN = 1e-3
+#: the bracket width on a fillet's rounding below which its bisection stops (:func:`bisect_rounding`).
+#: Swept 1/8, 1/16, 1/64, 1/256 on SHORT_REACH's cases: the pocket 9.1704 / 9.0866 / 9.0319 / 9.0319 s
+#: (limits) and 8.3700 / 8.3407 / 8.3186 / 8.3186 s, the others the same
+SHORT_LEAST = 1.0 / 64.0
+#: the shortest piece [mm] from a fillet's end to its corner (:func:`cornered`): below it the fillet
+#: barely turns and is left as it is
+SHORT_LEG = 1e-6
+#: a chord of a fillet is no longer than this share of the filters' reach (:func:`_chord_fillets`), and
+#: the blocks either side of the fillet are longer than FILLET_RATIO of its longest chord. Swept
+#: 0.0625 / 0.125 / 0.25 and 2 / 4 / 8 on the filleted rectangles (R 1 and 0.3 mm) and the offset
+#: pocket of 8 rings as G1 chords of 1 and 5 um, with and without the envelope's limits: the same
+#: cycle times (the pocket at 1 um 11.5952 -> 8.3051 s); the inner rings' 12-18 mm sides are
+#: shorter than the reach, which is why a chord must be much shorter than it. Even at 0.5 / 1
+#: bench_cam's freeform CAM files (2,251 and 10,359 chords) have no chord fillet
+CHORD_REACH = 0.125
+FILLET_RATIO = 4.0
+
+
+@dataclass(frozen=True)
+class Fillets:
+    """The fillets :func:`cornered` plans as corners (``n`` of them).
+
+    Attributes:
+        corners: ``(n, d)`` where the lines either side of each fillet meet (``V``) [mm].
+        splits: ``(n, d)`` each fillet's point nearest ``V`` (``P``; an arc's at half its sweep) [mm].
+        pinned: ``(m, d)`` the planned vertices the mirror passes leave where they are: each
+            fillet's ``V``, start, end and the points between [mm].
+        first: ``(n,)`` the planned block that ends at each ``V`` (``V`` is planned corner ``first``).
+        offset: ``(n,)`` ``|V - P|`` [mm].
+        corner_of: ``(B - 1,)`` the fillet whose ``V``, start, end or inner vertex each planned corner
+            is (an arc's start or end where it is tangent); -1 for the others.
+    """
+
+    corners: np.ndarray
+    splits: np.ndarray
+    pinned: np.ndarray
+    first: np.ndarray
+    offset: np.ndarray
+    corner_of: np.ndarray
+
+
+def chorded(tp: ToolPath, tol: np.ndarray) -> tuple[ToolPath, ToolPath, np.ndarray]:
+    """The path the mirror's search plans and the one it checks: ``(planned, checked, owner)``.
+
+    On a path of lines both are ``tp`` and ``owner`` is ``arange(M)``. With arcs, ``planned`` holds
+    every arc as chords of equal angle (``ToolPath.to_polyline``) of sagitta at most
+    :data:`CHORD_SHARE` of the least arc tolerance in ``tol`` ``(M,)`` [mm], and ``checked`` the
+    same blocks as sub-arcs of the programmed arcs (the same centre and axis, the sweep split
+    evenly: radius and axial offset are linear in the angle, so each is the programmed arc's own
+    piece): the search moves and times the chords' vertices and checks the programmed arcs
+    themselves. ``owner`` ``(B,)`` is each planned block's programmed block."""
+    M = tp.n_blocks
+    if not tp.is_arc.any():
+        return tp, tp, np.arange(M)
+    chords, owner = tp.to_polyline(CHORD_SHARE * float(np.min(tol[tp.is_arc])))
+    count = np.bincount(owner, minlength=M)[owner]
+    checked = ToolPath(tp.start, chords.points[1:], tp.centers[owner], tp.normals[owner],
+                       np.where(tp.is_arc[owner], tp.sweeps[owner] / count, 0.0), tp.axes)
+    return ToolPath.from_polyline(chords), checked, owner
+
+
+def cornered(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, window: float):
+    """:func:`chorded` with the fillets planned as corners: ``(planned, checked, owner, fillets)``
+    (a :class:`Fillets`), or None where the path has none (module docstring).
+
+    A fillet is no longer than :data:`SHORT_REACH` times the filters' reach at its feed (``feed``
+    ``(M,)`` [mm/s] times ``window``, the delays' sum [s]), turns by at most :data:`CORNER_TURN`,
+    lies in a plane and is not at the path's ends (the output rests there). An arc fillet
+    (:func:`_arc_fillets`) gives way to the two tangent lines from its ends to where they meet
+    (``V``), checked as its two halves (split at ``P``, half its sweep). A chord fillet
+    (:func:`_chord_fillets`) keeps its block count: its vertices move onto the two lines from its
+    ends to ``V``, in proportion to their arc length on either side of its vertex nearest ``V``, and
+    it is checked as programmed. ``tol`` ``(M,)`` [mm] as :func:`chorded`'s."""
+    Td = float(window)
+    arcs = _arc_fillets(tp, tol, feed, Td)
+    if arcs is None:
+        planned, checked, owner = chorded(tp, tol)
+        parts = []
+    else:
+        planned, checked, owner, parts = arcs
+    chords = _chord_fillets(planned, checked, owner, feed, Td)
+    if chords is not None:
+        planned, more = chords
+        parts = parts + more
+    if not parts:
+        return None
+    corner_of = np.full(planned.n_blocks - 1, -1)
+    for i, (V, P, pinned, first, corners) in enumerate(parts):
+        corner_of[corners] = i
+    V, P, pinned, first, _ = zip(*parts)
+    return planned, checked, owner, Fillets(np.array(V), np.array(P), np.concatenate(pinned), np.array(first),
+                                            np.linalg.norm(np.array(V) - np.array(P), axis=1), corner_of)
+
+
+def _corner_points(S: np.ndarray, u: np.ndarray, E: np.ndarray, w: np.ndarray):
+    """``(V, keep)``: where the line through ``S`` along ``u`` meets the one through ``E`` along
+    ``w`` (unit directions; ``V = S + a u = E - b w``, by least squares), each ``(n, d)`` [mm], and
+    whether they meet (in a plane) ahead of ``S`` and behind ``E`` by more than :data:`SHORT_LEG`."""
+    d = E - S
+    uw = np.sum(u * w, axis=1)
+    det = np.maximum(1.0 - uw**2, 1e-300)  # the turn is at most CORNER_TURN < pi: not parallel
+    du, dw = np.sum(d * u, axis=1), np.sum(d * w, axis=1)
+    a, b = (du - uw * dw) / det, (dw - uw * du) / det
+    V = S + a[:, None] * u
+    planar = np.linalg.norm(V - (E - b[:, None] * w), axis=1) <= 1e-9 * (1.0 + np.linalg.norm(d, axis=1))
+    return V, planar & (a > SHORT_LEG) & (b > SHORT_LEG) & (uw < 1.0 - 1e-12)
+
+
+def _arc_fillets(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, Td: float):
+    """The arc fillets of ``tp`` as corners: ``(planned, checked, owner, parts)`` (:func:`cornered`;
+    ``parts`` one ``(V, P, pinned, first, corners)`` per fillet), or None where there are none. An
+    arc fillet is tangent (within :data:`TANGENT_TURN`) to the blocks either side: an arc that
+    meets a corner shares its window with that corner's dwell."""
+    arc = tp.is_arc & (tp.sweeps <= CORNER_TURN) & (tp.lengths <= SHORT_REACH * feed * Td)
+    arc[[0, -1]] = False  # the output rests on the path's ends: no corner to round there
+    turn = tp.turning_angles()
+    arc[1:] &= turn <= TANGENT_TURN
+    arc[:-1] &= turn <= TANGENT_TURN
+    if not arc.any():
+        return None
+    k = np.flatnonzero(arc)
+    t_s, t_e = tp.tangents()
+    V, keep = _corner_points(tp.starts[k], t_s[k], tp.ends[k], t_e[k])
+    if not keep.any():
+        return None
+    k, V = k[keep], V[keep]
+    arc = np.zeros(tp.n_blocks, dtype=bool)
+    arc[k] = True
+    P = tp.arc_points(k, 0.5 * tp.sweeps[k])
+    _, checked, owner = chorded(tp, tol)  # the other arcs' chords stay
+    points = checked.ends
+    last = np.r_[owner[1:] != owner[:-1], True]
+    stay = ~arc[owner] | last  # an arc fillet keeps its end point; V goes in before it
+    points, owner = points[stay], owner[stay]
+    at = np.flatnonzero(arc[owner])  # the fillets' end points, in the order of k
+    plan_pts = np.insert(points, at, V, axis=0)
+    check_pts = np.insert(points, at, P, axis=0)
+    owner = np.insert(owner, at, owner[at])
+    count = np.bincount(owner, minlength=tp.n_blocks)[owner]
+    planned = ToolPath.from_polyline(Polyline(np.vstack([tp.start[None], plan_pts])))
+    checked = ToolPath(tp.start, check_pts, tp.centers[owner], tp.normals[owner],
+                       np.where(tp.is_arc[owner], tp.sweeps[owner] / count, 0.0), tp.axes)
+    first = at + np.arange(at.size)  # the planned block from each fillet's start to its V
+    parts = []
+    for i in range(k.size):  # its corner V, and its start and end (tangent there)
+        c = np.arange(first[i] - 1, first[i] + 2)
+        parts.append((V[i], P[i], np.stack([V[i], tp.starts[k[i]], tp.ends[k[i]]]), first[i],
+                      c[(c >= 0) & (c < planned.n_blocks - 1)]))
+    return planned, checked, owner, parts
+
+
+def _chord_fillets(planned: ToolPath, checked: ToolPath, owner: np.ndarray, feed: np.ndarray, Td: float):
+    """The chord fillets of ``planned``'s lines as corners: ``(planned with their vertices moved,
+    parts)`` (:func:`cornered`), or None where there are none.
+
+    A chord fillet is a run of two or more consecutive short blocks (each, and all together, no
+    longer than :data:`SHORT_REACH` times the reach at its feed; ``feed`` per programmed block,
+    ``owner`` maps to it), lines in ``checked`` as in ``planned`` (not an arc's chords, not an
+    arc fillet's pieces), between two blocks longer than the run, that turns one way at every
+    vertex by at most :data:`CORNER_TURN` in all; its vertex nearest ``V`` is not one of its ends."""
+    B = planned.n_blocks
+    if B < 4 or planned.dim < 2:
+        return None
+    reach = SHORT_REACH * feed[owner] * Td
+    lengths = planned.lengths
+    line = ~checked.is_arc  # programmed lines: not an arc's chords, not an arc fillet's pieces
+    short = line & (lengths <= CHORD_REACH * reach)
+    # runs of short blocks: [s, e) block ranges, bounded by blocks that are not short
+    edge = np.diff(np.r_[0, short.astype(np.int8), 0])
+    starts, stops = np.flatnonzero(edge == 1), np.flatnonzero(edge == -1)
+    pts = np.vstack([planned.start[None], planned.ends])
+    out, parts = pts.copy(), []
+    chords = np.diff(pts, axis=0)
+    unit = chords / np.linalg.norm(chords, axis=1, keepdims=True)
+    for s, e in zip(starts, stops):
+        if e - s < 2 or s == 0 or e == B:
+            continue
+        run = float(np.sum(lengths[s:e]))
+        if run > float(np.min(reach[s:e])) or min(lengths[s - 1], lengths[e]) <= max(run, FILLET_RATIO * lengths[s:e].max()):
+            continue
+        u, w = unit[s - 1], unit[e]
+        if math.acos(min(max(float(u @ w), -1.0), 1.0)) > CORNER_TURN:
+            continue
+        if not _turns_one_way(unit[s - 1:e + 1]):
+            continue
+        S, E = pts[s], pts[e]  # the run's first and last vertex
+        V, keep = _corner_points(S[None], u[None], E[None], w[None])
+        if not keep[0]:
+            continue
+        V = V[0]
+        inner = np.arange(s + 1, e)  # the run's inner vertices
+        m = int(inner[np.argmin(np.linalg.norm(pts[inner] - V, axis=1))])
+        along = np.r_[0.0, np.cumsum(lengths[s:e])]  # arc length of vertices s..e from S
+        a = along[: m - s + 1] / along[m - s]
+        b = (along[m - s:] - along[m - s]) / (along[-1] - along[m - s])
+        out[s:m + 1] = S + a[:, None] * (V - S)
+        out[m:e + 1] = V + b[:, None] * (E - V)
+        parts.append((V, pts[m], out[s:e + 1].copy(), m - 1, np.arange(s - 1, e)))
+    if not parts:
+        return None
+    return ToolPath.from_polyline(Polyline(out)), parts
+
+
+def _turns_one_way(units: np.ndarray) -> bool:
+    """Whether the unit directions ``units`` ``(k + 1, d)`` of consecutive blocks turn the same way
+    at each of their ``k`` vertices (about one axis, in 3-D that of the first and last)."""
+    a, b = units[:-1], units[1:]
+    if units.shape[1] == 2:
+        z = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+        return bool(np.all(z > 0) or np.all(z < 0))
+    axis = np.cross(units[0], units[-1])
+    return bool(np.linalg.norm(axis) > 1e-12 and np.all(np.cross(a, b) @ axis > 0))
+
+
+def planned_tolerance(tol: np.ndarray, g: np.ndarray, fillets: Fillets | None, h: np.ndarray | None) -> np.ndarray:
+    """``(B,)`` the tolerance [mm] a round plans its timing at: ``g tol`` on every planned block
+    (``tol``, ``g`` ``(B,)``), and on the two planned blocks either side of a fillet's corner
+    (``fillets``, :func:`cornered`) ``|V - P| + (2 h - 1) tol`` (at least 0; ``h`` ``(n,)`` in
+    ``[0, 1]``): eq 13/14 rounds the corner ``V`` ``tol`` outside ``P`` at ``h = 1``, through it at
+    ``1/2``, ``tol`` inside at 0."""
+    out = tol * g
+    if fillets is None:
+        return out
+    for b in (fillets.first, fillets.first + 1):
+        out[b] = np.maximum(fillets.offset + (2.0 * h - 1.0) * tol[b], 0.0)
+    return out
+
+
+def bisect_rounding(position, corner_times: np.ndarray, delays: np.ndarray, fillets: Fillets, which: np.ndarray,
+                    h: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> None:
+    """One bisection step of the rounding ``h`` of each fillet in ``which`` (in place, with its
+    bracket ``[lo, hi]``): up where the output's point nearest the fillet's ``P`` lies between ``P``
+    and the corner ``V`` (rounded too little), down where it lies beyond ``P`` (cut too much).
+    ``position``: the plan's profile (a ``NumpyPiecewise``), ``corner_times`` ``(B - 1,)`` [s] its
+    corner instants, ``delays`` [s]."""
+    centre = corner_times[fillets.first[which]]
+    P = fillets.splits[which]
+    q = position(nearest_instants(position, P, centre, 0.5 * float(np.sum(delays))))
+    outside = np.linalg.norm(q - fillets.corners[which], axis=1) < fillets.offset[which]
+    lo[which] = np.where(outside, h[which], lo[which])
+    hi[which] = np.where(outside, hi[which], h[which])
+    h[which] = 0.5 * (lo[which] + hi[which])
