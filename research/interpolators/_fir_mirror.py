@@ -42,7 +42,7 @@ What this module does:
    4.3x after five passes, the nearest point's by 1.5x. Fixed: the path's two ends and exact stops
    (the output rests on them).
 
-   **Arcs** are searched as chords (:func:`chorded`: sagitta :data:`CHORD_SHARE` of the
+   **Arcs** are searched as chords (``_fir_mirror_paths.chorded``: sagitta ``CHORD_SHARE`` of the
    tolerance) and checked as the programmed arcs. Each arc block was once scaled about its own
    centre (eq 8's shrink is radial), which only an arc between two lines can be: two arcs that
    meet cannot both scale about their centres and still meet. On chains of tangent arcs (CAM
@@ -51,21 +51,22 @@ What this module does:
    4.6292 s as chords; over eleven programs with arcs (``benchmarks/fir_mirror.py``) the cycles
    summed 33.71 -> 19.60 s (benchmarks/README.md).
 
-   **Short arcs** (:func:`cornered`), fillets shorter than the filters' reach at their feed (``L
-   <= F T_d``), are not followed as curves at all: the window averages such an arc with the blocks
-   either side, yet ``plan_fir`` slows it to its eq 8 feed as if it were a long circle. A fillet
-   of R 1 mm between two 50 mm lines at bench_cam's setting: 0.7283 s, against 0.6552 s for the
-   sharp corner without it. Where the program has such arcs the search runs a second time (and
-   the faster verified plan is kept) with each of them planned as the corner ``V`` of its end
-   tangents and checked as the arc: eq 13/14 rounds ``V`` at ``|V - P| + (2 h - 1) eps`` (``P``
-   the arc's point at half its sweep, :func:`planned_tolerance`), and ``h`` is bisected per arc on
-   which side of ``P`` the output passes (:func:`_bisect`, to :data:`SHORT_LEAST`); the mirror
-   passes leave ``V`` and the arc's ends where they are (moving ``V`` towards ``P`` by the mirror
-   of its error broke the lines beside it). The fillet: 0.6298 s; a closed 60 x 40 mm rectangle
-   with R 1 mm fillets 1.6384 -> 1.2492 s; an offset pocket of 8 such rings (R 1-0.3 mm, 2 mm
-   stepovers) 10.8623 -> 8.3186 s, under the envelope's limits 11.0126 -> 9.0319 s. Fillets of
-   R 2 mm and more (at 200 mm/s, 60/30 ms, 50 um) have no rounding of ``V`` within eps of them;
-   nor have turns beyond 120 deg.
+   **Fillets** (``_fir_mirror_paths.cornered``): an arc, or a run of chords, shorter than the
+   filters' reach at its feed that rounds the corner of two longer blocks is not followed as a
+   curve at all: the window averages it with the blocks either side, yet ``plan_fir`` slows it to
+   its eq 8 feed (or its chords' window feeds) as if it were a long curve. A fillet of R 1 mm
+   between two 50 mm lines at bench_cam's setting: 0.7283 s, against 0.6552 s for the sharp corner
+   without it. Where the program has fillets the search runs a second time (the faster verified
+   plan is kept) with each planned as the corner ``V`` of the lines either side and checked as
+   programmed: eq 13/14 rounds ``V`` at ``|V - P| + (2 h - 1) eps`` (``P`` the fillet's point
+   nearest ``V``; ``planned_tolerance``), ``h`` bisected per fillet on which side of ``P`` the
+   output passes (``bisect_rounding``); the mirror passes leave the fillet's planned vertices where
+   they are (moving ``V`` towards ``P`` by the mirror of its error broke the lines beside it). The
+   fillet: 0.6298 s; a closed 60 x 40 mm rectangle with R 1 mm fillets 1.6384 -> 1.2492 s (as 1 um
+   G1 chords 1.6774 -> 1.2492 s); an offset pocket of 8 such rings (R 1-0.3 mm, 2 mm stepovers)
+   10.8623 -> 8.3186 s, under the envelope's limits 11.0126 -> 9.0319 s. Fillets of R 2 mm and
+   more (at 200 mm/s, 60/30 ms, 50 um) have no rounding of ``V`` within eps of them; nor have turns
+   beyond 120 deg.
 
 3. **Checks and search.** The exact profile of the moved input is checked against the
    *programmed* path as ``plan_fir`` checks its own (vertex distances at every corner, the
@@ -195,15 +196,15 @@ class MirrorPlan:
             filtered moved input, verified against the programmed path:
             :attr:`FIRPlan.path_deviation` is the largest sampled distance [mm]). Where the
             program has arcs and the plan is compensated, its blocks are the arcs' chords
-            (:func:`chorded`; the programmed vertices among their vertices), or for a short arc
-            the two tangent pieces to its corner (:func:`cornered`).
+            (``chorded``; the programmed vertices among their vertices), or for a fillet the
+            pieces of the lines to its corner (``cornered``).
         input_vertices: ``(B + 1, d)`` the path the filters average [mm]: the vertices of the
-            planned blocks (arcs as chords or short arcs as corners, straight runs merged, lines
+            planned blocks (arcs as chords or fillets as corners, straight runs merged, lines
             cut into ramp pieces where ``plan_fir`` did), moved; the programmed vertices where
             nothing was compensated.
         relaxation: ``(M,)`` factor ``g_k >= 1`` on each programmed block's tolerance at which the
-            timing was planned (an arc's: the least over its chords; a short arc planned as a
-            corner is rounded by :func:`planned_tolerance` instead; 1 everywhere when the plain
+            timing was planned (an arc's: the least over its chords; a fillet planned as a corner
+            is rounded by ``planned_tolerance`` instead; 1 everywhere when the plain
             plan was kept).
         feed_factors: ``(M,)`` each block's feed in the timing over its commanded feed (the
             curvature caps times the search's factors; an arc's: the least over its chords; 1
@@ -324,11 +325,14 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
             caps: np.ndarray, best: MirrorPlan, corners: np.ndarray,
             fillets: Fillets | None = None) -> tuple[MirrorPlan, int]:
     """One timing's search (module docstring, steps 1-3): ``(the faster of best and what it
-    verified, rounds made)``. ``tp``: the planned path (arcs as chords), ``checked``: the path its
-    plans are checked against (the programmed arcs' pieces, :func:`chorded`); ``refine``: the
+    verified, rounds made)``. ``tp``: the planned path (arcs as chords, fillets as corners),
+    ``checked``: the path its plans are checked against (the programmed arcs' pieces,
+    :func:`chorded`); ``refine``: the
     timing is ``plan_fir``'s look-ahead plan, else its eq 13/14 plan capped by :func:`shrink_caps`
     as well; ``kappa`` ``(M - 1, d)`` the vertices' curvature [1/mm], ``caps`` ``(M,)`` the blocks'
-    curvature caps [mm/s]; ``corners`` ``(M - 1,)`` the sharp corners (step 3)."""
+    curvature caps [mm/s]; ``corners`` ``(M - 1,)`` the sharp corners (step 3); ``fillets``: the
+    fillets ``tp`` has as corners (``cornered``; their tolerance ``planned_tolerance``'s, bisected
+    where a violation is theirs), or None."""
     M = tp.n_blocks
     g = np.full(M, float(relax))
     scale = np.ones(M)  # the search's factors on the caps

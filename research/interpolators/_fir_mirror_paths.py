@@ -202,11 +202,12 @@ def _chord_fillets(planned: ToolPath, checked: ToolPath, owner: np.ndarray, feed
     """The chord fillets of ``planned``'s lines as corners: ``(planned with their vertices moved,
     parts)`` (:func:`cornered`), or None where there are none.
 
-    A chord fillet is a run of two or more consecutive short blocks (each, and all together, no
-    longer than :data:`SHORT_REACH` times the reach at its feed; ``feed`` per programmed block,
-    ``owner`` maps to it), lines in ``checked`` as in ``planned`` (not an arc's chords, not an
-    arc fillet's pieces), between two blocks longer than the run, that turns one way at every
-    vertex by at most :data:`CORNER_TURN` in all; its vertex nearest ``V`` is not one of its ends."""
+    A chord fillet is a run of two or more consecutive short blocks (each no longer than
+    :data:`CHORD_REACH`, all together than :data:`SHORT_REACH` times the reach at their feed;
+    ``feed`` per programmed block, ``owner`` maps to it), lines in ``checked`` as in ``planned``
+    (not an arc's chords, not an arc fillet's pieces), between two such lines longer than the run
+    and than :data:`FILLET_RATIO` times its longest chord, that turns one way at every vertex, by
+    at most :data:`CORNER_TURN` in all. Its inner vertex nearest ``V`` moves onto ``V``."""
     B = planned.n_blocks
     if B < 4 or planned.dim < 2:
         return None
@@ -225,7 +226,8 @@ def _chord_fillets(planned: ToolPath, checked: ToolPath, owner: np.ndarray, feed
         if e - s < 2 or s == 0 or e == B:
             continue
         run = float(np.sum(lengths[s:e]))
-        if run > float(np.min(reach[s:e])) or min(lengths[s - 1], lengths[e]) <= max(run, FILLET_RATIO * lengths[s:e].max()):
+        bound = max(run, FILLET_RATIO * float(lengths[s:e].max()))  # the blocks either side are longer
+        if run > float(np.min(reach[s:e])) or min(lengths[s - 1], lengths[e]) <= bound or not (line[s - 1] and line[e]):
             continue
         u, w = unit[s - 1], unit[e]
         if math.acos(min(max(float(u @ w), -1.0), 1.0)) > CORNER_TURN:
