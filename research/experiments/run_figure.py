@@ -1,7 +1,7 @@
-"""Figure of one run (``python -m research run``): path, first corner, feed, axis kinematics.
+"""Figure of one run (``python -m research run``): path, a sharp corner, feed, axis kinematics.
 
 In the layout of Sencer 2015 Fig 6a-b: the commanded and interpolated path with a zoom on the
-first corner, the feed along time, and the axis acceleration and jerk of the first interpolator.
+sharp corner of largest error (the first such), the feed along time, and the axis acceleration and jerk of the first interpolator.
 With several interpolators every one is drawn in the path, corner and feed panels.
 """
 
@@ -81,17 +81,23 @@ def plot_run(path: Polyline, runs: list, title: str = ""):
     a.legend(loc=best)
     a = ax[0, 1]
     if path.n_segments > 1 and path.dim > 1:
-        c = path.corners[0]
-        r = max(4 * max(float(m.corner_errors[0]) for *_, m in runs), 1e-3)
+        # a sharp corner (turning by at least half the sharpest turn: a lead-in's straight junction or
+        # an arc's chord vertex shows nothing of the cornering), the first of largest error of the first run
+        turns = np.asarray(path.turning_angles)
+        errors = np.where(turns >= 0.5 * float(np.max(turns)), np.asarray(metrics0.corner_errors, dtype=float), -1.0)
+        k = int(np.argmax(errors))
+        c = path.corners[k]
+        r = max(4 * max(float(m.corner_errors[k]) for *_, m in runs), 1e-3)
         a.plot(path.points[:, 0], path.points[:, 1], "k--", lw=0.8, label="G01 path")
         for i, (label, _, traj, m) in enumerate(runs):
             q = _near(np.asarray(traj.q), c, 2 * r)  # the samples in (and around) the zoom
-            a.plot(q[:, 0], q[:, 1], f"C{i}.-", ms=2, label=f"{label}: {float(m.corner_errors[0]) * 1e3:.1f} um")
-            a.add_patch(Circle(c[:2], float(m.corner_errors[0]), fill=False, ls=":", color=f"C{i}"))
-        overlap = f", T_k = {float(plan0.overlaps[0]) * 1e3:.1f} ms" if plan0 is not None else ""
+            a.plot(q[:, 0], q[:, 1], f"C{i}.-", ms=2, label=f"{label}: {float(m.corner_errors[k]) * 1e3:.1f} um")
+            a.add_patch(Circle(c[:2], float(m.corner_errors[k]), fill=False, ls=":", color=f"C{i}"))
+        same = plan0 is not None and np.asarray(plan0.overlaps).size == turns.size  # the plan's corners are these
+        overlap = f", T_k = {float(plan0.overlaps[k]) * 1e3:.1f} ms" if same else ""
         a.set(xlim=(c[0] - r, c[0] + r), ylim=(c[1] - r, c[1] + r), xlabel=f"{path.axes[0]} [mm]",
-              ylabel=f"{path.axes[1]} [mm]", title=f"first corner (dotted: corner error, samples Ts = "
-                                                    f"{traj0.sample_period * 1e3:g} ms){overlap}")
+              ylabel=f"{path.axes[1]} [mm]", title=f"sharp corner, {np.degrees(turns[k]):.0f} deg (dotted: "
+                                                    f"corner error, Ts = {traj0.sample_period * 1e3:g} ms){overlap}")
         a.set_aspect("equal")
         a.legend(loc=best, title="corner error")
     else:
