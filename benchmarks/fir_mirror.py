@@ -3,6 +3,7 @@
 Usage::
 
     python benchmarks/fir_mirror.py [--quick] [--sweep] [--sweep-feeds] [--sweep-raise] [--sweep-chords]
+                                    [--fillets-only]
 
 1. ``--sweep``: the two constants of ``research/interpolators/_fir_mirror.py`` (``RELAX``, the
    tolerance factor the first round's timing is planned at, and ``PASSES``, the mirror passes per
@@ -25,6 +26,11 @@ Usage::
    without: cycle times, the ratio mirror / plain, the largest distance to the
    programmed path and the worst limit ratio of the mirror plan (``metrics``, on samples every
    0.5 ms), and the planning time of both (process time; the mirror's includes its plain plan).
+3. Fillets (``_fir_mirror_paths.cornered``): a fillet of R 1 mm between two 50 mm lines, a closed
+   60 x 40 mm rectangle with R 1 mm fillets and the offset pocket of 8 rings (``offset_pocket``),
+   each as G2/G3 arcs and as G1 chords of 1 um sagitta, with the envelope's limits and without:
+   plain -> mirror, and the mirror with no fillet planned as a corner (``SHORT_REACH`` = 0) in the
+   same run. ``--fillets-only`` runs this part alone.
 
 Every plan printed is verified on the programmed path by ``plan_fir_mirror`` itself (vertex
 distances and samples every 1 ms, as ``plan_fir``); the distance and limit columns are an
@@ -196,6 +202,38 @@ def sweep_chords(table: Table) -> None:
         _fir_mirror_paths.CHORD_SHARE = kept
 
 
+def fillet_cases() -> dict:
+    """``{name: path}`` of part 3 (module docstring): each program as arcs and as 1 um G1 chords."""
+    corner = parse_gcode("G21 G90 G17\nG1 X-1 Y0 F12000\nG3 X0 Y1 I0 J1\nG1 X0 Y50\nM2", start=(-50.0, 0.0, 0.0)).blocks
+    programs = {"fillet R 1 mm between 50 mm lines": corner,
+                "rectangle 60 x 40 mm, R 1 mm fillets": parse_gcode(arc_programs.offset_pocket(1),
+                                                                  start=(30.0, 0.0, 0.0)).blocks,
+                "offset pocket, 8 rings, R 1-0.3 mm fillets": parse_gcode(arc_programs.offset_pocket(8),
+                                                                        start=(30.0, 0.0, 0.0)).blocks}
+    cases = {}
+    for name, tp in programs.items():
+        cases[f"{name}, arcs"] = tp
+        cases[f"{name}, 1 um chords"] = tp.to_polyline(1e-3)[0]
+    return cases
+
+
+def fillets(table: Table) -> None:
+    """Part 3 (module docstring)."""
+    F, D, eps = bench_cam.FEED, bench_cam.DELAYS, bench_cam.EPS
+    table.section("Fillets planned as corners (_fir_mirror_paths.cornered): plain -> mirror; the mirror "
+                  "without (SHORT_REACH = 0) in the same run")
+    kept = _fir_mirror_paths.SHORT_REACH
+    for name, path in fillet_cases().items():
+        for lim in (None, AxisLimits.fir_envelope(path.dim, F, D)):
+            try:
+                _fir_mirror_paths.SHORT_REACH = 0.0
+                without = plan_fir_mirror(path, F, D, eps, limits=lim).cycle_time
+            finally:
+                _fir_mirror_paths.SHORT_REACH = kept
+            T, Tm = compare(table, name, path, F, D, eps, lim)
+            table.row("  without fillets as corners", f"{without:.4f} s", f"{Tm / without:.4f}x of it")
+
+
 def compare(table: Table, name: str, path, feed, delays, eps, limits) -> tuple[float, float]:
     """One row: ``plan_fir`` and ``plan_fir_mirror`` on ``path``; returns their cycle times [s]."""
     args = (path, feed, delays, eps)
@@ -217,6 +255,7 @@ def main(argv=None) -> int:
     ap.add_argument("--sweep-feeds", action="store_true", help="sweep the feed steps of _fir_mirror_feeds first")
     ap.add_argument("--sweep-raise", action="store_true", help="sweep the raise phase's step first")
     ap.add_argument("--sweep-chords", action="store_true", help="sweep the arcs' chord sagitta (CHORD_SHARE) first")
+    ap.add_argument("--fillets-only", action="store_true", help="part 3 (fillets) alone")
     args = ap.parse_args(argv)
     table = Table(f"plan_fir_mirror (RELAX {_fir_mirror.RELAX:g}, PASSES {_fir_mirror.PASSES}) against plan_fir")
     if args.sweep:
@@ -228,6 +267,10 @@ def main(argv=None) -> int:
     if args.sweep_chords:
         sweep_chords(table)
     F, D, eps = bench_cam.FEED, bench_cam.DELAYS, bench_cam.EPS
+    if args.fillets_only:
+        fillets(table)
+        table.print()
+        return 0
     table.section(f"Defaults, F {F:g} mm/s, T {D[0] * 1e3:g}/{D[1] * 1e3:g} ms, eps {eps * 1e3:g} um: "
                   "plain -> mirror cycle time")
     files = [bench_cam.LEVELS_QUICK] + ([] if args.quick else [bench_cam.LEVELS])
@@ -248,6 +291,7 @@ def main(argv=None) -> int:
                        ("diamond", named_path("diamond")), ("zigzag", named_path("zigzag"))):
         for lim in (None, AxisLimits.fir_envelope(path.dim, F, D)):
             compare(table, name, path, F, D, eps, lim)
+    fillets(table)
     table.print()
     return 0
 

@@ -134,8 +134,8 @@ from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_limits import LIMIT_RTOL
 from research.interpolators._fir_piece_peaks import PiecePeaks
 from research.interpolators._fir_profile import ProfileInputs, profile
-from research.interpolators._fir_mirror_paths import (SHORT_LEAST, Fillets, bisect_rounding, chorded, cornered,
-                                                      planned_tolerance)
+from research.interpolators._fir_mirror_paths import (FILLET_RETRIES, SHORT_LEAST, Fillets, bisect_rounding, chorded,
+                                                      cornered, planned_tolerance)
 from research.interpolators._fir_mirror_feeds import (RAISE_STEP, TOLERANCE_STEP, curvature_caps, jerk_push,
                                                       limit_factors, raise_factors, shrink_caps, span_ratios,
                                                       triangle_sum, vertex_curvature)
@@ -289,13 +289,15 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
     T_plain = float(plain.cycle_time)
     best = MirrorPlan(plain, _input_vertices(plain), np.ones(M), np.ones(M), False, 0, T_plain)
     # the search plans chords where the program has arcs, and checks the arcs themselves (chorded);
-    # where it has fillets shorter than the filters' reach, also those as corners (cornered)
-    variants = [chorded(tp, tol) + (None,)]
-    rounded = cornered(tp, tol, feed, Td)
-    if rounded is not None:
-        variants.append(rounded)
+    # where it has fillets shorter than the filters' reach, also those as corners (cornered), less
+    # those whose rounding ran out of bisection steps in a search that verified nothing better
     total, owner_best = 0, None
-    for planned, checked, owner, fillets in variants:
+    kept = np.zeros(M, dtype=bool)  # programmed blocks whose fillets stay as programmed
+    for attempt in range(2 + FILLET_RETRIES):
+        variant = chorded(tp, tol) + (None,) if attempt == 0 else cornered(tp, tol, feed, Td, kept)
+        if variant is None:
+            break
+        planned, checked, owner, fillets = variant
         f, t = feed[owner], tol[owner]
         B = planned.n_blocks
         corners = np.zeros(max(B - 1, 0), dtype=bool)
@@ -306,12 +308,19 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
             corners = np.asarray(eq13.overlaps) < Td * (1.0 - 1e-12)
         kappa = vertex_curvature(planned, f, corners, delays)
         caps = curvature_caps(planned, f, kappa, delays, limits)
+        better = False
+        spent = np.zeros(0 if fillets is None else fillets.first.size, dtype=bool)
         for refine in (False, True):  # eq 13/14 at the caps, then plan_fir's look-ahead (module docstring)
-            found, r = _search(planned, checked, f, delays, t, limits, relax, passes, rounds, check_period, refine,
-                               kappa, caps, best, corners, fillets)
+            found, r, out = _search(planned, checked, f, delays, t, limits, relax, passes, rounds, check_period,
+                                    refine, kappa, caps, best, corners, fillets)
             if found is not best:
-                best, owner_best = found, (owner if planned is not tp else None)
+                best, owner_best, better = found, (owner if planned is not tp else None), True
+            spent |= out
             total += r
+        if fillets is not None and (better or not spent.any()):
+            break
+        if fillets is not None:
+            kept[fillets.owners[spent]] = True
     if best.compensated and owner_best is not None:  # per programmed block: the least over its chords
         # each programmed block's first planned block
         own_first = np.concatenate([[0], np.flatnonzero(np.diff(owner_best)) + 1])
@@ -325,7 +334,7 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
             caps: np.ndarray, best: MirrorPlan, corners: np.ndarray,
             fillets: Fillets | None = None) -> tuple[MirrorPlan, int]:
     """One timing's search (module docstring, steps 1-3): ``(the faster of best and what it
-    verified, rounds made)``. ``tp``: the planned path (arcs as chords, fillets as corners),
+    verified, rounds made, the fillets whose bisection ran out with their violations left (n,))``. ``tp``: the planned path (arcs as chords, fillets as corners),
     ``checked``: the path its plans are checked against (the programmed arcs' pieces,
     :func:`chorded`); ``refine``: the
     timing is ``plan_fir``'s look-ahead plan, else its eq 13/14 plan capped by :func:`shrink_caps`
@@ -344,6 +353,7 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
     last_limits = (np.zeros(0), np.zeros(0), np.zeros(0, dtype=int))  # the last round's limit violations
     n_fillets = 0 if fillets is None else fillets.first.size
     h, lo, hi = np.ones(n_fillets), np.zeros(n_fillets), np.ones(n_fillets)  # their roundings (planned_tolerance)
+    spent = np.zeros(n_fillets, dtype=bool)
     r = 0
     while r < rounds:
         r += 1
@@ -392,6 +402,7 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
         if late.size and n_fillets:  # a violation by a fillet still bisected: its rounding moves instead
             which = fillets.corner_of[_nearest_corner(moved, late)]
             mine = (which >= 0) & (hi[which] - lo[which] > SHORT_LEAST)
+            spent[which[(which >= 0) & ~mine]] = True
             if mine.any():
                 bisect_rounding(moved.position.numpy_evaluator(), np.asarray(moved.corner_times), moved.delays, fillets,
                                 np.unique(which[mine]), h, lo, hi)
@@ -418,7 +429,7 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
             scale[_blocks_near(moved, lower)] *= 1.0 - TOLERANCE_STEP
         else:
             struck[:] = False
-    return best, r
+    return best, r, spent
 
 
 def compensate(plan: FIRPlan, passes: int, frozen: np.ndarray, pinned=None) -> tuple[FIRPlan, np.ndarray]:

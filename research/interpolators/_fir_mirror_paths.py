@@ -54,6 +54,12 @@ SHORT_LEAST = 1.0 / 64.0
 #: the shortest piece [mm] from a fillet's end to its corner (:func:`cornered`): below it the fillet
 #: barely turns and is left as it is
 SHORT_LEG = 1e-6
+#: searches again without the fillets whose bisection ran out, at most this many times, after a
+#: search with fillets as corners that verified nothing better (``_fir_mirror``). Swept 0 / 1 / 2 / 4
+#: on 120 filleted contours of ``tests/fuzz/test_fuzz_fir_fillets.py``: faster than ``plan_fir`` on
+#: 16 / 24 / 25 / 25, cycle times summed 679.0691 / 678.0183 / 677.9789 / 677.9789 s (681.4362 s
+#: plain), planning 69.9 / 79.7 / 83.2 / 84.3 s
+FILLET_RETRIES = 2
 #: a chord of a fillet is no longer than this share of the filters' reach (:func:`_chord_fillets`), and
 #: the blocks either side of the fillet are longer than FILLET_RATIO of its longest chord. Swept
 #: 0.0625 / 0.125 / 0.25 and 2 / 4 / 8 on the filleted rectangles (R 1 and 0.3 mm) and the offset
@@ -78,6 +84,7 @@ class Fillets:
         offset: ``(n,)`` ``|V - P|`` [mm].
         corner_of: ``(B - 1,)`` the fillet whose ``V``, start, end or inner vertex each planned corner
             is (an arc's start or end where it is tangent); -1 for the others.
+        owners: ``(n,)`` a programmed block of each fillet (an arc's own, a run's first).
     """
 
     corners: np.ndarray
@@ -86,6 +93,7 @@ class Fillets:
     first: np.ndarray
     offset: np.ndarray
     corner_of: np.ndarray
+    owners: np.ndarray
 
 
 def chorded(tp: ToolPath, tol: np.ndarray) -> tuple[ToolPath, ToolPath, np.ndarray]:
@@ -108,7 +116,7 @@ def chorded(tp: ToolPath, tol: np.ndarray) -> tuple[ToolPath, ToolPath, np.ndarr
     return ToolPath.from_polyline(chords), checked, owner
 
 
-def cornered(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, window: float):
+def cornered(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, window: float, kept: np.ndarray | None = None):
     """:func:`chorded` with the fillets planned as corners: ``(planned, checked, owner, fillets)``
     (a :class:`Fillets`), or None where the path has none (module docstring).
 
@@ -119,26 +127,29 @@ def cornered(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, window: float):
     (``V``), checked as its two halves (split at ``P``, half its sweep). A chord fillet
     (:func:`_chord_fillets`) keeps its block count: its vertices move onto the two lines from its
     ends to ``V``, in proportion to their arc length on either side of its vertex nearest ``V``, and
-    it is checked as programmed. ``tol`` ``(M,)`` [mm] as :func:`chorded`'s."""
+    it is checked as programmed. ``tol`` ``(M,)`` [mm] as :func:`chorded`'s; ``kept`` ``(M,)``:
+    programmed blocks whose fillets stay as programmed (a search's spent ones, ``_fir_mirror``)."""
     Td = float(window)
-    arcs = _arc_fillets(tp, tol, feed, Td)
+    kept = np.zeros(tp.n_blocks, dtype=bool) if kept is None else kept
+    arcs = _arc_fillets(tp, tol, feed, Td, kept)
     if arcs is None:
         planned, checked, owner = chorded(tp, tol)
         parts = []
     else:
         planned, checked, owner, parts = arcs
-    chords = _chord_fillets(planned, checked, owner, feed, Td)
+    chords = _chord_fillets(planned, checked, owner, feed, Td, kept)
     if chords is not None:
         planned, more = chords
         parts = parts + more
     if not parts:
         return None
     corner_of = np.full(planned.n_blocks - 1, -1)
-    for i, (V, P, pinned, first, corners) in enumerate(parts):
+    for i, (V, P, pinned, first, corners, _) in enumerate(parts):
         corner_of[corners] = i
-    V, P, pinned, first, _ = zip(*parts)
+    V, P, pinned, first, _, owners = zip(*parts)
     return planned, checked, owner, Fillets(np.array(V), np.array(P), np.concatenate(pinned), np.array(first),
-                                            np.linalg.norm(np.array(V) - np.array(P), axis=1), corner_of)
+                                            np.linalg.norm(np.array(V) - np.array(P), axis=1), corner_of,
+                                            np.array(owners))
 
 
 def _corner_points(S: np.ndarray, u: np.ndarray, E: np.ndarray, w: np.ndarray):
@@ -155,12 +166,12 @@ def _corner_points(S: np.ndarray, u: np.ndarray, E: np.ndarray, w: np.ndarray):
     return V, planar & (a > SHORT_LEG) & (b > SHORT_LEG) & (uw < 1.0 - 1e-12)
 
 
-def _arc_fillets(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, Td: float):
+def _arc_fillets(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, Td: float, kept: np.ndarray):
     """The arc fillets of ``tp`` as corners: ``(planned, checked, owner, parts)`` (:func:`cornered`;
     ``parts`` one ``(V, P, pinned, first, corners)`` per fillet), or None where there are none. An
     arc fillet is tangent (within :data:`TANGENT_TURN`) to the blocks either side: an arc that
     meets a corner shares its window with that corner's dwell."""
-    arc = tp.is_arc & (tp.sweeps <= CORNER_TURN) & (tp.lengths <= SHORT_REACH * feed * Td)
+    arc = tp.is_arc & (tp.sweeps <= CORNER_TURN) & (tp.lengths <= SHORT_REACH * feed * Td) & ~kept
     arc[[0, -1]] = False  # the output rests on the path's ends: no corner to round there
     turn = tp.turning_angles()
     arc[1:] &= turn <= TANGENT_TURN
@@ -194,11 +205,12 @@ def _arc_fillets(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, Td: float):
     for i in range(k.size):  # its corner V, and its start and end (tangent there)
         c = np.arange(first[i] - 1, first[i] + 2)
         parts.append((V[i], P[i], np.stack([V[i], tp.starts[k[i]], tp.ends[k[i]]]), first[i],
-                      c[(c >= 0) & (c < planned.n_blocks - 1)]))
+                      c[(c >= 0) & (c < planned.n_blocks - 1)], k[i]))
     return planned, checked, owner, parts
 
 
-def _chord_fillets(planned: ToolPath, checked: ToolPath, owner: np.ndarray, feed: np.ndarray, Td: float):
+def _chord_fillets(planned: ToolPath, checked: ToolPath, owner: np.ndarray, feed: np.ndarray, Td: float,
+                   kept: np.ndarray):
     """The chord fillets of ``planned``'s lines as corners: ``(planned with their vertices moved,
     parts)`` (:func:`cornered`), or None where there are none.
 
@@ -223,7 +235,7 @@ def _chord_fillets(planned: ToolPath, checked: ToolPath, owner: np.ndarray, feed
     chords = np.diff(pts, axis=0)
     unit = chords / np.linalg.norm(chords, axis=1, keepdims=True)
     for s, e in zip(starts, stops):
-        if e - s < 2 or s == 0 or e == B:
+        if e - s < 2 or s == 0 or e == B or kept[owner[s]]:
             continue
         run = float(np.sum(lengths[s:e]))
         bound = max(run, FILLET_RATIO * float(lengths[s:e].max()))  # the blocks either side are longer
@@ -246,7 +258,7 @@ def _chord_fillets(planned: ToolPath, checked: ToolPath, owner: np.ndarray, feed
         b = (along[m - s:] - along[m - s]) / (along[-1] - along[m - s])
         out[s:m + 1] = S + a[:, None] * (V - S)
         out[m:e + 1] = V + b[:, None] * (E - V)
-        parts.append((V, pts[m], out[s:e + 1].copy(), m - 1, np.arange(s - 1, e)))
+        parts.append((V, pts[m], out[s:e + 1].copy(), m - 1, np.arange(s - 1, e), owner[s]))
     if not parts:
         return None
     return ToolPath.from_polyline(Polyline(out)), parts
