@@ -168,7 +168,8 @@ def _corner_points(S: np.ndarray, u: np.ndarray, E: np.ndarray, w: np.ndarray):
 
 def _arc_fillets(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, Td: float, kept: np.ndarray):
     """The arc fillets of ``tp`` as corners: ``(planned, checked, owner, parts)`` (:func:`cornered`;
-    ``parts`` one ``(V, P, pinned, first, corners)`` per fillet), or None where there are none. An
+    ``parts`` one ``(V, P, pinned, first, corners, owner)`` per fillet: ``corners`` the planned corners
+    it holds, ``owner`` its programmed block), or None where there are none. An
     arc fillet is tangent (within :data:`TANGENT_TURN`) to the blocks either side: an arc that
     meets a corner shares its window with that corner's dwell."""
     arc = tp.is_arc & (tp.sweeps <= CORNER_TURN) & (tp.lengths <= SHORT_REACH * feed * Td) & ~kept
@@ -212,7 +213,8 @@ def _arc_fillets(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, Td: float, kep
 def _chord_fillets(planned: ToolPath, checked: ToolPath, owner: np.ndarray, feed: np.ndarray, Td: float,
                    kept: np.ndarray):
     """The chord fillets of ``planned``'s lines as corners: ``(planned with their vertices moved,
-    parts)`` (:func:`cornered`), or None where there are none.
+    parts)`` (as :func:`_arc_fillets`'), or None where there are none; ``kept`` ``(M,)`` as
+    :func:`cornered`'s.
 
     A chord fillet is a run of two or more consecutive short blocks (each no longer than
     :data:`CHORD_REACH`, all together than :data:`SHORT_REACH` times the reach at their feed;
