@@ -88,8 +88,10 @@ _M_REFUSE = {
     98: "unsupported M-code M98 (subroutine call); expected plain G-code (expand subroutines in the CAM post-processor)",
     99: "unsupported M-code M99 (subroutine return); expected plain G-code (expand subroutines in the CAM post-processor)",
 }
+#: extra axes: accepted where they never move (a 4- or 5-axis post writes ``A0.`` on a 3-axis job);
+#: U, V, W are linear (program units), A, B, C rotary (degrees)
+_EXTRA_AXES = frozenset("ABCUVW")
 _LETTER_REFUSE = {
-    **{c: f"{c} (extra axis) is not supported: only X, Y, Z" for c in "ABCUVW"},
     "D": "D (cutter radius offset) is not supported: cutter compensation G41/G42 is refused",
     "L": "L (repeat count / G10 parameter) is not supported",
 }
@@ -152,6 +154,7 @@ class _Interpreter:
         self.plane = 170
         self.path_tol = _NAN  # G64 P tolerance [mm] in force (NaN: none given, 0 under G61/G61.1)
         self.motion = None  # 0, 1, 2, 3 or None
+        self.extra: dict[str, float] = {}  # where each extra axis was put (it never moves) [deg or mm]
         self.ended = 0  # line of M2/M30, 0 while running (the reader stops after that line)
         # output: the vertices (flat x, y, z), one (feed, rapid, line, tolerance) row and one chord count
         # per block
@@ -217,12 +220,37 @@ class _Interpreter:
         self.nblocks += 1
         return True
 
+    def _extra_axis(self, letter, num, k):
+        """An A, B, C, U, V or W word: accepted where the axis stays where it was first put (only X,
+        Y and Z are planned). The first word of an axis positions it, under G90 on a rapid or a line
+        without motion; later words must repeat that position (under G91: move it by 0)."""
+        v = float(num) * (self.scale if letter in "UVW" else 1.0)
+        if not math.isfinite(v):
+            raise _LineError(f"{letter}{_short(num)}: expected a finite axis position", k)
+        unit = "mm" if letter in "UVW" else "deg"
+        held = self.extra.get(letter)
+        if not self.absolute:
+            if v != 0.0:
+                raise _LineError(f"{letter}{_short(num)} under G91 moves the {letter} axis; only X, Y, Z move here "
+                                 f"(expected {letter}0 or no {letter} word)", k)
+            return
+        if held is None:
+            if self.motion not in (None, 0):
+                raise _LineError(f"{letter}{_short(num)} first given on a G{self.motion} feed move: the {letter} axis "
+                                 f"would move while cutting; only X, Y, Z move here (expected it put in place by a "
+                                 f"G0 or a line without motion, and kept)", k)
+            self.extra[letter] = v
+        elif v != held:
+            raise _LineError(f"{letter}{_short(num)} moves the {letter} axis from {held:g} to {v:g} {unit}; only X, "
+                             f"Y, Z move here (expected {letter} to stay where it was first put)", k)
+
     # -- one block ---------------------------------------------------------------------------
     def line(self, words, lineno):
         gs = []
         ms = []
         vals = {}
         refused = None
+        extra = []
         for k, (letter, num) in enumerate(words):
             if letter.islower():
                 letter = letter.upper()
@@ -230,6 +258,10 @@ class _Interpreter:
                 gs.append((num, k))
             elif letter == "M":
                 ms.append((num, k))
+            elif letter in _EXTRA_AXES:
+                if any(e[0] == letter for e in extra):
+                    raise _LineError(f"{letter} given twice on one line; expected each letter at most once", k)
+                extra.append((letter, num, k))
             elif letter in _ACCEPTED_LETTERS:
                 if letter in vals:
                     raise _LineError(f"{letter} given twice on one line (first at word {vals[letter][1] + 1}); "
@@ -337,6 +369,8 @@ class _Interpreter:
             self.plane = groups["plane"][0]
         if "motion" in groups:
             self.motion = _MOTION[groups["motion"][0]]
+        for letter, num, k in extra:
+            self._extra_axis(letter, num, k)
 
         if "machine_coordinates" in groups:  # RS274/NGC modal group 0: G4, G28, G53 (G92, G10 refused)
             other = next((kind for kind in ("home", "dwell") if kind in groups), None)

@@ -307,7 +307,10 @@ BAD = [
     ("G1.5 X1", 1, 1, "unsupported G-code"),
     ("M99", 1, 1, "unsupported M-code"),
     ("G0 X1 E5", 1, 7, "unknown word letter 'E'"),
-    ("G0 A90", 1, 4, "extra axis"),
+    ("G0 A90\nG1 X1 A45 F100", 2, 7, "moves the A axis from 90 to 45 deg"),
+    ("G1 X1 A45 F100", 1, 7, "A45 first given on a G1 feed move"),
+    ("G91 G0 A5", 1, 8, "A5 under G91 moves the A axis"),
+    ("G0 B1 B1", 1, 7, "B given twice"),
     ("G2 X1 K1 F60", 1, 7, "K"),
     ("G0 G1 X1 F100", 1, 4, "two motion G-codes"),
     ("F100\nG1G2X1", 2, 3, "two motion G-codes"),
@@ -606,3 +609,16 @@ def test_to_gcode_program_argument_checks():
         to_gcode(prog.polyline)
     text = to_gcode(prog)
     assert "G2 X2 I0.5 J0" in text and text.startswith("%\n(research.paths.gcode.to_gcode: start X0 Y0 Z0)")
+
+
+def test_extra_axes_that_never_move_are_read():
+    """A 4-axis post's 3-axis job (Mastercam style): ``A0.`` on the first rapid and again on a feed
+    move, a rotary axis that never moves. The blocks are those of the same program without the A
+    words (X, Y, Z alone are planned); an A word that would move the axis is refused (above)."""
+    body = ("G20\nG0 G17 G40 G49 G80 G90\nT1 M6\nG0 G90 G54 X.5 Y.25{a} S5000 M3\nG43 H1 Z.1\nG1 Z-.05 F10.\n"
+            "X1.5 F20.\nG3 X1.75 Y.5 R.25\nG1 Y1.5{a}\nG2 X1.5 Y1.75 R.25\nG1 X.5\nY.25\nG0 Z.1\nM5\nM30\n")
+    with_a = parse_gcode(body.format(a=" A0."))
+    without = parse_gcode(body.format(a=""))
+    np.testing.assert_array_equal(with_a.blocks.ends, without.blocks.ends)
+    np.testing.assert_array_equal(with_a.block_feeds, without.block_feeds)
+    assert with_a.blocks.is_arc.tolist() == without.blocks.is_arc.tolist()
