@@ -686,3 +686,16 @@ def test_a_rectangle_with_chord_fillets_runs_them_as_corners(limits):
     assert np.max(segment_distances(np.asarray(tr.q), np.asarray(chords.points))) <= EPS * (1 + 1e-6) + 1e-8
     if limits:
         assert max(float(np.max(v)) for v in metrics.limit_ratios(tr, lim).values()) <= 1.0 + 1e-3
+
+
+def test_fillets_in_other_planes_run_as_corners():
+    """The fillet of R 1 mm in the XZ plane (``G18 G2``), and as 1 um chords turned 0.5 rad about X
+    (a fillet in a slanted plane): each more than 10 % faster than ``plan_fir``, eps held by the
+    exact distance to the programmed path (``ToolPath.distance``)."""
+    tp = parse_gcode("G21 G90 G18\nG1 X-1 Z0 F12000\nG2 X0 Z1 I0 K1\nG1 X0 Z50\nM2", start=(-50.0, 0.0, 0.0)).blocks
+    c, s = np.cos(0.5), np.sin(0.5)
+    slanted = Polyline(tp.to_polyline(1e-3)[0].points @ np.array([[1, 0, 0], [0, c, -s], [0, s, c]]).T)
+    for path, check in ((tp, tp), (slanted, ToolPath.from_polyline(slanted))):
+        m = plan_fir_mirror(path, F, DELAYS, EPS)
+        assert m.compensated and m.cycle_time < 0.9 * m.plain_cycle_time
+        assert np.max(check.distance(np.asarray(m.plan.trajectory(2e-4).q))) <= EPS * (1 + 1e-6) + 1e-8
