@@ -26,8 +26,8 @@ Usage::
    without: cycle times, the ratio mirror / plain, the largest distance to the
    programmed path and the worst limit ratio of the mirror plan (``metrics``, on samples every
    0.5 ms), and the planning time of both (process time; the mirror's includes its plain plan).
-3. Fillets (``_fir_mirror_paths.cornered``): a fillet of R 1 mm between two 50 mm lines, a closed
-   60 x 40 mm rectangle with R 1 mm fillets and the offset pocket of 8 rings (``offset_pocket``),
+3. Fillets (``_fir_mirror_paths.cornered``): a fillet of R 1 mm between two 50 mm lines, closed
+   60 x 40 mm rectangles with R 1 and R 5 mm fillets and the offset pocket of 8 rings (``offset_pocket``),
    each as G2/G3 arcs and as G1 chords of 1 um sagitta, with the envelope's limits and without:
    plain -> mirror, and the mirror with no fillet planned as a corner (``SHORT_REACH`` = 0) in the
    same run. ``--fillets-only`` runs this part alone.
@@ -207,6 +207,8 @@ def fillet_cases() -> dict:
     corner = parse_gcode("G21 G90 G17\nG1 X-1 Y0 F12000\nG3 X0 Y1 I0 J1\nG1 X0 Y50\nM2", start=(-50.0, 0.0, 0.0)).blocks
     programs = {"fillet R 1 mm between 50 mm lines": corner,
                 "rectangle 60 x 40 mm, R 1 mm fillets": parse_gcode(arc_programs.offset_pocket(1),
+                                                                  start=(30.0, 0.0, 0.0)).blocks,
+                "rectangle 60 x 40 mm, R 5 mm fillets": parse_gcode(arc_programs.offset_pocket(1, radius=5.0),
                                                                   start=(30.0, 0.0, 0.0)).blocks,
                 "offset pocket, 8 rings, R 1-0.3 mm fillets": parse_gcode(arc_programs.offset_pocket(8),
                                                                         start=(30.0, 0.0, 0.0)).blocks}

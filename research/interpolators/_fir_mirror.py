@@ -64,9 +64,12 @@ What this module does:
    they are (moving ``V`` towards ``P`` by the mirror of its error broke the lines beside it). The
    fillet: 0.6298 s; a closed 60 x 40 mm rectangle with R 1 mm fillets 1.6384 -> 1.2492 s (as 1 um
    G1 chords 1.6774 -> 1.2492 s); an offset pocket of 8 such rings (R 1-0.3 mm, 2 mm stepovers)
-   10.8623 -> 8.3186 s, under the envelope's limits 11.0126 -> 9.0319 s. Fillets of R 2 mm and
-   more (at 200 mm/s, 60/30 ms, 50 um) have no rounding of ``V`` within eps of them; nor have turns
-   beyond 120 deg.
+   10.8623 -> 8.3186 s, under the envelope's limits 11.0126 -> 9.0319 s. A fillet of R 2 mm or
+   more sits too far inside its corner (0.83 mm at R 2) for one rounding to follow it: such an
+   arc is planned as the polygon of its tangents with the fewest corners within ``CORNER_OFFSET``
+   tolerances of it (more after a spent search): a fillet of R 5 mm 0.7863 -> 0.6384 s (two
+   corners), the rectangle with R 5 mm fillets 1.8579 -> 1.2837 s. Turns beyond 120 deg never
+   verified as corners.
 
 3. **Checks and search.** The exact profile of the moved input is checked against the
    *programmed* path as ``plan_fir`` checks its own (vertex distances at every corner, the
@@ -289,12 +292,13 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
     T_plain = float(plain.cycle_time)
     best = MirrorPlan(plain, _input_vertices(plain), np.ones(M), np.ones(M), False, 0, T_plain)
     # the search plans chords where the program has arcs, and checks the arcs themselves (chorded);
-    # where it has fillets shorter than the filters' reach, also those as corners (cornered), less
-    # those whose rounding ran out of bisection steps in a search that verified nothing better
+    # where it has fillets shorter than the filters' reach, also those as corners (cornered); after
+    # a search that verified nothing better, again with one more corner on each arc fillet whose
+    # rounding ran out of bisection steps (a chord fillet's stays as programmed)
     total, owner_best = 0, None
-    kept = np.zeros(M, dtype=bool)  # programmed blocks whose fillets stay as programmed
+    extra = np.zeros(M, dtype=int)  # searches each programmed block's fillet spent (cornered)
     for attempt in range(2 + FILLET_RETRIES):
-        variant = chorded(tp, tol) + (None,) if attempt == 0 else cornered(tp, tol, feed, Td, kept)
+        variant = chorded(tp, tol) + (None,) if attempt == 0 else cornered(tp, tol, feed, Td, extra)
         if variant is None:
             break
         planned, checked, owner, fillets = variant
@@ -320,7 +324,7 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
         if fillets is not None and (better or not spent.any()):
             break
         if fillets is not None:
-            kept[fillets.owners[spent]] = True
+            extra[np.unique(fillets.owners[spent])] += 1
     if best.compensated and owner_best is not None:  # per programmed block: the least over its chords
         # each programmed block's first planned block
         own_first = np.concatenate([[0], np.flatnonzero(np.diff(owner_best)) + 1])

@@ -6,9 +6,10 @@ each checked vertex has the planned corner's instant).
 
 * :func:`chorded`: every arc as chords of equal angle, checked as the arc's own pieces.
 * :func:`cornered`: besides, every *fillet* shorter than the filters' reach is planned as the
-  corner ``V`` where the lines either side of it meet, and checked as the fillet. A fillet is a
-  short arc tangent to its neighbours (CAM corner smoothing, a tool-radius arc), or a run of
-  short chords between two long blocks that turns one way (the same written as ``G1`` chords).
+  corner ``V`` where the lines either side of it meet (an arc too far inside that corner as the
+  polygon of its tangents, with a few corners), and checked as the fillet. A fillet is a short
+  arc tangent to its neighbours (CAM corner smoothing, a tool-radius arc), or a run of short
+  chords between two long blocks that turns one way (the same written as ``G1`` chords).
   The FIR's window averages such a fillet whole, so ``plan_fir`` cannot follow it as a curve; it
   slows it to its eq 8 feed (an arc) or to its chords' window feeds, as if it were a long curve.
   As a corner, eq 13/14 rounds it at a tolerance :func:`planned_tolerance` that the search
@@ -54,6 +55,15 @@ SHORT_LEAST = 1.0 / 64.0
 #: the shortest piece [mm] from a fillet's end to its corner (:func:`cornered`): below it the fillet
 #: barely turns and is left as it is
 SHORT_LEG = 1e-6
+#: the largest offset of a fillet's corner from the arc, in tolerances (:func:`_arc_fillets`): the
+#: first search's corner count; spent fillets get more. Swept 8 / 10 / 12 / 16 / 20 / 24 / 32 on
+#: bench_cam's setting (the 8-ring pocket, rings with fillets of R 1-10 mm, single fillets of R
+#: 0.3-5 mm, the arc chains; with and without the envelope's limits): cycle times summed 55.3077 /
+#: 53.4566 / 53.3731 / 53.2339 / 52.9522 / 52.9522 / 52.9984 s, planning 16.6-21.8 s (8: a fillet
+#: of R 1 mm takes two corners, 0.6840 s against 0.6298 s with one)
+CORNER_OFFSET = 20.0
+#: the most corners an arc fillet is planned as (:func:`_arc_fillets`)
+CORNERS_MAX = 4
 #: searches again without the fillets whose bisection ran out, at most this many times, after a
 #: search with fillets as corners that verified nothing better (``_fir_mirror``). Swept 0 / 1 / 2 / 4
 #: on 120 filleted contours of ``tests/fuzz/test_fuzz_fir_fillets.py``: faster than ``plan_fir`` on
@@ -116,28 +126,30 @@ def chorded(tp: ToolPath, tol: np.ndarray) -> tuple[ToolPath, ToolPath, np.ndarr
     return ToolPath.from_polyline(chords), checked, owner
 
 
-def cornered(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, window: float, kept: np.ndarray | None = None):
+def cornered(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, window: float, extra: np.ndarray | None = None):
     """:func:`chorded` with the fillets planned as corners: ``(planned, checked, owner, fillets)``
     (a :class:`Fillets`), or None where the path has none (module docstring).
 
     A fillet is no longer than :data:`SHORT_REACH` times the filters' reach at its feed (``feed``
     ``(M,)`` [mm/s] times ``window``, the delays' sum [s]), turns by at most :data:`CORNER_TURN`,
     lies in a plane and is not at the path's ends (the output rests there). An arc fillet
-    (:func:`_arc_fillets`) gives way to the two tangent lines from its ends to where they meet
-    (``V``), checked as its two halves (split at ``P``, half its sweep). A chord fillet
+    (:func:`_arc_fillets`) gives way to the polygon of its tangents (one corner ``V``: the two
+    tangent lines from its ends to where they meet), checked as its pieces (split at each ``P``,
+    the arc's point nearest its corner). A chord fillet
     (:func:`_chord_fillets`) keeps its block count: its vertices move onto the two lines from its
     ends to ``V``, in proportion to their arc length on either side of its vertex nearest ``V``, and
-    it is checked as programmed. ``tol`` ``(M,)`` [mm] as :func:`chorded`'s; ``kept`` ``(M,)``:
-    programmed blocks whose fillets stay as programmed (a search's spent ones, ``_fir_mirror``)."""
+    it is checked as programmed. ``tol`` ``(M,)`` [mm] as :func:`chorded`'s; ``extra`` ``(M,)``:
+    the searches each programmed block's fillet spent (``_fir_mirror``): an arc fillet gets one more
+    corner for each, a chord fillet stays as programmed after one."""
     Td = float(window)
-    kept = np.zeros(tp.n_blocks, dtype=bool) if kept is None else kept
-    arcs = _arc_fillets(tp, tol, feed, Td, kept)
+    extra = np.zeros(tp.n_blocks, dtype=int) if extra is None else extra
+    arcs = _arc_fillets(tp, tol, feed, Td, extra)
     if arcs is None:
         planned, checked, owner = chorded(tp, tol)
         parts = []
     else:
         planned, checked, owner, parts = arcs
-    chords = _chord_fillets(planned, checked, owner, feed, Td, kept)
+    chords = _chord_fillets(planned, checked, owner, feed, tol[owner], Td, extra)
     if chords is not None:
         planned, more = chords
         parts = parts + more
@@ -166,62 +178,87 @@ def _corner_points(S: np.ndarray, u: np.ndarray, E: np.ndarray, w: np.ndarray):
     return V, planar & (a > SHORT_LEG) & (b > SHORT_LEG) & (uw < 1.0 - 1e-12)
 
 
-def _arc_fillets(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, Td: float, kept: np.ndarray):
+def _arc_fillets(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, Td: float, extra: np.ndarray):
     """The arc fillets of ``tp`` as corners: ``(planned, checked, owner, parts)`` (:func:`cornered`;
-    ``parts`` one ``(V, P, pinned, first, corners, owner)`` per fillet: ``corners`` the planned corners
-    it holds, ``owner`` its programmed block), or None where there are none. An
-    arc fillet is tangent (within :data:`TANGENT_TURN`) to the blocks either side: an arc that
-    meets a corner shares its window with that corner's dwell."""
-    arc = tp.is_arc & (tp.sweeps <= CORNER_TURN) & (tp.lengths <= SHORT_REACH * feed * Td) & ~kept
+    ``parts`` one ``(V, P, pinned, first, corners, owner)`` per corner: ``corners`` the planned corners
+    it holds, ``owner`` its programmed block), or None where there are none. An arc fillet is
+    tangent (within :data:`TANGENT_TURN`) to the blocks either side: an arc that meets a corner
+    shares its window with that corner's dwell.
+
+    A fillet of sweep ``theta`` becomes the ``n`` corners of the polygon of its tangents at ``i
+    theta / n`` (``i = 0..n``): corner ``i`` lies ``R (1 / cos(theta / 2n) - 1)`` outside the arc
+    point ``P_i`` at ``(i - 1/2) theta / n``, and the checked path splits the arc at the ``P_i``.
+    ``n`` is the least that keeps that offset within :data:`CORNER_OFFSET` tolerances, plus
+    ``extra`` ``(M,)`` (a search's spent fillets get one more corner); a fillet that would need
+    more than :data:`CORNERS_MAX` stays as chords."""
+    arc = tp.is_arc & (tp.sweeps <= CORNER_TURN) & (tp.lengths <= SHORT_REACH * feed * Td)
     arc[[0, -1]] = False  # the output rests on the path's ends: no corner to round there
     turn = tp.turning_angles()
     arc[1:] &= turn <= TANGENT_TURN
     arc[:-1] &= turn <= TANGENT_TURN
-    if not arc.any():
-        return None
     k = np.flatnonzero(arc)
-    t_s, t_e = tp.tangents()
-    V, keep = _corner_points(tp.starts[k], t_s[k], tp.ends[k], t_e[k])
-    if not keep.any():
+    theta, R = tp.sweeps[k], tp.radii[k]
+    half = np.arccos(R / (R + CORNER_OFFSET * tol[k]))  # the largest half-turn per corner
+    n = np.maximum(1, np.ceil(theta / (2.0 * half) - 1e-9)).astype(int) + extra[k]
+    geo = []
+    for kj, th, nj in zip(k.tolist(), theta.tolist(), n.tolist()):
+        if nj > CORNERS_MAX:
+            continue
+        t = th * np.arange(nj + 1) / nj  # the tangent points
+        T = tp.arc_points(np.full(nj + 1, kj), t)
+        d = tp.arc_derivatives(np.full(nj + 1, kj), t, 1)
+        d = d / np.linalg.norm(d, axis=1, keepdims=True)
+        V, ok = _corner_points(T[:-1], d[:-1], T[1:], d[1:])
+        if ok.all():
+            geo.append((kj, th, nj, V, tp.arc_points(np.full(nj, kj), th * (np.arange(nj) + 0.5) / nj)))
+    if not geo:
         return None
-    k, V = k[keep], V[keep]
     arc = np.zeros(tp.n_blocks, dtype=bool)
-    arc[k] = True
-    P = tp.arc_points(k, 0.5 * tp.sweeps[k])
+    arc[[g[0] for g in geo]] = True
     _, checked, owner = chorded(tp, tol)  # the other arcs' chords stay
-    points = checked.ends
+    points, sweeps = checked.ends, checked.sweeps
     last = np.r_[owner[1:] != owner[:-1], True]
-    stay = ~arc[owner] | last  # an arc fillet keeps its end point; V goes in before it
-    points, owner = points[stay], owner[stay]
-    at = np.flatnonzero(arc[owner])  # the fillets' end points, in the order of k
-    plan_pts = np.insert(points, at, V, axis=0)
-    check_pts = np.insert(points, at, P, axis=0)
-    owner = np.insert(owner, at, owner[at])
-    count = np.bincount(owner, minlength=tp.n_blocks)[owner]
+    stay = ~arc[owner] | last  # an arc fillet keeps its end point; its corners go in before it
+    points, owner, sweeps = points[stay], owner[stay], sweeps[stay].copy()
+    at = np.flatnonzero(arc[owner])  # the fillets' end points, in path order (as geo)
+    counts = np.array([g[2] for g in geo])
+    sweeps[at] = [g[1] / (2 * g[2]) for g in geo]  # the last piece: P_n to the end
+    where = np.repeat(at, counts)
+    plan_pts = np.insert(points, where, np.concatenate([g[3] for g in geo]), axis=0)
+    check_pts = np.insert(points, where, np.concatenate([g[4] for g in geo]), axis=0)
+    owner = np.insert(owner, where, np.repeat(owner[at], counts))
+    sweeps = np.insert(sweeps, where, np.concatenate([[g[1] / (2 * g[2])] + [g[1] / g[2]] * (g[2] - 1) for g in geo]))
     planned = ToolPath.from_polyline(Polyline(np.vstack([tp.start[None], plan_pts])))
-    checked = ToolPath(tp.start, check_pts, tp.centers[owner], tp.normals[owner],
-                       np.where(tp.is_arc[owner], tp.sweeps[owner] / count, 0.0), tp.axes)
-    first = at + np.arange(at.size)  # the planned block from each fillet's start to its V
+    checked = ToolPath(tp.start, check_pts, tp.centers[owner], tp.normals[owner], sweeps, tp.axes)
     parts = []
-    for i in range(k.size):  # its corner V, and its start and end (tangent there)
-        c = np.arange(first[i] - 1, first[i] + 2)
-        parts.append((V[i], P[i], np.stack([V[i], tp.starts[k[i]], tp.ends[k[i]]]), first[i],
-                      c[(c >= 0) & (c < planned.n_blocks - 1)], k[i]))
+    before = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    for (kj, _, nj, V, P), a, b0 in zip(geo, at.tolist(), before.tolist()):
+        pinned = np.vstack([V, tp.starts[kj][None], tp.ends[kj][None]])
+        for i in range(nj):
+            first = a + b0 + i  # the planned block that ends at corner i
+            c = np.array([first] + ([first - 1] if i == 0 else []) + ([first + 1] if i == nj - 1 else []))
+            parts.append((V[i], P[i], pinned if i == 0 else pinned[:0], first,
+                          c[(c >= 0) & (c < planned.n_blocks - 1)], kj))
     return planned, checked, owner, parts
 
 
-def _chord_fillets(planned: ToolPath, checked: ToolPath, owner: np.ndarray, feed: np.ndarray, Td: float,
-                   kept: np.ndarray):
+def _chord_fillets(planned: ToolPath, checked: ToolPath, owner: np.ndarray, feed: np.ndarray, tol: np.ndarray,
+                   Td: float, extra: np.ndarray):
     """The chord fillets of ``planned``'s lines as corners: ``(planned with their vertices moved,
-    parts)`` (as :func:`_arc_fillets`'), or None where there are none; ``kept`` ``(M,)`` as
+    parts)`` (as :func:`_arc_fillets`'), or None where there are none; ``extra`` ``(M,)`` as
     :func:`cornered`'s.
 
     A chord fillet is a run of two or more consecutive short blocks (each no longer than
     :data:`CHORD_REACH`, all together than :data:`SHORT_REACH` times the reach at their feed;
-    ``feed`` per programmed block, ``owner`` maps to it), lines in ``checked`` as in ``planned``
-    (not an arc's chords, not an arc fillet's pieces), between two such lines longer than the run
-    and than :data:`FILLET_RATIO` times its longest chord, that turns one way at every vertex, by
-    at most :data:`CORNER_TURN` in all. Its inner vertex nearest ``V`` moves onto ``V``."""
+    ``feed`` and ``tol`` per programmed and planned block, ``owner`` maps between them), lines in
+    ``checked`` as in ``planned`` (not an arc's chords, not an arc fillet's pieces), between two
+    such lines longer than the run and than :data:`FILLET_RATIO` times its longest chord, that
+    turns one way at every vertex, by at most :data:`CORNER_TURN` in all. As an arc fillet
+    (:func:`_arc_fillets`, its radius read as the run's length over its turn) it becomes the
+    polygon of ``n`` tangents, here the lines through the points at ``i / n`` of its length along
+    the chord there (the lines either side at its ends); the run's inner vertex nearest each
+    corner moves onto it, the others onto the polygon's sides in proportion to their arc length.
+    Not where two corners would take one vertex (too few chords)."""
     B = planned.n_blocks
     if B < 4 or planned.dim < 2:
         return None
@@ -237,30 +274,45 @@ def _chord_fillets(planned: ToolPath, checked: ToolPath, owner: np.ndarray, feed
     chords = np.diff(pts, axis=0)
     unit = chords / np.linalg.norm(chords, axis=1, keepdims=True)
     for s, e in zip(starts, stops):
-        if e - s < 2 or s == 0 or e == B or kept[owner[s]]:
+        if e - s < 2 or s == 0 or e == B:
             continue
         run = float(np.sum(lengths[s:e]))
         bound = max(run, FILLET_RATIO * float(lengths[s:e].max()))  # the blocks either side are longer
         if run > float(np.min(reach[s:e])) or min(lengths[s - 1], lengths[e]) <= bound or not (line[s - 1] and line[e]):
             continue
         u, w = unit[s - 1], unit[e]
-        if math.acos(min(max(float(u @ w), -1.0), 1.0)) > CORNER_TURN:
+        turn = math.acos(min(max(float(u @ w), -1.0), 1.0))
+        if turn > CORNER_TURN or not _turns_one_way(unit[s - 1:e + 1]):
             continue
-        if not _turns_one_way(unit[s - 1:e + 1]):
+        # as an arc's: the tangent polygon of the run (its radius read as length over turn)
+        radius = run / max(turn, 1e-12)
+        n = max(1, math.ceil(turn / (2.0 * math.acos(radius / (radius + CORNER_OFFSET * float(tol[s])))) - 1e-9))
+        n += int(extra[owner[s]])
+        if n > CORNERS_MAX:
             continue
-        S, E = pts[s], pts[e]  # the run's first and last vertex
-        V, keep = _corner_points(S[None], u[None], E[None], w[None])
-        if not keep[0]:
-            continue
-        V = V[0]
-        inner = np.arange(s + 1, e)  # the run's inner vertices
-        m = int(inner[np.argmin(np.linalg.norm(pts[inner] - V, axis=1))])
         along = np.r_[0.0, np.cumsum(lengths[s:e])]  # arc length of vertices s..e from S
-        a = along[: m - s + 1] / along[m - s]
-        b = (along[m - s:] - along[m - s]) / (along[-1] - along[m - s])
-        out[s:m + 1] = S + a[:, None] * (V - S)
-        out[m:e + 1] = V + b[:, None] * (E - V)
-        parts.append((V, pts[m], out[s:e + 1].copy(), m - 1, np.arange(s - 1, e), owner[s]))
+        t = run * np.arange(n + 1) / n  # the tangent points, by arc length
+        j = np.clip(np.searchsorted(along, t, side="right") - 1, 0, e - s - 1)  # the chord holding each
+        T = pts[s + j] + (t - along[j])[:, None] * unit[s + j]
+        d = unit[s + j]
+        d[0], d[-1] = u, w  # at the run's ends: the lines either side
+        T[-1] = pts[e]
+        V, ok = _corner_points(T[:-1], d[:-1], T[1:], d[1:])
+        if not ok.all():
+            continue
+        m = np.array([s + 1 + int(np.argmin(np.linalg.norm(pts[s + 1:e] - v, axis=1))) for v in V])
+        if np.any(np.diff(m) <= 0):
+            continue  # two corners on one vertex: too few chords for this many
+        knots = np.r_[s, m, e]  # S, the vertices moved onto the corners, E
+        poly = np.vstack([pts[s], V, pts[e]])
+        for a0, a1, p0, p1 in zip(knots[:-1], knots[1:], poly[:-1], poly[1:]):
+            f = (along[a0 - s:a1 - s + 1] - along[a0 - s]) / (along[a1 - s] - along[a0 - s])
+            out[a0:a1 + 1] = p0 + f[:, None] * (p1 - p0)
+        # each corner of the run (its vertices s..e are corners s - 1 .. e - 1) to the nearest moved corner
+        nearest = np.argmin(np.abs(along[:, None] - along[m - s][None, :]), axis=1)
+        for i in range(n):
+            parts.append((V[i], pts[m[i]], out[s:e + 1].copy() if i == 0 else out[s:s],
+                          int(m[i]) - 1, np.arange(s - 1, e)[nearest == i], owner[s]))
     if not parts:
         return None
     return ToolPath.from_polyline(Polyline(out)), parts
@@ -286,9 +338,11 @@ def planned_tolerance(tol: np.ndarray, g: np.ndarray, fillets: Fillets | None, h
     out = tol * g
     if fillets is None:
         return out
-    for b in (fillets.first, fillets.first + 1):
-        out[b] = np.maximum(fillets.offset + (2.0 * h - 1.0) * tol[b], 0.0)
-    return out
+    x = np.maximum(fillets.offset + (2.0 * h - 1.0) * tol[fillets.first], 0.0)
+    held = np.full(out.shape, -np.inf)  # a block between two corners of one arc: the larger (each corner its own)
+    np.maximum.at(held, fillets.first, x)
+    np.maximum.at(held, fillets.first + 1, x)
+    return np.where(np.isfinite(held), held, out)
 
 
 def bisect_rounding(position, corner_times: np.ndarray, delays: np.ndarray, fillets: Fillets, which: np.ndarray,

@@ -699,3 +699,48 @@ def test_fillets_in_other_planes_run_as_corners():
         m = plan_fir_mirror(path, F, DELAYS, EPS)
         assert m.compensated and m.cycle_time < 0.9 * m.plain_cycle_time
         assert np.max(check.distance(np.asarray(m.plan.trajectory(2e-4).q))) <= EPS * (1 + 1e-6) + 1e-8
+
+
+def test_a_larger_fillet_runs_as_the_corners_of_its_tangent_polygon():
+    """A fillet of R 5 mm (7.9 mm, within the 18 mm reach) sits 2.07 mm inside its corner, too far
+    for one rounding to follow it; ``cornered`` plans it as the polygon of its tangents with the
+    fewest corners that lie within ``CORNER_OFFSET`` tolerances of the arc: with eps 50 um two,
+    at -67.5 and -22.5 deg about the centre (-5, 5), each R / cos 22.5 deg from it, the arc split at
+    the points at those angles (R from the centre). The plan is more than 15 % faster than
+    ``plan_fir`` (0.7863 s) and keeps eps on the arc."""
+    tp = fillet(5.0)
+    M = tp.n_blocks
+    planned, checked, owner, fil = cornered(tp, np.full(M, EPS), np.full(M, F), float(np.sum(DELAYS)))
+    a = np.radians([-67.5, -22.5])
+    ring = np.stack([np.cos(a), np.sin(a), 0 * a], axis=1)
+    centre = np.array([-5.0, 5.0, 0.0])
+    np.testing.assert_allclose(fil.corners, centre + 5.0 / np.cos(np.radians(22.5)) * ring, atol=1e-9)
+    np.testing.assert_allclose(fil.splits, centre + 5.0 * ring, atol=1e-9)
+    assert owner.tolist() == [0, 1, 1, 1, 2] and fil.first.tolist() == [1, 2]
+    np.testing.assert_allclose(checked.ends[1:3], fil.splits, atol=1e-9)
+    np.testing.assert_allclose(checked.sweeps[1:4], np.radians([22.5, 45.0, 22.5]), rtol=1e-12)
+    m = plan_fir_mirror(tp, F, DELAYS, EPS)
+    assert m.compensated and m.cycle_time < 0.85 * m.plain_cycle_time
+    assert np.max(tp.distance(np.asarray(m.plan.trajectory(2e-4).q))) <= EPS * (1 + 1e-6) + 1e-8
+
+
+def test_a_larger_fillet_as_chords_runs_as_the_corners_of_its_tangent_polygon():
+    """The fillet of R 5 mm as 1 um G1 chords: two corners as for the arc, each within 0.1 mm of the
+    arc's tangent polygon corner (the run's tangents are read from its chords, whose directions
+    turn by 0.04 rad each: the lines through R tan 22.5 deg = 2.07 mm long sides move the corner
+    by up to about 2.07 x 0.02 x 2), the splits on the arc (chord vertices, R from the centre);
+    more than 15 % faster than ``plan_fir`` and within eps of the programmed chords."""
+    chords = fillet(5.0).to_polyline(1e-3)[0]
+    tp = ToolPath.from_polyline(chords)
+    M = tp.n_blocks
+    _, _, _, fil = cornered(tp, np.full(M, EPS), np.full(M, F), float(np.sum(DELAYS)))
+    a = np.radians([-67.5, -22.5])
+    ring = np.stack([np.cos(a), np.sin(a), 0 * a], axis=1)
+    centre = np.array([-5.0, 5.0, 0.0])
+    assert fil.first.size == 2
+    assert np.max(np.abs(fil.corners - (centre + 5.0 / np.cos(np.radians(22.5)) * ring))) < 0.1
+    np.testing.assert_allclose(np.linalg.norm(fil.splits - centre, axis=1), 5.0, atol=1e-6)
+    m = plan_fir_mirror(chords, F, DELAYS, EPS)
+    assert m.compensated and m.cycle_time < 0.85 * m.plain_cycle_time
+    q = np.asarray(m.plan.trajectory(2e-4).q)
+    assert np.max(segment_distances(q, np.asarray(chords.points))) <= EPS * (1 + 1e-6) + 1e-8
