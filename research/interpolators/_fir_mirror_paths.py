@@ -36,10 +36,11 @@ from research.interpolators._fir_verify import nearest_instants
 #: 7.7 / 7.8 / 8.3 s
 CHORD_SHARE = 0.1
 #: a fillet up to this share of the filters' reach at its feed (``F T_d``) is short (:func:`cornered`): the
-#: window averages it whole. Swept 0.5 / 1 / 2 on bench_cam's setting (offset pocket of 8 rings, rings
-#: and corners with fillets of R 0.3-15 mm, arc chains; with and without the envelope's limits): the
-#: same cycle times (fillets of R 2 mm and more never verify as corners there), planning 11.9 / 11.5 /
-#: 11.8 s; at 0 (no fillets) the pocket 10.8623 s against 8.3186 s
+#: window averages it whole. Swept with the tangent polygons (CORNER_OFFSET's cases and a ring of
+#: R 15 mm fillets, 23.6 mm long) at 0.5 / 1 / 2 / 3: cycle times summed 56.0554 / 55.3997 / 55.2559 /
+#: 55.2559 s (at 0.5 the ring of R 10 mm fillets 1.6213 against 1.1191 s; at 2 the R 15 mm ring
+#: 1.1355 against 1.2518 s, and the 40-arc chain 4.8478 against 4.8016 s); 1, the reach itself, is
+#: kept: within 0.3 % of the best; at 0 (no fillets) the pocket 10.8623 s against 8.3186 s
 SHORT_REACH = 1.0
 #: the largest turn [rad] of a fillet planned as a corner (:func:`cornered`). Fillets of R 0.3 / 1 mm
 #: between 50 mm lines turning 60-170 deg (bench_cam's setting) verify as corners up to 120 deg
