@@ -293,8 +293,8 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
     best = MirrorPlan(plain, _input_vertices(plain), np.ones(M), np.ones(M), False, 0, T_plain)
     # the search plans chords where the program has arcs, and checks the arcs themselves (chorded);
     # where it has fillets shorter than the filters' reach, also those as corners (cornered); after
-    # a search that verified nothing better, again with one more corner on each arc fillet whose
-    # rounding ran out of bisection steps (a chord fillet's stays as programmed)
+    # a search that verified nothing better, again with one more corner on each fillet whose
+    # rounding ran out of bisection steps (beyond CORNERS_MAX it stays as programmed)
     total, owner_best = 0, None
     extra = np.zeros(M, dtype=int)  # searches each programmed block's fillet spent (cornered)
     for attempt in range(2 + FILLET_RETRIES):

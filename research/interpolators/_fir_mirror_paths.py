@@ -65,11 +65,11 @@ SHORT_LEG = 1e-6
 CORNER_OFFSET = 20.0
 #: the most corners an arc fillet is planned as (:func:`_arc_fillets`)
 CORNERS_MAX = 4
-#: searches again without the fillets whose bisection ran out, at most this many times, after a
-#: search with fillets as corners that verified nothing better (``_fir_mirror``). Swept 0 / 1 / 2 / 4
-#: on 120 filleted contours of ``tests/fuzz/test_fuzz_fir_fillets.py``: faster than ``plan_fir`` on
-#: 16 / 24 / 25 / 25, cycle times summed 679.0691 / 678.0183 / 677.9789 / 677.9789 s (681.4362 s
-#: plain), planning 69.9 / 79.7 / 83.2 / 84.3 s
+#: searches again, each fillet whose bisection ran out with one more corner, at most this many
+#: times after a search with fillets as corners that verified nothing better (``_fir_mirror``).
+#: Swept 0 / 1 / 2 / 3 on the 120 filleted contours of ``tests/fuzz/test_fuzz_fir_fillets.py``:
+#: faster than ``plan_fir`` on 18 / 27 / 29 / 29, cycle times summed 678.9245 / 677.2507 /
+#: 676.9570 / 676.9570 s (681.4362 s plain), planning 73.2 / 80.8 / 82.4 / 82.2 s
 FILLET_RETRIES = 2
 #: a chord of a fillet is no longer than this share of the filters' reach (:func:`_chord_fillets`), and
 #: the blocks either side of the fillet are longer than FILLET_RATIO of its longest chord. Swept
@@ -137,11 +137,10 @@ def cornered(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, window: float, ext
     (:func:`_arc_fillets`) gives way to the polygon of its tangents (one corner ``V``: the two
     tangent lines from its ends to where they meet), checked as its pieces (split at each ``P``,
     the arc's point nearest its corner). A chord fillet
-    (:func:`_chord_fillets`) keeps its block count: its vertices move onto the two lines from its
-    ends to ``V``, in proportion to their arc length on either side of its vertex nearest ``V``, and
-    it is checked as programmed. ``tol`` ``(M,)`` [mm] as :func:`chorded`'s; ``extra`` ``(M,)``:
-    the searches each programmed block's fillet spent (``_fir_mirror``): an arc fillet gets one more
-    corner for each, a chord fillet stays as programmed after one."""
+    (:func:`_chord_fillets`) keeps its block count: its vertices move onto the polygon of its
+    tangents, and it is checked as programmed. ``tol`` ``(M,)`` [mm] as :func:`chorded`'s;
+    ``extra`` ``(M,)``: the searches each programmed block's fillet spent (``_fir_mirror``): one
+    more corner for each (beyond :data:`CORNERS_MAX` the fillet stays as programmed)."""
     Td = float(window)
     extra = np.zeros(tp.n_blocks, dtype=int) if extra is None else extra
     arcs = _arc_fillets(tp, tol, feed, Td, extra)
