@@ -298,7 +298,7 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
     total, owner_best = 0, None
     extra = np.zeros(M, dtype=int)  # searches each programmed block's fillet spent (cornered)
     for attempt in range(2 + FILLET_RETRIES):
-        variant = chorded(tp, tol) + (None,) if attempt == 0 else cornered(tp, tol, feed, Td, extra)
+        variant = (chorded(tp, tol) + (None,)) if attempt == 0 else cornered(tp, tol, feed, Td, extra)
         if variant is None:
             break
         planned, checked, owner, fillets = variant
@@ -336,13 +336,12 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
 def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray, limits: AxisLimits | None,
             relax: float, passes: int, rounds: int, check_period: float, refine: bool, kappa: np.ndarray,
             caps: np.ndarray, best: MirrorPlan, corners: np.ndarray,
-            fillets: Fillets | None = None) -> tuple[MirrorPlan, int]:
+            fillets: Fillets | None = None) -> tuple[MirrorPlan, int, np.ndarray]:
     """One timing's search (module docstring, steps 1-3): ``(the faster of best and what it
-    verified, rounds made, the fillets whose bisection ran out with their violations left (n,))``. ``tp``: the planned path (arcs as chords, fillets as corners),
-    ``checked``: the path its plans are checked against (the programmed arcs' pieces,
-    :func:`chorded`); ``refine``: the
-    timing is ``plan_fir``'s look-ahead plan, else its eq 13/14 plan capped by :func:`shrink_caps`
-    as well; ``kappa`` ``(M - 1, d)`` the vertices' curvature [1/mm], ``caps`` ``(M,)`` the blocks'
+    verified, rounds made, (n,) the fillets whose bisection ran out with violations left)``.
+    ``tp``: the planned path (arcs as chords, fillets as corners), ``checked``: the path its plans
+    are checked against (the programmed arcs' pieces, :func:`chorded`); ``refine``: the timing is
+    ``plan_fir``'s look-ahead plan, else its eq 13/14 plan capped by :func:`shrink_caps` as well; ``kappa`` ``(M - 1, d)`` the vertices' curvature [1/mm], ``caps`` ``(M,)`` the blocks'
     curvature caps [mm/s]; ``corners`` ``(M - 1,)`` the sharp corners (step 3); ``fillets``: the
     fillets ``tp`` has as corners (``cornered``; their tolerance ``planned_tolerance``'s, bisected
     where a violation is theirs), or None."""

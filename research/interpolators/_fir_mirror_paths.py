@@ -134,9 +134,10 @@ def cornered(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, window: float, ext
     A fillet is no longer than :data:`SHORT_REACH` times the filters' reach at its feed (``feed``
     ``(M,)`` [mm/s] times ``window``, the delays' sum [s]), turns by at most :data:`CORNER_TURN`,
     lies in a plane and is not at the path's ends (the output rests there). An arc fillet
-    (:func:`_arc_fillets`) gives way to the polygon of its tangents (one corner ``V``: the two
-    tangent lines from its ends to where they meet), checked as its pieces (split at each ``P``,
-    the arc's point nearest its corner). A chord fillet
+    (:func:`_arc_fillets`) gives way to the polygon of its tangents (with one corner ``V``, the
+    two tangent lines from its ends to where they meet), checked as its pieces (split at each
+    ``P``, the arc's point nearest a corner); each fillet pins its vertices once, in its first
+    corner's part. A chord fillet
     (:func:`_chord_fillets`) keeps its block count: its vertices move onto the polygon of its
     tangents, and it is checked as programmed. ``tol`` ``(M,)`` [mm] as :func:`chorded`'s;
     ``extra`` ``(M,)``: the searches each programmed block's fillet spent (``_fir_mirror``): one
@@ -237,7 +238,7 @@ def _arc_fillets(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, Td: float, ext
         for i in range(nj):
             first = a + b0 + i  # the planned block that ends at corner i
             c = np.array([first] + ([first - 1] if i == 0 else []) + ([first + 1] if i == nj - 1 else []))
-            parts.append((V[i], P[i], pinned if i == 0 else pinned[:0], first,
+            parts.append((V[i], P[i], pinned if i == 0 else np.zeros((0, pinned.shape[1])), first,
                           c[(c >= 0) & (c < planned.n_blocks - 1)], kj))
     return planned, checked, owner, parts
 
@@ -311,7 +312,7 @@ def _chord_fillets(planned: ToolPath, checked: ToolPath, owner: np.ndarray, feed
         # each corner of the run (its vertices s..e are corners s - 1 .. e - 1) to the nearest moved corner
         nearest = np.argmin(np.abs(along[:, None] - along[m - s][None, :]), axis=1)
         for i in range(n):
-            parts.append((V[i], pts[m[i]], out[s:e + 1].copy() if i == 0 else out[s:s],
+            parts.append((V[i], pts[m[i]], out[s:e + 1].copy() if i == 0 else np.zeros((0, out.shape[1])),
                           int(m[i]) - 1, np.arange(s - 1, e)[nearest == i], owner[s]))
     if not parts:
         return None

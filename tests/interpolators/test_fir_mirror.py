@@ -567,6 +567,14 @@ def fillet(radius: float, length: float = 50.0, feed_mm_min: float = 12000.0) ->
     return parse_gcode(g, start=(-length, 0.0, 0.0)).blocks
 
 
+def filleted_rectangle(r: float, w: float = 60.0, h: float = 40.0) -> ToolPath:
+    """A closed ``w x h`` [mm] rectangle with G3 fillets of ``r`` [mm] (CAM corner smoothing), run
+    counter-clockwise from the middle of its bottom side back to it."""
+    g = (f"G21 G90 G17 F12000\nG1 X{w - r} Y0\nG3 X{w} Y{r} I0 J{r}\nG1 X{w} Y{h - r}\nG3 X{w - r} Y{h} I{-r} J0\n"
+         f"G1 X{r} Y{h}\nG3 X0 Y{h - r} I0 J{-r}\nG1 X0 Y{r}\nG3 X{r} Y0 I{r} J0\nG1 X{w / 2} Y0\nM2")
+    return parse_gcode(g, start=(w / 2, 0.0, 0.0)).blocks
+
+
 def test_cornered_plans_a_short_arc_as_the_corner_of_its_end_tangents():
     """``cornered`` on a fillet of R 1 mm (1.57 mm long, against ``F T_d`` = 18 mm): the planned path
     runs through ``V`` = (0, 0, 0), where the lines y = 0 and x = 0 meet, and keeps the arc's ends;
@@ -623,10 +631,7 @@ def test_a_filleted_rectangle_runs_its_fillets_as_corners_under_limits():
     by more than 15 % (three corners, each about 0.1 s of dwell and slow arc that the sharp
     corner's eq 13/14 plan does not pay); eps by the exact distance to the programmed fillets,
     limits on the sampled trajectory; the path's end reached."""
-    r, w, h = 0.5, 60.0, 40.0
-    g = (f"G21 G90 G17 F12000\nG1 X{w - r} Y0\nG3 X{w} Y{r} I0 J{r}\nG1 X{w} Y{h - r}\nG3 X{w - r} Y{h} I{-r} J0\n"
-         f"G1 X{r} Y{h}\nG3 X0 Y{h - r} I0 J{-r}\nG1 X0 Y{r}\nG3 X{r} Y0 I{r} J0\nG1 X{w / 2} Y0\nM2")
-    tp = parse_gcode(g, start=(w / 2, 0.0, 0.0)).blocks
+    tp = filleted_rectangle(0.5)
     lim = AxisLimits.fir_envelope(3, F, DELAYS)
     m = plan_fir_mirror(tp, F, DELAYS, EPS, limits=lim)
     assert m.compensated and m.cycle_time < 0.85 * m.plain_cycle_time
@@ -675,10 +680,7 @@ def test_a_rectangle_with_chord_fillets_runs_them_as_corners(limits):
     fillet as chords of 1 um sagitta. Faster than ``plan_fir`` by more than 15 %, eps by the exact
     distance to the programmed chords (brute force over every segment), limits on the sampled
     trajectory."""
-    r, w, h = 0.5, 60.0, 40.0
-    g = (f"G21 G90 G17 F12000\nG1 X{w - r} Y0\nG3 X{w} Y{r} I0 J{r}\nG1 X{w} Y{h - r}\nG3 X{w - r} Y{h} I{-r} J0\n"
-         f"G1 X{r} Y{h}\nG3 X0 Y{h - r} I0 J{-r}\nG1 X0 Y{r}\nG3 X{r} Y0 I{r} J0\nG1 X{w / 2} Y0\nM2")
-    chords, _ = parse_gcode(g, start=(w / 2, 0.0, 0.0)).blocks.to_polyline(1e-3)
+    chords, _ = filleted_rectangle(0.5).to_polyline(1e-3)
     lim = AxisLimits.fir_envelope(3, F, DELAYS) if limits else None
     m = plan_fir_mirror(chords, F, DELAYS, EPS, limits=lim)
     assert m.compensated and m.cycle_time < 0.85 * m.plain_cycle_time
