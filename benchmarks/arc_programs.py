@@ -150,3 +150,13 @@ def offset_pocket(rings: int, width: float = 60.0, height: float = 40.0, step: f
                   f"G1 X{a:.4f} Y{a + r:.4f}", f"G3 X{a + r:.4f} Y{a:.4f} I{r:.4f} J0", f"G1 X{a + w / 2:.4f} Y{a:.4f}"]
     lines.append("M2")
     return "\n".join(lines)
+
+
+def slot(radius: float, length: float = 40.0) -> str:
+    """G-code of a closed slot (obround) contour: two ``length`` [mm] sides joined by G3 half circles
+    of ``radius`` [mm] about (length, 0) and (0, 0), run counter-clockwise from the middle of its lower
+    side back to it (G17, 4 decimals, F 12000 mm/min). Read it with ``parse_gcode(text, start=(length
+    / 2, -radius, 0))``."""
+    r, L = radius, length
+    return "\n".join(["G21 G90 G17 G94 F12000", f"G1 X{L:.4f} Y{-r:.4f}", f"G3 X{L:.4f} Y{r:.4f} I0 J{r:.4f}",
+                      f"G1 X0 Y{r:.4f}", f"G3 X0 Y{-r:.4f} I0 J{-r:.4f}", f"G1 X{L / 2:.4f} Y{-r:.4f}", "M2"])

@@ -27,7 +27,8 @@ Usage::
    programmed path and the worst limit ratio of the mirror plan (``metrics``, on samples every
    0.5 ms), and the planning time of both (process time; the mirror's includes its plain plan).
 3. Fillets (``_fir_mirror_paths.cornered``): a fillet of R 1 mm between two 50 mm lines, closed
-   60 x 40 mm rectangles with R 1 and R 5 mm fillets and the offset pocket of 8 rings (``offset_pocket``),
+   60 x 40 mm rectangles with R 1 and R 5 mm fillets, the offset pocket of 8 rings (``offset_pocket``)
+   and slots of 40 mm with R 1 and R 3 mm half circles (``slot``, a fillet that turns the path back),
    each as G2/G3 arcs and as G1 chords of 1 um sagitta, with the envelope's limits and without:
    plain -> mirror, and the mirror with no fillet planned as a corner (``SHORT_REACH`` = 0) in the
    same run. ``--fillets-only`` runs this part alone.
@@ -211,7 +212,9 @@ def fillet_cases() -> dict:
                 "rectangle 60 x 40 mm, R 5 mm fillets": parse_gcode(arc_programs.offset_pocket(1, radius=5.0),
                                                                   start=(30.0, 0.0, 0.0)).blocks,
                 "offset pocket, 8 rings, R 1-0.3 mm fillets": parse_gcode(arc_programs.offset_pocket(8),
-                                                                        start=(30.0, 0.0, 0.0)).blocks}
+                                                                        start=(30.0, 0.0, 0.0)).blocks,
+                "slot 40 mm, R 1 mm half circles": parse_gcode(arc_programs.slot(1.0), start=(20.0, -1.0, 0.0)).blocks,
+                "slot 40 mm, R 3 mm half circles": parse_gcode(arc_programs.slot(3.0), start=(20.0, -3.0, 0.0)).blocks}
     cases = {}
     for name, tp in programs.items():
         cases[f"{name}, arcs"] = tp

@@ -42,9 +42,13 @@ CHORD_SHARE = 0.1
 #: 1.1355 against 1.2518 s, and the 40-arc chain 4.8478 against 4.8016 s); 1, the reach itself, is
 #: kept: within 0.3 % of the best; at 0 (no fillets) the pocket 10.8623 s against 8.3186 s
 SHORT_REACH = 1.0
-#: the largest turn [rad] of a fillet planned as a corner (:func:`cornered`). Fillets of R 0.3 / 1 mm
-#: between 50 mm lines turning 60-170 deg (bench_cam's setting) verify as corners up to 120 deg
-#: (R 0.3 mm: 0.7439 -> 0.6431 s) and never beyond (150, 170 deg)
+#: the largest turn [rad] of one corner a fillet is planned as (:func:`cornered`); a fillet that turns
+#: more is planned as at least ``ceil(turn / CORNER_TURN)`` corners. Fillets of R 0.3 / 1 mm between
+#: 50 mm lines turning 60-170 deg (bench_cam's setting) verify as one corner up to 120 deg (R 0.3 mm:
+#: 0.7439 -> 0.6431 s) and never beyond (150, 170 deg). Swept as the turn of one corner at 90 / 120 /
+#: 135 / 150 deg: the 120 fuzz contours of ``tests/fuzz/test_fuzz_fir_fillets.py`` summed 669.6232 /
+#: 668.7790 / 669.5255 / 669.2328 s (681.4362 s plain), fillets of 90-165 deg and slots of R 0.3-6 mm
+#: (25 programs, with and without the envelope's limits) 42.0482 / 42.0482 / 42.1319 / 42.1586 s
 CORNER_TURN = 2.0 * math.pi / 3.0
 #: a turn [rad] up to which an arc's start or end counts as tangent (:func:`cornered`): 4-decimal
 #: coordinates of a fillet of R >= 0.1 mm turn by less than 1e-3 rad where it is tangent
@@ -132,10 +136,11 @@ def cornered(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, window: float, ext
     (a :class:`Fillets`), or None where the path has none (module docstring).
 
     A fillet is no longer than :data:`SHORT_REACH` times the filters' reach at its feed (``feed``
-    ``(M,)`` [mm/s] times ``window``, the delays' sum [s]), turns by at most :data:`CORNER_TURN`,
-    lies in a plane and is not at the path's ends (the output rests there). An arc fillet
-    (:func:`_arc_fillets`) gives way to the polygon of its tangents (with one corner ``V``, the
-    two tangent lines from its ends to where they meet), checked as its pieces (split at each
+    ``(M,)`` [mm/s] times ``window``, the delays' sum [s]), lies in a plane and is not at the
+    path's ends (the output rests there); it may turn the path back on itself (a slot's half
+    circle). An arc fillet (:func:`_arc_fillets`) gives way to the polygon of its tangents (with
+    one corner ``V``, the two tangent lines from its ends to where they meet; each corner turns
+    by at most :data:`CORNER_TURN`), checked as its pieces (split at each
     ``P``, the arc's point nearest a corner); each fillet pins its vertices once, in its first
     corner's part. A chord fillet
     (:func:`_chord_fillets`) keeps its block count: its vertices move onto the polygon of its
@@ -171,7 +176,7 @@ def _corner_points(S: np.ndarray, u: np.ndarray, E: np.ndarray, w: np.ndarray):
     whether they meet (in a plane) ahead of ``S`` and behind ``E`` by more than :data:`SHORT_LEG`."""
     d = E - S
     uw = np.sum(u * w, axis=1)
-    det = np.maximum(1.0 - uw**2, 1e-300)  # the turn is at most CORNER_TURN < pi: not parallel
+    det = np.maximum(1.0 - uw**2, 1e-300)  # each corner turns by at most CORNER_TURN < pi: not parallel
     du, dw = np.sum(d * u, axis=1), np.sum(d * w, axis=1)
     a, b = (du - uw * dw) / det, (dw - uw * du) / det
     V = S + a[:, None] * u
@@ -189,10 +194,11 @@ def _arc_fillets(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, Td: float, ext
     A fillet of sweep ``theta`` becomes the ``n`` corners of the polygon of its tangents at ``i
     theta / n`` (``i = 0..n``): corner ``i`` lies ``R (1 / cos(theta / 2n) - 1)`` outside the arc
     point ``P_i`` at ``(i - 1/2) theta / n``, and the checked path splits the arc at the ``P_i``.
-    ``n`` is the least that keeps that offset within :data:`CORNER_OFFSET` tolerances, plus
+    ``n`` is the least that keeps that offset within :data:`CORNER_OFFSET` tolerances and each
+    corner's turn ``theta / n`` within :data:`CORNER_TURN` (a half circle: two corners), plus
     ``extra`` ``(M,)`` (a search's spent fillets get one more corner); a fillet that would need
     more than :data:`CORNERS_MAX` stays as chords."""
-    arc = tp.is_arc & (tp.sweeps <= CORNER_TURN) & (tp.lengths <= SHORT_REACH * feed * Td)
+    arc = tp.is_arc & (tp.lengths <= SHORT_REACH * feed * Td)
     arc[[0, -1]] = False  # the output rests on the path's ends: no corner to round there
     turn = tp.turning_angles()
     arc[1:] &= turn <= TANGENT_TURN
@@ -200,7 +206,8 @@ def _arc_fillets(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, Td: float, ext
     k = np.flatnonzero(arc)
     theta, R = tp.sweeps[k], tp.radii[k]
     half = np.arccos(R / (R + CORNER_OFFSET * tol[k]))  # the largest half-turn per corner
-    n = np.maximum(1, np.ceil(theta / (2.0 * half) - 1e-9)).astype(int) + extra[k]
+    n = np.ceil(np.maximum(theta / (2.0 * half), theta / CORNER_TURN) - 1e-9).astype(int)
+    n = np.maximum(n, 1) + extra[k]
     geo = []
     for kj, th, nj in zip(k.tolist(), theta.tolist(), n.tolist()):
         if nj > CORNERS_MAX:
@@ -254,7 +261,7 @@ def _chord_fillets(planned: ToolPath, checked: ToolPath, owner: np.ndarray, feed
     ``feed`` and ``tol`` per programmed and planned block, ``owner`` maps between them), lines in
     ``checked`` as in ``planned`` (not an arc's chords, not an arc fillet's pieces), between two
     such lines longer than the run and than :data:`FILLET_RATIO` times its longest chord, that
-    turns one way at every vertex, by at most :data:`CORNER_TURN` in all. As an arc fillet
+    turns one way at every vertex (its turn the sum of theirs). As an arc fillet
     (:func:`_arc_fillets`, its radius read as the run's length over its turn) it becomes the
     polygon of ``n`` tangents, here the lines through the points at ``i / n`` of its length along
     the chord there (the lines either side at its ends); the run's inner vertex nearest each
@@ -282,13 +289,14 @@ def _chord_fillets(planned: ToolPath, checked: ToolPath, owner: np.ndarray, feed
         if run > float(np.min(reach[s:e])) or min(lengths[s - 1], lengths[e]) <= bound or not (line[s - 1] and line[e]):
             continue
         u, w = unit[s - 1], unit[e]
-        turn = math.acos(min(max(float(u @ w), -1.0), 1.0))
-        if turn > CORNER_TURN or not _turns_one_way(unit[s - 1:e + 1]):
+        if not _turns_one_way(unit[s - 1:e + 1]):
             continue
+        # its turn: the sum of its vertices' (one way), more than pi where it turns back on itself
+        turn = float(np.sum(np.arccos(np.clip(np.sum(unit[s - 1:e] * unit[s:e + 1], axis=1), -1.0, 1.0))))
         # as an arc's: the tangent polygon of the run (its radius read as length over turn)
         radius = run / max(turn, 1e-12)
-        n = max(1, math.ceil(turn / (2.0 * math.acos(radius / (radius + CORNER_OFFSET * float(tol[s])))) - 1e-9))
-        n += int(extra[owner[s]])
+        half = math.acos(radius / (radius + CORNER_OFFSET * float(tol[s])))
+        n = max(1, math.ceil(max(turn / (2.0 * half), turn / CORNER_TURN) - 1e-9)) + int(extra[owner[s]])
         if n > CORNERS_MAX:
             continue
         along = np.r_[0.0, np.cumsum(lengths[s:e])]  # arc length of vertices s..e from S
@@ -321,13 +329,15 @@ def _chord_fillets(planned: ToolPath, checked: ToolPath, owner: np.ndarray, feed
 
 def _turns_one_way(units: np.ndarray) -> bool:
     """Whether the unit directions ``units`` ``(k + 1, d)`` of consecutive blocks turn the same way
-    at each of their ``k`` vertices (about one axis, in 3-D that of the first and last)."""
+    at each of their ``k`` vertices (about one axis, in 3-D the sum of their turns' axes: a run
+    that turns back on itself has first and last directions opposite)."""
     a, b = units[:-1], units[1:]
     if units.shape[1] == 2:
         z = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
         return bool(np.all(z > 0) or np.all(z < 0))
-    axis = np.cross(units[0], units[-1])
-    return bool(np.linalg.norm(axis) > 1e-12 and np.all(np.cross(a, b) @ axis > 0))
+    turns = np.cross(a, b)
+    axis = np.sum(turns, axis=0)
+    return bool(np.linalg.norm(axis) > 1e-12 and np.all(turns @ axis > 0))
 
 
 def planned_tolerance(tol: np.ndarray, g: np.ndarray, fillets: Fillets | None, h: np.ndarray | None) -> np.ndarray:
