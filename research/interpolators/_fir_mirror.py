@@ -132,6 +132,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from research._device import device_array
 from research.errors import ParameterError
 from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_limits import LIMIT_RTOL
@@ -200,7 +201,9 @@ class MirrorPlan:
             :attr:`FIRPlan.path_deviation` is the largest sampled distance [mm]). Where the
             program has arcs and the plan is compensated, its blocks are the arcs' chords
             (``chorded``; the programmed vertices among their vertices), or for a fillet the
-            pieces of the lines to its corner (``cornered``).
+            pieces of the lines to its corner (``cornered``), whose vertex there is the fillet's
+            point nearest that corner: every vertex is a point of the program, and
+            :attr:`FIRPlan.corner_errors` its verified distance.
         input_vertices: ``(B + 1, d)`` the path the filters average [mm]: the vertices of the
             planned blocks (arcs as chords or fillets as corners, straight runs merged, lines
             cut into ramp pieces where ``plan_fir`` did), moved; the programmed vertices where
@@ -370,7 +373,10 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
         moved, vertices = compensate(plan, passes, frozen, None if fillets is None else fillets.pinned)
         found = violations(moved, checked, tol, limits, check_period)
         if found.tolerance.size == 0 and found.limits.size == 0:
-            best = MirrorPlan(dataclasses.replace(moved, path_deviation=found.deviation), vertices, g.copy(),
+            # its corners are the checked path's vertices (a fillet's point nearest its planned corner,
+            # not that corner, which lies off the program), at the errors just verified
+            best = MirrorPlan(dataclasses.replace(moved, path_deviation=found.deviation,
+                                                  vertices=device_array(checked.vertices)), vertices, g.copy(),
                               top * scale / feed, True, r, best.plain_cycle_time)
             if limits is None:
                 break

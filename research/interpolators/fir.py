@@ -345,10 +345,16 @@ def paused_parts(tp: ToolPath, feed, tolerance, pauses, plan_part):
 
 
 def joined_plan(tp: ToolPath, pauses: np.ndarray, ranges, plans) -> FIRPlan:
-    """The :class:`FIRPlan` of the whole program from its parts' plans (:func:`paused_parts`)."""
+    """The :class:`FIRPlan` of the whole program from its parts' plans (:func:`paused_parts`). Its
+    corners are the parts' own (a part planned on more blocks than programmed, as
+    ``plan_fir_mirror``'s arcs as chords, brings its own vertices) with the vertex of each cut
+    between them, in the order of ``_fir_pauses.join``'s corner instants."""
     starts, pulse, overlaps, feeds, position, centre, deviation, rounds = _fir_pauses.join(plans, ranges, pauses)
-    return FIRPlan(starts, pulse, overlaps, feeds, plans[0].delays, position, centre, device_array(tp.vertices),
-                   deviation, rounds, tp.axes)
+    vertices = [np.asarray(plans[0].vertices)]
+    for plan, (first, _) in zip(plans[1:], ranges[1:]):
+        vertices += [tp.ends[first - 1][None], np.asarray(plan.vertices)]
+    return FIRPlan(starts, pulse, overlaps, feeds, plans[0].delays, position, centre,
+                   device_array(np.concatenate(vertices).reshape(-1, tp.dim)), deviation, rounds, tp.axes)
 
 
 def _run_value(x, run: np.ndarray, first: np.ndarray):
