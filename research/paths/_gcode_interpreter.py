@@ -358,7 +358,9 @@ class _Interpreter:
                 p = _value("P", num, k, self.scale, what="tolerance")
                 if p < 0:
                     raise _LineError(f"G64 P{_short(num)}: expected a blend tolerance >= 0", k)
-                self.path_tol = p
+                # P0 is no tolerance, as a bare G64 (LinuxCNC's tcFindBlendTolerance: "Detect zero
+                # tolerance = no tolerance"), not the exact path of G61
+                self.path_tol = p if p > 0 else _NAN
             else:
                 self.path_tol = _NAN
         if "distance" in groups:

@@ -148,7 +148,8 @@ def _blocks_to_gcode(prog, line_numbers: bool) -> str:
         t = prog.block_tolerance[k]
         t_key = "nan" if np.isnan(t) else float(t)
         if t_key != tol:
-            out.append("G64" if t_key == "nan" else f"G64 P{_num(t)}")
+            # a tolerance of 0 is G61's (exact path): G64 P0 reads as no tolerance, as in LinuxCNC
+            out.append("G64" if t_key == "nan" else "G61" if t == 0.0 else f"G64 P{_num(t)}")
             tol = t_key
         if b.sweeps[k] > 0:
             n = b.normals[k]

@@ -20,7 +20,8 @@ Accepted words (anything else is a :class:`~research.errors.GCodeError` naming f
 * ``G17 G18 G19`` (XY, ZX, YZ arc planes, centre words ``I J`` / ``K I`` / ``J K``),
   ``G20``/``G21`` (inch / mm), ``G90``/``G91`` (absolute / incremental ``X Y Z``),
   ``G90.1``/``G91.1`` (absolute / incremental arc centres; incremental is the default);
-* path control: ``G64 P<tol>`` (blend tolerance of the following blocks, ``block_tolerance``),
+* path control: ``G64 P<tol>`` (blend tolerance of the following blocks, ``block_tolerance``;
+  ``P0`` is no tolerance, as ``G64`` alone: LinuxCNC's planner reads a zero tolerance so),
   ``G64 P<tol> Q<tol>`` (Q, LinuxCNC's naive-CAM tolerance, is accepted and ignored), ``G64``
   without ``P`` (no tolerance given: NaN), ``G61``/``G61.1`` (exact path / exact stop: tolerance 0);
 * harmless modal codes that do not change the geometry: ``G40`` (cutter compensation off), ``G43``
@@ -441,7 +442,8 @@ def parse_gcode(
     * ``G64 P<tol>`` sets the blend tolerance (``block_tolerance``) of the following blocks, in
       program units; a ``Q`` with it (LinuxCNC's naive-CAM tolerance) is accepted and ignored.
       ``G61``/``G61.1`` (exact path / exact stop) set it to 0, ``G64`` without ``P`` to NaN (no
-      tolerance given). ``G64 P0`` is kept as 0.
+      tolerance given), and so does ``G64 P0``: LinuxCNC's planner reads a zero tolerance as none
+      (``tcFindBlendTolerance``: "Detect zero tolerance = no tolerance").
     * ``G80`` on a line with a motion code is ignored (the motion code wins, as in LinuxCNC); alone
       it cancels the motion mode.
     * A move ending within :data:`ZERO_LENGTH_MM` of the last polyline vertex produces no segment;

@@ -577,6 +577,16 @@ def test_g64_p_q_tolerance_changes_mid_program():
     assert np.all(prog.block_tolerance[prog.segment_block][prog.lines == 3] == 0.005)  # every chord of the arc
 
 
+def test_g64_p0_is_no_tolerance_as_a_bare_g64():
+    """``G64 P0`` (with or without ``Q0``, as four of LinuxCNC's trajectory-planner test programs
+    write it) is no tolerance, as a bare ``G64``, not the exact path of ``G61``: LinuxCNC's
+    ``tcFindBlendTolerance`` reads "Detect zero tolerance = no tolerance and force to reasonable
+    maximum". So an arc under it is planned by the FIR stage at the config's eps (it refuses arcs
+    under G61, tolerance 0)."""
+    prog = parse_gcode("G21 G90\nG64 P0 Q0\nG1 X10 F600\nG2 X20 R5\nG1 Y10\nG61\nG1 X30\nG64 P0.\nG1 Y0")
+    np.testing.assert_array_equal(prog.block_tolerance, [np.nan, np.nan, np.nan, 0.0, np.nan])
+
+
 def test_full_circle_with_p_turns_and_helical_g18():
     """G2 I-5 P3: three full turns, sweep 6 pi, length 2 pi 5 * 3; G18 helical arc along Y."""
     prog = parse_gcode("G0 X5\nG2 I-5 P3 F600\nG18 G3 X5 Z0 I0 K-2 Y4")
