@@ -555,8 +555,9 @@ def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits 
     period, margin = sample_period(pos, check_period, float(np.min(positive)) if positive.size else 0.0)
     held = np.where(tol > 0, tol - margin, tol)  # an exact stop's 0 stays 0 (its output is on the path)
     stopped = np.asarray(plan.overlaps) == 0.0  # exact stops: samples by them are their blocks' own (plan_fir's check)
-    deviation, at_vertex, at_block = path_deviations(pos, tp, starts, centre, Td, held, period, slack=slack,
-                                                     stopped=stopped)
+    durations, cap = _steady_strides(plan, tp, tol, period, margin)
+    deviation, at_vertex, at_block = path_deviations(pos, tp, starts, centre, Td, held, period, durations=durations,
+                                                     slack=slack, stopped=stopped, stride_cap=cap)
     times.append(centre[sorted(at_vertex)] if at_vertex else np.zeros(0))
     middle = starts + 0.5 * np.asarray(plan.pulse_times) + 0.5 * Td  # the window centred on the block
     times.append(middle[sorted(at_block)] if at_block else np.zeros(0))
@@ -566,6 +567,33 @@ def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits 
         over = peaks.per_piece > 1.0 + LIMIT_RTOL
         over_times, ratios = 0.5 * (pos.breaks[:-1] + pos.breaks[1:])[over], peaks.per_piece[over]
     return Violations(np.sort(np.concatenate(times)), over_times, ratios, float(deviation), peaks)
+
+
+def _steady_strides(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, period: float, margin: float):
+    """``(durations (P,) [s], cap (P,))`` of the input pieces of ``plan`` (a path of lines, its
+    profile a ``ProfileInputs``) for the thinned grid of the path check (``_fir_verify.steady_spans``):
+    over a piece's steady span (the output averages that piece alone) the output moves along a
+    straight line at the piece's speed ``v`` (chord over pulse length). Its distance to a line of
+    the checked path ``tp`` is then convex in time, and so is its distance to an arc's circle
+    outside it; inside, ``R - |p - c|`` is concave with ``|d''| <= v^2 / rho`` (``rho >= R - tol -
+    2 margin`` for samples within the tolerance and a chord of at most ``v h``), so between samples
+    ``h`` apart it exceeds the larger one by at most ``v^2 h^2 / (8 rho)``. ``cap`` keeps that at most
+    ``margin`` [mm] (:func:`sample_period`'s, by which the samples are held below the tolerance),
+    in strides of ``period`` [s]; unbounded on a path of lines, at rest or without a margin 1."""
+    inputs = plan.profile
+    table = inputs.pieces.table
+    fraction, piece_tv = np.asarray(inputs.fraction), np.asarray(inputs.piece_tv)
+    durations = np.where(table.gap, np.append(np.asarray(inputs.gaps), 0.0)[table.block], fraction * piece_tv)
+    if not tp.is_arc.any():
+        return durations, None
+    rho = float(np.min(tp.radii[tp.is_arc])) - float(np.max(tol)) - 2.0 * margin
+    chord = np.linalg.norm(table.geo[:, 0, :], axis=1)
+    speed = np.where(table.gap | (piece_tv <= 0), 0.0, chord / np.where(piece_tv > 0, piece_tv, 1.0))
+    if rho <= 0.0 or margin <= 0.0:
+        return durations, np.ones(speed.size)
+    with np.errstate(divide="ignore"):
+        h = np.sqrt(8.0 * margin * rho) / speed  # inf at rest
+    return durations, np.maximum(np.floor(h / period), 1.0)
 
 
 def sample_period(position, check_period: float, tolerance: float) -> tuple[float, float]:

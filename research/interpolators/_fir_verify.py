@@ -197,7 +197,8 @@ def charged_repairs(j: int, deviation: float, stops: np.ndarray, centre: np.ndar
 
 
 def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray, centre: np.ndarray, Td: float,
-                    tol_block: np.ndarray, check_period: float, durations=None, slack: float = 0.0, stopped=None):
+                    tol_block: np.ndarray, check_period: float, durations=None, slack: float = 0.0, stopped=None,
+                    stride_cap=None):
     """Largest sampled distance from the trajectory to ``path`` and where it breaks the tolerance.
 
     Args:
@@ -211,6 +212,8 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
             (:func:`profile_rounding`).
         stopped: ``(M - 1,)`` the corners that are exact stops (``T_k = 0``: no blend; a sample by
             one is charged to its block on that side, as ``RoundChecks`` does), or None: none.
+        stride_cap: ``(P,)`` the largest stride of the thinned grid over each input piece's
+            steady span (:func:`steady_spans`' ``cap``), or None: none.
 
     Returns:
         ``(max_deviation [mm], {vertex: deviation}, {block: deviation})``; distances are upper
@@ -225,7 +228,7 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
     n = int(np.ceil((t1 - t0) / check_period)) + 1
     M = path.n_blocks
     worst, bad = np.full(2 * M - 1, -np.inf), np.full(2 * M - 1, -np.inf)
-    steady = None if durations is None else steady_spans(starts, durations, t0, Td, check_period)
+    steady = None if durations is None else steady_spans(starts, durations, t0, Td, check_period, cap=stride_cap)
     _, times = _sample_times(np.zeros(1, np.int64), np.array([n - 1]), t0, t1, check_period, centre, steady)
     deviation = _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, None, slack, stopped)
     at_vertex = {int(v): float(bad[v]) for v in np.flatnonzero(bad[: M - 1] > -np.inf)}
@@ -234,7 +237,7 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
 
 
 def steady_spans(starts: np.ndarray, durations: np.ndarray, t0: float, Td: float, period: float,
-                 joined: np.ndarray | None = None):
+                 joined: np.ndarray | None = None, cap: np.ndarray | None = None):
     """The stretches of the sample grid ``t0 + i period`` where a check learns nothing new per
     sample: grid-index spans ``(first, last, stride)`` (sorted, disjoint) over which only every
     ``stride``-th index is sampled.
@@ -248,17 +251,22 @@ def steady_spans(starts: np.ndarray, durations: np.ndarray, t0: float, Td: float
     thinned to about that many (``stride = ceil(n / STEADY_SAMPLES)``); the grid next to them stays
     dense, so every window that meets a break is sampled at the full rate. ``joined``: indices of
     pieces that go on with the polynomial of the piece before them at its feed (a cut sub-arc's
-    pieces, ``PulseTable.joins``): the two are one input piece, and the break between them is none."""
+    pieces, ``PulseTable.joins``): the two are one input piece, and the break between them is none.
+    ``cap``: ``(P,)`` the largest stride over each piece's span (at least 1), or None: none (with
+    ``joined`` None: the mirror's paths of lines, ``_fir_mirror.violations``)."""
     breaks = float(starts[0]) + np.concatenate([[0.0], np.cumsum(durations)])
     if joined is not None and joined.size:
+        if cap is not None:
+            raise ValueError("steady_spans: cap is per input piece, without joined pieces")
         breaks = np.delete(breaks, joined)
     first = np.ceil((breaks[:-1] + Td + period - t0) / period)
     last = np.floor((breaks[1:] - period - t0) / period)
     n = last - first + 1
     keep = n > STEADY_SAMPLES
-    n = n[keep]
-    return (first[keep].astype(np.int64), last[keep].astype(np.int64),
-            np.ceil(n / STEADY_SAMPLES).astype(np.int64))
+    stride = np.ceil(n[keep] / STEADY_SAMPLES)
+    if cap is not None:
+        stride = np.maximum(np.minimum(stride, cap[keep]), 1.0)
+    return first[keep].astype(np.int64), last[keep].astype(np.int64), stride.astype(np.int64)
 
 
 def _sample_times(first: np.ndarray, last: np.ndarray, t0: float, t1: float, period: float, extra: np.ndarray,

@@ -827,3 +827,38 @@ def test_the_mirror_plans_corners_are_programmed_points_with_fillets_and_pauses(
         q = np.asarray(m.plan.trajectory(1e-4).q)
         near = np.min(np.linalg.norm(q[None, :, :] - v[:, None, :], axis=2), axis=1)
         assert np.max(near) <= EPS * (1 + 1e-3)
+
+
+SLOW_ARCS = ("G21 G90 G17\nG0 X20 Y-20 Z1\nG1 Z-1 F{f}\nG2 X60 Y20 Z-1 I0 J40\nG0 Z1\nG0 X120 Y-20\nG1 Z-1\n"
+             "G2 X160 Y20 Z-1 I0 J40\nG0 Z1\nM2")
+
+
+def test_slow_arcs_are_checked_on_a_thinned_grid_with_the_same_plan(monkeypatch):
+    """Two R 40 mm arcs at a slow feed joined by rapids (an engraving program of Inkscape's
+    gcodetools, F 5 mm/min: a 4,572 s cycle). The mirror's path check sampled the whole cycle
+    every 0.2 ms (its rapids' acceleration sets the period), 103 s against plan_fir's 0.4 s; it
+    now thins each input piece's steady span as plan_fir does, with a stride whose excess between
+    samples on an arc stays within the check's margin (``_steady_strides``). At F 200 mm/min the
+    plan is the same as with the dense grid (strides capped at 1), eps is held on the sampled
+    trajectory; at F 5 mm/min the plan takes seconds (a session measured 0.9 s)."""
+    import time as _time
+    from research.interpolators import _fir_mirror
+    prog = parse_gcode(SLOW_ARCS.format(f=200))
+    args = (prog.blocks, prog.block_feeds, DELAYS, EPS)
+    thin = plan_fir_mirror(*args)
+    original = _fir_mirror._steady_strides
+
+    def dense_strides(plan, tp, tol, period, margin):  # every stride 1: the full grid
+        return original(plan, tp, tol, period, margin)[0], np.ones(np.asarray(plan.profile.fraction).size)
+
+    monkeypatch.setattr(_fir_mirror, "_steady_strides", dense_strides)
+    dense = plan_fir_mirror(*args)
+    monkeypatch.undo()
+    assert thin.cycle_time == dense.cycle_time and thin.compensated == dense.compensated
+    q = np.asarray(thin.plan.trajectory(5e-4).q)
+    assert np.max(prog.blocks.distance(q)) <= EPS * (1 + 1e-6)
+    slow = parse_gcode(SLOW_ARCS.format(f=5))
+    t0 = _time.perf_counter()
+    m = plan_fir_mirror(slow.blocks, slow.block_feeds, DELAYS, EPS)
+    assert _time.perf_counter() - t0 < 30.0
+    assert m.cycle_time <= m.plain_cycle_time and m.plain_cycle_time > 4500.0
