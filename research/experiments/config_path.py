@@ -40,6 +40,8 @@ class PathConfig(_Strict):
     initial_feed_mm_per_s: float | None = Field(None, gt=0, description="feed in effect before the program's first "
                                                 "F word [mm/s] (a controller's default feed); without it a move "
                                                 "before any F word is an error naming its line; with gcode only")
+    block_delete: bool = Field(False, description="the block delete switch: lines starting with '/' are skipped "
+                               "when true, read without the '/' when false (LinuxCNC's default); with gcode only")
     bspline: BSplinePathConfig | None = Field(None, description="B-spline path ([path.bspline]: control points, knots, degree)")
 
     @model_validator(mode="after")
@@ -50,7 +52,7 @@ class PathConfig(_Strict):
         if self.gcode is None:
             # by value, not by fields set: a dumped config (sweeps, the store) writes every field back
             extra = [k for k, v in (("home_mm", None), ("machine_origin_mm", None), ("start_mm", [0.0, 0.0, 0.0]),
-                                    ("initial_feed_mm_per_s", None)) if getattr(self, k) != v]
+                                    ("initial_feed_mm_per_s", None), ("block_delete", False)) if getattr(self, k) != v]
             if extra:
                 raise ValueError(f"{', '.join(extra)} only apply to a G-code path (gcode = ...); remove them or give gcode")
         if self.name is not None and self.name not in PATHS:
@@ -121,13 +123,14 @@ def read_program(cfg: PathConfig, base: Path):
     """The :class:`~research.paths.gcode.GCodeProgram` of a G-code path config (read relative to
     ``base``; arcs as chords at ``chord_tolerance_um`` and as blocks; from ``start_mm``, ``G28`` to
     ``home_mm``, ``G53`` from ``machine_origin_mm``, ``F`` before the first F word from
-    ``initial_feed_mm_per_s``)."""
+    ``initial_feed_mm_per_s``, ``/`` lines skipped or read by ``block_delete``)."""
     from research.paths.gcode import read_gcode
 
     program = read_gcode(base / cfg.gcode, chord_tolerance=cfg.chord_tolerance_um * 1e-3, start=tuple(cfg.start_mm),
                          home=None if cfg.home_mm is None else tuple(cfg.home_mm),
                          machine_origin=None if cfg.machine_origin_mm is None else tuple(cfg.machine_origin_mm),
-                         initial_feed=None if cfg.initial_feed_mm_per_s is None else 60.0 * cfg.initial_feed_mm_per_s)
+                         initial_feed=None if cfg.initial_feed_mm_per_s is None else 60.0 * cfg.initial_feed_mm_per_s,
+                         block_delete=cfg.block_delete)
     if program.unread_lines:
         logging.getLogger(__name__).warning(
             "%s: the program ends on line %d (M2/M30 or the closing %%); %d non-blank line(s) after it are not "

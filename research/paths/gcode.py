@@ -71,7 +71,9 @@ become spiral blocks. Radii below ``RADIUS_TOLERANCE_MM`` = 0.00127 mm are zero-
 
 Refused with a message naming the feature: O-word subroutines and control flow (``o100 sub``,
 ``o<name> call``, ``if``, ``while`` ...), ``M98``/``M99``, ``#`` parameters (``#1``, ``#<name>``),
-expressions ``[...]`` and functions (``sin[30]``), ``/`` block delete; ``G17.1 G18.1 G19.1`` (UVW
+expressions ``[...]`` and functions (``sin[30]``), ``/`` anywhere but first on its line (block
+delete, read as LinuxCNC with its switch off, or skipped with ``block_delete=True``), ``/1``-``/9``
+skip levels; ``G17.1 G18.1 G19.1`` (UVW
 planes), ``G41 G42 G41.1 G42.1`` (cutter compensation), ``G43.1 G43.2`` (dynamic / additional tool length
 offsets), ``G4`` without ``P``, ``G5 G5.1 G5.2`` (splines),
 ``G28`` without ``home``, ``G53`` without ``machine_origin``, with an arc mode or ``G80`` in effect,
@@ -142,6 +144,7 @@ _SIMPLE = re.compile(
     r"[ \t]*(?:[Nn][ \t]*[0-9]{1,15}[ \t]*)?(?:[Gg][ \t]*0*([01])(?:\.0*)?[ \t]*)?"
     rf"(?:[Xx][ \t]*{_NUM})?(?:[Yy][ \t]*{_NUM})?(?:[Zz][ \t]*{_NUM})?(?:[Ff][ \t]*{_NUM})?"
 )
+_BLOCK_DELETE = re.compile(r"[ \t]*/([0-9])?")  # the block delete character, first on its line
 _OWORD = re.compile(r"[ \t]*(?:[Nn][ \t]*[0-9]+[ \t]*)?([Oo])[ \t]*(<[^>\n]*>?|[0-9]+)[ \t]*([A-Za-z]*)")
 _OWORD_KEYWORDS = frozenset("sub endsub call return if elseif else endif do while endwhile repeat endrepeat "
                             "break continue".split())
@@ -320,7 +323,8 @@ def _diagnose_bad_char(line_text: str, column: int) -> tuple[str, int]:
         snippet = snippet if len(snippet) <= 24 else snippet[:21] + "..."
         return f"expressions [..] are not supported (found {snippet}); expected plain numbers", column
     if c == "/":
-        return "block delete '/' is not supported; expected the line without '/'", column
+        return ("'/' after the start of the line; expected block delete '/' only as the line's first character "
+                "(expressions such as [1/2] are not supported)"), column
     if c == "(":
         if "(" in rest.split(")", 1)[0]:
             return "nested '(' inside a comment; expected comments without parentheses inside", column
@@ -385,6 +389,7 @@ def parse_gcode(
     arc_relative_tolerance: float = SPIRAL_RELATIVE_TOLERANCE,
     home=None,
     machine_origin=None,
+    block_delete: bool = False,
 ) -> GCodeProgram:
     """Read a G-code program into blocks (lines and arcs) and straight chords with feeds.
 
@@ -421,6 +426,10 @@ def parse_gcode(
             tool tip ends the tool length below them under ``G43``): give ``z`` less that length
             when a tool length offset is in force at the ``G53`` moves. ``None`` (default) makes
             ``G53`` an error that asks for it.
+        block_delete: the block delete switch. A line whose first character (after blanks) is
+            ``/`` is skipped when True and read as if the ``/`` were not there when False (the
+            default, LinuxCNC's switch off: "when block delete is on, lines starting with / are
+            skipped"). A ``/`` followed by a digit (Fanuc's skip levels ``/1``-``/9``) is an error.
 
     Semantics worth knowing:
 
@@ -477,6 +486,9 @@ def parse_gcode(
     st = _point("start", start)
     home_t = None if home is None else _point("home", home)
     origin_t = None if machine_origin is None else _point("machine_origin", machine_origin)
+    if not isinstance(block_delete, (bool, np.bool_)):
+        raise ParameterError(f"parse_gcode: block_delete must be True or False (the block delete switch), got "
+                             f"{block_delete!r}")
     if not isinstance(text, str):
         raise GCodeError(f"expected the program as str, got {type(text).__name__}", source=source, line=0, column=0)
     if text.startswith("\ufeff"):  # a byte-order mark written by some Windows editors
@@ -504,6 +516,16 @@ def parse_gcode(
     gc.disable()
     try:
         for lineno, line_text in enumerate(all_lines, 1):
+            if "/" in line_text:
+                slash = _BLOCK_DELETE.match(line_text)
+                if slash is not None:
+                    if slash.group(1):
+                        fail(lineno, f"block delete with a skip level (/{slash.group(1)}) is not supported; "
+                             "expected a plain '/' (LinuxCNC's block delete switch, parse_gcode's block_delete)",
+                             slash.start(1))
+                    if block_delete:
+                        continue  # the switch is on: the line is skipped
+                    line_text = line_text[: slash.end() - 1] + " " + line_text[slash.end():]  # read without it
             m = simple_match(line_text)
             if m is not None and simple_fn(*m.groups(), lineno):
                 continue
@@ -586,7 +608,7 @@ def read_gcode(path: str | PathLike, **kwargs) -> GCodeProgram:
         path: file to read; its path string becomes ``source`` in messages and the result.
         **kwargs: as :func:`parse_gcode` (``chord_tolerance`` [mm], ``rapid_feed`` [mm/min],
             ``initial_feed`` [mm/min], ``start`` [mm], ``arc_radius_tolerance`` [mm],
-            ``arc_relative_tolerance``, ``home`` [mm], ``machine_origin`` [mm]).
+            ``arc_relative_tolerance``, ``home`` [mm], ``machine_origin`` [mm], ``block_delete``).
 
     Raises:
         GCodeError: the file cannot be read (line 0), or as :func:`parse_gcode`.

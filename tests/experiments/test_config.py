@@ -108,6 +108,25 @@ def test_gcode_path_without_f_words_runs_from_initial_feed(tmp_path):
                           "c.toml"))
 
 
+def test_gcode_path_block_delete_switch(tmp_path):
+    """``[path] block_delete``: a '/' line of the program is read without its '/' by default (two
+    blocks of 10 mm: feeds of both) and skipped with ``block_delete = true`` (one block); the switch
+    without a G-code path is a config error naming it."""
+    (tmp_path / "part.nc").write_text("G21 G90 F600\nG1 X10\n/G1 Y10\n")
+    text = GOOD.replace('name = "corner90"', 'gcode = "part.nc"')
+
+    def run(t, name):  # the feed of each planned block
+        result = run_experiment(write(tmp_path, t, name), cache_dir=tmp_path / f"cache-{name}",
+                                figures_dir=tmp_path / "f", log=lambda s: None)
+        return result.record["details"]["fir"]["feeds"]
+
+    assert len(run(text, "a.toml")) == 2
+    assert len(run(text.replace('gcode = "part.nc"', 'gcode = "part.nc"\nblock_delete = true'), "b.toml")) == 1
+    with pytest.raises(ConfigError, match=r"block_delete"):
+        load_config(write(tmp_path, GOOD.replace('name = "corner90"', 'name = "corner90"\nblock_delete = true'),
+                          "c.toml"))
+
+
 def test_gcode_path_after_m30_is_not_run_and_is_reported(tmp_path, caplog):
     """Text after M30 (here a second, malformed program) is not read, as LinuxCNC does; the run plans
     the two moves before it and logs a warning naming the file, the end line and the unread lines."""

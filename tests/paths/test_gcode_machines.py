@@ -288,3 +288,21 @@ def test_programs_round_trip_through_to_gcode_with_arcs(name):
     np.testing.assert_array_equal(again.block_pauses, prog.block_pauses)
     np.testing.assert_array_equal(again.block_rapid, prog.block_rapid)
     np.testing.assert_array_equal(again.block_feeds, prog.block_feeds)
+
+
+def test_block_delete_lines_are_read_with_the_switch_off_and_skipped_with_it_on():
+    """block_delete.ngc (comments of the file give each block): with the switch off (LinuxCNC's
+    default) the '/' lines are read as if the '/' were not there, with it on they are skipped."""
+    off = read("block_delete.ngc")
+    np.testing.assert_allclose(off.blocks.ends[:, :2], [[10, 0], [10, 10], [0, 10], [-10, 10]], atol=1e-12)
+    np.testing.assert_array_equal(off.block_lines, [5, 7, 8, 11])
+    np.testing.assert_array_equal(off.block_tolerance, [NAN, 0.0, 0.0, 0.01])
+    np.testing.assert_allclose(off.blocks.centers[3, :2], [-5, 10], atol=1e-12)
+    on = read("block_delete.ngc", block_delete=True)
+    np.testing.assert_allclose(on.blocks.ends[:, :2], [[10, 0], [0, 0], [-10, 0]], atol=1e-12)
+    np.testing.assert_array_equal(on.block_lines, [5, 8, 11])
+    np.testing.assert_array_equal(on.block_tolerance, [NAN, NAN, 0.01])
+    np.testing.assert_allclose(on.blocks.centers[2, :2], [-5, 0], atol=1e-12)
+    for prog in (off, on):
+        np.testing.assert_allclose(prog.blocks.sweeps[-1], PI, rtol=1e-12)
+        check_consistent(prog)
