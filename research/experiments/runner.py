@@ -300,14 +300,20 @@ def format_summary(result: RunResult) -> str:
         else:  # a polyline (or a record stored before the block counts were)
             n = len(d["turning_angle_deg"])
             rows.append((f"{tag}segments / corners", f"{n + 1:,} / {n:,}"))
-        rows.append((f"{tag}interpolator", ic.kind))
+        planner = d.get("planner", "plan_fir")
+        rows.append((f"{tag}interpolator", ic.kind + (f" ({planner})" if ic.kind == "fir" and planner != "plan_fir" else "")))
         if ic.kind == "fir":
             rows += [(f"{tag}feed F [mm/s]", _range(np.asarray(d["feeds"]))),
                      (f"{tag}FIR delays T_i [ms]", ", ".join(f"{x:g}" for x in ic.delays_ms))]
         elif ic.kind == "time_optimal":
             rows.append((f"{tag}OCP status / iterations", f"{d['status']} / {d['iterations']}"))
         if hasattr(ic, "tolerance_um"):
-            rows.append((f"{tag}tolerance eps [um]", f"{ic.tolerance_um:g}"))
+            lo, hi = d.get("tolerance_um_range", (ic.tolerance_um, ic.tolerance_um))
+            if lo == hi == ic.tolerance_um:
+                rows.append((f"{tag}tolerance eps [um]", f"{ic.tolerance_um:g}"))
+            else:  # the program's G64 P tolerances govern some blocks
+                rows.append((f"{tag}tolerance eps [um]", f"{lo:g}" + (f" .. {hi:g}" if hi > lo else "")
+                             + f" (the program's G64 P; {ic.tolerance_um:g} where it gives none)"))
         rows += [
             (f"{tag}cycle time [s]", f"{m['cycle_time']:.6f}"),
             (f"{tag}max corner error [um]", f"{m['max_corner_error'] * 1e3:.3f}"),

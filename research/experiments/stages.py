@@ -94,8 +94,12 @@ def interpolate(ic, path, program_feeds, blocks=None, pauses=None):
         else:
             plan = plan_fir(target, feed, np.asarray(ic.delays_ms) * 1e-3, tolerance, refine=ic.refine, limits=limits,
                             pauses=block_pauses, corner_speed=ic.corner_speed)
-        info = {"planner": "optimize_fir" if ic.optimized else "plan_fir_mirror" if ic.mirror else "plan_fir", "feeds": np.asarray(plan.feeds).tolist(), "overlap_times": np.asarray(plan.overlaps).tolist(),
-                "corner_errors": np.asarray(plan.corner_errors).tolist()}
+        planned_tol = np.asarray(tolerance, dtype=np.float64)
+        info = {"planner": "optimize_fir" if ic.optimized else "plan_fir_mirror" if ic.mirror else "plan_fir",
+                "feeds": np.asarray(plan.feeds).tolist(), "overlap_times": np.asarray(plan.overlaps).tolist(),
+                "corner_errors": np.asarray(plan.corner_errors).tolist(),
+                # the tolerances planned [um]: the program's G64 P where it gives one, tolerance_um elsewhere
+                "tolerance_um_range": [float(planned_tol.min()) * 1e3, float(planned_tol.max()) * 1e3]}
         return plan.trajectory(Ts), info, plan
     if ic.kind == "scurve":
         from research.interpolators import scurve_interpolate

@@ -326,8 +326,8 @@ def _diagnose_bad_char(line_text: str, column: int) -> tuple[str, int]:
         return ("'/' after the start of the line; expected block delete '/' only as the line's first character "
                 "(expressions such as [1/2] are not supported)"), column
     if c == "(":
-        if "(" in rest.split(")", 1)[0]:
-            return "nested '(' inside a comment; expected comments without parentheses inside", column
+        if "(" in rest.split(")", 1)[0]:  # at the inner '('
+            return "nested '(' inside a comment; expected comments without parentheses inside", column + 1 + rest.index("(")
         return "comment '(' is not closed on this line; expected ')'", column
     if c == ")":
         return "')' without an opening '('; expected a comment like (text)", column

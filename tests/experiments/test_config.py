@@ -127,6 +127,20 @@ def test_gcode_path_block_delete_switch(tmp_path):
                           "c.toml"))
 
 
+def test_summary_names_the_programs_g64_tolerances_and_the_planner(tmp_path):
+    """A program whose ``G64 P`` (10 and 200 um) governs its blocks: the summary's tolerance row gives
+    those, not the config's 50 um beside a 200 um corner error, and a mirror plan is named as one."""
+    from research.experiments.runner import format_summary
+
+    (tmp_path / "part.nc").write_text("G21 G90 F6000\nG64 P0.01\nG1 X10\nG1 Y10\nG64 P0.2\nG1 X0\nG1 Y0\nM2\n")
+    text = GOOD.replace('name = "corner90"', 'gcode = "part.nc"').replace("feed_mm_per_s = 200.0\n", "")
+    text = text.replace("tolerance_um = ", "mirror = true\ntolerance_um = ")
+    result = run_experiment(write(tmp_path, text), cache_dir=tmp_path / "c", figures_dir=tmp_path / "f", log=lambda s: None)
+    summary = format_summary(result)
+    assert "10 .. 200 (the program's G64 P;" in summary
+    assert "fir (plan_fir_mirror)" in summary
+
+
 def test_gcode_path_after_m30_is_not_run_and_is_reported(tmp_path, caplog):
     """Text after M30 (here a second, malformed program) is not read, as LinuxCNC does; the run plans
     the two moves before it and logs a warning naming the file, the end line and the unread lines."""

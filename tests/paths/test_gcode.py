@@ -288,7 +288,7 @@ BAD = [
     ("G1 X1.2.3 F100", 1, 4, "X1.2.3"),
     ("G0 X1\nG0 X", 2, 4, "not followed by a number"),
     ("F100\nG1 X1 (unclosed", 2, 7, "not closed"),
-    ("G0 X1 (a (b) c)", 1, 7, "nested"),
+    ("G0 X1 (a (b) c)", 1, 10, "nested"),  # at the inner "("
     ("G0 X1 )", 1, 7, "')'"),
     ("G0 X1 # 3", 1, 7, "parameters (# 3) are not supported"),  # was "unexpected character" before #-diagnosis
     ("G0 X1\n  G18.1", 2, 3, "G18.1"),  # G18 / G19 are accepted since arcs work in all three planes
