@@ -536,6 +536,9 @@ def parse_gcode(
                     words.append((letter, num))
                 elif bad:
                     column = next(t.start(4) + 1 for t in _TOKEN.finditer(line_text) if t.group(4))
+                    if pct:  # a '%' line with text after it (a post's "% vfd enable")
+                        fail(lineno, "'%' program delimiter must be alone on its line; expected no text with it "
+                             f"(found {line_text[column - 1:].strip()[:24]!r})", column)
                     fail(lineno, *_diagnose_bad_char(line_text, column))
                 elif percent:
                     pct = pct or 1

@@ -531,6 +531,7 @@ BAD_SUBSET = [
     ("F60 G3 X0 Y50.04 I-50 J0\n", 1, 18, "end radius"),
     ("M98 P100", 1, 1, "M98 (subroutine call)"),
     ("/2 G0 X1", 1, 1, "block delete with a skip level (/2)"),  # Fanuc's skip levels
+    ("% vfd enable\nG0 X1", 1, 3, "'%' program delimiter must be alone on its line"),  # a Fusion post's line
     ("G0 X1 /G1 X2 F60", 1, 7, "'/' after the start of the line"),
     ("G0 X1 O1.5", 1, 7, "program number"),
     ("G80 X1 G0 G1", 1, 11, "two motion G-codes"),
