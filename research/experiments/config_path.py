@@ -33,10 +33,11 @@ class PathConfig(_Strict):
     start_mm: list[float] = Field([0.0, 0.0, 0.0], description="position before the G-code program's first move "
                                   "(x, y, z) [mm]; with gcode only")
     home_mm: list[float] | None = Field(None, description="machine home (x, y, z) [mm, program frame], the target "
-                                        "of G28; a program with G28 needs it; with gcode only")
+                                        "of G28; default LinuxCNC's, the machine origin (logged); with gcode only")
     machine_origin_mm: list[float] | None = Field(None, description="origin of the machine coordinates (x, y, z) [mm, "
                                                   "program frame: minus the work offset, one for G54-G59], the frame "
-                                                  "of G53's X Y Z; a program with G53 needs it; with gcode only")
+                                                  "of G53's X Y Z; default LinuxCNC's with a work offset of 0, "
+                                                  "the program's origin (logged); with gcode only")
     initial_feed_mm_per_s: float | None = Field(None, gt=0, description="feed in effect before the program's first "
                                                 "F word [mm/s] (a controller's default feed); without it a move "
                                                 "before any F word is an error naming its line; with gcode only")

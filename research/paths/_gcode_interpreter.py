@@ -140,8 +140,12 @@ class _Interpreter:
     def __init__(self, chord_tolerance, rapid_feed_mm_s, initial_feed_mm_s, start, arc_radius_tolerance,
                  arc_relative_tolerance, home=None, machine_origin=None):
         self.tol = chord_tolerance
-        self.home = home  # G28 target (x, y, z) [mm], or None: G28 is an error
-        self.machine_origin = machine_origin  # G53's frame origin (x, y, z) [mm, program frame], or None: G53 is an error
+        # G53's frame origin and G28's target (x, y, z) [mm, program frame]; None: LinuxCNC's defaults
+        # (work offset 0: the origin at the program's; G28 position parameters 5161-5163 = 0: home at
+        # the machine origin), each noted in ``assumed`` with the first line that used it
+        self.home = home
+        self.machine_origin = machine_origin
+        self.assumed: dict[str, int] = {}
         self.arc_tol = arc_radius_tolerance  # mm, or None: LinuxCNC's (unit dependent)
         self.arc_rel = arc_relative_tolerance
         self.rapid_feed = rapid_feed_mm_s
@@ -435,9 +439,6 @@ class _Interpreter:
         """``G28 [X] [Y] [Z]`` (LinuxCNC): a rapid to the point of the axis words (G90/G91 as usual),
         then a rapid of those axes (of every axis when none is given) to ``home``; other axes stay."""
         k = groups["home"][1]
-        if self.home is None:
-            raise _LineError("G28 (return to home) needs the machine home position; expected home=(x, y, z) "
-                             "[mm, program frame] given to parse_gcode / read_gcode ([path] home_mm in a config)", k)
         if "motion" in groups and not _AXIS_LETTERS.isdisjoint(vals):
             raise _LineError(f"G28 and G{_fmt_key(groups['motion'][0])} on one line with axis words; expected "
                              "the motion code on a line of its own (both would use the axis words)", k)
@@ -447,7 +448,19 @@ class _Interpreter:
         named = [i for i, letter in enumerate("XYZ") if letter in vals]
         via = self._target(vals)
         self._move(via, self.rapid_feed, True, lineno)
-        self._move([self.home[i] if (i in named or not named) else via[i] for i in range(3)], self.rapid_feed, True, lineno)
+        home = self.home
+        if home is None:  # LinuxCNC's G28 position parameters left at 0: the machine origin
+            self.assumed.setdefault("home", lineno)
+            home = self._origin(lineno)
+        self._move([home[i] if (i in named or not named) else via[i] for i in range(3)], self.rapid_feed, True, lineno)
+
+    def _origin(self, lineno):
+        """The machine origin [mm, program frame]: ``machine_origin``, or LinuxCNC's work offset of 0
+        (the program's origin), noted in ``assumed``."""
+        if self.machine_origin is not None:
+            return self.machine_origin
+        self.assumed.setdefault("machine_origin", lineno)
+        return (0.0, 0.0, 0.0)
 
     def _machine(self, vals, lineno, groups, motion_word):
         """``G53 [G0|G1] [X] [Y] [Z]`` (LinuxCNC): a straight move, rapid or at the feed of the motion mode
@@ -456,10 +469,6 @@ class _Interpreter:
         mode), under G91 (``interp_check.cc``: "Cannot use G53 incremental"); G4/G28 on its line are refused
         by ``line``."""
         k = groups["machine_coordinates"][1]
-        if self.machine_origin is None:
-            raise _LineError("G53 (move in machine coordinates) needs the machine coordinate system's origin; expected "
-                             "machine_origin=(x, y, z) [mm, program frame] given to parse_gcode / read_gcode "
-                             "([path] machine_origin_mm in a config)", k)
         named = [i for i, letter in enumerate("XYZ") if letter in vals]
         if "motion" not in groups and not named:
             raise _LineError("G53 without G0/G1 on the line and without X, Y or Z; expected G53 G0 or G53 G1 with "
@@ -476,9 +485,10 @@ class _Interpreter:
             return
         s = self.scale
         t = list(self.pos)
+        origin = self._origin(lineno)
         for i in named:
             num, kw = vals["XYZ"[i]]
-            v = self.machine_origin[i] + float(num) * s
+            v = origin[i] + float(num) * s
             if not -_MAXC <= v <= _MAXC:
                 raise _LineError(f"G53 {'XYZ'[i]}{_short(num)}: expected a finite machine coordinate with the position "
                                  f"(machine_origin + {'XYZ'[i]}) inside +-{_MAXC:g} mm", kw)

@@ -32,12 +32,12 @@ Accepted words (anything else is a :class:`~research.errors.GCodeError` naming f
   ``G98``/``G99`` (canned-cycle retract mode, written in the safety line of Fanuc-style posts: with the
   canned cycles refused it changes nothing);
 * ``G28 [X] [Y] [Z]`` (return to home, LinuxCNC: a rapid to the point of the axis words, then a
-  rapid of those axes, or of all three when none is given, to the home position) when ``home`` is
-  given to the reader; without it an error that asks for it;
+  rapid of those axes, or of all three when none is given, to the home position ``home``; without
+  it LinuxCNC's default, the machine origin (noted in ``GCodeProgram.assumed`` and logged);
 * ``G53 [G0|G1] [X] [Y] [Z]`` (move in machine coordinates, LinuxCNC; not modal: on each line that
   uses it): a straight ``G0`` or ``G1`` block to ``machine_origin`` plus the axis words (absolute, in
-  the current units; axes not given keep their position) when ``machine_origin`` is given to the
-  reader; without it an error that asks for it. As LinuxCNC it needs ``G0`` or ``G1`` on its line or
+  the current units; axes not given keep their position); without ``machine_origin`` LinuxCNC's
+  default of a work offset of 0, the program's origin (noted and logged). As LinuxCNC it needs ``G0`` or ``G1`` on its line or
   in effect (an arc mode, ``G80`` or a lone ``G53`` is an error), and ``G90``: ``G53`` under ``G91`` is
   an error (LinuxCNC's "cannot use G53 incremental"); ``G53 G0`` without axis words only sets the
   motion mode;
@@ -76,7 +76,7 @@ delete, read as LinuxCNC with its switch off, or skipped with ``block_delete=Tru
 skip levels; ``G17.1 G18.1 G19.1`` (UVW
 planes), ``G41 G42 G41.1 G42.1`` (cutter compensation), ``G43.1 G43.2`` (dynamic / additional tool length
 offsets), ``G4`` without ``P``, ``G5 G5.1 G5.2`` (splines),
-``G28`` without ``home``, ``G53`` without ``machine_origin``, with an arc mode or ``G80`` in effect,
+``G53`` with an arc mode or ``G80`` in effect,
 without ``G0``/``G1`` and axis words, under ``G91``, or with ``G4``/``G28`` on its line, ``G30 G92``
 (secondary home, coordinate-system offset), ``G73 G76 G81``-``G89`` (canned
 cycles), ``G93 G95`` (inverse-time / per-revolution feed), every other G or M code (a code with more
@@ -96,6 +96,7 @@ with ``R``, an unclosed or nested ``(``, any other stray character.
 from __future__ import annotations
 
 import gc
+import logging
 import re
 from dataclasses import dataclass
 from os import PathLike, fspath
@@ -182,6 +183,11 @@ class GCodeProgram:
             line (LinuxCNC reads nothing after either); 0 when the program ran to the end of the text.
         unread_lines: 1-based lines after ``end_line`` that hold anything but blanks or a lone
             ``%`` (not read, as LinuxCNC; listed so that nothing is dropped unseen).
+        assumed: what the reader took from LinuxCNC's default configuration because the program
+            needed it and it was not given, one sentence each naming the first line that used it
+            and the argument that sets it: the machine origin of ``G53`` (and of ``G28``) where
+            ``machine_origin`` is None, the home of ``G28`` where ``home`` is None (also logged as
+            a warning).
 
     ``blocks`` and the ``block_*`` arrays may be left out (``None``) when building a program by hand:
     they are then one line block per polyline segment with NaN tolerance.
@@ -214,6 +220,7 @@ class GCodeProgram:
     block_pauses: np.ndarray | None = None
     end_line: int = 0
     unread_lines: tuple[int, ...] = ()
+    assumed: tuple[str, ...] = ()
 
     def __post_init__(self):
         m = self.polyline.n_segments
@@ -416,7 +423,10 @@ def parse_gcode(
             has its radius blended linearly along the arc (a spiral, as LinuxCNC does), so it ends
             exactly at the programmed point. For an absolute limit alone pass a tiny relative one.
         home: the machine home position ``(x, y, z)`` [mm] in the program frame, the target of ``G28``;
-            ``None`` (default) makes ``G28`` an error that asks for it (the reader cannot know it).
+            ``None`` (default): LinuxCNC's with its G28 position parameters (5161-5163, machine
+            coordinates) at 0, i.e. the machine origin, noted in ``GCodeProgram.assumed`` and
+            logged (a CAM post's ``G28 G91 Z0.`` is a retract to the machine's Z home, which the
+            program cannot tell: give it where the path of those rapids matters).
         machine_origin: the origin of the machine coordinate system ``(x, y, z)`` [mm] in the program
             frame, i.e. minus the active work offset (a work offset ``G54 X-100 Y-50 Z-200`` puts the
             machine origin at ``(100, 50, 200)`` in the program frame): ``G53 X Y Z`` goes to
@@ -424,8 +434,9 @@ def parse_gcode(
             taken as this one frame (the reader keeps no offset table). The program's coordinates are
             tool-tip coordinates, while LinuxCNC's ``G53`` words are the machine axis positions (the
             tool tip ends the tool length below them under ``G43``): give ``z`` less that length
-            when a tool length offset is in force at the ``G53`` moves. ``None`` (default) makes
-            ``G53`` an error that asks for it.
+            when a tool length offset is in force at the ``G53`` moves. ``None`` (default):
+            LinuxCNC's with a work offset of 0, the program's origin ``(0, 0, 0)``, noted in
+            ``GCodeProgram.assumed`` and logged.
         block_delete: the block delete switch. A line whose first character (after blanks) is
             ``/`` is skipped when True and read as if the ``/`` were not there when False (the
             default, LinuxCNC's switch off: "when block delete is on, lines starting with / are
@@ -600,8 +611,20 @@ def parse_gcode(
         pauses[k] = p
     unread = tuple(k for k in range(end_line + 1, len(all_lines) + 1)
                    if all_lines[k - 1].strip() not in ("", "%")) if end_line else ()
+    assumed = []
+    if "machine_origin" in it.assumed:
+        assumed.append(f"line {it.assumed['machine_origin']}: the machine origin of G53/G28 taken as (0, 0, 0) mm in "
+                       "the program frame, LinuxCNC's with a work offset of 0 (give machine_origin, [path] "
+                       "machine_origin_mm in a config, for your machine's)")
+    if "home" in it.assumed:
+        home_at = origin_t or (0.0, 0.0, 0.0)
+        assumed.append(f"line {it.assumed['home']}: G28 returned to {tuple(float(v) for v in home_at)} mm in the "
+                       "program frame, the machine origin: LinuxCNC's home with its G28 position parameters "
+                       "5161-5163 at 0 (give home, [path] home_mm in a config, for your machine's)")
+    for what in assumed:
+        logging.getLogger(__name__).warning("%s: %s", source, what)
     return GCodeProgram(poly, feeds, rap, lines, source, tuple(it.no_motion), blocks, b_feeds, b_rapid,
-                        b_lines, b_tols, seg_block, pauses, end_line, unread)
+                        b_lines, b_tols, seg_block, pauses, end_line, unread, tuple(assumed))
 
 
 def read_gcode(path: str | PathLike, **kwargs) -> GCodeProgram:

@@ -154,10 +154,10 @@ def test_gcode_path_after_m30_is_not_run_and_is_reported(tmp_path, caplog):
                and "first: line 6" in r.getMessage() for r in caplog.records), caplog.text
 
 
-def test_gcode_path_with_g28_needs_home_mm(tmp_path):
+def test_gcode_path_with_g28_reads_home_mm(tmp_path):
     """A post-processor's G28 G91 Z0 retract: with ``home_mm`` the program reads and runs (the retract
-    from z = 5 to the home z = 20 is a rapid block of 15 mm, X then home from (10, 0)); without it the
-    run stops with the reader's error naming the file, line 4 and what to give. ``home_mm`` with a named
+    from z = 5 to the home z = 20 is a rapid block of 15 mm, X then home from (10, 0)); without it
+    LinuxCNC's default home, the machine origin, (0, 0, 0) here. ``home_mm`` with a named
     path is a config error."""
     (tmp_path / "part.nc").write_text("G21 G90\nG0 Z5\nG1 X10 F1200\nG28 G91 Z0\nG90\nG28 X10\nM30\n")
     text = GOOD.replace('name = "corner90"', 'gcode = "part.nc"\nhome_mm = [0.0, 0.0, 20.0]')
@@ -166,19 +166,20 @@ def test_gcode_path_with_g28_needs_home_mm(tmp_path):
     traj = Trajectory.load(tmp_path / "c" / "t" / "trajectory.npz")
     np.testing.assert_allclose(traj.q[-1], [0.0, 0.0, 20.0], atol=1e-9)
     assert result.record["details"]["fir"]["feeds"][0] == pytest.approx(15000.0 / 60.0)  # G0 at the rapid feed
-    with pytest.raises(Exception, match=r"part.nc:4:1: G28 \(return to home\) needs the machine home position"):
-        run_experiment(write(tmp_path, text.replace("home_mm = [0.0, 0.0, 20.0]\n", ""), "b.toml"),
-                       cache_dir=tmp_path / "c2", figures_dir=tmp_path / "f", log=lambda s: None)
+    # without it LinuxCNC's default home, the machine origin (0, 0, 0) here: the run ends there
+    run_experiment(write(tmp_path, text.replace("home_mm = [0.0, 0.0, 20.0]\n", ""), "b.toml"),
+                   cache_dir=tmp_path / "c2", figures_dir=tmp_path / "f", log=lambda s: None)
+    np.testing.assert_allclose(Trajectory.load(tmp_path / "c2" / "t" / "trajectory.npz").q[-1], [0, 0, 0], atol=1e-9)
     with pytest.raises(ConfigError, match=r"home_mm"):
         load_config(write(tmp_path, GOOD.replace('name = "corner90"', 'name = "corner90"\nhome_mm = [0, 0, 1]'), "c.toml"))
 
 
-def test_gcode_path_with_g53_needs_machine_origin_mm(tmp_path):
+def test_gcode_path_with_g53_reads_machine_origin_mm(tmp_path):
     """A post's ``G53 G0 Z0.`` / ``G53 G0 X0. Y0.`` end-of-program retract, read with ``machine_origin_mm =
     [-5, 2, 20]``: from (10, 0, 5) a rapid to z = 20 + 0, then to x = -5 + 0, y = 2 + 0 (z kept), so the
     run ends at (-5, 2, 20) and its block feeds are rapid, F1200 = 20 mm/s, rapid, rapid (the rapid feed
-    15000 mm/min = 250 mm/s). Without the key the run stops with the reader's error naming the file,
-    line 4, column 1 and the key; a misspelt key is the usual "did you mean"; the key with a named
+    15000 mm/min = 250 mm/s). Without the key LinuxCNC's default (a work offset of 0) puts the end at
+    the program's origin; a misspelt key is the usual "did you mean"; the key with a named
     path, or with two coordinates, is a config error."""
     (tmp_path / "part.nc").write_text("G21 G90\nG0 Z5\nG1 X10 F1200\nG53 G0 Z0.\nG53 X0. Y0.\nM30\n")
     text = GOOD.replace('name = "corner90"', 'gcode = "part.nc"\nmachine_origin_mm = [-5.0, 2.0, 20.0]')
@@ -187,10 +188,10 @@ def test_gcode_path_with_g53_needs_machine_origin_mm(tmp_path):
     traj = Trajectory.load(tmp_path / "c" / "t" / "trajectory.npz")
     np.testing.assert_allclose(traj.q[-1], [-5.0, 2.0, 20.0], atol=1e-9)
     np.testing.assert_allclose(result.record["details"]["fir"]["feeds"], [250.0, 20.0, 250.0, 250.0], rtol=1e-12)
-    with pytest.raises(Exception, match=r"part.nc:4:1: G53 \(move in machine coordinates\) needs the machine "
-                                        r"coordinate system's origin; .*\[path\] machine_origin_mm"):
-        run_experiment(write(tmp_path, text.replace("machine_origin_mm = [-5.0, 2.0, 20.0]\n", ""), "b.toml"),
-                       cache_dir=tmp_path / "c2", figures_dir=tmp_path / "f", log=lambda s: None)
+    # without it LinuxCNC's default work offset of 0: the program's origin, where the run ends
+    run_experiment(write(tmp_path, text.replace("machine_origin_mm = [-5.0, 2.0, 20.0]\n", ""), "b.toml"),
+                   cache_dir=tmp_path / "c2", figures_dir=tmp_path / "f", log=lambda s: None)
+    np.testing.assert_allclose(Trajectory.load(tmp_path / "c2" / "t" / "trajectory.npz").q[-1], [0, 0, 0], atol=1e-9)
     typo = write(tmp_path, text.replace("machine_origin_mm", "machine_orign_mm"), "typo.toml")
     with pytest.raises(ConfigError, match=r"key 'path.machine_orign_mm': unknown key \(typo\? did you mean "
                                           r"'machine_origin_mm'\?\)") as e:

@@ -302,7 +302,6 @@ BAD = [
     ("G83 X1 Y1 Z-1 R2 Q1", 1, 1, "canned cycle G83"),
     ("G93 G1 X1 F2", 1, 1, "inverse-time"),
     ("G4", 1, 1, "dwell"),
-    ("G28", 1, 1, "needs the machine home position"),
     ("G92 X0", 1, 1, "G92"),
     ("G1.5 X1", 1, 1, "unsupported G-code"),
     ("M99", 1, 1, "unsupported M-code"),

@@ -125,17 +125,28 @@ def test_g90_on_the_g53_line_lifts_a_modal_g91():
     assert prog.block_lines.tolist() == [1, 2, 3]
 
 
-def test_g53_without_machine_origin_names_file_line_column_and_key(tmp_path):
-    """The reader cannot know the machine frame: G53 without ``machine_origin`` is an error at its
-    line and column (after ``N60``: column 5), naming G53, the argument and the config key."""
+def test_g53_and_g28_without_machine_origin_or_home_take_linuxcncs_defaults(tmp_path, caplog):
+    """Without ``machine_origin`` the reader takes LinuxCNC's default configuration: a work offset
+    of 0, so ``G53 Z0.`` goes to the program's z = 0; without ``home`` too, ``G28`` returns to the
+    machine origin (its position parameters 5161-5163 at 0), here (0, 0, 0). By hand from (0, 0,
+    0): line 2 to (10, 0, 5), line 3 to z = 0, line 4 up to z = 7 (G91), line 5 ``G28 Z0.`` (G91,
+    intermediate point its own position) to z = 0, line 6 to (10, 3, 0). Each default is noted in
+    ``assumed`` with its first line and the argument that sets it, and logged as a warning."""
     f = tmp_path / "part.nc"
-    f.write_text("G21 G90\nG0 X10 Z5\nN60 G53 G0 Z0.\n")
-    with pytest.raises(GCodeError, match=rf"^{f}:3:5: G53 \(move in machine coordinates\) needs the machine "
-                                         r"coordinate system's origin; expected machine_origin=\(x, y, z\) \[mm, program "
-                                         r"frame\] given to parse_gcode / read_gcode \(\[path\] machine_origin_mm in a "
-                                         r"config\)$") as e:
-        read_gcode(f)
-    assert (e.value.line, e.value.column) == (3, 5)
+    f.write_text("G21 G90\nG0 X10 Z5\nN60 G53 G0 Z0.\nG91 G0 Z7\nG28 Z0.\nG90 G1 Y3 F600\n")
+    with caplog.at_level("WARNING", logger="research.paths.gcode"):
+        prog = read_gcode(f)
+    np.testing.assert_allclose(prog.blocks.ends, [[10, 0, 5], [10, 0, 0], [10, 0, 7], [10, 0, 0], [10, 3, 0]],
+                               atol=1e-12)
+    assert len(prog.assumed) == 2
+    assert prog.assumed[0].startswith("line 3: the machine origin of G53/G28 taken as (0, 0, 0) mm")
+    assert "machine_origin_mm" in prog.assumed[0]
+    assert prog.assumed[1].startswith("line 5: G28 returned to (0.0, 0.0, 0.0) mm") and "home_mm" in prog.assumed[1]
+    assert sum(r.levelname == "WARNING" and str(f) in r.getMessage() for r in caplog.records) == 2
+    given = read_gcode(f, machine_origin=(1.0, 2.0, 50.0))  # G28 returns to the given origin
+    assert len(given.assumed) == 1 and given.assumed[0].startswith("line 5: G28 returned to (1.0, 2.0, 50.0) mm")
+    np.testing.assert_allclose(given.blocks.ends[3], [10, 0, 50], atol=1e-12)
+    assert read_gcode(f, machine_origin=(1.0, 2.0, 50.0), home=(0.0, 0.0, 9.0)).assumed == ()
 
 
 @pytest.mark.parametrize("text, line, column, match", [

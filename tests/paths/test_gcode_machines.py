@@ -238,12 +238,17 @@ def test_fanuc_post_with_safety_line_and_incremental_g28():
     check_consistent(prog)
 
 
-def test_g28_without_home_asks_for_it():
-    """The reader cannot know the machine home: G28 without ``home`` is an error at its line and column
-    naming the argument to pass."""
-    with pytest.raises(GCodeError, match=r"mill_post.ngc:8:1: G28 \(return to home\) needs the machine home "
-                                         r"position; expected home=\(x, y, z\)"):
-        read("mill_post.ngc")
+def test_g28_without_home_returns_to_the_machine_origin():
+    """mill_post.ngc without ``home``, from (0, 0, 50): its ``G28`` lines return to LinuxCNC's default
+    home, the machine origin, here the program's (0, 0, 0) (no ``machine_origin`` either), noted in
+    ``assumed`` at line 8, the first. By hand as the test above with home z = 0: line 8 a rapid down
+    to (0, 0, 0), line 21 from (25, 20, 15) to (25, 20, 0), line 23 via (30, 20, 0) to (0, 0, 0)."""
+    prog = read("mill_post.ngc", start=(0.0, 0.0, 50.0))
+    ends = [[0, 0, 0], [10, 5, 0], [10, 5, 15], [10, 5, 5], [10, 5, -1], [20, 5, -1], [25, 10, -1], [25, 20, -1],
+            [25, 20, 15], [25, 20, 0], [30, 20, 0], [0, 0, 0]]
+    np.testing.assert_allclose(prog.blocks.ends, ends, atol=1e-12)
+    assert prog.block_lines.tolist() == [8, 13, 14, 15, 16, 17, 18, 19, 20, 21, 23, 23]
+    assert [a.split(":")[0] for a in prog.assumed] == ["line 8", "line 8"]
 
 
 def test_spiral_beyond_tolerance_names_both_radii():
