@@ -66,6 +66,10 @@ _G_REFUSE = {
     181: "G18.1 (WU plane) is not supported: only the G17, G18, G19 planes",
     191: "G19.1 (VW plane) is not supported: only the G17, G18, G19 planes",
     300: "G30 (return to secondary home) is not supported",
+    700: "G70 (LinuxCNC's lathe finishing cycle; inch units in Mach3 and old Fanuc) is not supported: for inch "
+         "units write G20",
+    710: "G71 (LinuxCNC's lathe roughing cycle; metric units in Mach3 and old Fanuc) is not supported: for mm "
+         "units write G21",
     330: "G33 (spindle-synchronized motion) is not supported",
     410: "G41 (cutter compensation left) is not supported: post-process with compensation off (G40)",
     411: "G41.1 (dynamic cutter compensation left) is not supported: post-process with compensation off (G40)",

@@ -303,6 +303,7 @@ BAD = [
     ("G93 G1 X1 F2", 1, 1, "inverse-time"),
     ("G4", 1, 1, "dwell"),
     ("G92 X0", 1, 1, "G92"),
+    ("G71 G90\nG1 X1 F60", 1, 1, "metric units in Mach3 and old Fanuc) is not supported: for mm units write G21"),
     ("G1.5 X1", 1, 1, "unsupported G-code"),
     ("M99", 1, 1, "unsupported M-code"),
     ("G0 X1 E5", 1, 7, "unknown word letter 'E'"),
