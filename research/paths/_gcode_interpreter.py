@@ -551,9 +551,11 @@ class _Interpreter:
         a, b, c = _PLANES[self.plane]
         pname = _PLANE_NAME[self.plane]
         la, lb, lc = "IJK"[a], "IJK"[b], "IJK"[c]
-        if lc in vals:
+        # the off-plane centre word: LinuxCNC refuses it; GRBL (FreeCAD's and other GRBL posts write
+        # K0 on every G17 arc) ignores it. Read where it is 0, which moves no centre
+        if lc in vals and float(vals[lc][0]) != 0.0:
             raise _LineError(f"{lc} given for an arc in the {pname} plane; expected the centre words {la} and "
-                             f"{lb} (or R)", vals[lc][1])
+                             f"{lb} (or R; an {lc} of 0 is read)", vals[lc][1])
         has_ij = la in vals or lb in vals
         if has_ij and "R" in vals:
             raise _LineError(f"{name} with both {la}/{lb} and R; expected either the centre ({la}, {lb}) or the "

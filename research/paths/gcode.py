@@ -450,7 +450,8 @@ def parse_gcode(
       later ``G20``/``G21`` without a new ``F`` keeps that physical feed.
     * Arcs: in G17 the centre words are ``I``/``J`` (X/Y), in G18 ``K``/``I`` (Z/X), in G19
       ``J``/``K`` (Y/Z); the off-plane centre word (``K`` in G17, ``J`` in G18, ``I`` in G19) is an
-      error, as in LinuxCNC. The words are offsets from the arc start (``G91.1``, the default) or
+      error, as in LinuxCNC, unless it is 0 (GRBL posts write ``K0`` on every G17 arc; GRBL ignores
+      it). The words are offsets from the arc start (``G91.1``, the default) or
       absolute centre coordinates under ``G90.1``; ``G91`` does not affect them. ``R < 0`` selects
       the arc > 180 deg; ``R`` may be up to ``RADIUS_TOLERANCE_MM`` = 0.00127 mm (LinuxCNC's
       ``RADIUS_TOLERANCE_INCH * 25.4``) shorter than half the chord. A radius below 0.00127 mm is

@@ -589,6 +589,21 @@ def test_g64_p0_is_no_tolerance_as_a_bare_g64():
     np.testing.assert_array_equal(prog.block_tolerance, [np.nan, np.nan, np.nan, 0.0, np.nan])
 
 
+def test_an_off_plane_centre_word_of_zero_is_read_as_grbl_posts_write_it():
+    """FreeCAD's GRBL post writes ``I J K`` on every arc (``K0.000`` in G17); GRBL ignores it,
+    LinuxCNC refuses it. A zero off-plane word moves no centre, so it is read: the blocks are those
+    of the same arcs without it (G17 with K0, G18 with J0); a nonzero one stays an error."""
+    for plane, with_zero, without in (("G17", "G2 X2 Y0 I1 J0 K0.000 F60", "G2 X2 Y0 I1 J0 F60"),
+                                      ("G18", "G2 X2 Z0 I1 K0 J-0 F60", "G2 X2 Z0 I1 K0 F60")):
+        a = parse_gcode(f"{plane}\n{with_zero}").blocks
+        b = parse_gcode(f"{plane}\n{without}").blocks
+        np.testing.assert_array_equal(a.ends, b.ends)
+        np.testing.assert_array_equal(a.centers, b.centers)
+        np.testing.assert_array_equal(a.sweeps, b.sweeps)
+    with pytest.raises(GCodeError, match=r"K given for an arc in the G17 \(XY\) plane"):
+        parse_gcode("G2 X2 Y0 I1 J0 K0.001 F60")
+
+
 def test_full_circle_with_p_turns_and_helical_g18():
     """G2 I-5 P3: three full turns, sweep 6 pi, length 2 pi 5 * 3; G18 helical arc along Y."""
     prog = parse_gcode("G0 X5\nG2 I-5 P3 F600\nG18 G3 X5 Z0 I0 K-2 Y4")
