@@ -84,7 +84,7 @@ than one decimal digit such as ``G1.00000001`` is not read as ``G1``); an extra 
 that moves (its first word, under ``G90`` on a rapid or a line without motion, puts it in place,
 and every later word must repeat that position; under ``G91`` only 0: a 4-axis post's ``A0.`` on a
 3-axis job is read, X, Y, Z alone are planned), ``D`` (cutter radius offset), ``H`` without
-``G43``, ``L``, every other letter; the off-plane centre word (``K`` in
+``G43``, ``L``, every other letter; a nonzero off-plane centre word (``K`` in
 G17, ``J`` in G18, ``I`` in G19), ``P`` or ``Q`` with nothing to use them; two G-codes of one modal
 group on one line (e.g. two motion codes), a letter given twice on one line, a malformed number
 (``X1.2.3``, ``X``), a number that is not finite or beyond the bounds (coordinates, centres, radii
