@@ -83,7 +83,9 @@ What this module does:
    signed lowering can miss what makes a peak, where the moved input's direction is not the
    path's). A tolerance violation lowers the feeds of the blocks whose window holds
    it by ``TOLERANCE_STEP`` (the mirror's residual falls with the feed where it does not with
-   ``g``); where the corner nearest it was the nearest to one in the round before as well, it
+   ``g``), from the feed each block reached once it has been lowered :data:`LOWERED_ROUNDS`
+   rounds in a row with the violation still there (a short block's feed is its window's, often
+   far below the cap the steps act on); where the corner nearest it was the nearest to one in the round before as well, it
    halves that corner's relaxation towards 1 (``g <- 1 + (g - 1) / 2``, to 1 below
    :data:`_LAST_STEP`; at a sharp corner eq 13/14 then dwells), and once that is at 1 its
    vertices stop being moved. Halving at the first violation moved the violation on: the halved
@@ -171,6 +173,16 @@ _LAST_STEP = 1.25  # a relaxation below this goes to 1 on the next violation (on
 #: plain plan returned): 4 is the least count that leaves every bench_cam case as it was (1-3
 #: moved them by -0.4 to +1.1 %) and plans seed 25 at 10.5706 s against 12.2763 s
 STUCK_ROUNDS = 4
+#: rounds in a row a block's feed may be lowered for a tolerance violation that stays (step 3)
+#: before it is lowered from the feed it reached instead of from its cap. Swept 2 / 4 / **8** / 16
+#: (with no such lowering: 30.0733 / 668.7790 / 627.5498 s, tight contours 2 of 6 returned plain,
+#: the 1,897-block program 290.5828 s): fir_mirror.py's arc programs 30.0889 / 30.1165 / 30.0733 /
+#: 30.0733 s, the 120 filleted fuzz contours 668.6264 / 668.7133 / 668.7790 / 668.7790 s, the 100
+#: random programs 625.1398 / 622.1265 / 619.4909 / 619.6872 s, six filleted contours at eps 2.54 um
+#: and F 423 mm/s 29.0355 / 28.4383 / 27.8905 / 29.1255 s, a real 394-block program at eps 2.54 um
+#: 38.8451 / 37.8541 / 37.7488 / 37.7360 s (53.1065 s plain) and its 1,897 blocks - / 210.0793 /
+#: 209.1836 / 290.5828 s (at 16 its 41 rounds run out first)
+LOWERED_ROUNDS = 8
 RAISE_LEAST = 1e-3  # the raise phase ends when no block can be raised by more than this share
 #: share of the tolerance the sampled path check may miss between two samples (:func:`sample_period`):
 #: the samples per ``check_period`` grow as its inverse square root (3 at eps 50 um under bench_cam's
@@ -355,6 +367,7 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
     tangents = tp.tangents()[0]
     verified = None  # the search's factors of the last verified plan (raise phase)
     struck = np.zeros(M, dtype=bool)  # the blocks of the corners nearest a tolerance violation last round
+    lowered = np.zeros(M, dtype=int)  # rounds in a row each block's feed was lowered for the tolerance
     step = np.full(M, RAISE_STEP)  # each block's largest raise a round, halved where a raise broke something
     last_limits = (np.zeros(0), np.zeros(0), np.zeros(0, dtype=int))  # the last round's limit violations
     n_fillets = 0 if fillets is None else fillets.first.size
@@ -435,9 +448,19 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
                 lower = late[~hit]
             else:
                 lower = late
-            scale[_blocks_near(moved, lower)] *= 1.0 - TOLERANCE_STEP
+            slow = _blocks_near(moved, lower)
+            held_low = slow & (lowered >= LOWERED_ROUNDS)  # lowered that many rounds in a row, still violated
+            # those are lowered from the feed they reached, not from their cap: a short block's feed
+            # is its window's (plan_fir's look-ahead), often far below the cap, where steps of the
+            # cap change nothing for many rounds (an arc's 0.05 mm chords at 4 mm/s under a
+            # 423 mm/s cap, eps 2.54 um: no plan verified in 48 rounds)
+            reached = np.asarray(moved.feeds)[held_low] / np.maximum(top[held_low], 1e-300)
+            scale[held_low] = np.minimum(scale[held_low], reached)
+            scale[slow] *= 1.0 - TOLERANCE_STEP
+            lowered = np.where(slow, lowered + 1, 0)
         else:
             struck[:] = False
+            lowered[:] = 0
     return best, r, spent
 
 

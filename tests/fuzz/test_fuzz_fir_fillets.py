@@ -90,3 +90,21 @@ def test_filleted_contours_through_the_mirror_keep_tolerance_limits_and_end_poin
         for ratio in limit_ratios(m.plan.trajectory(1e-3), limits).values():
             assert np.all(ratio <= 1 + 1e-6)
     assert m.cycle_time <= m.plain_cycle_time * (1 + 1e-12)
+
+
+def test_a_tight_tolerance_contour_verifies_through_the_mirror():
+    """The filleted contour of seed 5 (19 blocks, fillets as G2/G3 arcs) at a tolerance of 2.54 um
+    (``G64 P0.0001`` in an inch program) and F 423 mm/s (F1000 in/min), T 60/30 ms. The mirror
+    returned the plain plan after 195 rounds: the caps of the blocks by a lasting violation were
+    lowered by 3 % a round and stayed far above the feeds their windows allow, so the feeds did
+    not move. With a block lowered ``LOWERED_ROUNDS`` rounds in a row lowered from the feed it
+    reached, a compensated plan verifies, more than 10 % faster than ``plan_fir`` (a session
+    measured 4.0969 -> 3.0859 s), eps held on the sampled trajectory."""
+    text, start = filleted_contour(np.random.default_rng(5))
+    tp = parse_gcode(text, start=start, source="fillets-5.ngc").blocks
+    eps = 0.00254
+    m = plan_fir_mirror(tp, 423.0, (0.06, 0.03), eps, check_period=2.5e-4)
+    assert m.compensated and m.cycle_time < 0.9 * m.plain_cycle_time
+    q = np.asarray(m.plan.trajectory(5e-4).q)
+    assert np.max(tp.distance(q)) <= eps * (1 + 1e-3) + 1e-9
+    np.testing.assert_allclose(q[-1], tp.ends[-1], atol=1e-8)
