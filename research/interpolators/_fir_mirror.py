@@ -68,8 +68,9 @@ What this module does:
    more sits too far inside its corner (0.83 mm at R 2) for one rounding to follow it: such an
    arc is planned as the polygon of its tangents with the fewest corners within ``CORNER_OFFSET``
    tolerances of it (more after a spent search): a fillet of R 5 mm 0.7863 -> 0.6384 s (two
-   corners), the rectangle with R 5 mm fillets 1.8579 -> 1.2837 s. Turns beyond 120 deg never
-   verified as corners.
+   corners), the rectangle with R 5 mm fillets 1.8579 -> 1.2837 s. A fillet turning more than
+   ``CORNER_TURN`` (120 deg; one corner never verified beyond it) gets at least ``turn /
+   CORNER_TURN`` corners: a slot of R 1 mm half circles 0.9784 -> 0.7973 s.
 
 3. **Checks and search.** The exact profile of the moved input is checked against the
    *programmed* path as ``plan_fir`` checks its own (vertex distances at every corner, the
@@ -85,8 +86,8 @@ What this module does:
    it by ``TOLERANCE_STEP`` (the mirror's residual falls with the feed where it does not with
    ``g``), from the feed each block reached once it has been lowered :data:`LOWERED_ROUNDS`
    rounds in a row with the violation still there (a short block's feed is its window's, often
-   far below the cap the steps act on); where the corner nearest it was the nearest to one in the round before as well, it
-   halves that corner's relaxation towards 1 (``g <- 1 + (g - 1) / 2``, to 1 below
+   far below the cap the steps act on); where the corner nearest it was the nearest to one in
+   the round before as well, it halves that corner's relaxation towards 1 (``g <- 1 + (g - 1) / 2``, to 1 below
    :data:`_LAST_STEP`; at a sharp corner eq 13/14 then dwells), and once that is at 1 its
    vertices stop being moved. Halving at the first violation moved the violation on: the halved
    corner's blocks slow against their neighbours, whose corner broke next, and round by round a

@@ -184,6 +184,15 @@ def _corner_points(S: np.ndarray, u: np.ndarray, E: np.ndarray, w: np.ndarray):
     return V, planar & (a > SHORT_LEG) & (b > SHORT_LEG) & (uw < 1.0 - 1e-12)
 
 
+def _corner_count(turn, radius, tol):
+    """The fewest corners of the tangent polygon of a fillet turning ``turn`` [rad] at ``radius``
+    [mm] (arrays or scalars): each within :data:`CORNER_OFFSET` tolerances ``tol`` [mm] of the arc
+    (corner ``i`` lies ``R (1 / cos(turn / 2n) - 1)`` outside it) and turning at most
+    :data:`CORNER_TURN`; at least one."""
+    half = np.arccos(radius / (radius + CORNER_OFFSET * tol))  # the largest half-turn per corner
+    return np.maximum(np.ceil(np.maximum(turn / (2.0 * half), turn / CORNER_TURN) - 1e-9).astype(int), 1)
+
+
 def _arc_fillets(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, Td: float, extra: np.ndarray):
     """The arc fillets of ``tp`` as corners: ``(planned, checked, owner, parts)`` (:func:`cornered`;
     ``parts`` one ``(V, P, pinned, first, corners, owner)`` per corner: ``corners`` the planned corners
@@ -205,9 +214,7 @@ def _arc_fillets(tp: ToolPath, tol: np.ndarray, feed: np.ndarray, Td: float, ext
     arc[:-1] &= turn <= TANGENT_TURN
     k = np.flatnonzero(arc)
     theta, R = tp.sweeps[k], tp.radii[k]
-    half = np.arccos(R / (R + CORNER_OFFSET * tol[k]))  # the largest half-turn per corner
-    n = np.ceil(np.maximum(theta / (2.0 * half), theta / CORNER_TURN) - 1e-9).astype(int)
-    n = np.maximum(n, 1) + extra[k]
+    n = _corner_count(theta, R, tol[k]) + extra[k]
     geo = []
     for kj, th, nj in zip(k.tolist(), theta.tolist(), n.tolist()):
         if nj > CORNERS_MAX:
@@ -294,9 +301,7 @@ def _chord_fillets(planned: ToolPath, checked: ToolPath, owner: np.ndarray, feed
         # its turn: the sum of its vertices' (one way), more than pi where it turns back on itself
         turn = float(np.sum(np.arccos(np.clip(np.sum(unit[s - 1:e] * unit[s:e + 1], axis=1), -1.0, 1.0))))
         # as an arc's: the tangent polygon of the run (its radius read as length over turn)
-        radius = run / max(turn, 1e-12)
-        half = math.acos(radius / (radius + CORNER_OFFSET * float(tol[s])))
-        n = max(1, math.ceil(max(turn / (2.0 * half), turn / CORNER_TURN) - 1e-9)) + int(extra[owner[s]])
+        n = int(_corner_count(turn, run / max(turn, 1e-12), tol[s])) + int(extra[owner[s]])
         if n > CORNERS_MAX:
             continue
         along = np.r_[0.0, np.cumsum(lengths[s:e])]  # arc length of vertices s..e from S
