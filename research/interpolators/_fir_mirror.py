@@ -137,16 +137,14 @@ from scipy.spatial import cKDTree
 
 from research._device import device_array
 from research.errors import ParameterError
-from research.interpolators._fir_kernels import verified_bound
-from research.interpolators._fir_limits import LIMIT_RTOL
-from research.interpolators._fir_piece_peaks import PiecePeaks
 from research.interpolators._fir_profile import ProfileInputs, profile
 from research.interpolators._fir_mirror_paths import (FILLET_RETRIES, SHORT_LEAST, Fillets, bisect_rounding, chorded,
                                                       cornered, planned_tolerance)
 from research.interpolators._fir_mirror_feeds import (RAISE_STEP, TOLERANCE_STEP, curvature_caps, jerk_push,
                                                       limit_factors, raise_factors, shrink_caps, span_ratios,
                                                       triangle_sum, vertex_curvature)
-from research.interpolators._fir_verify import nearest_instants, path_deviations, profile_rounding, vertex_distances
+from research.interpolators._fir_mirror_check import violations
+from research.interpolators._fir_verify import nearest_instants
 from research.interpolators.fir import (CHECK_PERIOD, FIRPlan, _as_toolpath, _check_inputs, joined_plan, paused_parts,
                                        plan_fir)
 from research.limits import AxisLimits
@@ -185,10 +183,6 @@ STUCK_ROUNDS = 4
 #: 209.1836 / 290.5828 s (at 16 its 41 rounds run out first)
 LOWERED_ROUNDS = 8
 RAISE_LEAST = 1e-3  # the raise phase ends when no block can be raised by more than this share
-#: share of the tolerance the sampled path check may miss between two samples (:func:`sample_period`):
-#: the samples per ``check_period`` grow as its inverse square root (3 at eps 50 um under bench_cam's
-#: envelope: the 10^4-chord file's planning 8.0 -> 9.5 s); plan_fir's own check allows none
-SAMPLE_MARGIN = 1e-3
 
 
 def default_rounds(relax: float) -> int:
@@ -537,114 +531,6 @@ def _smoothing(target: np.ndarray, fixed: np.ndarray, pulses: np.ndarray, shorte
         return out
 
     return smooth
-
-
-@dataclass(frozen=True)
-class Violations:
-    """Where a plan's profile breaks the tolerance or the limits (:func:`violations`).
-
-    Attributes:
-        tolerance: ``(N,)`` times [s] of the tolerance violations, sorted.
-        limits: ``(P,)`` middle times [s] of the profile pieces above a limit, and ``ratios``
-            ``(P,)`` their largest ``peak / limit``.
-        deviation: the largest sampled distance to the path [mm].
-        peaks: the profile's ``PiecePeaks`` under the limits (None without limits).
-    """
-
-    tolerance: np.ndarray
-    limits: np.ndarray
-    ratios: np.ndarray
-    deviation: float
-    peaks: PiecePeaks | None = None
-
-
-def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits | None,
-               check_period: float) -> Violations:
-    """Where ``plan``'s profile breaks the tolerance ``tol`` ``(M,)`` on the programmed path ``tp``
-    or the ``limits`` (module docstring, step 3). The bounds are ``plan_fir``'s own:
-    ``verified_bound`` plus the rounding the profile has accumulated by its end, and its limits'
-    relative tolerance on the exact peaks; the path's samples are denser and keep the tolerance
-    less their margin (:func:`sample_period`)."""
-    pos = plan.position.numpy_evaluator()
-    Td = float(np.sum(np.asarray(plan.delays)))
-    slack = profile_rounding(pos, tp.ends[-1])
-    centre = np.asarray(plan.corner_times)
-    starts = np.asarray(plan.start_times)
-    times = []
-    if tp.n_blocks > 1:
-        tol_v = np.minimum(tol[:-1], tol[1:])
-        errors = vertex_distances(pos, np.asarray(tp.vertices), centre, 0.5 * Td, tol_v)
-        times.append(centre[errors > verified_bound(tol_v) + slack])
-    positive = tol[tol > 0]
-    period, margin = sample_period(pos, check_period, float(np.min(positive)) if positive.size else 0.0)
-    held = np.where(tol > 0, tol - margin, tol)  # an exact stop's 0 stays 0 (its output is on the path)
-    stopped = np.asarray(plan.overlaps) == 0.0  # exact stops: samples by them are their blocks' own (plan_fir's check)
-    durations, cap = _steady_strides(plan, tp, tol, period, margin)
-    deviation, at_vertex, at_block = path_deviations(pos, tp, starts, centre, Td, held, period, durations=durations,
-                                                     slack=slack, stopped=stopped, stride_cap=cap)
-    times.append(centre[sorted(at_vertex)] if at_vertex else np.zeros(0))
-    middle = starts + 0.5 * np.asarray(plan.pulse_times) + 0.5 * Td  # the window centred on the block
-    times.append(middle[sorted(at_block)] if at_block else np.zeros(0))
-    over_times, ratios, peaks = np.zeros(0), np.zeros(0), None
-    if limits is not None:
-        peaks = PiecePeaks(pos, limits)
-        over = peaks.per_piece > 1.0 + LIMIT_RTOL
-        over_times, ratios = 0.5 * (pos.breaks[:-1] + pos.breaks[1:])[over], peaks.per_piece[over]
-    return Violations(np.sort(np.concatenate(times)), over_times, ratios, float(deviation), peaks)
-
-
-def _steady_strides(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, period: float, margin: float):
-    """``(durations (P,) [s], cap (P,))`` of the input pieces of ``plan`` (a path of lines, its
-    profile a ``ProfileInputs``) for the thinned grid of the path check (``_fir_verify.steady_spans``):
-    over a piece's steady span (the output averages that piece alone) the output moves along a
-    straight line at the piece's speed ``v`` (chord over pulse length). Its distance to a line of
-    the checked path ``tp`` is then convex in time, and so is its distance to an arc's circle
-    outside it; inside, ``R - |p - c|`` is concave with ``|d''| <= v^2 / rho`` (``rho >= R - tol -
-    2 margin`` for samples within the tolerance and a chord of at most ``v h``), so between samples
-    ``h`` apart it exceeds the larger one by at most ``v^2 h^2 / (8 rho)``. ``cap`` keeps that at most
-    ``margin`` [mm] (:func:`sample_period`'s, by which the samples are held below the tolerance),
-    in strides of ``period`` [s]; unbounded on a path of lines, at rest or without a margin 1."""
-    inputs = plan.profile
-    table = inputs.pieces.table
-    fraction, piece_tv = np.asarray(inputs.fraction), np.asarray(inputs.piece_tv)
-    durations = np.where(table.gap, np.append(np.asarray(inputs.gaps), 0.0)[table.block], fraction * piece_tv)
-    if not tp.is_arc.any():
-        return durations, None
-    rho = float(np.min(tp.radii[tp.is_arc])) - float(np.max(tol)) - 2.0 * margin
-    chord = np.linalg.norm(table.geo[:, 0, :], axis=1)
-    speed = np.where(table.gap | (piece_tv <= 0), 0.0, chord / np.where(piece_tv > 0, piece_tv, 1.0))
-    if rho <= 0.0 or margin <= 0.0:
-        return durations, np.ones(speed.size)
-    with np.errstate(divide="ignore"):
-        h = np.sqrt(8.0 * margin * rho) / speed  # inf at rest
-    return durations, np.maximum(np.floor(h / period), 1.0)
-
-
-def sample_period(position, check_period: float, tolerance: float) -> tuple[float, float]:
-    """``(period [s], margin [mm])`` of the mirror's sampled path check (module docstring, step 3).
-
-    The mirror drives the output's distance to the path towards the tolerance all along a curve,
-    so its largest value often falls between two samples (the random chain of
-    ``test_fir_mirror``'s seed 2: 50.016 um between the 1 ms samples, whose largest is 49.984 um,
-    at eps 50 um). Near a peak the distance ``d`` to a line of the path has ``|d''| <= |a|`` (in
-    the plane of the trajectory and the line), so between samples ``h`` apart it exceeds the
-    larger sample by at most ``|a|_max h^2 / 8``. The check samples ``check_period / k``
-    apart, ``k`` the least integer that makes that allowance at most ``SAMPLE_MARGIN`` of the
-    ``tolerance`` [mm] (the smallest positive one over the blocks), and holds the samples to the
-    tolerance less the allowance (the margin; a block of tolerance 0, an exact stop, keeps 0).
-    ``|a|_max`` [mm/s^2] is bounded over each piece of ``position`` (a ``NumpyPiecewise``) by its
-    local coefficients, ``sum_m m (m - 1) |c_m| dt^(m - 2)`` per axis. A tolerance of 0 (every block an exact stop) keeps ``check_period`` and no margin."""
-    if tolerance <= 0:
-        return check_period, 0.0
-    c = np.abs(position.coeffs)
-    m = np.arange(c.shape[1])
-    dt = np.diff(position.breaks)
-    power = np.maximum(m - 2, 0)
-    weight = np.where(m >= 2, m * (m - 1.0), 0.0)[None, :] * dt[:, None] ** power[None, :]
-    peak = float(np.max(np.linalg.norm(np.einsum("km,kma->ka", weight, c), axis=1), initial=0.0))
-    k = max(1, math.ceil(check_period * math.sqrt(peak / (8.0 * SAMPLE_MARGIN * tolerance))))
-    period = check_period / k
-    return period, peak * period**2 / 8.0
 
 
 def _nearest_corner(plan: FIRPlan, times: np.ndarray) -> np.ndarray:

@@ -22,8 +22,8 @@ from jax import Array
 from research.paths.toolpath import ToolPath
 from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_verify_kernels import corner_distances as _corner_kernel
-from research.interpolators._fir_verify_kernels import (charge_samples, grid_times, nearest_times, sampled_line_distances,
-                                                        scatter_max, thinned_runs)
+from research.interpolators._fir_verify_kernels import (charge_samples, grid_times, nearest_times, overlay_spans,
+                                                        sampled_line_distances, scatter_max, thinned_runs)
 from research.piecewise import NumpyPiecewise, PiecewisePolynomial, bucket_size
 
 _GRID = 9  # grid points per corner window for the corner-error search
@@ -198,7 +198,7 @@ def charged_repairs(j: int, deviation: float, stops: np.ndarray, centre: np.ndar
 
 def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray, centre: np.ndarray, Td: float,
                     tol_block: np.ndarray, check_period: float, durations=None, slack: float = 0.0, stopped=None,
-                    stride_cap=None):
+                    stride_cap=None, spans=None):
     """Largest sampled distance from the trajectory to ``path`` and where it breaks the tolerance.
 
     Args:
@@ -214,6 +214,9 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
             one is charged to its block on that side, as ``RoundChecks`` does), or None: none.
         stride_cap: ``(P,)`` the largest stride of the thinned grid over each input piece's
             steady span (:func:`steady_spans`' ``cap``), or None: none.
+        spans: ``(first, last, stride)`` grid-index spans (sorted, disjoint) thinned elsewhere
+            than over the steady spans, which take precedence where the two meet (the mirror's
+            local strides, ``_fir_mirror_check.local_strides``), or None: none.
 
     Returns:
         ``(max_deviation [mm], {vertex: deviation}, {block: deviation})``; distances are upper
@@ -229,6 +232,9 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
     M = path.n_blocks
     worst, bad = np.full(2 * M - 1, -np.inf), np.full(2 * M - 1, -np.inf)
     steady = None if durations is None else steady_spans(starts, durations, t0, Td, check_period, cap=stride_cap)
+    if spans is not None:
+        none = np.zeros(0, np.int64)
+        steady = overlay_spans(*(steady if steady is not None else (none, none, none)), *spans)
     _, times = _sample_times(np.zeros(1, np.int64), np.array([n - 1]), t0, t1, check_period, centre, steady)
     deviation = _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, None, slack, stopped)
     at_vertex = {int(v): float(bad[v]) for v in np.flatnonzero(bad[: M - 1] > -np.inf)}

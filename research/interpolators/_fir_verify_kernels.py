@@ -430,6 +430,39 @@ def thinned_runs(first, last, s_first, s_last, s_stride):
 
 
 @numba.njit(**_OPTIONS)
+def overlay_spans(s_first, s_last, s_stride, c_first, c_last, c_stride):
+    """The grid-index spans ``s`` (sorted, disjoint; they take precedence) laid over the spans ``c``
+    (sorted, disjoint): every ``s`` span, and each ``c`` span less the ``s`` spans it meets, in
+    order (``_fir_verify.path_deviations``' ``spans``). A cut ``c`` piece keeps its stride from its
+    own first index. Returns ``(first, last, stride)``."""
+    S, C = s_first.size, c_first.size
+    cap = 2 * (S + C) + 1
+    out_first = np.empty(cap, np.int64)
+    out_last = np.empty(cap, np.int64)
+    out_stride = np.empty(cap, np.int64)
+    n, s, covered = 0, 0, -1
+    for c in range(C):
+        cur, end = max(c_first[c], covered + 1), c_last[c]
+        while s < S and s_first[s] <= end:
+            if s_first[s] > cur and cur <= end:  # the part of c before the s span
+                out_first[n], out_last[n], out_stride[n] = cur, s_first[s] - 1, c_stride[c]
+                n += 1
+            out_first[n], out_last[n], out_stride[n] = s_first[s], s_last[s], s_stride[s]
+            n += 1
+            covered = s_last[s]
+            cur = max(cur, covered + 1)
+            s += 1
+        if cur <= end:
+            out_first[n], out_last[n], out_stride[n] = cur, end, c_stride[c]
+            n += 1
+    while s < S:
+        out_first[n], out_last[n], out_stride[n] = s_first[s], s_last[s], s_stride[s]
+        n += 1
+        s += 1
+    return out_first[:n], out_last[:n], out_stride[:n]
+
+
+@numba.njit(**_OPTIONS)
 def charge_samples(t, d2, block, centre, tol_block, is_arc, half_window, redo, worst, slack, stopped):
     """Distance, tolerance, violation and charge key of path samples, and the largest distance of
     each key (``_fir_verify._charged_samples``).

@@ -359,8 +359,14 @@ class ToolPath:
             blocks = np.concatenate([blocks, np.clip(near + np.arange(-1, 2)[None, :], 0, self.n_blocks - 1)], axis=1)
         if not self.is_arc[blocks].any():  # lines only: one compiled pass, the same arithmetic
             return _nearest_line(np.ascontiguousarray(q), np.ascontiguousarray(blocks), self.starts, self.ends)
-        rows = np.repeat(np.arange(len(q)), blocks.shape[1])
-        d = self._block_distance(q[rows], blocks.ravel()).reshape(blocks.shape)
+        # each (point, block) pair once: the candidates repeat (nearest samples of one block, the
+        # neighbours of ``near`` and of the nearest sample's owner); the minimum is the same
+        blocks = np.sort(blocks, axis=1)
+        fresh = np.ones(blocks.shape, dtype=bool)
+        fresh[:, 1:] = blocks[:, 1:] != blocks[:, :-1]
+        rows, cols = np.nonzero(fresh)
+        d = np.full(blocks.shape, np.inf)
+        d[rows, cols] = self._block_distance(q[rows], blocks[rows, cols])
         return d.min(axis=1)
 
     def _block_distance(self, q: np.ndarray, blocks: np.ndarray) -> np.ndarray:

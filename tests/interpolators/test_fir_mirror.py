@@ -9,7 +9,8 @@ from scipy.optimize import brentq, minimize_scalar
 from research import metrics
 from research.errors import ParameterError
 from research.interpolators import plan_fir, plan_fir_mirror
-from research.interpolators._fir_mirror import SAMPLE_MARGIN, _input_vertices, compensate, sample_period
+from research.interpolators._fir_mirror import _input_vertices, compensate
+from research.interpolators._fir_mirror_check import SAMPLE_MARGIN, Violations, derivative_bound, sample_period
 from research.interpolators._fir_mirror_paths import CHORD_SHARE, chorded, cornered
 from research.limits import AxisLimits
 from research.paths import Polyline
@@ -480,14 +481,14 @@ def test_the_sampled_path_check_misses_at_most_its_margin_between_samples():
             t_star, y0 = rng.uniform(0.2, 0.8), 0.05
             coeffs = np.array([[[y0 - a * t_star**2 / 2], [a * t_star], [-a / 2]]])  # ascending, from t = 0
             pos = NumpyPiecewise(np.array([0.0, 1.0]), coeffs)
-            period, margin = sample_period(pos, 1e-3, tol)
+            period, margin = sample_period(derivative_bound(pos, 2), 1e-3, tol)
             assert margin <= SAMPLE_MARGIN * tol * (1 + 1e-12)
             assert 1e-3 / period == pytest.approx(round(1e-3 / period), rel=1e-12)  # a whole share of it
             t = np.arange(0.0, 1.0, period)
             sampled = np.max(y0 - a * (t - t_star) ** 2 / 2)
             assert sampled + margin >= y0 - 1e-15
     pos = NumpyPiecewise(np.array([0.0, 1.0]), np.array([[[0.0], [0.0], [1.0]]]))
-    assert sample_period(pos, 1e-3, 0.0) == (1e-3, 0.0)
+    assert sample_period(derivative_bound(pos, 2), 1e-3, 0.0) == (1e-3, 0.0)
 
 
 @pytest.mark.parametrize("rounds_hit, halved", [(1, False), (2, True)])
@@ -517,7 +518,7 @@ def test_a_corner_is_relaxed_less_only_when_its_violation_persists(monkeypatch, 
         rounds.append(found.tolerance.size)
         if len(rounds) <= rounds_hit:
             at = float(np.asarray(plan.corner_times)[60])
-            found = fm.Violations(np.sort(np.append(found.tolerance, at)), found.limits, found.ratios,
+            found = Violations(np.sort(np.append(found.tolerance, at)), found.limits, found.ratios,
                                   found.deviation, found.peaks)
         return found
 
@@ -842,16 +843,17 @@ def test_slow_arcs_are_checked_on_a_thinned_grid_with_the_same_plan(monkeypatch)
     plan is the same as with the dense grid (strides capped at 1), eps is held on the sampled
     trajectory; at F 5 mm/min the plan takes seconds (a session measured 0.9 s)."""
     import time as _time
-    from research.interpolators import _fir_mirror
+    from research.interpolators import _fir_mirror_check
     prog = parse_gcode(SLOW_ARCS.format(f=200))
     args = (prog.blocks, prog.block_feeds, DELAYS, EPS)
     thin = plan_fir_mirror(*args)
-    original = _fir_mirror._steady_strides
+    original = _fir_mirror_check._steady_strides
 
     def dense_strides(plan, tp, tol, period, margin):  # every stride 1: the full grid
         return original(plan, tp, tol, period, margin)[0], np.ones(np.asarray(plan.profile.fraction).size)
 
-    monkeypatch.setattr(_fir_mirror, "_steady_strides", dense_strides)
+    monkeypatch.setattr(_fir_mirror_check, "_steady_strides", dense_strides)
+    monkeypatch.setattr(_fir_mirror_check, "local_strides", lambda *args: None)
     dense = plan_fir_mirror(*args)
     monkeypatch.undo()
     assert thin.cycle_time == dense.cycle_time and thin.compensated == dense.compensated
