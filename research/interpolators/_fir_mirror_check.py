@@ -48,7 +48,8 @@ class Violations:
         tolerance: ``(N,)`` times [s] of the tolerance violations, sorted.
         limits: ``(P,)`` middle times [s] of the profile pieces above a limit, and ``ratios``
             ``(P,)`` their largest ``peak / limit``.
-        deviation: the largest sampled distance to the path [mm].
+        deviation: the largest sampled distance to the path [mm] (where the tolerance breaks, a
+            lower bound: only which keys break it is sought).
         peaks: the profile's ``PiecePeaks`` under the limits (None without limits).
     """
 
@@ -85,7 +86,8 @@ def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits 
     pulses = np.asarray(plan.pulse_times)
     cells = local_strides(pos, accel, tp, starts, pulses, Td, tol, check_period, period, margin)
     deviation, at_vertex, at_block = path_deviations(pos, tp, starts, centre, Td, held, period, durations=durations,
-                                                     slack=slack, stopped=stopped, stride_cap=cap, spans=cells)
+                                                     slack=slack, stopped=stopped, stride_cap=cap, spans=cells,
+                                                     keys_only=True)
     times.append(centre[sorted(at_vertex)] if at_vertex else np.zeros(0))
     middle = starts + 0.5 * pulses + 0.5 * Td  # the window centred on the block
     times.append(middle[sorted(at_block)] if at_block else np.zeros(0))

@@ -198,7 +198,7 @@ def charged_repairs(j: int, deviation: float, stops: np.ndarray, centre: np.ndar
 
 def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray, centre: np.ndarray, Td: float,
                     tol_block: np.ndarray, check_period: float, durations=None, slack: float = 0.0, stopped=None,
-                    stride_cap=None, spans=None):
+                    stride_cap=None, spans=None, keys_only: bool = False):
     """Largest sampled distance from the trajectory to ``path`` and where it breaks the tolerance.
 
     Args:
@@ -217,6 +217,9 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
         spans: ``(first, last, stride)`` grid-index spans (sorted, disjoint) thinned elsewhere
             than over the steady spans, which take precedence where the two meet (the mirror's
             local strides, ``_fir_mirror_check.local_strides``), or None: none.
+        keys_only: only which vertices and blocks break the tolerance is wanted: where some do,
+            their values and the largest distance are lower bounds (:func:`_bound_waiting`);
+            where none does, the result is the same.
 
     Returns:
         ``(max_deviation [mm], {vertex: deviation}, {block: deviation})``; distances are upper
@@ -236,7 +239,7 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
         none = np.zeros(0, np.int64)
         steady = overlay_spans(*(steady if steady is not None else (none, none, none)), *spans)
     _, times = _sample_times(np.zeros(1, np.int64), np.array([n - 1]), t0, t1, check_period, centre, steady)
-    deviation = _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, None, slack, stopped)
+    deviation = _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, None, slack, stopped, keys_only)
     at_vertex = {int(v): float(bad[v]) for v in np.flatnonzero(bad[: M - 1] > -np.inf)}
     at_block = {int(b): float(bad[M - 1 + b]) for b in np.flatnonzero(bad[M - 1:] > -np.inf)}
     return deviation, at_vertex, at_block
@@ -301,7 +304,7 @@ def _sample_times(first: np.ndarray, last: np.ndarray, t0: float, t1: float, per
 
 
 def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo, slack: float = 0.0,
-          stopped=None) -> float:
+          stopped=None, keys_only: bool = False) -> float:
     """Check the sample chunks ``times`` (an iterable of time arrays, :func:`_sample_times`): the
     largest distance of each charge key into ``worst`` and of its violations into ``bad`` (keys
     where ``redo``, all if None). Returns the largest distance over all samples.
@@ -309,7 +312,7 @@ def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo
     The samples outside tolerance of their three blocks (:func:`_charged_samples`) wait in a batch
     of about :data:`_BATCH` for :meth:`ToolPath.distance_bound` (a fixed cost per call that would
     otherwise come with every chunk); each sample's distance is its own, so the batching changes
-    no value, and the maxima are the same in any order."""
+    no value, and the maxima are the same in any order. ``keys_only``: :func:`_bound_waiting`'s."""
     arrays = _ScanArrays(position, path, starts, centre, tol_block, redo, slack, stopped)
     deviation = -np.inf
     waiting: list[tuple[np.ndarray, ...]] = []
@@ -321,10 +324,10 @@ def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo
             waiting.append(wait)
             n_waiting += wait[0].shape[0]
         if n_waiting >= _BATCH:
-            deviation = max(deviation, _bound_waiting(path, waiting, worst, bad, arrays.slack, arrays.key_tol))
+            deviation = max(deviation, _bound_waiting(path, waiting, worst, bad, arrays.slack, arrays.key_tol, keys_only))
             waiting, n_waiting = [], 0
     if waiting:
-        deviation = max(deviation, _bound_waiting(path, waiting, worst, bad, arrays.slack, arrays.key_tol))
+        deviation = max(deviation, _bound_waiting(path, waiting, worst, bad, arrays.slack, arrays.key_tol, keys_only))
     return deviation
 
 
@@ -353,7 +356,7 @@ class _ScanArrays:
         self.stopped = np.zeros(0, bool) if stopped is None else np.ascontiguousarray(stopped, dtype=bool)
 
 
-def _bound_waiting(path: ToolPath, waiting, worst, bad, slack: float, key_tol: np.ndarray) -> float:
+def _bound_waiting(path: ToolPath, waiting, worst, bad, slack: float, key_tol: np.ndarray, keys_only: bool = False) -> float:
     """The distances of the waiting samples (``(q, block, dist, limit, key, keep)`` rows of
     :func:`_charged_samples`) to the path by :meth:`ToolPath.distance_bound` (the smaller of it and
     the three-block distance), into ``worst`` and ``bad``; returns their largest.
@@ -366,9 +369,33 @@ def _bound_waiting(path: ToolPath, waiting, worst, bad, slack: float, key_tol: n
     the vertex's, and its plain distance over the vertex's tolerance gave a ratio above 1 (a
     "repair" that sped the window up; measured on three lines of tolerances 0.1 / 50 / 50 um at
     F 50 mm/s: planned feeds of 816 mm/s). Equal where the two tolerances are equal (all of a
-    program with one tolerance); 1 where the sample's limit or the key's tolerance is 0."""
+    program with one tolerance); 1 where the sample's limit or the key's tolerance is 0.
+
+    ``keys_only``: only which keys break the tolerance is wanted (the mirror's search). A key shown
+    broken, in ``bad`` already or by its sample of largest three-block distance (bounded first),
+    has its other samples dropped unbounded; the values of such keys, and the largest distance
+    where any key breaks, are then lower bounds. Where none breaks, every sample is bounded and
+    the values are the same as without it."""
     q, block, dist, limit, key, keep = (np.concatenate(parts) for parts in zip(*waiting))
-    dist = np.minimum(dist, path.distance_bound(q, near=block))
+    todo = np.ones(dist.size, dtype=bool)
+    if keys_only:
+        broken = bad > -np.inf  # keys shown broken by an earlier batch
+        counted = ~broken[key]
+        cand = np.flatnonzero(keep & counted)
+        if cand.size:  # each key's sample of largest three-block distance, bounded first
+            order = cand[np.lexsort((-dist[cand], key[cand]))]
+            head = order[np.r_[True, key[order][1:] != key[order][:-1]]]
+            dist[head] = np.minimum(dist[head], path.distance_bound(q[head], near=block[head]))
+            todo[head] = False
+            broken[key[head][dist[head] > verified_bound(limit[head]) + slack]] = True
+            counted[broken[key]] = False
+            counted[head] = True
+        todo &= counted
+        keep &= counted
+        dist = np.where(counted, dist, -np.inf)  # dropped samples count nowhere
+    rest = np.flatnonzero(todo)
+    if rest.size:
+        dist[rest] = np.minimum(dist[rest], path.distance_bound(q[rest], near=block[rest]))
     scatter_max(worst, key[keep], dist[keep])
     keep &= dist > verified_bound(limit) + slack
     k, lim = key[keep], limit[keep]

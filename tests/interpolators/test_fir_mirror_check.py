@@ -180,3 +180,28 @@ def test_the_mirror_at_the_inch_quantum_keeps_eps_on_a_dense_grid():
     assert np.max(prog.blocks.distance(q)) <= 2.54e-3 * (1 + 1e-6)
     assert np.max(np.asarray(m.plan.corner_errors)) <= 2.54e-3 * (1 + 1e-6)
     assert m.cycle_time <= m.plain_cycle_time * (1 + 1e-12)
+
+
+@pytest.mark.parametrize("share", [0.3, 1.5])
+def test_keys_only_finds_the_same_broken_keys_and_the_same_clean_deviation(share):
+    """``path_deviations(..., keys_only=True)`` (the mirror's check) against the full check on a
+    ``plan_fir`` plan of a random 80-chord curve with arcs, checked at ``share`` of its tolerance:
+    at 0.3 some vertices and blocks break it and ``keys_only`` names the same ones (its values no
+    larger); at 1.5 none does and every value is the same."""
+    from research.interpolators._fir_verify import path_deviations
+    rng = np.random.default_rng(11)
+    ang = np.cumsum(rng.normal(0.0, 0.25, 80))
+    pts = np.cumsum(np.c_[np.cos(ang), np.sin(ang)] * rng.uniform(0.2, 2.0, 80)[:, None], axis=0)
+    tp = ToolPath.from_polyline(Polyline(np.vstack([[0.0, 0.0], pts])))
+    tol = np.full(tp.n_blocks, 0.02)
+    plan = plan_fir(tp, 120.0, DELAYS, tol)
+    pos = plan.position.numpy_evaluator()
+    args = (pos, tp, np.asarray(plan.start_times), np.asarray(plan.corner_times), float(DELAYS.sum()), share * tol, 2e-4)
+    full = path_deviations(*args)
+    keys = path_deviations(*args, keys_only=True)
+    assert set(keys[1]) == set(full[1]) and set(keys[2]) == set(full[2])
+    if share < 1:
+        assert full[1] or full[2]
+        assert all(keys[1][k] <= full[1][k] for k in keys[1]) and keys[0] <= full[0]
+    else:
+        assert not full[1] and not full[2] and keys[0] == full[0]
