@@ -124,7 +124,17 @@ def _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
     height (skipped, a point 1e-4 mm from a helix of 0.01 rad over 10 mm read 0.1 mm: the distance
     to its start). Measured: the same plans on bench_adaptive's programs and the fuzz programs of
     ``tests/fuzz/test_fuzz_fir_programs.py``, 44 % less time in this kernel (before the clamped
-    turns took their steps)."""
+    turns took their steps).
+
+    A planar arc (no axial travel) of less than a turn whose projection angle lies inside its
+    sweep takes no steps from its end: ``|P - q|^2 = (r - rho)^2 + 2 r rho (1 - cos(phi - base))
+    + z^2``, ``r`` linear in ``phi`` at slope ``r'``, is stationary only where ``r rho |sin(phi -
+    base)| <= |r'| (|r - rho| + 2 rho)``: near ``base`` (the minimum the steps from ``base``
+    reach) or near ``base + pi`` (a maximum) wherever ``rho`` is well above ``|r'|``, as for every
+    point near a circular or nearly circular arc. Near a spiral's centre neither start need reach
+    an inner minimum, with this skip or without it (``tests/paths/test_toolpath_distance.py``).
+    Measured on a real program of 691 arcs (spirals within 2.3 um of circles): 32 % less time in
+    this kernel, the same plans to 1e-15."""
     N = q.shape[0]
     out = np.empty(N)
     p, d1, d2 = np.empty(3), np.empty(3), np.empty(3)
@@ -146,6 +156,8 @@ def _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
                 phi = sw
             else:
                 phi = min(max(base[i] + two_pi * (m - 2), 0.0), sw)
+                if m >= 3 and da == 0.0 and sw < two_pi and base[i] <= sw:
+                    break  # a planar arc of less than a turn: its end is no start (docstring)
             starts[m] = phi
             seen = False
             for k in range(2 if m >= 2 else 0, m):  # a turn clamped to an end still takes its steps
