@@ -75,9 +75,10 @@ What this module does:
 3. **Checks and search.** The exact profile of the moved input is checked against the
    *programmed* path as ``plan_fir`` checks its own (vertex distances at every corner, the
    trajectory sampled), but more densely: the mirror holds the output's distance near eps all
-   along a curve, so its peaks fall between samples; the samples lie ``check_period / k`` apart
-   and keep eps less what can hide between them (:func:`sample_period`). And against ``limits``
-   on its exact peaks. A limit
+   along a curve, so its peaks fall between samples; the samples lie ``check_period / k`` apart,
+   further where the profile bends less, and keep eps less what can hide between them
+   (``_fir_mirror_check``; only which corners and blocks break eps is sought, not by how much).
+   And against ``limits`` on its exact peaks. A limit
    violation lowers the feeds of the blocks whose input makes the profile at its instant
    (``_fir_mirror_feeds.limit_factors``; at a jerk peak of a cubic profile, only those whose term
    has the peak's sign, until the peak has stayed as high for :data:`STUCK_ROUNDS` rounds: the
