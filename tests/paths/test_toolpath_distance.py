@@ -45,12 +45,12 @@ def test_distance_in_chunks_is_the_distance_over_every_segment(monkeypatch):
 @pytest.mark.parametrize("seed", range(4))
 def test_distance_to_planar_circles_and_spirals_is_the_least_over_the_arc(seed):
     """Planar arcs of less than a turn, circles and spirals (end radius within 5 % of the start's,
-    as the reader's spiral arcs), CW and CCW, from random points within half a radius of the arc
-    and off its plane (where a path check's samples lie): ``ToolPath.distance`` equals the least
-    distance over the arc written here from its definition (angle ``phi`` from the start about
-    the normal, radius linear in ``phi``), found on 20,001 angles and refined by a bounded scalar
-    search. (Points near a spiral's centre are not held to this: there the kernel's starts, the
-    ends and the projection angle, can miss an inner minimum by a few um in 7 mm.)"""
+    as the reader's spiral arcs), CW and CCW, from random points within half a radius of the arc,
+    near its centre and beyond it, off its plane: ``ToolPath.distance`` equals the least distance
+    over the arc written here from its definition (angle ``phi`` from the start about the normal,
+    radius linear in ``phi``), found on 20,001 angles and refined by a bounded scalar search. Near
+    a spiral's centre the projection angle and the ends missed inner minima (1.9 um at 7.1 mm)
+    before the kernel scanned the sweep there."""
     from scipy.optimize import minimize_scalar
 
     rng = np.random.default_rng(seed)
@@ -68,7 +68,8 @@ def test_distance_to_planar_circles_and_spirals_is_the_least_over_the_arc(seed):
             return c + np.asarray(r)[..., None] * (np.cos(phi)[..., None] * e1 + np.sin(phi)[..., None] * e2)
 
         tp = ToolPath(point(np.array(0.0)), [point(np.array(sw))], [c], [n], [sw])
-        ang, rad = rng.uniform(0.0, 2 * np.pi, 150), r0 * rng.uniform(0.5, 1.5, 150)
+        ang = rng.uniform(0.0, 2 * np.pi, 150)
+        rad = r0 * np.where(rng.random(150) < 0.3, rng.uniform(0.0, 0.1, 150), rng.uniform(0.5, 1.5, 150))
         q = c + rad[:, None] * (np.cos(ang)[:, None] * e1 + np.sin(ang)[:, None] * e2) + np.outer(rng.normal(0, 0.2 * r0, 150), n)
         grid = np.linspace(0.0, sw, 20001)
         got = tp.distance(q)
