@@ -245,7 +245,7 @@ class MirrorPlan:
 
 def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None = None, relax: float = RELAX,
                     passes: int = PASSES, rounds: int | None = None, check_period: float = CHECK_PERIOD,
-                    pauses=None) -> MirrorPlan:
+                    pauses=None, progress=None) -> MirrorPlan:
     """A FIR plan with its input pre-compensated by mirror passes (module docstring).
 
     Args:
@@ -255,6 +255,9 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
         passes: mirror passes per round, ``>= 0`` (0: relaxed timing, nothing moved: verifies only
             where the relaxed plan already keeps the tolerance).
         rounds: re-plans at most, ``>= 1``; None: :func:`default_rounds` of ``relax``.
+        progress: called after every re-plan with the cycle time [s] of the best plan so far (a
+            progress bar's hook: the search may take minutes on long programs at tight
+            tolerances), or None.
 
     Returns:
         :class:`MirrorPlan`; its plan keeps ``tolerance`` on the programmed path (vertices and
@@ -286,7 +289,8 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
     M = tp.n_blocks
     _check_inputs(delays, feed, tolerance, M, limits, tp.dim)
     cut = paused_parts(tp, feed, tolerance, pauses, lambda part, f, t: plan_fir_mirror(
-        part, f, delays, t, limits=limits, relax=relax, passes=passes, rounds=rounds, check_period=check_period))
+        part, f, delays, t, limits=limits, relax=relax, passes=passes, rounds=rounds, check_period=check_period,
+        progress=progress))
     if cut is not None:
         pauses, ranges, parts = cut
         return MirrorPlan(joined_plan(tp, pauses, ranges, [p.plan for p in parts]),
@@ -327,9 +331,11 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
         spent = np.zeros(0 if fillets is None else fillets.first.size, dtype=bool)
         for refine in (False, True):  # eq 13/14 at the caps, then plan_fir's look-ahead (module docstring)
             found, r, out = _search(planned, checked, f, delays, t, limits, relax, passes, rounds, check_period,
-                                    refine, kappa, caps, best, corners, fillets)
+                                    refine, kappa, caps, best, corners, fillets, progress)
             if found is not best:
                 best, owner_best, better = found, (owner if planned is not tp else None), True
+            if progress is not None:
+                progress(float(best.plan.cycle_time))
             spent |= out
             total += r
         if fillets is not None and (better or not spent.any()):
@@ -347,7 +353,7 @@ def plan_fir_mirror(path, feed, delays, tolerance, *, limits: AxisLimits | None 
 def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarray, tol: np.ndarray, limits: AxisLimits | None,
             relax: float, passes: int, rounds: int, check_period: float, refine: bool, kappa: np.ndarray,
             caps: np.ndarray, best: MirrorPlan, corners: np.ndarray,
-            fillets: Fillets | None = None) -> tuple[MirrorPlan, int, np.ndarray]:
+            fillets: Fillets | None = None, progress=None) -> tuple[MirrorPlan, int, np.ndarray]:
     """One timing's search (module docstring, steps 1-3): ``(the faster of best and what it
     verified, rounds made, (n,) the fillets whose bisection ran out with violations left)``.
     ``tp``: the planned path (arcs as chords, fillets as corners), ``checked``: the path its plans
@@ -355,7 +361,7 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
     ``plan_fir``'s look-ahead plan, else its eq 13/14 plan capped by :func:`shrink_caps` as well; ``kappa`` ``(M - 1, d)`` the vertices' curvature [1/mm], ``caps`` ``(M,)`` the blocks'
     curvature caps [mm/s]; ``corners`` ``(M - 1,)`` the sharp corners (step 3); ``fillets``: the
     fillets ``tp`` has as corners (``cornered``; their tolerance ``planned_tolerance``'s, bisected
-    where a violation is theirs), or None."""
+    where a violation is theirs), or None; ``progress``: :func:`plan_fir_mirror`'s."""
     M = tp.n_blocks
     g = np.full(M, float(relax))
     scale = np.ones(M)  # the search's factors on the caps
@@ -371,6 +377,8 @@ def _search(tp: ToolPath, checked: ToolPath, feed: np.ndarray, delays: np.ndarra
     spent = np.zeros(n_fillets, dtype=bool)
     r = 0
     while r < rounds:
+        if progress is not None and r:
+            progress(float(best.plan.cycle_time))
         r += 1
         relaxed_tol = planned_tolerance(tol, g, fillets, h)
         top = caps if refine else np.minimum(caps, shrink_caps(kappa, np.minimum(relaxed_tol[:-1], relaxed_tol[1:]),

@@ -864,3 +864,21 @@ def test_slow_arcs_are_checked_on_a_thinned_grid_with_the_same_plan(monkeypatch)
     m = plan_fir_mirror(slow.blocks, slow.block_feeds, DELAYS, EPS)
     assert _time.perf_counter() - t0 < 30.0
     assert m.cycle_time <= m.plain_cycle_time and m.plain_cycle_time > 4500.0
+
+
+def test_progress_reports_each_replan_with_the_best_cycle_so_far():
+    """``plan_fir_mirror(..., progress=f)``: ``f`` is called once per re-plan (``MirrorPlan.rounds``
+    in all, over the timings and the fillet search), with cycle times that never rise and end at
+    the returned plan's; a program cut by a pause reports its parts' re-plans."""
+    rng = np.random.default_rng(4)
+    pts = np.cumsum(np.c_[np.full(40, 1.5), rng.normal(0.0, 0.4, 40)], axis=0)
+    path = Polyline(np.vstack([[0.0, 0.0], pts]))
+    calls = []
+    m = plan_fir_mirror(path, F, DELAYS, EPS, progress=calls.append)
+    assert len(calls) == m.rounds and m.rounds > 1
+    assert all(b <= a for a, b in zip(calls, calls[1:])) and calls[-1] == m.cycle_time
+    pauses = np.full(path.n_segments + 1, np.nan)
+    pauses[20] = 0.5
+    calls.clear()
+    cut = plan_fir_mirror(path, F, DELAYS, EPS, pauses=pauses, progress=calls.append)
+    assert len(calls) == cut.rounds
