@@ -31,7 +31,8 @@ def contour_errors(traj: Trajectory, path: Polyline) -> np.ndarray:
 
 
 def max_contour_error(traj: Trajectory, path: Polyline, candidates: int = 16) -> float:
-    """Maximum distance [mm] from the trajectory to the polyline, refined between samples.
+    """Maximum distance [mm] from the trajectory to the polyline (or to a ``ToolPath``: any path
+    with ``distance``), refined between samples.
 
     The ``candidates`` largest local maxima of the sampled distance are refined on
     ``[t_i - Ts, t_i + Ts]`` when the trajectory has an exact profile.
@@ -161,13 +162,15 @@ class MotionMetrics:
         return {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in asdict(self).items()}
 
 
-def summarize(traj: Trajectory, path: Polyline) -> MotionMetrics:
-    """All metrics of ``traj`` against ``path``."""
+def summarize(traj: Trajectory, path: Polyline, programmed=None) -> MotionMetrics:
+    """All metrics of ``traj`` against ``path``; the contour error against ``programmed`` instead
+    where given (a G-code program's blocks, ``ToolPath``: its arcs exact, where ``path`` holds them
+    as chords within a chord tolerance, which would count in the error)."""
     corners = corner_errors(traj, path)
     return MotionMetrics(
         axes=traj.axes,
         cycle_time=cycle_time(traj),
-        max_contour_error=max_contour_error(traj, path),
+        max_contour_error=max_contour_error(traj, path if programmed is None else programmed),
         max_corner_error=float(corners.max()) if corners.size else 0.0,
         corner_errors=corners,
         peak_velocity=peak_axis_values(traj, 1),

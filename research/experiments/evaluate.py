@@ -142,7 +142,8 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
             if getattr(ic, "limits_from", None) is not None:  # the peaks of an earlier interpolator as the limits
                 ic = _limits_of(ic, next(tr for lb, _, tr, _ in objects["runs"] if lb == ic.limits_from))
             traj, info, plan = interpolate(ic, path, program_feeds, blocks, pauses)
-            metrics = summarize(traj, path)
+            # a program's contour error against its own blocks (arcs exact, not their chords)
+            metrics = summarize(traj, path, programmed=None if blocks is None else blocks.blocks)
             objects.setdefault("runs", []).append((label, plan, traj, metrics))
             details[label] = info | {"metrics": metrics.as_dict(), "turning_angle_deg": np.degrees(path.turning_angles).tolist()} \
                 | path_counts

@@ -61,8 +61,9 @@ def interpolate(ic, path, program_feeds, blocks=None, pauses=None):
     gives them (the config's ``tolerance_um`` elsewhere) and its pauses (``G4``/``M0``/``M1``); an
     arc under ``G61``/``G61.1`` (tolerance 0) is refused with its file and line, as an FIR chain
     cannot run any arc exactly (Sencer 2015 eq 8). The S-curve and sigmoid moves, which stop at
-    every vertex, hold ``pauses`` ``(M + 1,)`` [s] on the chords' vertices; metrics are taken
-    against the chords (``chord_tolerance_um``)."""
+    every vertex, hold ``pauses`` ``(M + 1,)`` [s] on the chords' vertices; corner errors are taken
+    at the chords' vertices (``chord_tolerance_um``), the contour error against the program's
+    blocks, its arcs exact (``evaluate``)."""
     Ts = ic.sample_period_ms * 1e-3
     explicit = "feed_mm_per_s" in ic.model_fields_set
     feed = program_feeds if (program_feeds is not None and not explicit) else ic.feed_mm_per_s
@@ -91,7 +92,9 @@ def interpolate(ic, path, program_feeds, blocks=None, pauses=None):
 
             from research.interpolators import plan_fir_mirror
 
-            bar = tqdm(desc="mirror re-plans", unit="plan", disable=len(target.lengths) < _MIRROR_BAR, leave=False)
+            # disable None: shown on a terminal only (no carriage returns in logs)
+            bar = tqdm(desc="mirror re-plans", unit="plan", disable=True if len(target.lengths) < _MIRROR_BAR else None,
+                       leave=False)
 
             def progress(best):
                 bar.update()
