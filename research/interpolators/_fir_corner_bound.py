@@ -66,7 +66,7 @@ def corner_limit_bound(path: Polyline, feed, delays, tolerance: float, limits: A
 
     Raises:
         ParameterError: not two segments, not two positive delays, delays with no common cell of
-            at least ``step / 100``, a feed or tolerance not positive.
+            at least ``step / 100``, a feed or tolerance not positive, limits for another axis count.
 
     Example (a bound lies below every plan of its family)::
 
@@ -90,6 +90,8 @@ def corner_limit_bound(path: Polyline, feed, delays, tolerance: float, limits: A
     u = (path.points[1:] - path.points[:-1]) / L[:, None]
     sin_turn = math.sqrt(max(0.0, 1.0 - float(np.dot(u[0], u[1])) ** 2))
     J = np.asarray(limits.jerk, dtype=np.float64).reshape(-1)
+    if J.size != path.dim:
+        raise ParameterError(f"corner_limit_bound: limits for {J.size} axes on a path of {path.dim}")
 
     def feasible(N: int) -> bool:
         return _feasible(N, dt, n1, n2, F, L, u, J, sin_turn, float(tolerance), d)

@@ -3,9 +3,10 @@
 The mirror drives the output's distance to the path towards the tolerance all along a curve, so
 the check samples more densely than ``plan_fir``'s and holds the samples to the tolerance less
 what can hide between two of them (:func:`sample_period`: a global period set by the largest
-concavity of the distance anywhere in the profile). Where the profile is gentler the same margin
-holds at longer strides (:func:`local_strides`, grid cells of ``check_period``), and over a piece's
-steady span (the output a straight uniform motion) at longer ones still (:func:`_steady_strides`).
+acceleration anywhere in the profile; where an arc's bend adds more, the grid stays at that
+period). Where the profile is gentler the same margin holds at longer strides
+(:func:`local_strides`, grid cells of ``check_period``), and over a piece's steady span (the output
+a straight uniform motion) at longer ones still (:func:`_steady_strides`).
 
 The distance ``d(t)`` from the output to the path between two samples ``h`` apart exceeds the
 larger sample by at most ``K h^2 / 8``, ``K`` a bound on ``-d''`` there. To a line of the path (and
@@ -63,10 +64,11 @@ class Violations:
 def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits | None,
                check_period: float) -> Violations:
     """Where ``plan``'s profile breaks the tolerance ``tol`` ``(M,)`` on the programmed path ``tp``
-    or the ``limits`` (module docstring, step 3). The bounds are ``plan_fir``'s own:
+    or the ``limits`` (``_fir_mirror``'s step 3). The bounds are ``plan_fir``'s own:
     ``verified_bound`` plus the rounding the profile has accumulated by its end, and its limits'
     relative tolerance on the exact peaks; the path's samples are denser and keep the tolerance
-    less their margin (:func:`sample_period`)."""
+    less their margin (:func:`sample_period`, :func:`local_strides`); only which corners and
+    blocks break the tolerance is sought (``path_deviations``' ``keys_only``)."""
     pos = plan.position.numpy_evaluator()
     Td = float(np.sum(np.asarray(plan.delays)))
     slack = profile_rounding(pos, tp.ends[-1])

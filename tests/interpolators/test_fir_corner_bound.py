@@ -65,6 +65,7 @@ def test_step_response_is_the_distribution_of_two_uniform_delays():
     (dict(delays=(0.02,)), "two positive delays"),
     (dict(delays=(0.02, 0.0100003)), "no common cell"),
     (dict(feed=0.0), "positive"),
+    (dict(limits=AxisLimits.fir_envelope(3, 100.0, DELAYS)), "3 axes on a path of 2"),
 ])
 def test_bad_input_names_what_is_wrong(kw, match):
     args = dict(path=Polyline([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]), feed=100.0, delays=DELAYS, tolerance=0.01,
