@@ -5,8 +5,8 @@ the check samples more densely than ``plan_fir``'s and holds the samples to the 
 what can hide between two of them (:func:`sample_period`: a global period set by the largest
 acceleration anywhere in the profile; where an arc's bend adds more, the grid stays at that
 period). Where the profile is gentler the same margin holds at longer strides
-(:func:`local_strides`, grid cells of ``check_period``), and over a piece's steady span (the output
-a straight uniform motion) at longer ones still (:func:`_steady_strides`).
+(:func:`local_strides`, per piece of the profile), and over an input piece's steady span (the
+output a straight uniform motion) at longer ones still (:func:`_steady_strides`).
 
 The distance ``d(t)`` from the output to the path between two samples ``h`` apart exceeds the
 larger sample by at most ``K h^2 / 8``, ``K`` a bound on ``-d''`` there. To a line of the path (and
@@ -35,9 +35,10 @@ from research.paths.toolpath import ToolPath
 #: the samples per ``check_period`` grow as its inverse square root (3 at eps 50 um under bench_cam's
 #: envelope: the 10^4-chord file's planning 8.0 -> 9.5 s); plan_fir's own check allows none. Swept
 #: with the local strides (benchmarks/README.md): 1e-3 / 3e-3 / 1e-2 give ``fir_mirror.py --quick``'s
-#: cycles 136.7382 / 136.7976 / 136.7940 s (planning 16.1 / 13.3 / 11.8 s) and a real 394-block
-#: program at eps 2.54 um 37.7844 / 37.8430 / 37.8968 s (planning 8.0 / 6.2 / 4.8 s): the least
-#: margin plans the fastest motion
+#: 48 rows 136.7410 / 136.8000 / 136.7959 s (planning 13.4 / 11.9 / 11.2 s) and a real 394-block
+#: program at eps 2.54 um 37.8235 / 37.7862 / 37.8351 s (planning 6.1 / 5.1 / 4.1 s): over the many
+#: programs the least margin plans the fastest motion (the one program's 0.1 % moves either way
+#: with the samples the search happens to see)
 SAMPLE_MARGIN = 1e-3
 
 
@@ -86,9 +87,9 @@ def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits 
     stopped = np.asarray(plan.overlaps) == 0.0  # exact stops: samples by them are their blocks' own (plan_fir's check)
     durations, cap = _steady_strides(plan, tp, tol, period, margin)
     pulses = np.asarray(plan.pulse_times)
-    cells = local_strides(pos, accel, tp, starts, pulses, Td, tol, check_period, period, margin)
+    local = local_strides(pos, accel, tp, starts, pulses, Td, tol, check_period, period, margin)
     deviation, at_vertex, at_block = path_deviations(pos, tp, starts, centre, Td, held, period, durations=durations,
-                                                     slack=slack, stopped=stopped, stride_cap=cap, spans=cells,
+                                                     slack=slack, stopped=stopped, stride_cap=cap, spans=local,
                                                      keys_only=True)
     times.append(centre[sorted(at_vertex)] if at_vertex else np.zeros(0))
     middle = starts + 0.5 * pulses + 0.5 * Td  # the window centred on the block
@@ -158,14 +159,15 @@ def local_strides(position, accel: np.ndarray, tp: ToolPath, starts: np.ndarray,
     most: nothing to thin).
 
     :func:`sample_period` sets ``period`` by the largest ``|a|`` anywhere in the profile (a rapid,
-    a sharp corner); elsewhere the distance bends less and the samples may lie further apart. The
-    grid is cut into cells of ``check_period`` (``k = check_period / period`` grid points each,
-    the first at the cell's start, so every interval between two consecutive samples lies within
-    one cell); cell ``j`` takes the largest concavity bound ``K`` of the profile pieces that meet
-    it and its two neighbours (against the rounding of the grid times at the cells' edges) and
-    the stride ``floor(sqrt(8 margin / K) / period)`` within ``1 .. k``: between its samples the
-    distance exceeds the larger one by at most ``K h^2 / 8 <= margin``, as on the dense grid.
-    ``K`` is ``|a|`` plus, near arcs, ``|v|^2 / rho`` (:func:`piece_concavity`).
+    a sharp corner); elsewhere the distance bends less and the samples may lie further apart. Each
+    piece ``[b_i, b_i+1)`` of the profile is a span of the grid, sampled at the stride
+    ``floor(sqrt(8 margin / K) / period)`` within ``1 .. k`` (``k = check_period / period``), ``K``
+    the largest concavity bound of the pieces that meet ``[b_i - check_period, b_i+1 +
+    check_period]``: an interval between two consecutive samples is at most ``k period =
+    check_period`` long and starts in the span, so it lies there, and the distance exceeds the
+    larger sample by at most ``K h^2 / 8 <= margin``, as on the dense grid. ``K`` is ``|a|`` plus,
+    near arcs, ``|v|^2 / rho`` (:func:`piece_concavity`). The spans cost the profile's pieces, not
+    the cycle's duration (a 4,572 s engraving has a few hundred).
 
     Args:
         position: the exact profile (``NumpyPiecewise``); accel: ``(P,)`` its ``|a|`` bounds per
@@ -176,22 +178,20 @@ def local_strides(position, accel: np.ndarray, tp: ToolPath, starts: np.ndarray,
     if k <= 1 or margin <= 0.0:
         return None
     breaks = np.asarray(position.breaks)
-    t0, t1 = float(breaks[0]), float(breaks[-1])
-    n = int(np.ceil((t1 - t0) / period)) + 1  # the grid of path_deviations
+    t0 = float(breaks[0])
+    n = int(np.ceil((float(breaks[-1]) - t0) / period)) + 1  # the grid of path_deviations
     concave = piece_concavity(position, accel, tp, starts, pulses, Td, tol)
-    cells = -(-n // k)
-    # the pieces meeting each cell: the one holding its start, and every one starting inside it
-    holding = np.searchsorted(breaks, t0 + np.arange(cells) * check_period, side="right") - 1
-    cell_k = concave[np.clip(holding, 0, concave.size - 1)]
-    np.maximum.at(cell_k, np.clip(np.floor((breaks[:-1] - t0) / check_period).astype(np.int64), 0, cells - 1), concave)
-    near = cell_k.copy()
-    near[1:] = np.maximum(near[1:], cell_k[:-1])
-    near[:-1] = np.maximum(near[:-1], cell_k[1:])
+    P = concave.size
+    lo = np.clip(np.searchsorted(breaks, breaks[:-1] - check_period, side="right") - 1, 0, P - 1)
+    hi = np.clip(np.searchsorted(breaks, breaks[1:] + check_period, side="left") - 1, 0, P - 1)
+    near = _range_reduce(concave, np.minimum(lo, hi), hi, np.maximum)
     with np.errstate(divide="ignore"):
         stride = np.clip(np.floor(np.sqrt(8.0 * margin / near) / period), 1, k).astype(np.int64)
-    keep = np.flatnonzero(stride > 1)
-    first = keep * k
-    return first, np.minimum(first + k - 1, n - 1), stride[keep]
+    # piece i holds the grid indices [ceil(b_i), ceil(b_i+1) - 1] (in periods from t0): a partition
+    edge = np.minimum(np.ceil((breaks - t0) / period).astype(np.int64), n)
+    first, last = edge[:-1], edge[1:] - 1
+    keep = (stride > 1) & (last >= first)
+    return first[keep], last[keep], stride[keep]
 
 
 def piece_concavity(position, accel: np.ndarray, tp: ToolPath, starts: np.ndarray, pulses: np.ndarray, Td: float,
@@ -211,23 +211,24 @@ def piece_concavity(position, accel: np.ndarray, tp: ToolPath, starts: np.ndarra
     ends = np.maximum.accumulate(starts + pulses)
     lo = np.clip(np.searchsorted(ends, breaks[:-1] - Td, side="left") - 1, 0, M - 1)
     hi = np.clip(np.searchsorted(starts, breaks[1:], side="right"), 0, M - 1)
-    least = _range_min(rho, np.minimum(lo, hi), hi)
+    least = _range_reduce(rho, np.minimum(lo, hi), hi, np.minimum)
     speed = derivative_bound(position, 1)
     return accel + speed**2 / least
 
 
-def _range_min(values: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """``min(values[lo[i] : hi[i] + 1])`` for each ``i`` (``lo <= hi``): a sparse table of minima
-    over spans of ``2^j``, each query the two spans of the largest ``2^j`` within its range."""
+def _range_reduce(values: np.ndarray, lo: np.ndarray, hi: np.ndarray, op) -> np.ndarray:
+    """``op.reduce(values[lo[i] : hi[i] + 1])`` for each ``i`` (``lo <= hi``; ``op`` ``np.minimum``
+    or ``np.maximum``): a sparse table over spans of ``2^j``, each query the two spans of the
+    largest ``2^j`` within its range."""
     out = np.empty(lo.size)
     length = hi - lo + 1
     table, span, top = values, 1, int(length.max(initial=1))
     while True:
         sel = (length >= span) & (length < 2 * span)
-        out[sel] = np.minimum(table[lo[sel]], table[hi[sel] - span + 1])
+        out[sel] = op(table[lo[sel]], table[hi[sel] - span + 1])
         if 2 * span > top:
             return out
-        table = np.minimum(table[:-span], table[span:])  # table[i]: min of values[i : i + 2 span]
+        table = op(table[:-span], table[span:])  # table[i]: over values[i : i + 2 span]
         span *= 2
 
 

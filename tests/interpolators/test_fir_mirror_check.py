@@ -1,6 +1,6 @@
 """The mirror's path check on a thinned grid (``_fir_mirror_check``): the global period is set by
-the profile's largest acceleration, and cells of ``check_period`` where the distance to the path
-bends less take longer strides with the same margin (``local_strides``).
+the profile's largest acceleration, and the profile's pieces where the distance to the path bends
+less take longer strides with the same margin (``local_strides``).
 
 References: the span overlay is checked against NumPy set computations; the strides against the
 exact acceleration of the profile (its pieces are cubic for two filters, so ``|a|`` is largest
@@ -29,10 +29,10 @@ def _disjoint(rng, n, hi):
 
 
 @pytest.mark.parametrize("seed", range(20))
-def test_overlaid_spans_keep_the_steady_ones_and_cut_the_cells_around_them(seed):
-    """Random steady spans over random cell spans: the overlay is sorted and disjoint, holds every
+def test_overlaid_spans_keep_the_steady_ones_and_cut_the_local_ones_around_them(seed):
+    """Random steady spans over random local spans: the overlay is sorted and disjoint, holds every
     steady span as it was, covers the same indices as the two together, and each of its other
-    spans lies inside one cell span, with that cell's stride, outside every steady span."""
+    spans lies inside one local span, with its stride, outside every steady span."""
     rng = np.random.default_rng(seed)
     s_first, s_last = _disjoint(rng, int(rng.integers(0, 6)), 500)
     s_stride = rng.integers(1, 30, s_first.size).astype(np.int64)
@@ -107,7 +107,7 @@ def _strides_of(plan, tp, tol):
 def test_local_strides_hold_the_margin_between_samples_under_the_exact_acceleration():
     """A 60-chord random polyline of long lines and short zigzags at eps 2.54 um (the inch
     quantum of ``G64 P0.0001``), F 150 mm/s: the check's global period is ``check_period / k``
-    with ``k`` > 1; the cells thin the grid (fewer samples than the dense grid), and between every
+    with ``k`` > 1; the local strides thin the grid (fewer samples than the dense grid), and between every
     two consecutive samples the exact ``|a|_max h^2 / 8`` is within the margin."""
     rng = np.random.default_rng(3)
     steps = rng.normal(size=(60, 2)) * np.where(rng.random(60) < 0.3, 8.0, 0.3)[:, None]
@@ -116,6 +116,7 @@ def test_local_strides_hold_the_margin_between_samples_under_the_exact_accelerat
     plan = plan_fir(path, 150.0, DELAYS, tol)
     pos, period, margin, spans = _strides_of(plan, ToolPath.from_polyline(path), tol)
     assert round(CHECK / period) > 1 and spans is not None and np.any(spans[2] > 1)
+    assert spans[0].size <= pos.breaks.size - 1  # one span per profile piece at most, whatever the cycle's length
     kept = _kept_times(pos, period, spans)
     n_dense = int(np.ceil((pos.breaks[-1] - pos.breaks[0]) / period)) + 1
     assert kept.size < 0.8 * n_dense
