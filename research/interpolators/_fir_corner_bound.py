@@ -20,13 +20,13 @@ masses ``m_b,k = int_cell v_b`` in ``[0, F_b dt]``.
   T2)) / (T1 T2)``, so its mean over a cell is that sum of the masses of four cells over ``T1 T2
   dt``, exactly; it lies within ``+-J_a``.
 - Tolerance: with ``s_b(t) = int K(t - tau) v_b(tau) dtau`` (``K`` the kernel's step response,
-  nondecreasing) the output is ``P0 + s_1 u_1 + s_2 u_2``; its distance to line 2 is ``(L_1 - s_1)
-  sin(beta)`` and to line 1 ``s_2 sin(beta)`` (``beta`` the turn), each at most its distance to
-  that block, so a point within ``eps`` of the path has ``s_2 sin(beta) <= eps`` or ``(L_1 - s_1)
-  sin(beta) <= eps``. Both ``s_b`` are nondecreasing, so the first holds up to some instant and
-  the second from then on (a binary per output sample, nonincreasing: a MILP). In the constraints
-  ``s_2 >= sum_k m_2,k K(t - b_k)`` and ``s_1 <= sum_k m_1,k K(t - a_k)`` (``[a_k, b_k]`` the cell),
-  at the samples ``t = g dt``.
+  ``_fir_window_bound.kernel_cdf``, nondecreasing) the output is ``P0 + s_1 u_1 + s_2 u_2``; its
+  distance to line 2 is ``(L_1 - s_1) sin(beta)`` and to line 1 ``s_2 sin(beta)`` (``beta`` the
+  turn), each at most its distance to that block, so a point within ``eps`` of the path has ``s_2
+  sin(beta) <= eps`` or ``(L_1 - s_1) sin(beta) <= eps``. Both ``s_b`` are nondecreasing, so the
+  first holds up to some instant and the second from then on (a binary per output sample,
+  nonincreasing: a MILP). In the constraints ``s_2 >= sum_k m_2,k K(t - b_k)`` and ``s_1 <= sum_k
+  m_1,k K(t - a_k)`` (``[a_k, b_k]`` the cell), at the samples ``t = g dt``.
 - Velocity and acceleration limits are left out (the bound holds without them).
 
 A plan whose reference ends at ``T_ref`` fills ``ceil(T_ref / dt)`` cells; the least cell count
@@ -43,6 +43,7 @@ from scipy.optimize import Bounds, LinearConstraint, milp
 from scipy.sparse import coo_matrix
 
 from research.errors import ParameterError
+from research.interpolators._fir_window_bound import kernel_cdf
 from research.limits import AxisLimits
 from research.paths import Polyline
 
@@ -121,15 +122,6 @@ def _common_cell(T1: float, T2: float, step: float) -> tuple[float, int, int]:
                          f"{step / 100:g} and {step:g} s")
 
 
-def _step_response(t: np.ndarray, T1: float, T2: float) -> np.ndarray:
-    """``K(t)``: the fraction of a unit step the two moving averages have passed at ``t`` [s] (the
-    distribution function of the sum of two uniform delays on ``[0, T1]`` and ``[0, T2]``)."""
-    a, b = min(T1, T2), max(T1, T2)
-    t = np.clip(np.asarray(t, dtype=np.float64), 0.0, a + b)
-    return np.where(t <= a, t**2 / (2 * a * b),
-                    np.where(t <= b, (t - a / 2) / b, 1.0 - (a + b - t) ** 2 / (2 * a * b)))
-
-
 def _feasible(N, dt, n1, n2, F, L, u, J, sin_turn, eps, delays) -> bool:
     """Whether the relaxation (module docstring) admits references within ``N`` cells."""
     G = N + n1 + n2 + 1  # output samples g dt: from the first cell to past the last output change
@@ -169,9 +161,9 @@ def _feasible(N, dt, n1, n2, F, L, u, J, sin_turn, eps, delays) -> bool:
         for g in range(G):
             t = g * dt
             # z_g = 1: s_2 sin <= eps (s_2 from below); z_g = 0: (L_1 - s_1) sin <= eps (s_1 from above)
-            add(list(range(N, 2 * N)) + [2 * N + g], list(_step_response(t - cells - dt, *delays) * sin_turn) + [big],
+            add(list(range(N, 2 * N)) + [2 * N + g], list(kernel_cdf(t - cells - dt, delays) * sin_turn) + [big],
                 -np.inf, eps + big)
-            add(list(range(N)) + [2 * N + g], list(_step_response(t - cells, *delays) * sin_turn) + [big],
+            add(list(range(N)) + [2 * N + g], list(kernel_cdf(t - cells, delays) * sin_turn) + [big],
                 L[0] * sin_turn - eps, np.inf)
             if g + 1 < G:
                 add([2 * N + g, 2 * N + g + 1], [1.0, -1.0], 0.0, np.inf)

@@ -25,7 +25,7 @@ import numpy as np
 
 from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_limits import LIMIT_RTOL
-from research.interpolators._fir_piece_peaks import PiecePeaks
+from research.interpolators._fir_piece_peaks import PiecePeaks, range_max
 from research.interpolators._fir_verify import path_deviations, profile_rounding, vertex_distances
 from research.interpolators.fir import FIRPlan
 from research.limits import AxisLimits
@@ -184,7 +184,7 @@ def local_strides(position, accel: np.ndarray, tp: ToolPath, starts: np.ndarray,
     P = concave.size
     lo = np.clip(np.searchsorted(breaks, breaks[:-1] - check_period, side="right") - 1, 0, P - 1)
     hi = np.clip(np.searchsorted(breaks, breaks[1:] + check_period, side="left") - 1, 0, P - 1)
-    near = _range_reduce(concave, np.minimum(lo, hi), hi, np.maximum)
+    near = range_max(concave, np.minimum(lo, hi), hi + 1)
     with np.errstate(divide="ignore"):
         stride = np.clip(np.floor(np.sqrt(8.0 * margin / near) / period), 1, k).astype(np.int64)
     # piece i holds the grid indices [ceil(b_i), ceil(b_i+1) - 1] (in periods from t0): a partition
@@ -211,25 +211,9 @@ def piece_concavity(position, accel: np.ndarray, tp: ToolPath, starts: np.ndarra
     ends = np.maximum.accumulate(starts + pulses)
     lo = np.clip(np.searchsorted(ends, breaks[:-1] - Td, side="left") - 1, 0, M - 1)
     hi = np.clip(np.searchsorted(starts, breaks[1:], side="right"), 0, M - 1)
-    least = _range_reduce(rho, np.minimum(lo, hi), hi, np.minimum)
+    least = -range_max(-rho, np.minimum(lo, hi), hi + 1)
     speed = derivative_bound(position, 1)
     return accel + speed**2 / least
-
-
-def _range_reduce(values: np.ndarray, lo: np.ndarray, hi: np.ndarray, op) -> np.ndarray:
-    """``op.reduce(values[lo[i] : hi[i] + 1])`` for each ``i`` (``lo <= hi``; ``op`` ``np.minimum``
-    or ``np.maximum``): a sparse table over spans of ``2^j``, each query the two spans of the
-    largest ``2^j`` within its range."""
-    out = np.empty(lo.size)
-    length = hi - lo + 1
-    table, span, top = values, 1, int(length.max(initial=1))
-    while True:
-        sel = (length >= span) & (length < 2 * span)
-        out[sel] = op(table[lo[sel]], table[hi[sel] - span + 1])
-        if 2 * span > top:
-            return out
-        table = op(table[:-span], table[span:])  # table[i]: over values[i : i + 2 span]
-        span *= 2
 
 
 def derivative_bound(position, order: int) -> np.ndarray:

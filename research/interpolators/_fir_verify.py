@@ -262,7 +262,7 @@ def steady_spans(starts: np.ndarray, durations: np.ndarray, t0: float, Td: float
     pieces that go on with the polynomial of the piece before them at its feed (a cut sub-arc's
     pieces, ``PulseTable.joins``): the two are one input piece, and the break between them is none.
     ``cap``: ``(P,)`` the largest stride over each piece's span (at least 1), or None: none (with
-    ``joined`` None: the mirror's paths of lines, ``_fir_mirror.violations``)."""
+    ``joined`` None: the mirror's paths of lines, ``_fir_mirror_check.violations``)."""
     breaks = float(starts[0]) + np.concatenate([[0.0], np.cumsum(durations)])
     if joined is not None and joined.size:
         if cap is not None:

@@ -66,18 +66,25 @@ N_DIRECTIONS = 72
 _STEPS = 18
 
 
-def kernel_cell_masses(delays, ds: float) -> np.ndarray:
-    """Exact mass of the filter kernel (cascade of unit-area boxes of widths ``delays`` [s]) in
-    each cell ``[m ds, (m + 1) ds]``: differences of the CDF of a sum of uniforms,
-    ``G(x) = sum_S (-1)^|S| (x - sum S)_+^n / (n! prod T)``."""
+def kernel_cdf(x, delays) -> np.ndarray:
+    """The filter kernel's distribution function at ``x`` [s] (the share of a unit step the cascade
+    of unit-area boxes of widths ``delays`` [s] has passed): the CDF of a sum of uniforms,
+    ``G(x) = sum_S (-1)^|S| (x - sum S)_+^n / (n! prod T)``, clipped to ``[0, 1]``."""
     T = np.asarray(delays, dtype=np.float64)
     n = T.size
-    x = np.arange(int(math.ceil(T.sum() / ds)) + 1) * ds
+    x = np.asarray(x, dtype=np.float64)
     cdf = np.zeros_like(x)
     for mask in range(1 << n):
         sub = [T[i] for i in range(n) if mask >> i & 1]
         cdf += (-1) ** len(sub) * np.maximum(x - sum(sub), 0.0) ** n
-    cdf = np.clip(cdf / (math.factorial(n) * np.prod(T)), 0.0, 1.0)
+    return np.clip(cdf / (math.factorial(n) * np.prod(T)), 0.0, 1.0)
+
+
+def kernel_cell_masses(delays, ds: float) -> np.ndarray:
+    """Exact mass of the filter kernel (cascade of unit-area boxes of widths ``delays`` [s]) in
+    each cell ``[m ds, (m + 1) ds]``: differences of :func:`kernel_cdf`."""
+    T = np.asarray(delays, dtype=np.float64)
+    cdf = kernel_cdf(np.arange(int(math.ceil(T.sum() / ds)) + 1) * ds, T)
     cdf[-1] = 1.0
     return np.diff(cdf)
 

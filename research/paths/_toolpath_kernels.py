@@ -110,6 +110,28 @@ def _chord_turns(rows, counts, starts, ends, t_in, t_out, c, n, e1, e2, r0, r1, 
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
+def _newton_steps(qi, c, n, e1, e2, r0, dr, a0, da, sw, phi, p, d1, d2):
+    """At most three safeguarded Newton steps on ``|P(phi) - qi|^2`` over an arc (row geometry as
+    :func:`_nearest_arc`), each clamped to ``[0, sw]``, from ``phi``: ``(phi, at)``, ``at`` True when
+    a step left ``phi`` where it was (``p`` then holds ``P(phi)``, evaluated by that step)."""
+    for _ in range(3):
+        _arc_points(c, n, e1, e2, r0, dr, a0, da, phi, 2, p, d1, d2)
+        slope, dd, ed = 0.0, 0.0, 0.0
+        for a in range(3):
+            e = p[a] - qi[a]
+            slope += e * d1[a]
+            dd += d1[a] * d1[a]
+            ed += e * d2[a]
+        curv = dd + ed
+        new = phi - slope / curv if curv > 0 else phi
+        new = min(max(new, 0.0), sw)
+        if new == phi:
+            return phi, True
+        phi = new
+    return phi, False
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
     """Distance from ``q[i]`` to arc row ``rows[i]``: the least over the candidate angles, the two
     ends as they are and every turn of the projection angle ``base[i]`` [rad, in [0, 2 pi)] inside
@@ -166,21 +188,8 @@ def _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
             if seen:
                 continue
             at_phi = False  # p holds P(phi) already (the step that left phi unchanged evaluated it)
-            for _ in range(3 if m >= 2 else 0):
-                _arc_points(c[j], n[j], e1[j], e2[j], r0[j], dr, a0[j], da, phi, 2, p, d1, d2)
-                slope, dd, ed = 0.0, 0.0, 0.0
-                for a in range(3):
-                    e = p[a] - q[i, a]
-                    slope += e * d1[a]
-                    dd += d1[a] * d1[a]
-                    ed += e * d2[a]
-                curv = dd + ed
-                new = phi - slope / curv if curv > 0 else phi
-                new = min(max(new, 0.0), sw)
-                if new == phi:
-                    at_phi = True
-                    break
-                phi = new
+            if m >= 2:
+                phi, at_phi = _newton_steps(q[i], c[j], n[j], e1[j], e2[j], r0[j], dr, a0[j], da, sw, phi, p, d1, d2)
             if not at_phi:
                 _arc_points(c[j], n[j], e1[j], e2[j], r0[j], dr, a0[j], da, phi, 0, p, d1, d2)
             acc = 0.0
@@ -214,8 +223,7 @@ SCAN_STEP = 0.05
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _scanned_arc(qi, c, n, e1, e2, r0, dr, a0, sw, p, d1, d2):
     """Distance from ``qi`` to a planar arc (row geometry as :func:`_nearest_arc`): the least over
-    angles ``SCAN_STEP`` apart across the sweep, then at most three safeguarded Newton steps from
-    the best of them."""
+    angles ``SCAN_STEP`` apart across the sweep, then :func:`_newton_steps` from the best of them."""
     m = int(math.ceil(sw / SCAN_STEP)) + 1
     best, at = np.inf, 0.0
     for k in range(m):
@@ -227,19 +235,9 @@ def _scanned_arc(qi, c, n, e1, e2, r0, dr, a0, sw, p, d1, d2):
             acc += e * e
         if acc < best:
             best, at = acc, phi
-    phi = at
-    for _ in range(3):
-        _arc_points(c, n, e1, e2, r0, dr, a0, 0.0, phi, 2, p, d1, d2)
-        slope, curv = 0.0, 0.0
-        for a in range(3):
-            e = p[a] - qi[a]
-            slope += e * d1[a]
-            curv += d1[a] * d1[a] + e * d2[a]
-        new = min(max(phi - slope / curv if curv > 0 else phi, 0.0), sw)
-        if new == phi:
-            break
-        phi = new
-    _arc_points(c, n, e1, e2, r0, dr, a0, 0.0, phi, 0, p, d1, d2)
+    phi, at_phi = _newton_steps(qi, c, n, e1, e2, r0, dr, a0, 0.0, sw, at, p, d1, d2)
+    if not at_phi:
+        _arc_points(c, n, e1, e2, r0, dr, a0, 0.0, phi, 0, p, d1, d2)
     acc = 0.0
     for a in range(3):
         e = p[a] - qi[a]

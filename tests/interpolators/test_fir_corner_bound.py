@@ -11,7 +11,8 @@ import pytest
 
 from research.errors import ParameterError
 from research.interpolators import plan_fir
-from research.interpolators._fir_corner_bound import _step_response, corner_limit_bound
+from research.interpolators._fir_corner_bound import corner_limit_bound
+from research.interpolators._fir_window_bound import kernel_cdf
 from research.limits import AxisLimits
 from research.paths import Polyline
 
@@ -53,11 +54,12 @@ def test_a_tighter_jerk_limit_never_lowers_the_bound():
 
 
 def test_step_response_is_the_distribution_of_two_uniform_delays():
-    """``K(t)`` against the sampled distribution of the sum of two uniform delays."""
+    """``K(t)`` (``kernel_cdf``, B3's step response) against the sampled distribution of the sum of
+    two uniform delays."""
     rng = np.random.default_rng(0)
     s = rng.uniform(0, 0.02, 400_000) + rng.uniform(0, 0.01, 400_000)
     t = np.linspace(-0.005, 0.035, 41)
-    np.testing.assert_allclose(_step_response(t, *DELAYS), [np.mean(s <= x) for x in t], atol=3e-3)
+    np.testing.assert_allclose(kernel_cdf(t, DELAYS), [np.mean(s <= x) for x in t], atol=3e-3)
 
 
 @pytest.mark.parametrize("kw, match", [
