@@ -23,10 +23,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from research.interpolators._fir_certify import derivative_bound
 from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_limits import LIMIT_RTOL
 from research.interpolators._fir_piece_peaks import PiecePeaks, range_max
-from research.interpolators._fir_verify import path_deviations, profile_rounding, vertex_distances
+from research.interpolators._fir_verify import CERTIFY_SPAN, path_deviations, profile_rounding, vertex_distances
 from research.interpolators.fir import FIRPlan
 from research.limits import AxisLimits
 from research.paths.toolpath import ToolPath
@@ -90,7 +91,7 @@ def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits 
     local = local_strides(pos, accel, tp, starts, pulses, Td, tol, check_period, period, margin)
     deviation, at_vertex, at_block = path_deviations(pos, tp, starts, centre, Td, held, period, durations=durations,
                                                      slack=slack, stopped=stopped, stride_cap=cap, spans=local,
-                                                     keys_only=True)
+                                                     keys_only=True, certify=(CERTIFY_SPAN * check_period, margin, 0.0))
     times.append(centre[sorted(at_vertex)] if at_vertex else np.zeros(0))
     middle = starts + 0.5 * pulses + 0.5 * Td  # the window centred on the block
     times.append(middle[sorted(at_block)] if at_block else np.zeros(0))
@@ -214,17 +215,3 @@ def piece_concavity(position, accel: np.ndarray, tp: ToolPath, starts: np.ndarra
     least = -range_max(-rho, np.minimum(lo, hi), hi + 1)
     speed = derivative_bound(position, 1)
     return accel + speed**2 / least
-
-
-def derivative_bound(position, order: int) -> np.ndarray:
-    """``(P,)`` bound on ``|d^order q / dt^order|`` over each piece of ``position`` (a
-    ``NumpyPiecewise`` in local coefficients): ``sum_m m! / (m - order)! |c_m| dt^(m - order)`` per
-    axis, ``dt`` the piece's length, then the norm over the axes [mm/s^order]."""
-    c = np.abs(position.coeffs)
-    m = np.arange(c.shape[1])
-    falling = np.ones(m.size)
-    for j in range(order):
-        falling = falling * (m - j)
-    dt = np.diff(position.breaks)
-    weight = np.where(m >= order, falling, 0.0)[None, :] * dt[:, None] ** np.maximum(m - order, 0)[None, :]
-    return np.linalg.norm(np.einsum("km,kma->ka", weight, c), axis=1)

@@ -20,6 +20,7 @@ import numpy as np
 from jax import Array
 
 from research.paths.toolpath import ToolPath
+from research.interpolators._fir_certify import BETWEEN_RTOL, Certifier, PathFeatures
 from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_verify_kernels import corner_distances as _corner_kernel
 from research.interpolators._fir_verify_kernels import (charge_samples, grid_times, nearest_times, overlay_spans,
@@ -51,6 +52,10 @@ _BATCH = 1 << 10  # samples that wait for ToolPath.distance_bound together (:fun
 #: and closer below). Only spans longer than 64 grid steps are thinned: before this, a program at
 #: ``F0.001`` (mm/min) took one sample per ms of its 10^6 s and did not finish.
 STEADY_SAMPLES = 64
+#: intervals between grid samples up to this many grid periods apart are bounded (``_fir_certify``):
+#: consecutive grid points (1), not the strides of the thinned steady spans (2 and more), over
+#: which the output is a straight uniform motion on a line or a constant distance from an arc
+CERTIFY_SPAN = 1.5
 
 
 def corner_distances(position: PiecewisePolynomial, vertices: Array, centre: Array, half_window: Array) -> Array:
@@ -198,7 +203,7 @@ def charged_repairs(j: int, deviation: float, stops: np.ndarray, centre: np.ndar
 
 def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray, centre: np.ndarray, Td: float,
                     tol_block: np.ndarray, check_period: float, durations=None, slack: float = 0.0, stopped=None,
-                    stride_cap=None, spans=None, keys_only: bool = False):
+                    stride_cap=None, spans=None, keys_only: bool = False, certify=None):
     """Largest sampled distance from the trajectory to ``path`` and where it breaks the tolerance.
 
     Args:
@@ -220,6 +225,8 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
         keys_only: only which vertices and blocks break the tolerance is wanted: where some do,
             their values and the largest distance are lower bounds (:func:`_bound_waiting`);
             where none does, the result is the same.
+        certify: ``(span [s], extra [mm], rel)``: the intervals between grid samples bounded as
+            well (:func:`_scan`, ``_fir_certify``), or None: the samples only.
 
     Returns:
         ``(max_deviation [mm], {vertex: deviation}, {block: deviation})``; distances are upper
@@ -239,7 +246,8 @@ def path_deviations(position: NumpyPiecewise, path: ToolPath, starts: np.ndarray
         none = np.zeros(0, np.int64)
         steady = overlay_spans(*(steady if steady is not None else (none, none, none)), *spans)
     _, times = _sample_times(np.zeros(1, np.int64), np.array([n - 1]), t0, t1, check_period, centre, steady)
-    deviation = _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, None, slack, stopped, keys_only)
+    deviation = _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, None, slack, stopped, keys_only,
+                      certify)
     at_vertex = {int(v): float(bad[v]) for v in np.flatnonzero(bad[: M - 1] > -np.inf)}
     at_block = {int(b): float(bad[M - 1 + b]) for b in np.flatnonzero(bad[M - 1:] > -np.inf)}
     return deviation, at_vertex, at_block
@@ -281,7 +289,8 @@ def steady_spans(starts: np.ndarray, durations: np.ndarray, t0: float, Td: float
 def _sample_times(first: np.ndarray, last: np.ndarray, t0: float, t1: float, period: float, extra: np.ndarray,
                   steady=None):
     """The check's sample times in chunks of at most :data:`_CHUNK` (bounded memory, never the
-    whole list at once): the grid points ``t0 + i period`` for ``i`` in ``first[r] .. last[r]`` of
+    whole list at once), each with a flag: True for the grid (in time order), False for the rest:
+    the grid points ``t0 + i period`` for ``i`` in ``first[r] .. last[r]`` of
     each run ``r`` (sorted, disjoint), thinned over the ``steady`` spans (:func:`steady_spans`;
     None: none), then the times ``extra`` and ``t1``, all clipped to ``[t0, t1]``. Returns the
     number of samples and their chunks; the values are those of the full list, whatever the
@@ -296,18 +305,24 @@ def _sample_times(first: np.ndarray, last: np.ndarray, t0: float, t1: float, per
 
     def chunks():
         for i in range(0, n_grid, _CHUNK):
-            yield grid_times(i, min(i + _CHUNK, n_grid), first, count, stride, ends, t0, t1, period)  # compiled
+            yield grid_times(i, min(i + _CHUNK, n_grid), first, count, stride, ends, t0, t1, period), True  # compiled
         for i in range(0, tail.size, _CHUNK):
-            yield np.clip(tail[i: i + _CHUNK], t0, t1)
+            yield np.clip(tail[i: i + _CHUNK], t0, t1), False
 
     return n_grid + tail.size, chunks()
 
 
 def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo, slack: float = 0.0,
-          stopped=None, keys_only: bool = False) -> float:
-    """Check the sample chunks ``times`` (an iterable of time arrays, :func:`_sample_times`): the
-    largest distance of each charge key into ``worst`` and of its violations into ``bad`` (keys
-    where ``redo``, all if None). Returns the largest distance over all samples.
+          stopped=None, keys_only: bool = False, certify=None) -> float:
+    """Check the sample chunks ``times`` (an iterable of ``(time array, on the grid)``,
+    :func:`_sample_times`): the largest distance of each charge key into ``worst`` and of its
+    violations into ``bad`` (keys where ``redo``, all if None). Returns the largest distance over
+    all samples.
+
+    ``certify``: ``(span [s], extra [mm], rel)``, or None: the intervals between consecutive grid
+    samples up to ``span`` apart are bounded too (``_fir_certify``: what hides between samples),
+    each against its samples' limits plus ``extra`` and ``rel`` of their tolerance, and sampled
+    more densely where the bound is above that (those samples charged as any other).
 
     The samples outside tolerance of their three blocks (:func:`_charged_samples`) wait in a batch
     of about :data:`_BATCH` for :meth:`ToolPath.distance_bound` (a fixed cost per call that would
@@ -317,8 +332,10 @@ def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo
     deviation = -np.inf
     waiting: list[tuple[np.ndarray, ...]] = []
     n_waiting = 0
-    for t in times:
-        near_max, wait = _charged_samples(arrays, path, t, Td, worst)
+    def check(t):
+        """Charge the samples at ``t``; returns their fields for the certifier."""
+        nonlocal deviation, waiting, n_waiting
+        near_max, wait, fields = _charged_samples(arrays, path, t, Td, worst)
         deviation = max(deviation, near_max)
         if wait is not None:
             waiting.append(wait)
@@ -326,6 +343,22 @@ def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo
         if n_waiting >= _BATCH:
             deviation = max(deviation, _bound_waiting(path, waiting, worst, bad, arrays.slack, arrays.key_tol, keys_only))
             waiting, n_waiting = [], 0
+        if certifier is None:
+            return None
+        q, block, d2, lim, key = fields
+        kept = key >= 0 if arrays.redo.size == 0 else arrays.redo[np.maximum(key, 0)] & (key >= 0)
+        return t, q, block, d2, lim, key, kept
+
+    certifier = None
+    if certify is not None:
+        span, extra, rel = certify
+        certifier = Certifier(position, PathFeatures(path, arrays.segments), check, span, extra + arrays.slack, rel)
+    for t, grid in times:
+        fields = check(t)
+        if grid and fields is not None:
+            certifier.add(fields)
+    if certifier is not None:
+        certifier.close()
     if waiting:
         deviation = max(deviation, _bound_waiting(path, waiting, worst, bad, arrays.slack, arrays.key_tol, keys_only))
     return deviation
@@ -411,13 +444,14 @@ def _charged_samples(arrays: _ScanArrays, path: ToolPath, t: np.ndarray, Td: flo
     sample charged to a key (vertex ``j < M - 1``, or ``M - 1 + block``: see
     :func:`path_deviations`) and, unless it breaks its tolerance, into ``worst`` where kept
     (``_fir_verify_kernels.charge_samples``). Returns ``(largest distance of the samples within
-    tolerance, rows (q, block, dist, limit, key, keep) of those that break it)``: the nearest path
-    samples are to be tried for those as well (:func:`_scan`); None if none."""
+    tolerance, rows (q, block, dist, limit, key, keep) of those that break it (the nearest path
+    samples are to be tried for those as well, :func:`_scan`; None if none), (q, block, d2,
+    tolerance, key) of every sample)``: ``d2`` ``(N, 3)`` as :func:`_three_block_distance`."""
     q, block, d2 = _three_block_distance(arrays, path, t, Td)
-    near_max, over, dist, limit, key, keep = charge_samples(t, d2, block, arrays.centre, arrays.tol, arrays.is_arc,
-                                                             0.5 * Td, arrays.redo, worst, arrays.slack, arrays.stopped)
+    near_max, over, dist, limit, key, keep, s_limit, s_key = charge_samples(
+        t, d2, block, arrays.centre, arrays.tol, arrays.is_arc, 0.5 * Td, arrays.redo, worst, arrays.slack, arrays.stopped)
     rows = (q[over], block[over], dist, limit, key, keep) if over.size else None
-    return near_max, rows
+    return near_max, rows, (q, block, d2, s_limit, s_key)
 
 
 class RoundChecks:
@@ -450,6 +484,7 @@ class RoundChecks:
     def __init__(self, path: ToolPath, tol_block: np.ndarray, piece_block: np.ndarray, Td: float, check_period: float,
                  fraction: np.ndarray | None = None, joins: np.ndarray | None = None):
         self.path, self.tol, self.Td, self.period = path, tol_block, Td, check_period
+        self.certify = (CERTIFY_SPAN * check_period, 0.0, BETWEEN_RTOL)  # the intervals between grid samples
         self.piece_block = piece_block  # padding pieces (block M_pad) count as the last block's
         self.joins = None if joins is None else np.flatnonzero(joins)
         self.fraction = fraction
@@ -547,7 +582,8 @@ class RoundChecks:
         path, M = self.path, self.path.n_blocks
         if M == 1:
             position, starts, centre, durations = self._pending
-            return path_deviations(position, path, starts, centre, self.Td, self.tol, self.period, durations)
+            return path_deviations(position, path, starts, centre, self.Td, self.tol, self.period, durations,
+                                   certify=self.certify)
         position, starts, centre, redo_v, redo_b = self._pending
         self._pending = None
         t0, t1 = float(position.breaks[0]), float(position.breaks[-1])
@@ -566,7 +602,7 @@ class RoundChecks:
             bad[self.bad[0]] = self.bad[1]
             self.worst[redo], bad[redo] = -np.inf, -np.inf
             _scan(position, path, times, starts, centre, self.Td, self.tol, self.worst, bad, redo, self.slack,
-                  self.stops)
+                  self.stops, certify=self.certify)
             keys = np.flatnonzero(bad > -np.inf)
             self.bad = (keys, bad[keys])
         keys, values = self.bad

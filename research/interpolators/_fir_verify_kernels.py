@@ -485,11 +485,13 @@ def charge_samples(t, d2, block, centre, tol_block, is_arc, half_window, redo, w
 
     Returns:
         ``(largest distance of the samples not over (-inf if none), over (V,) indices, their
-        distances, tolerances, keys and kept flags)``.
+        distances, tolerances, keys and kept flags, the tolerance (N,) and key (N,) of every
+        sample)``.
     """
     N, C = t.size, centre.size
     M = C + 1
     whole = redo.size == 0
+    s_limit, s_key = np.empty(N), np.empty(N, np.int64)
     over = np.empty(N, np.int64)
     o_dist, o_limit, o_key, o_keep = np.empty(N), np.empty(N), np.empty(N, np.int64), np.empty(N, np.bool_)
     deviation = -np.inf
@@ -518,6 +520,7 @@ def charge_samples(t, d2, block, centre, tol_block, is_arc, half_window, redo, w
         else:
             key = M - 1 + b
         keep = key >= 0 if whole else redo[key]
+        s_limit[i], s_key[i] = lim, key
         if dist > (lim * (1.0 + VERIFY_RTOL) + VERIFY_ATOL) + slack:
             over[n_over], o_dist[n_over], o_limit[n_over], o_key[n_over], o_keep[n_over] = i, dist, lim, key, keep
             n_over += 1
@@ -525,4 +528,4 @@ def charge_samples(t, d2, block, centre, tol_block, is_arc, half_window, redo, w
             deviation = max(deviation, dist)
             if keep and dist > worst[key]:
                 worst[key] = dist
-    return deviation, over[:n_over], o_dist[:n_over], o_limit[:n_over], o_key[:n_over], o_keep[:n_over]
+    return deviation, over[:n_over], o_dist[:n_over], o_limit[:n_over], o_key[:n_over], o_keep[:n_over], s_limit, s_key

@@ -445,8 +445,10 @@ def test_sample_charges_match_the_vectorised_rule(with_stops):
         assert close.any() and (~close).any() and (want_key >= M - 1).any() and want_over.any() and (~want_over).any()
         kept = np.ones(t.size, bool) if redo.size == 0 else redo[want_key]
         worst = np.full(2 * M - 1, -np.inf)
-        near_max, over, o_dist, o_limit, o_key, o_keep = charge_samples(t, d2, block, centre, tol, arc, half, redo, worst,
-                                                                         slack, stopped)
+        near_max, over, o_dist, o_limit, o_key, o_keep, s_limit, s_key = charge_samples(
+            t, d2, block, centre, tol, arc, half, redo, worst, slack, stopped)
+        np.testing.assert_array_equal(s_limit, want_limit)
+        np.testing.assert_array_equal(s_key, want_key)
         np.testing.assert_array_equal(over, np.flatnonzero(want_over))
         np.testing.assert_array_equal(o_dist, dist[want_over])
         np.testing.assert_array_equal(o_limit, want_limit[want_over])

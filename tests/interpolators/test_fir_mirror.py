@@ -10,7 +10,8 @@ from research import metrics
 from research.errors import ParameterError
 from research.interpolators import plan_fir, plan_fir_mirror
 from research.interpolators._fir_mirror import _input_vertices, compensate
-from research.interpolators._fir_mirror_check import SAMPLE_MARGIN, Violations, derivative_bound, sample_period
+from research.interpolators._fir_certify import derivative_bound
+from research.interpolators._fir_mirror_check import SAMPLE_MARGIN, Violations, sample_period
 from research.interpolators._fir_mirror_paths import CHORD_SHARE, chorded, cornered
 from research.limits import AxisLimits
 from research.paths import Polyline

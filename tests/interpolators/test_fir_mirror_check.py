@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from research.interpolators import plan_fir, plan_fir_mirror
-from research.interpolators._fir_mirror_check import SAMPLE_MARGIN, derivative_bound, local_strides, sample_period
+from research.interpolators._fir_certify import derivative_bound
+from research.interpolators._fir_mirror_check import SAMPLE_MARGIN, local_strides, sample_period
 from research.interpolators._fir_verify_kernels import overlay_spans, thinned_runs
 from research.paths import Polyline
 from research.paths.gcode import parse_gcode
