@@ -6,22 +6,38 @@ A sampled check sees the distance ``d(t)`` from the output to the path only at i
 ``d`` is smooth it can rise above the larger of two samples ``h`` apart by the curvature term
 ``K h^2 / 8``; where the nearest part of the path changes between them (the medial axis of the
 path: the bisector inside a corner, an arc's end, near an arc's centre) ``d`` has a peak, a kink,
-that rises to first order in ``h``. Measured before this check (``plan_fir``, 1 ms samples, 200
+that rises to first order in ``h``. Measured before this check (``plan_fir``, 1 ms samples, 240
 random filleted contours of ``tests/fuzz/test_fuzz_fir_fillets.py``): 6 plans broke eps between
 samples, by up to 8.8 % (a 95 deg corner filleted at R 84 um = eps, where the output passes 11 um
-from the fillet's centre).
+from the fillet's centre), while the check read eps at most.
 
 **The bound.** ``d = min_f f`` over the *features* of the blocks around the two samples: each line
 segment, each arc's two end points, and an arc's body (the distance to its circle) where the
-whole interval lies inside its sweep. Each feature is *semiconvex* along the motion: ``-f'' <= K_f``
-(a segment and a point are convex sets, so ``f`` is convex in the point and ``-f'' <= |a|``; an
-arc's circle adds ``|v|^2 / r`` on its concave side, ``r`` the distance from the axis). So on the
-interval, ``f(s) <= l_f(s) + K_f h^2 / 8``, ``l_f`` the straight interpolation of its two sample
-values (``s`` in ``[0, 1]``), and ``d(s) <= U = max_s min_f (l_f(s) + K_f h^2 / 8)``. ``|a|`` and
-``|v|`` are bounded over the profile pieces that meet the interval (:func:`derivative_bound`).
-``U`` is exact to ``O(h^2)`` at a kink between two straight features, where the samples alone
-miss it to ``O(h)``. An arc's body counts only where the ball of radius ``|v| h`` around a sample
-(which holds the whole interval) lies inside the sweep's wedge, away from the axis.
+whole interval lies inside its sweep. Each feature is *semiconvex* along the motion, ``-f'' <=
+K_f``, so on the interval ``f(s) <= l_f(s) + K_f h^2 / 8``, ``l_f`` the straight interpolation of
+its two sample values (``s`` in ``[0, 1]``), and ``d(s) <= U = max_s min_f (l_f(s) + K_f h^2 /
+8)``. ``U`` is exact to ``O(h^2)`` at a kink between two straight features, where the samples
+alone miss it to ``O(h)``. An arc's body counts only where the ball of radius ``|v| h`` around a
+sample (which holds the whole interval) lies inside the sweep's wedge, away from the axis.
+
+The curvature terms, with ``V``, ``A``, ``J`` the bounds of ``|v|``, ``|a|``, ``|j|`` over the
+profile pieces that meet the interval (:func:`derivative_bound`):
+
+- a segment and a point are convex sets, so their distance is convex in the point and ``-f'' <=
+  A``. Where the interval projects inside the segment its distance is the line's, whose ``-f''``
+  is at most the acceleration across the line, ``|a_perp|``: at most its larger value at the two
+  samples plus ``J h / 2``.
+- an arc's body ``f = |(r - R, z)|`` (``r`` the distance from the axis, ``z`` along it) is a norm of
+  ``(r - R, z)``, so ``-f'' <= |r''| + |z''|``, ``z'' = a . n``; ``r'' = (|v_in|^2 - r'^2 + w . a_in)
+  / r`` in the arc's plane. Coarsely ``|r''| <= A + V^2 / rho`` (``rho`` the least ``r`` over the
+  interval); finely its larger value at the two samples plus ``h / 2`` times ``|r'''| <= J + 6 A V /
+  rho + 3 V^3 / rho^2`` (from ``r''' = (3 v . a + w . j) / r - 3 r' r'' / r``), which is small where
+  the motion is nearly circular (an arc at its eq 8 feed: ``r'' = 0``, where the coarse term is
+  ``V^2 / rho``). A spiral's and a helix's radius and axial offset change with the angle: their
+  slopes times ``|phi''| <= (A + 2 V^2 / rho) / rho`` are added.
+
+The coarse terms are tried first (no motion evaluated); the fine ones where those leave the
+interval unproven.
 
 **Refinement.** Where ``U`` is above the limit and neither sample is, the interval is cut into
 ``n`` equal parts (``n`` from ``K`` and the room the limit leaves above the samples, and at least
@@ -34,10 +50,11 @@ none of the blocks' whole (an interval that crosses the joint of two arcs of one
 arc's body cut off at its end: a ramp-cut arc at eps 0.1 um read 1.0-1.8 eps there against a
 sampled 0.77 eps), and charging such bounds would slow a plan for nothing.
 
-What it does not cover: spirals and helices take the curvature term of the circle through the
-sample's nearest turn (their pitch's own term is left out); a sample above the three-block
-distance's limit that ``ToolPath.distance_bound`` then finds within it (a crowded path: another
-pass nearer) leaves its two intervals unbounded.
+What it does not cover: an interval whose bound needs a block that neither sample's three
+blocks hold is bounded by the blocks both hold (a valid bound, looser); a sample above the
+three-block distance's limit that ``ToolPath.distance_bound`` then finds within it (a crowded path:
+another pass nearer) leaves its two intervals unbounded; the blocks of tolerance 0 (exact stops,
+whose output runs on the path) keep their samples alone.
 """
 
 from __future__ import annotations

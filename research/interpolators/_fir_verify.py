@@ -359,6 +359,7 @@ def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo
             certifier.add(fields)
     if certifier is not None:
         certifier.close()
+        certifier.evaluate = None  # it and ``check`` refer to each other: freed now, not by the cycle collector
     if waiting:
         deviation = max(deviation, _bound_waiting(path, waiting, worst, bad, arrays.slack, arrays.key_tol, keys_only))
     return deviation

@@ -28,7 +28,9 @@ CAM programs (beyond the paper, which assumes every block longer than the window
   windows that cover them.
 * **Verification and repair** (``_fir_settle``): the exact profile is checked at every vertex (distance from the
   vertex to the trajectory) and between vertices (distance from the trajectory, sampled every
-  ``check_period``, to the programmed path), both up to the rounding of the profile (a fixed slack
+  ``check_period``, to the programmed path; between two samples bounded from their distances to
+  the blocks both see, and sampled more densely where that bound is above the tolerance: at most
+  ``_fir_certify.BETWEEN_RTOL`` of it more there), both up to the rounding of the profile (a fixed slack
   plus what the profile has accumulated by its end, ``_fir_verify.profile_rounding``, which grows
   with the program's duration). A violating dwell corner has its overlap shrunk by
   ``(eps / error)^(1/(n+1))`` (the small-overlap scaling of ``H2``), a violating full-overlap
@@ -194,7 +196,8 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             holds them; where it breaks them by a ratio ``r``, the same plan at its feeds over
             ``r`` is tried as well (at most :data:`SCALED_TRIES` times) while it can still be
             faster than the search's plan.
-        check_period: spacing [s] of the trajectory samples whose distance to the path is checked.
+        check_period: spacing [s] of the trajectory samples whose distance to the path is checked
+            (and bounded between them, ``_fir_certify``).
         pauses: ``(M + 1,)`` pause at each vertex [s] (index 0 the start, ``M`` the end; NaN: none),
             e.g. a G-code program's ``block_pauses`` (``G4 P`` dwells, ``M0``/``M1`` stops as 0 s):
             the motion stops there (``T_k = 0``) and holds the vertex that long (``_fir_pauses``);

@@ -179,3 +179,23 @@ def test_plan_fir_keeps_eps_between_samples_by_a_fillet_as_small_as_eps():
     ev = plan.position.numpy_evaluator()
     t = np.arange(float(ev.breaks[0]), float(ev.breaks[-1]), 1e-5)
     assert tp.distance(ev(t)).max() <= eps * (1 + BETWEEN_RTOL) + 1e-9
+
+
+def test_a_check_leaves_no_certifier_behind():
+    """The certifier and the check's sample function refer to each other; a finished check breaks
+    that, so its arrays go when it returns, not at the cycle collector's next pass (with the cycle
+    kept, ``plan_fir``'s peak memory on bench_cam's quick file rose from 3.76 to 6.64 kB a chord:
+    every round's check stayed alive). Counted with the collector off."""
+    import gc
+
+    from research.interpolators._fir_certify import Certifier
+
+    tp = parse_gcode(SMALL_FILLET, start=(-3.0748, 13.1429, 0.0)).blocks
+    gc.collect()
+    gc.disable()
+    try:
+        plan_fir(tp, 8016.0 / 60.0, (0.01, 0.004), 0.0837)
+        alive = sum(isinstance(o, Certifier) for o in gc.get_objects())
+    finally:
+        gc.enable()
+    assert alive == 0
