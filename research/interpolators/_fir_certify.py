@@ -65,6 +65,7 @@ import numba
 import numpy as np
 
 from research.interpolators._fir_kernels import _OPTIONS, VERIFY_ATOL, VERIFY_RTOL
+from research.interpolators._fir_verify_kernels import segment_distance2
 
 #: share of its tolerance by which ``plan_fir``'s output may exceed it between two samples (every
 #: sample keeps the tolerance itself): the share the mirror's check allows (``_fir_mirror_check.
@@ -164,20 +165,6 @@ def split_fractions(h, K, S, top, limit, least: int = 1):
     frac = np.concatenate([frac, S[peak]])
     order = np.lexsort((frac, group))
     return group[order], frac[order]
-
-
-@numba.njit(**_OPTIONS)
-def _segment_distance(q, i, start, vec, inv, b):
-    dot = 0.0
-    A = q.shape[1]
-    for a in range(A):
-        dot += (q[i, a] - start[b, a]) * vec[b, a]
-    u = min(max(dot * inv[b], 0.0), 1.0)
-    acc = 0.0
-    for a in range(A):
-        r = (q[i, a] - start[b, a]) - u * vec[b, a]
-        acc += r * r
-    return math.sqrt(acc)
 
 
 @numba.njit(**_OPTIONS)
@@ -445,7 +432,8 @@ def _interval_bounds(t, q, block, d2, tol, kept, rel, extra, span, breaks, coeff
                 fa2[:F], fb2[:F], fk2[:F] = fa[:F], fb[:F], fk[:F]
                 fa, fb, fk = fa2, fb2, fk2
             if not is_arc[b]:
-                fa[F], fb[F], fk[F] = _segment_distance(q, i, start, vec, inv, b), _segment_distance(q, i + 1, start, vec, inv, b), A
+                fa[F] = math.sqrt(segment_distance2(q, i, start, vec, inv, b, q.shape[1]))
+                fb[F], fk[F] = math.sqrt(segment_distance2(q, i + 1, start, vec, inv, b, q.shape[1])), A
                 F += 1
                 continue
             for at_end in (False, True):

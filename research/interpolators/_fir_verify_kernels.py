@@ -105,17 +105,24 @@ def _line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, 
         k = min(max(at - 1, 0), M - 1)
         block[i] = k
         for c in range(3):
-            kb = min(max(k - 1 + c, 0), M - 1)
-            dot = 0.0
-            for a in range(A):
-                dot += (q[i, a] - seg_start[kb, a]) * seg_vec[kb, a]
-            u = min(max(dot * seg_inv[kb], 0.0), 1.0)
-            acc = 0.0
-            for a in range(A):
-                r = (q[i, a] - seg_start[kb, a]) - u * seg_vec[kb, a]
-                acc += r * r
-            d2[i, c] = acc
+            d2[i, c] = segment_distance2(q, i, seg_start, seg_vec, seg_inv, min(max(k - 1 + c, 0), M - 1), A)
     return q, block, d2
+
+
+@numba.njit(**_OPTIONS)
+def segment_distance2(q, i, seg_start, seg_vec, seg_inv, b, A):
+    """Squared distance [mm^2] from point ``q[i]`` to block ``b`` as a segment (its start, its end
+    minus start, the inverse of that's squared length; 0 for a zero-length one: its start), on the
+    first ``A`` axes (a constant where the caller's form is compiled for one)."""
+    dot = 0.0
+    for a in range(A):
+        dot += (q[i, a] - seg_start[b, a]) * seg_vec[b, a]
+    u = min(max(dot * seg_inv[b], 0.0), 1.0)
+    acc = 0.0
+    for a in range(A):
+        r = (q[i, a] - seg_start[b, a]) - u * seg_vec[b, a]
+        acc += r * r
+    return acc
 
 
 @numba.njit(**_OPTIONS)
