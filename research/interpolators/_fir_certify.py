@@ -141,9 +141,9 @@ def interval_bounds(t, q, block, d2, tol, kept, rel, extra, span, breaks, coeffs
         within the smaller limit of its samples (or not bounded: longer than ``span``, or a sample
         above its limit), else the bound; ``K`` [mm/s^2] the largest curvature term there and
         ``s`` in ``[0, 1]`` where the bound peaks."""
-    return _interval_bounds(t, q, block, d2, tol, kept, rel, extra, span, breaks, coeffs, speed, accel, jerk, features.start,
-                            features.vec,
-                            features.inv, features.is_arc, features.arc_row, *features.geo)
+    return _interval_bounds(t, q, block, d2, tol, kept, rel, extra, span, breaks, coeffs, speed, accel, jerk,
+                            features.start, features.vec, features.inv, features.is_arc, features.arc_row,
+                            *features.geo)
 
 
 def split_fractions(h, K, S, top, limit, least: int = 1):
@@ -177,7 +177,22 @@ def _point_distance(q, i, start, vec, b, at_end):
 
 
 @numba.njit(**_OPTIONS)
-def _inside_sweep(q, i, row, reach, c, n, e1, e2, r0, r1, a0, a1, sweep):
+def _arc_frame(q, i, row, c, n, e1, e2):
+    """``(x, y, z)`` of sample ``i`` in the frame of arc ``row``: along ``e1``, ``e2`` from its
+    centre and along its axis ``n`` (a sample of two axes at ``z = 0``)."""
+    w0, w1, w2 = q[i, 0] - c[row, 0], q[i, 1] - c[row, 1], (q[i, 2] if q.shape[1] > 2 else 0.0) - c[row, 2]
+    return (w0 * e1[row, 0] + w1 * e1[row, 1] + w2 * e1[row, 2], w0 * e2[row, 0] + w1 * e2[row, 1] + w2 * e2[row, 2],
+            w0 * n[row, 0] + w1 * n[row, 1] + w2 * n[row, 2])
+
+
+@numba.njit(**_OPTIONS)
+def _along(v, row, e):
+    """``v . e[row]`` of a ``(3,)`` vector."""
+    return v[0] * e[row, 0] + v[1] * e[row, 1] + v[2] * e[row, 2]
+
+
+@numba.njit(**_OPTIONS)
+def _inside_sweep(q, i, row, reach, c, n, e1, e2, sweep):
     """The radius of sample ``i`` from the axis of arc ``row`` where the ball of radius ``reach``
     around it lies inside the arc's sweep (a wedge of at most pi, two half-planes: at least
     ``reach`` inside each) and away from the axis; 0 elsewhere, and for sweeps beyond pi
@@ -185,9 +200,7 @@ def _inside_sweep(q, i, row, reach, c, n, e1, e2, r0, r1, a0, a1, sweep):
     Phi = sweep[row]
     if Phi > math.pi:
         return 0.0
-    w0, w1, w2 = q[i, 0] - c[row, 0], q[i, 1] - c[row, 1], (q[i, 2] if q.shape[1] > 2 else 0.0) - c[row, 2]
-    x = w0 * e1[row, 0] + w1 * e1[row, 1] + w2 * e1[row, 2]
-    y = w0 * e2[row, 0] + w1 * e2[row, 1] + w2 * e2[row, 2]
+    x, y, _ = _arc_frame(q, i, row, c, n, e1, e2)
     if y < reach or x * math.sin(Phi) - y * math.cos(Phi) < reach:
         return 0.0
     r = math.sqrt(x * x + y * y)
@@ -199,10 +212,7 @@ def _arc_body(q, i, row, reach, c, n, e1, e2, r0, r1, a0, a1, sweep):
     """``(distance to the arc's circle through its nearest turn, radius from the axis)`` of sample
     ``i``, or ``(inf, 0)`` where the ball of radius ``reach`` around it leaves the sweep's wedge or
     meets the axis (the body then is no feature of the interval)."""
-    w0, w1, w2 = q[i, 0] - c[row, 0], q[i, 1] - c[row, 1], (q[i, 2] if q.shape[1] > 2 else 0.0) - c[row, 2]
-    x = w0 * e1[row, 0] + w1 * e1[row, 1] + w2 * e1[row, 2]
-    y = w0 * e2[row, 0] + w1 * e2[row, 1] + w2 * e2[row, 2]
-    z = w0 * n[row, 0] + w1 * n[row, 1] + w2 * n[row, 2]
+    x, y, z = _arc_frame(q, i, row, c, n, e1, e2)
     r = math.sqrt(x * x + y * y)
     if r <= reach:
         return math.inf, 0.0
@@ -300,18 +310,12 @@ def _normal_accel(q, i, a, start, vec, inv, b, reach):
 
 
 @numba.njit(**_OPTIONS)
-def _radial_curvature(q, i, v, a, row, c, n, e1, e2, a0):
+def _radial_curvature(q, i, v, a, row, c, n, e1, e2):
     """``(|r''|, |a . n|)`` at sample ``i`` about the axis of arc ``row``: the second derivative of
     the sample's radius from the axis and the acceleration along the axis (the two parts of the
     arc body's ``-d''``)."""
-    w0, w1, w2 = q[i, 0] - c[row, 0], q[i, 1] - c[row, 1], (q[i, 2] if q.shape[1] > 2 else 0.0) - c[row, 2]
-    x = w0 * e1[row, 0] + w1 * e1[row, 1] + w2 * e1[row, 2]
-    y = w0 * e2[row, 0] + w1 * e2[row, 1] + w2 * e2[row, 2]
-    vx = v[0] * e1[row, 0] + v[1] * e1[row, 1] + v[2] * e1[row, 2]
-    vy = v[0] * e2[row, 0] + v[1] * e2[row, 1] + v[2] * e2[row, 2]
-    ax = a[0] * e1[row, 0] + a[1] * e1[row, 1] + a[2] * e1[row, 2]
-    ay = a[0] * e2[row, 0] + a[1] * e2[row, 1] + a[2] * e2[row, 2]
-    an = a[0] * n[row, 0] + a[1] * n[row, 1] + a[2] * n[row, 2]
+    x, y, _ = _arc_frame(q, i, row, c, n, e1, e2)
+    vx, vy, ax, ay, an = _along(v, row, e1), _along(v, row, e2), _along(a, row, e1), _along(a, row, e2), _along(a, row, n)
     r = math.sqrt(x * x + y * y)
     r1 = (x * vx + y * vy) / r
     return abs((vx * vx + vy * vy + x * ax + y * ay - r1 * r1) / r), abs(an)
@@ -396,8 +400,8 @@ def _interval_bounds(t, q, block, d2, tol, kept, rel, extra, span, breaks, coeff
                 F += 1
                 continue
             row = arc_row[ba]
-            ra = _inside_sweep(q, i, row, reach, c, n, e1, e2, r0, r1, a0, a1, sweep)
-            rb = _inside_sweep(q, i + 1, row, reach, c, n, e1, e2, r0, r1, a0, a1, sweep) if ra > 0.0 else 0.0
+            ra = _inside_sweep(q, i, row, reach, c, n, e1, e2, sweep)
+            rb = _inside_sweep(q, i + 1, row, reach, c, n, e1, e2, sweep) if ra > 0.0 else 0.0
             if rb > 0.0:
                 rho = min(ra, rb) - reach
                 fa[F], fb[F], fk[F], fblk[F], frho[F] = math.sqrt(d2[i, ca]), math.sqrt(d2[i + 1, cb]), A + V * V / rho, ba, rho
@@ -417,8 +421,8 @@ def _interval_bounds(t, q, block, d2, tol, kept, rel, extra, span, breaks, coeff
                     continue
                 # an arc's body: -d'' <= |r''| + |a . n| + (the spiral's and helix's slopes) |phi''|
                 row, rho = arc_row[ba], frho[f]
-                rr_a, an_a = _radial_curvature(q, i, va, aa, row, c, n, e1, e2, a0)
-                rr_b, an_b = _radial_curvature(q, i + 1, vb, ab, row, c, n, e1, e2, a0)
+                rr_a, an_a = _radial_curvature(q, i, va, aa, row, c, n, e1, e2)
+                rr_b, an_b = _radial_curvature(q, i + 1, vb, ab, row, c, n, e1, e2)
                 r3 = J + 6.0 * A * V / rho + 3.0 * V ** 3 / rho ** 2  # bounds the third derivative of r
                 slope = (abs(r1[row] - r0[row]) + abs(a1[row] - a0[row])) / sweep[row]
                 fk[f] = min(fk[f], max(rr_a, rr_b) + 0.5 * r3 * h + max(an_a, an_b) + 0.5 * J * h
@@ -505,9 +509,9 @@ class Certifier:
         self.unproven = 0  # intervals whose bound stayed above their limit after every round
 
     def add(self, samples) -> None:
-        """Bound the intervals between the grid samples ``samples`` (``(t, q, block, d2, tol, key,
-        kept)`` as :func:`interval_bounds` takes them, ``key`` the charge key of each), following
-        the last sample of the previous call, and refine those it cannot prove."""
+        """Bound the intervals between the grid samples ``samples`` (``(t, q, block, d2, tol, kept)``
+        as :func:`interval_bounds` takes them), following the last sample of the previous call, and
+        refine those it cannot prove."""
         if self.prev is not None:
             samples = tuple(np.concatenate([a, b]) for a, b in zip(self.prev, samples))
         if samples[0].size == 0:
@@ -524,13 +528,13 @@ class Certifier:
         """Refine the intervals held back so far (:meth:`add` holds up to :data:`BATCH`)."""
         if self.pending:
             parts, self.pending, self.n_pending = self.pending, [], 0
-            self._refine(0, tuple(tuple(np.concatenate(f) for f in zip(*side)) if isinstance(side[0], tuple)
-                                  else np.concatenate(side) for side in zip(*parts)))
+            a, b = (tuple(np.concatenate(f) for f in zip(*(p[side] for p in parts))) for side in (0, 1))
+            self._refine(0, (a, b) + tuple(np.concatenate([p[k] for p in parts]) for k in (2, 3, 4)))
 
     def _unproven(self, seq, inside):
         """The intervals of the sample sequence ``seq`` (those where ``inside``) whose bound is above
         their limit: ``(first fields, second fields, U, K, S)``, or None."""
-        t, q, block, d2, tol, _, kept = seq
+        t, q, block, d2, tol, kept = seq
         U, K, S = interval_bounds(t, np.ascontiguousarray(q), block, np.ascontiguousarray(d2), tol, kept, self.rel,
                                   self.extra, self.span, self.breaks, self.coeffs, self.speed, self.accel,
                                   self.jerk, self.features)
@@ -577,4 +581,4 @@ class Certifier:
         return np.sqrt(s[3].min(axis=1))
 
     def _limit(self, s):
-        return np.where(s[6], s[4] * (1.0 + VERIFY_RTOL + self.rel) + VERIFY_ATOL + self.extra, np.inf)
+        return np.where(s[5], s[4] * (1.0 + VERIFY_RTOL + self.rel) + VERIFY_ATOL + self.extra, np.inf)

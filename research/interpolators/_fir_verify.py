@@ -347,7 +347,7 @@ def _scan(position, path, times, starts, centre, Td, tol_block, worst, bad, redo
             return None
         q, block, d2, lim, key = fields
         kept = key >= 0 if arrays.redo.size == 0 else arrays.redo[np.maximum(key, 0)] & (key >= 0)
-        return t, q, block, d2, lim, key, kept
+        return t, q, block, d2, lim, kept
 
     certifier = None
     if certify is not None:
