@@ -256,6 +256,37 @@ def worst_ratio(plan, limits) -> float:
 
 
 # -- part 1 ----------------------------------------------------------------------------------------
+def one_check(plan, path: Polyline, tolerance: float):
+    """A callable that runs one full verification pass of ``plan`` as ``plan_fir``'s rounds do
+    (``_fir_settle``): its exact profile from its inputs, every vertex error, every path sample
+    (bounded between samples, ``_fir_certify``), from scratch (no earlier check to reuse). ``plan_fir``
+    runs at least one such pass per plan it returns, so its time per segment is a floor under the
+    verified planner's own (its look-ahead, other candidates and repair rounds come on top)."""
+    from research.interpolators import _fir_profile
+    from research.interpolators._fir_verify import RoundChecks
+    from research.interpolators.fir import CHECK_PERIOD, _as_toolpath
+    from research.piecewise import NumpyPiecewise
+
+    inputs = plan.profile
+    tab = inputs.pieces.table
+    tp = _as_toolpath(path)
+    M = tp.n_blocks
+    durations = np.where(tab.gap, np.append(inputs.gaps, 0.0)[tab.block], inputs.fraction * inputs.piece_tv)
+    tol = np.full(M, tolerance)
+    Td = float(np.sum(inputs.delays))
+
+    def run():
+        starts, _, breaks, coeffs, centre = _fir_profile.profile(inputs.start, tab.geo, tab.block, tab.gap,
+                                                                 inputs.fraction, inputs.piece_tv, inputs.gaps,
+                                                                 inputs.delays, tab.joins)
+        checks = RoundChecks(tp, tol, tab.block, Td, CHECK_PERIOD, tab.fraction, tab.joins)
+        errors = checks.vertices(NumpyPiecewise(breaks, coeffs), starts[:M], centre[: M - 1], durations, True)
+        deviation, _, _ = checks.samples_check()
+        return float(np.max(errors, initial=0.0)), deviation
+
+    return run
+
+
 def ruckig_follow(path: Polyline, feed: float, delays):
     """Callable running ruckig chord by chord (see the module docstring); inputs built outside."""
     from ruckig import InputParameter, Result, Ruckig, Trajectory
@@ -366,6 +397,11 @@ def bench_cam(args, table: Table, t0: float) -> None:
     _, t_eq = median_of(args.repeats, plan_fir, path, FEED, DELAYS, EPS, refine=False)
     table.row("  for information: plan_fir(refine=False) (eq 13/14 only), per segment", f"{t_eq / M * 1e6:.2f} us",
               f"{t_eq / t_fir:.0%} of the verified plan")
+    check = one_check(plan, path, EPS)
+    check()  # warm-up
+    (_, dev_check), t_check = median_of(args.repeats, check)
+    table.row("  for information: one full check of the plan (profile, vertex errors, path samples), per segment",
+              f"{t_check / M * 1e6:.2f} us", f"{t_check / t_fir:.0%} of the verified plan; deviation {dev_check * 1e3:.2f} um")
     try:
         import ruckig
         run = ruckig_follow(path, FEED, DELAYS)
@@ -376,6 +412,8 @@ def bench_cam(args, table: Table, t0: float) -> None:
                   f"motion {total:.3f} s ({total / lower:.3f}x bound), {failed} not Working")
         table.row("  FIR / ruckig time per segment", "", f"{ours / theirs:.3f}x",
                   f"<= {TARGET_VS_RUCKIG:g}x", verdict(ours / theirs <= TARGET_VS_RUCKIG))
+        table.row("  one full check / ruckig time per segment (a floor under plan_fir's ratio)", "",
+                  f"{t_check / M / theirs:.3f}x")
     except ImportError as err:
         theirs = None
         table.row(f"ruckig comparison skipped (import failed: {err})")

@@ -206,13 +206,51 @@ def _corner_any(breaks, coeffs, vertices, centre, half_window, grid, newton_step
 _CORNER_FORMS = {(4, 3): _corner_4_3, (9, 3): _corner_9_3, (4, 2): _corner_4_2, (9, 2): _corner_9_2}
 
 
-@numba.njit(**_OPTIONS)
 def nearest_times(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
     """``(C,)`` time [s] of the point of the profile nearest each vertex ``(C, A)`` near ``centre``
     ``(C,)`` [s]: the best of ``grid`` points over ``centre +- half_window``, then ``newton_steps``
     safeguarded Newton steps within one grid step of it (the search of :func:`corner_distances`
-    without its bound: the time it settles on, the nearer of it and the best grid point)."""
-    C, K, A, D = vertices.shape[0], coeffs.shape[0], coeffs.shape[2], coeffs.shape[1]
+    without its bound: the time it settles on, the nearer of it and the best grid point). Compiled
+    for the same row and axis counts as constants as :func:`corner_distances` (the mirror's search
+    calls it every round: its generic form took a fifth of ``plan_fir_mirror``'s time on bench_cam's
+    quick file)."""
+    return _NEAREST_FORMS.get(coeffs.shape[1:], _nearest_any)(breaks, coeffs, vertices, centre, half_window, grid,
+                                                              newton_steps)
+
+
+@numba.njit(**_OPTIONS)
+def _nearest_4_3(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
+    return _nearest_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 4, 3)
+
+
+@numba.njit(**_OPTIONS)
+def _nearest_9_3(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
+    return _nearest_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 9, 3)
+
+
+@numba.njit(**_OPTIONS)
+def _nearest_4_2(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
+    return _nearest_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 4, 2)
+
+
+@numba.njit(**_OPTIONS)
+def _nearest_9_2(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
+    return _nearest_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, 9, 2)
+
+
+@numba.njit(**_OPTIONS)
+def _nearest_any(breaks, coeffs, vertices, centre, half_window, grid, newton_steps):
+    return _nearest_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, coeffs.shape[1],
+                         coeffs.shape[2])
+
+
+_NEAREST_FORMS = {(4, 3): _nearest_4_3, (9, 3): _nearest_9_3, (4, 2): _nearest_4_2, (9, 2): _nearest_9_2}
+
+
+@numba.njit(**_OPTIONS)
+def _nearest_rows(breaks, coeffs, vertices, centre, half_window, grid, newton_steps, D, A):
+    """:func:`nearest_times` with the coefficient rows ``D`` and axes ``A`` of ``coeffs`` passed apart."""
+    C, K = vertices.shape[0], coeffs.shape[0]
     t_lo, t_hi = breaks[0], breaks[K]
     out = np.empty(C)
     step = half_window * (2.0 / (grid - 1))

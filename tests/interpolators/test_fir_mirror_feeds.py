@@ -138,14 +138,17 @@ def test_limit_factors_lower_the_blocks_in_use_at_the_shifted_instants():
     assert dwell[9] < 1.0 and dwell[10] == 1.0
 
 
-def test_nearest_instants_of_a_line_are_the_projections():
+@pytest.mark.parametrize("rows, axes", [(4, 3), (4, 2), (9, 3), (9, 2), (5, 3)])
+def test_nearest_instants_of_a_line_are_the_projections(rows, axes):
     """On ``p(t) = p0 + v t`` the nearest point to ``V`` is at ``t = (V - p0) . v / |v|^2``: random
-    points within reach of the search window, found to 1e-9 s."""
+    points within reach of the search window, found to 1e-9 s; for every compiled form of the
+    search (coefficient rows and axes as constants, the line padded with zero rows; 5 rows: the
+    generic form)."""
     rng = np.random.default_rng(3)
-    p0, v = np.array([1.0, -2.0, 0.5]), np.array([120.0, 35.0, -10.0])
-    pos = NumpyPiecewise(np.array([0.0, 2.0]), np.array([[p0, v, np.zeros(3), np.zeros(3)]]))
+    p0, v = np.array([1.0, -2.0, 0.5])[:axes], np.array([120.0, 35.0, -10.0])[:axes]
+    pos = NumpyPiecewise(np.array([0.0, 2.0]), np.array([[p0, v] + [np.zeros(axes)] * (rows - 2)]))
     t_true = rng.uniform(0.2, 1.8, 50)
-    side = rng.normal(size=(50, 3))
+    side = rng.normal(size=(50, axes))
     side -= np.outer(side @ v / (v @ v), v)  # across the line: the projection stays at t_true
     vertices = p0 + np.outer(t_true, v) + 0.3 * side
     centre = t_true + rng.uniform(-0.03, 0.03, 50)
