@@ -492,6 +492,7 @@ class RoundChecks:
         self.durations, self.samples, self._pending = None, 0, None
         self.slack = 0.0  # [mm] added to the tolerance of the path samples: the profile's rounding
         self.stops = None  # (M - 1,) exact stops of the profile checked (charge_samples), None: none
+        self.certified = None  # (2 M - 1,) charge keys whose values came from a check bounded between its samples
 
     def __call__(self, position: NumpyPiecewise, starts: np.ndarray, centre: np.ndarray, durations: np.ndarray,
                  vertex_errors: bool):
@@ -522,6 +523,7 @@ class RoundChecks:
             err_v, redo_v, redo_b = np.ones(M - 1, bool), np.ones(M - 1, bool), np.ones(M, bool)
             self.errors, self.worst = np.zeros(M - 1), np.full(2 * M - 1, -np.inf)
             self.bad = (np.zeros(0, np.int64), np.zeros(0))
+            self.certified = np.zeros(2 * M - 1, bool)
         else:
             changed = np.unique(np.minimum(self.piece_block[durations != self.durations], M - 1))
             r_lo, r_hi = starts[changed], np.append(starts, np.inf)[changed + 1] + self.Td
@@ -552,13 +554,15 @@ class RoundChecks:
         (same pulse table) can :meth:`adopt` it and check afresh only where its input differs."""
         if self.durations is None or self._pending is not None:
             return None
-        return (self.durations, self.errors.copy(), self.worst.copy(), (self.bad[0].copy(), self.bad[1].copy()))
+        return (self.durations, self.errors.copy(), self.worst.copy(), (self.bad[0].copy(), self.bad[1].copy()),
+                self.certified.copy())
 
     def adopt(self, snap) -> None:
         """Start from ``snap`` (:meth:`snapshot` of another candidate's last complete check)."""
         if snap is not None:
-            self.durations, errors, worst, bad = snap
+            self.durations, errors, worst, bad, certified = snap
             self.errors, self.worst, self.bad = errors.copy(), worst.copy(), (bad[0].copy(), bad[1].copy())
+            self.certified = certified.copy()
 
     def swap_profile(self, position, starts=None, centre=None) -> None:
         """Hand the check pending between :meth:`vertices` and :meth:`samples_check` another
@@ -576,10 +580,17 @@ class RoundChecks:
         tv = self.durations[j] / self.fraction[j]
         return j[np.abs(tv - self.durations[j - 1] / self.fraction[j - 1]) <= 1e-14 * tv]
 
-    def samples_check(self):
+    def samples_check(self, certify: bool = True):
         """Second half of a check (after :meth:`vertices`, on its profile): the path samples of
         the charge keys it marked. Returns ``(max deviation, {vertex: deviation}, {block:
-        deviation})`` as :func:`path_deviations`."""
+        deviation})`` as :func:`path_deviations`.
+
+        ``certify``: bound the intervals between the samples as well (``_fir_certify``; with it,
+        also every key whose values came from a check without it). ``plan_fir`` leaves it out in a
+        round that cannot return its plan (a vertex error or an axis limit already broken: the
+        round repairs and checks again), where bounding the whole path's intervals cost three to
+        four times its samples; the plan it returns comes from a round in which every key was
+        certified."""
         path, M = self.path, self.path.n_blocks
         if M == 1:
             position, starts, centre, durations = self._pending
@@ -590,6 +601,10 @@ class RoundChecks:
         t0, t1 = float(position.breaks[0]), float(position.breaks[-1])
         lo_v, hi_v, lo_b, hi_b = self._spans(position, starts, centre)
         redo = np.concatenate([redo_v, redo_b])
+        if certify:
+            redo |= ~self.certified
+            redo_v, redo_b = redo[: M - 1], redo[M - 1:]
+        self.certified[redo] = certify
         self.samples = 0  # path samples taken by this check
         if redo.any():
             s_lo, s_hi = _merged(np.concatenate([lo_v[redo_v], lo_b[redo_b]]), np.concatenate([hi_v[redo_v], hi_b[redo_b]]))
@@ -603,7 +618,7 @@ class RoundChecks:
             bad[self.bad[0]] = self.bad[1]
             self.worst[redo], bad[redo] = -np.inf, -np.inf
             _scan(position, path, times, starts, centre, self.Td, self.tol, self.worst, bad, redo, self.slack,
-                  self.stops, certify=self.certify)
+                  self.stops, certify=self.certify if certify else None)
             keys = np.flatnonzero(bad > -np.inf)
             self.bad = (keys, bad[keys])
         keys, values = self.bad

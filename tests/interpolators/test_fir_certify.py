@@ -199,3 +199,38 @@ def test_a_check_leaves_no_certifier_behind():
     finally:
         gc.enable()
     assert alive == 0
+
+
+def _rounded_sine(n: int, step: float, rounding: float) -> str:
+    """G-code of ``y = 3 sin(x / 5)`` in ``n - 1`` chords of ``step`` mm along x, coordinates rounded
+    to ``rounding`` mm (as a post writes them: zigzags of that size), F 12,000 mm/min."""
+    x = np.arange(n) * step
+    x, y = np.round(x / rounding) * rounding, np.round(3.0 * np.sin(x / 5.0) / rounding) * rounding
+    return "G21 G90\nG1 X0 Y0 F12000\n" + "\n".join(f"X{a:.4f} Y{b:.4f}" for a, b in zip(x[1:], y[1:])) + "\nM2\n"
+
+
+@pytest.mark.parametrize("step, rounding, eps", [(0.05, 0.001, 0.01), (0.1, 0.0254, 0.01)])
+def test_rounds_that_repair_skip_the_bound_and_the_returned_plan_is_bounded_everywhere(monkeypatch, step, rounding,
+                                                                                       eps):
+    """``plan_fir`` bounds the intervals between samples only in a round that may return its plan
+    (``RoundChecks.samples_check(certify=...)``): on these rounded sine programs (300-400 chords,
+    T 60/30 ms) the first round breaks eps at vertices and skips the bound, and the last check,
+    whose plan is returned, bounds every charge key (also those last checked without it). The
+    returned trajectory keeps eps to ``1 + BETWEEN_RTOL`` on a 20 us grid (``ToolPath.distance``)."""
+    from research.interpolators import _fir_verify
+
+    calls = []
+    check = _fir_verify.RoundChecks.samples_check
+
+    def recorded(self, certify=True):
+        out = check(self, certify)
+        calls.append((certify, bool(self.certified.all())))
+        return out
+
+    monkeypatch.setattr(_fir_verify.RoundChecks, "samples_check", recorded)
+    tp = parse_gcode(_rounded_sine(400 if step < 0.1 else 300, step, rounding)).blocks
+    plan = plan_fir(tp, 200.0, (0.06, 0.03), eps)
+    assert calls[0] == (False, False) and calls[-1] == (True, True)
+    ev = plan.position.numpy_evaluator()
+    t = np.arange(float(ev.breaks[0]), float(ev.breaks[-1]), 2e-5)
+    assert tp.distance(ev(t)).max() <= eps * (1 + BETWEEN_RTOL) + 1e-9
