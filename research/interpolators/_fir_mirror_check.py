@@ -81,6 +81,14 @@ def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits 
         tol_v = np.minimum(tol[:-1], tol[1:])
         errors = vertex_distances(pos, np.asarray(tp.vertices), centre, 0.5 * Td, tol_v)
         times.append(centre[errors > verified_bound(tol_v) + slack])
+    over_times, ratios, peaks = np.zeros(0), np.zeros(0), None
+    if limits is not None:
+        peaks = PiecePeaks(pos, limits)
+        over = peaks.per_piece > 1.0 + LIMIT_RTOL
+        over_times, ratios = 0.5 * (pos.breaks[:-1] + pos.breaks[1:])[over], peaks.per_piece[over]
+    # the intervals between samples bounded only where the plan may be taken: no vertex error and
+    # no limit broken already (a broken plan is never returned; plan_fir's rounds do the same)
+    whole = not (over_times.size or (times and times[0].size))
     positive = tol[tol > 0]
     accel = derivative_bound(pos, 2)
     period, margin = sample_period(accel, check_period, float(np.min(positive)) if positive.size else 0.0)
@@ -91,15 +99,11 @@ def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits 
     local = local_strides(pos, accel, tp, starts, pulses, Td, tol, check_period, period, margin)
     deviation, at_vertex, at_block = path_deviations(pos, tp, starts, centre, Td, held, period, durations=durations,
                                                      slack=slack, stopped=stopped, stride_cap=cap, spans=local,
-                                                     keys_only=True, certify=(CERTIFY_SPAN * check_period, margin, 0.0))
+                                                     keys_only=True,
+                                                     certify=(CERTIFY_SPAN * check_period, margin, 0.0) if whole else None)
     times.append(centre[sorted(at_vertex)] if at_vertex else np.zeros(0))
     middle = starts + 0.5 * pulses + 0.5 * Td  # the window centred on the block
     times.append(middle[sorted(at_block)] if at_block else np.zeros(0))
-    over_times, ratios, peaks = np.zeros(0), np.zeros(0), None
-    if limits is not None:
-        peaks = PiecePeaks(pos, limits)
-        over = peaks.per_piece > 1.0 + LIMIT_RTOL
-        over_times, ratios = 0.5 * (pos.breaks[:-1] + pos.breaks[1:])[over], peaks.per_piece[over]
     return Violations(np.sort(np.concatenate(times)), over_times, ratios, float(deviation), peaks)
 
 
