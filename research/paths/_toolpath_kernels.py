@@ -157,7 +157,16 @@ def _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
     an inner minimum (a point 0.47 mm from the centre of an R 7.6 mm spiral read 7.1228 mm
     against 7.1210 mm): where that band reaches :data:`SPIRAL_SCAN` the sweep is also scanned
     (:func:`_scanned_arc`). Measured on a real program of 691 arcs (spirals within 2.3 um of circles): 32 % less time in
-    this kernel, the same plans to 1e-15."""
+    this kernel, the same plans to 1e-15.
+
+    A planar arc of less than a turn whose projection angle lies outside its sweep has no minimum
+    inside it where the band around ``base`` misses the sweep (more than twice the band's bound
+    away, ``asin(x) <= 2 x``) and the band is below :data:`OUTSIDE_BAND`: the stationary points near
+    ``base + pi`` are then maxima (``f'' <= 2 r'^2 + 4 |r'| rho - 2 r rho cos 30 deg < 0`` there,
+    with ``|r'| <= r_min rho / (2 (r_max + 3 rho))``), so the ends hold the least distance and the
+    steps from the end the angle clamps to are skipped (they could only find a point no nearer).
+    Measured on the mirror's samples of a real inch program (2,204 sub-arcs, 78 % of the points
+    projecting outside): 155 -> 67 ns a point, every distance the same bits."""
     N = q.shape[0]
     out = np.empty(N)
     p, d1, d2 = np.empty(3), np.empty(3), np.empty(3)
@@ -172,6 +181,18 @@ def _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
         dr, da = (r1[j] - r0[j]) / sw, (a1[j] - a0[j]) / sw
         turns = int(np.ceil(sw / two_pi)) + 1
         best = np.inf
+        outside = False  # a planar arc of less than a turn whose stationary band near base misses the sweep
+        if da == 0.0 and sw < two_pi and base[i] > sw:
+            x, y = 0.0, 0.0
+            for a in range(3):
+                x += (q[i, a] - c[j, a]) * e1[j, a]
+                y += (q[i, a] - c[j, a]) * e2[j, a]
+            rho = math.sqrt(x * x + y * y)
+            r_lo, r_hi = min(r0[j], r1[j]), max(r0[j], r1[j])
+            band = abs(dr) * (r_hi + 3.0 * rho)
+            if band < OUTSIDE_BAND * r_lo * rho:
+                gap = min(base[i] - sw, two_pi - base[i])  # angle from base to the sweep [0, sw]
+                outside = gap > 2.0 * band / (r_lo * rho)
         for m in range(turns + 2):
             if m == 0:
                 phi = 0.0
@@ -181,6 +202,8 @@ def _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
                 phi = min(max(base[i] + two_pi * (m - 2), 0.0), sw)
                 if m >= 3 and da == 0.0 and sw < two_pi and base[i] <= sw:
                     break  # a planar arc of less than a turn: its end is no start (docstring)
+                if m == 2 and outside:
+                    break  # no minimum inside the sweep: the ends hold the least distance (docstring)
             starts[m] = phi
             seen = False
             for k in range(2 if m >= 2 else 0, m):  # a turn clamped to an end still takes its steps
@@ -210,6 +233,11 @@ def _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
     return out
 
 
+#: a planar arc (or spiral) whose projection angle lies outside its sweep takes no Newton steps from
+#: the end it clamps to where its stationary band ``|sin(phi - base)| <= |r'| (r_max + 3 rho) /
+#: (r_min rho)`` (:func:`_nearest_arc`) is below this and the angle from ``base`` to the sweep is
+#: above twice the band (``asin(x) <= 2 x`` for ``x <= 0.5``)
+OUTSIDE_BAND = 0.5
 #: a planar spiral arc whose stationary band ``|sin(phi - base)| <= |r'| (r_max + 3 rho) / (r_min
 #: rho)`` (:func:`_nearest_arc`'s docstring, with ``|r - rho| <= r_max + rho``) reaches this is also
 #: scanned (:func:`_scanned_arc`): below it every stationary point lies within 6 deg of the
