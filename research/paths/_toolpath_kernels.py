@@ -181,18 +181,19 @@ def _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
         dr, da = (r1[j] - r0[j]) / sw, (a1[j] - a0[j]) / sw
         turns = int(np.ceil(sw / two_pi)) + 1
         best = np.inf
-        outside = False  # a planar arc of less than a turn whose stationary band near base misses the sweep
-        if da == 0.0 and sw < two_pi and base[i] > sw:
+        # a planar arc's stationary band about the projection angle: |sin(phi - base)| <= band / (r_lo rho)
+        band, rho, r_lo = 0.0, 0.0, min(r0[j], r1[j])
+        if da == 0.0:
             x, y = 0.0, 0.0
             for a in range(3):
                 x += (q[i, a] - c[j, a]) * e1[j, a]
                 y += (q[i, a] - c[j, a]) * e2[j, a]
             rho = math.sqrt(x * x + y * y)
-            r_lo, r_hi = min(r0[j], r1[j]), max(r0[j], r1[j])
-            band = abs(dr) * (r_hi + 3.0 * rho)
-            if band < OUTSIDE_BAND * r_lo * rho:
-                gap = min(base[i] - sw, two_pi - base[i])  # angle from base to the sweep [0, sw]
-                outside = gap > 2.0 * band / (r_lo * rho)
+            band = abs(dr) * (max(r0[j], r1[j]) + 3.0 * rho)
+        outside = False  # a planar arc of less than a turn whose band near base misses the sweep
+        if da == 0.0 and sw < two_pi and base[i] > sw and band < OUTSIDE_BAND * r_lo * rho:
+            gap = min(base[i] - sw, two_pi - base[i])  # angle from base to the sweep [0, sw]
+            outside = gap > 2.0 * band / (r_lo * rho)
         for m in range(turns + 2):
             if m == 0:
                 phi = 0.0
@@ -220,15 +221,9 @@ def _nearest_arc(q, rows, base, c, n, e1, e2, r0, r1, a0, a1, sweep):
                 e = p[a] - q[i, a]
                 acc += e * e
             best = min(best, math.sqrt(acc))
-        if da == 0.0 and dr != 0.0:  # a planar spiral: near its centre, minima away from the starts
-            x, y = 0.0, 0.0
-            for a in range(3):
-                x += (q[i, a] - c[j, a]) * e1[j, a]
-                y += (q[i, a] - c[j, a]) * e2[j, a]
-            rho = math.sqrt(x * x + y * y)
-            r_lo, r_hi = min(r0[j], r1[j]), max(r0[j], r1[j])
-            if abs(dr) * (r_hi + 3.0 * rho) >= SPIRAL_SCAN * r_lo * rho:
-                best = min(best, _scanned_arc(q[i], c[j], n[j], e1[j], e2[j], r0[j], dr, a0[j], sw, p, d1, d2))
+        if da == 0.0 and dr != 0.0 and band >= SPIRAL_SCAN * r_lo * rho:
+            # a planar spiral near its centre: minima away from the starts
+            best = min(best, _scanned_arc(q[i], c[j], n[j], e1[j], e2[j], r0[j], dr, a0[j], sw, p, d1, d2))
         out[i] = best
     return out
 
