@@ -30,7 +30,8 @@ CAM programs (beyond the paper, which assumes every block longer than the window
   vertex to the trajectory) and between vertices (distance from the trajectory, sampled every
   ``check_period``, to the programmed path; between two samples bounded from their distances to
   the blocks both see, and sampled more densely where that bound is above the tolerance: at most
-  ``_fir_certify.BETWEEN_RTOL`` of it more there), both up to the rounding of the profile (a fixed slack
+  ``_fir_certify.BETWEEN_RTOL`` of it more there; bounded in every round that may return its plan,
+  not in one whose vertex errors or limits already break), both up to the rounding of the profile (a fixed slack
   plus what the profile has accumulated by its end, ``_fir_verify.profile_rounding``, which grows
   with the program's duration). A violating dwell corner has its overlap shrunk by
   ``(eps / error)^(1/(n+1))`` (the small-overlap scaling of ``H2``), a violating full-overlap
