@@ -230,7 +230,7 @@ def test_rounds_that_repair_skip_the_bound_and_the_returned_plan_is_bounded_ever
     monkeypatch.setattr(_fir_verify.RoundChecks, "samples_check", recorded)
     tp = parse_gcode(_rounded_sine(400 if step < 0.1 else 300, step, rounding)).blocks
     plan = plan_fir(tp, 200.0, (0.06, 0.03), eps)
-    assert calls[0] == (False, False) and calls[-1] == (True, True)
+    assert any(not certify for certify, _ in calls[:-1]) and calls[-1] == (True, True)
     ev = plan.position.numpy_evaluator()
     t = np.arange(float(ev.breaks[0]), float(ev.breaks[-1]), 2e-5)
     assert tp.distance(ev(t)).max() <= eps * (1 + BETWEEN_RTOL) + 1e-9
