@@ -271,7 +271,7 @@ def one_check(plan, path: Polyline, tolerance: float):
     tab = inputs.pieces.table
     tp = _as_toolpath(path)
     M = tp.n_blocks
-    durations = np.where(tab.gap, np.append(inputs.gaps, 0.0)[tab.block], inputs.fraction * inputs.piece_tv)
+    durations = inputs.durations()
     tol = np.full(M, tolerance)
     Td = float(np.sum(inputs.delays))
 

@@ -76,11 +76,11 @@ def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits 
     slack = profile_rounding(pos, tp.ends[-1])
     centre = np.asarray(plan.corner_times)
     starts = np.asarray(plan.start_times)
-    times = []
+    times = [np.zeros(0)]  # the corners above the tolerance first
     if tp.n_blocks > 1:
         tol_v = np.minimum(tol[:-1], tol[1:])
         errors = vertex_distances(pos, np.asarray(tp.vertices), centre, 0.5 * Td, tol_v)
-        times.append(centre[errors > verified_bound(tol_v) + slack])
+        times[0] = centre[errors > verified_bound(tol_v) + slack]
     over_times, ratios, peaks = np.zeros(0), np.zeros(0), None
     if limits is not None:
         peaks = PiecePeaks(pos, limits)
@@ -88,7 +88,7 @@ def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits 
         over_times, ratios = 0.5 * (pos.breaks[:-1] + pos.breaks[1:])[over], peaks.per_piece[over]
     # the intervals between samples bounded only where the plan may be taken: no vertex error and
     # no limit broken already (a broken plan is never returned; plan_fir's rounds do the same)
-    whole = not (over_times.size or (times and times[0].size))
+    whole = not (over_times.size or times[0].size)
     positive = tol[tol > 0]
     accel = derivative_bound(pos, 2)
     period, margin = sample_period(accel, check_period, float(np.min(positive)) if positive.size else 0.0)
@@ -120,8 +120,8 @@ def _steady_strides(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, period: float,
     in strides of ``period`` [s]; unbounded on a path of lines, at rest or without a margin 1."""
     inputs = plan.profile
     table = inputs.pieces.table
-    fraction, piece_tv = np.asarray(inputs.fraction), np.asarray(inputs.piece_tv)
-    durations = np.where(table.gap, np.append(np.asarray(inputs.gaps), 0.0)[table.block], fraction * piece_tv)
+    piece_tv = np.asarray(inputs.piece_tv)
+    durations = inputs.durations()
     if not tp.is_arc.any():
         return durations, None
     rho = float(np.min(tp.radii[tp.is_arc])) - float(np.max(tol)) - 2.0 * margin

@@ -91,6 +91,13 @@ class ProfileInputs(eqx.Module):
             self.pieces.built = PiecewisePolynomial(device_array(breaks), device_array(coeffs))
         return self.pieces.built
 
+    def durations(self) -> np.ndarray:
+        """``(P,)`` length [s] of every input piece, the dwell of its block for a gap piece (the
+        durations the path check's thinned grid and ``RoundChecks`` read)."""
+        table = self.pieces.table
+        return np.where(table.gap, np.append(np.asarray(self.gaps), 0.0)[table.block],
+                        np.asarray(self.fraction) * np.asarray(self.piece_tv))
+
 
 def kernel_second_integral(r: np.ndarray, delays: np.ndarray) -> np.ndarray:
     """``H2(r)`` of ``_fir_chain.kernel_second_integral`` in NumPy (same subsets, same order)."""
