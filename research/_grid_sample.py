@@ -1,13 +1,9 @@
 """One-pass sampling of a piecewise polynomial and its derivatives on a uniform grid.
 
-The kernel behind :meth:`research.piecewise.PiecewisePolynomial.sample`. On the grid
-``t_i = b_0 + i Ts`` the piece index is non-decreasing in ``i``, so one walk over the samples
-locates every sample's piece (no search), scales that piece's coefficients once into the derivatives'
-``m! / (m - nu)! c_m`` (a few doubles of scratch, no table over the pieces: that was 4x the
-profile, 190 MB for a 77k-chord program) and evaluates the value and all requested derivatives from
-them, writing the ``orders x A`` outputs of a sample together. Each order is Horner's rule on those
-coefficients (the same operations, in the same order, as the per-order evaluation in
-:class:`research.piecewise.NumpyPiecewise`), so the results agree to rounding.
+The kernel behind :meth:`research.piecewise.PiecewisePolynomial.sample`: the grid's piece indices
+from the breaks (:func:`first_samples`, no search), then one compiled walk over the samples that
+evaluates every order of a sample together (``research._grid_sample_kernels``: the loop, its
+operations and why it is written out per coefficient count).
 
 Compiled with Numba: the loop carries the piece index from one sample to the next, which neither
 NumPy nor XLA express without a per-sample gather of every coefficient (measured 270-1100 ns per
@@ -16,9 +12,6 @@ sample on this machine, benchmarks/bench_sampling.py) against the ~30 ns it cost
 """
 
 from __future__ import annotations
-
-import functools
-import math
 
 import numpy as np
 
@@ -43,56 +36,6 @@ def first_samples(breaks: np.ndarray, sample_period: float, n_samples: int) -> n
     return np.clip(np.ceil(rel), 0, n_samples).astype(np.int64)
 
 
-@functools.lru_cache(maxsize=None)
-def _kernel(n_coeffs: int, orders: int):
-    """The sampling loop for ``n_coeffs = d + 1`` coefficients and ``orders`` orders, compiled once.
-
-    Generated with every Horner step written out, so that each sample is straight-line code (a
-    generic loop over ``m`` costs about 3x more per sample, measured in bench_sampling.py)."""
-    import numba  # here, not at module level: importing numba costs ~0.3 s that only sampling needs
-
-    D = n_coeffs
-    lines = [
-        "def kernel(breaks, first, coeffs, sample_period, out):",
-        "    K = coeffs.shape[0]",
-        "    n = out.shape[1]",
-        "    b0, bK = breaks[0], breaks[K]",
-        f"    tab = np.zeros(({orders}, {D}, out.shape[2]))",
-        "    start = 0",
-        "    for p in range(K):",
-        "        stop = first[p] if p < K - 1 else n",
-        "        if stop <= start:",
-        "            continue",
-        "        bp = breaks[p]",
-        "        for a in range(out.shape[2]):",
-    ]
-    # the piece's derivative coefficients m! / (m - nu)! c_m, once per piece (a few doubles, not a
-    # (K, orders, d + 1, A) table: that was 4x the profile's size at once)
-    for nu in range(min(orders, D)):
-        for m in range(nu, D):
-            scale = math.perm(m, nu)
-            lines.append(f"            tab[{nu}, {m}, a] = coeffs[p, {m}, a]" + ("" if scale == 1 else f" * {float(scale)!r}"))
-    lines += [
-        "        for i in range(start, stop):",
-        "            t = b0 + i * sample_period",
-        "            tau = min(max(t, b0), bK) - bp",
-        "            moving = t <= bK",
-        "            for a in range(out.shape[2]):",
-    ]
-    for nu in range(orders):
-        if nu >= n_coeffs:
-            lines.append(f"                out[{nu}, i, a] = 0.0")
-            continue
-        expr = f"tab[{nu}, {n_coeffs - 1}, a]"
-        for m in range(n_coeffs - 2, nu - 1, -1):
-            expr = f"({expr}) * tau + tab[{nu}, {m}, a]"
-        lines.append(f"                out[{nu}, i, a] = {expr}" + ("" if nu == 0 else " if moving else 0.0"))
-    lines.append("        start = max(start, stop)")
-    namespace: dict = {"np": np}
-    exec("\n".join(lines), namespace)  # noqa: S102 - source built above from two integers
-    return numba.njit(nogil=True)(namespace["kernel"])
-
-
 def sample_grid(breaks, coeffs, sample_period: float, n_samples: int, orders: int = 4) -> np.ndarray:
     """Value and derivatives ``0 .. orders - 1`` on the grid ``breaks[0] + i * sample_period``.
 
@@ -114,5 +57,7 @@ def sample_grid(breaks, coeffs, sample_period: float, n_samples: int, orders: in
     coeffs = np.ascontiguousarray(coeffs, dtype=np.float64)
     out = np.empty((orders, int(n_samples), coeffs.shape[2]))
     first = first_samples(breaks, float(sample_period), int(n_samples))
-    _kernel(coeffs.shape[1], int(orders))(breaks, first, coeffs, float(sample_period), out)
+    from research._grid_sample_kernels import kernel  # Numba: imported on first sampling
+
+    kernel(coeffs.shape[1], int(orders))(breaks, first, coeffs, float(sample_period), out)
     return out

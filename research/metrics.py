@@ -87,18 +87,28 @@ def peak_axis_values(traj: Trajectory, nu: int) -> np.ndarray:
     With an exact profile the break points (where piecewise-polynomial derivatives peak) are added
     to the samples and the largest sampled local maxima are refined between samples.
     """
+    return _peak_values(traj, _realized(traj), nu)
+
+
+def _realized(traj: Trajectory):
+    """The exact profile without pieces of rounding length, whose jumping derivative no motion
+    realizes (a golden search found a 1.1e-16 s piece of a limit-holding plan at 1.7x its jerk
+    limit); None without one."""
+    return None if traj.exact is None else traj.evaluator().realized()
+
+
+def _peak_values(traj: Trajectory, f, nu: int) -> np.ndarray:
+    """:func:`peak_axis_values` on the realized profile ``f`` (:func:`_realized`, made once for
+    every order by :func:`summarize`)."""
     samples = np.abs(np.asarray((traj.q, traj.v, traj.a, traj.j)[nu]))
     peak = samples.max(axis=0)
-    if traj.exact is None:
+    if f is None:
         return peak
-    # without pieces of rounding length, whose jumping derivative no motion realizes (a golden
-    # search found a 1.1e-16 s piece of a limit-holding plan at 1.7x its jerk limit)
-    f = traj.evaluator().realized()
     breaks = f.breaks
     # both one-sided values at each break: derivatives of order >= degree jump there
     eps = 1e-12 * max(1.0, float(breaks[-1]))
     left, right = f(breaks - eps, nu), f(breaks + eps, nu)
-    peak = np.maximum(peak, np.abs(np.concatenate([left, right])).max(axis=0))
+    peak = np.maximum(peak, np.maximum(np.abs(left).max(axis=0), np.abs(right).max(axis=0)))
     # a jump in the derivative below (e.g. the acceleration of a single FIR filter) makes this one
     # a Dirac impulse: report it as unbounded rather than as the zero seen between the jumps
     # (less the change of a continuous one over the 2 eps between its one-sided values, the
@@ -167,15 +177,16 @@ def summarize(traj: Trajectory, path: Polyline, programmed=None) -> MotionMetric
     where given (a G-code program's blocks, ``ToolPath``: its arcs exact, where ``path`` holds them
     as chords within a chord tolerance, which would count in the error)."""
     corners = corner_errors(traj, path)
+    realized = _realized(traj)
     return MotionMetrics(
         axes=traj.axes,
         cycle_time=cycle_time(traj),
         max_contour_error=max_contour_error(traj, path if programmed is None else programmed),
         max_corner_error=float(corners.max()) if corners.size else 0.0,
         corner_errors=corners,
-        peak_velocity=peak_axis_values(traj, 1),
-        peak_acceleration=peak_axis_values(traj, 2),
-        peak_jerk=peak_axis_values(traj, 3),
+        peak_velocity=_peak_values(traj, realized, 1),
+        peak_acceleration=_peak_values(traj, realized, 2),
+        peak_jerk=_peak_values(traj, realized, 3),
         peak_feed=peak_feed(traj),
     )
 

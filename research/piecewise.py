@@ -166,7 +166,7 @@ def _break(breaks, i: int) -> Array:
 
 @dataclass(frozen=True)
 class NumpyPiecewise:
-    """A :class:`PiecewisePolynomial` held as NumPy arrays, evaluated with NumPy only: for loops that
+    """A :class:`PiecewisePolynomial` held as NumPy arrays, evaluated without JAX: for loops that
     evaluate one profile many times (golden-section refinements in :mod:`research.metrics`), where
     the per-call cost of a JAX module's attribute access dominates.
 
@@ -179,33 +179,19 @@ class NumpyPiecewise:
 
     def __call__(self, t, nu: int = 0, snap: float = 0.0) -> np.ndarray:
         """Value (``nu = 0``) or ``nu``-th derivative at ``t`` of any shape ``S``; returns ``S + (A,)``
-        (arguments as :meth:`PiecewisePolynomial.evaluate_numpy`)."""
-        t = np.asarray(t, dtype=np.float64)
-        flat = t.reshape(-1)
-        if flat.size <= _EVAL_CHUNK:
-            value = self._values(flat, nu, snap)
-        else:  # in chunks: each gathers its pieces' whole coefficient rows (~100 bytes a time)
-            value = np.empty((flat.size, self.coeffs.shape[2]))
-            for i in range(0, flat.size, _EVAL_CHUNK):
-                value[i:i + _EVAL_CHUNK] = self._values(flat[i:i + _EVAL_CHUNK], nu, snap)
-        return value.reshape(t.shape + (self.coeffs.shape[2],))
+        (arguments as :meth:`PiecewisePolynomial.evaluate_numpy`). One compiled pass over the times
+        (``research._piecewise_eval``)."""
+        from research._piecewise_eval import evaluate  # Numba: imported on first use
 
-    def _values(self, flat: np.ndarray, nu: int, snap: float) -> np.ndarray:
-        """:meth:`__call__` at the times ``flat`` ``(n,)``: ``(n, A)``."""
-        breaks, coeffs = self.breaks, self.coeffs
-        K, deg = coeffs.shape[0], coeffs.shape[1] - 1
-        clipped = np.clip(flat, breaks[0], breaks[-1])
-        piece = np.clip(np.searchsorted(breaks, clipped + snap, side="right") - 1, 0, K - 1)
-        tau = (clipped - breaks[piece])[:, None]
-        if nu > deg:
-            return np.zeros((flat.size, coeffs.shape[2]))
-        c = coeffs[piece]  # one gather of whole rows
-        value = c[:, deg, :] * math.perm(deg, nu)
-        for m in range(deg - 1, nu - 1, -1):
-            value = value * tau + c[:, m, :] * math.perm(m, nu)
-        if nu:
-            value = np.where(((flat >= breaks[0]) & (flat <= breaks[-1]))[:, None], value, 0.0)
-        return value
+        t = np.asarray(t, dtype=np.float64)
+        flat = np.ascontiguousarray(t.reshape(-1))
+        K, D, A = self.coeffs.shape
+        value = np.zeros((flat.size, A))
+        if nu < D:
+            scale = np.array([float(math.perm(m, nu)) if m >= nu else 0.0 for m in range(D)])
+            evaluate(np.ascontiguousarray(self.breaks, dtype=np.float64), np.ascontiguousarray(self.coeffs, dtype=np.float64),
+                     flat, int(nu), float(snap), scale, value)
+        return value.reshape(t.shape + (A,))
 
     def realized(self) -> "NumpyPiecewise":
         """The same profile without its pieces shorter than :data:`DEGENERATE_PIECE`: each is
@@ -227,9 +213,6 @@ class NumpyPiecewise:
         drop_break[drop_break == K] = K - 1  # the last piece: the previous one runs on to the end
         return NumpyPiecewise(np.delete(self.breaks, drop_break), self.coeffs[~short])
 
-
-#: times evaluated at once by :meth:`NumpyPiecewise.__call__` (its temporaries: this many times' worth)
-_EVAL_CHUNK = 1 << 16
 
 #: pieces shorter than this [s] are rounding, not motion: two breaks that coincide up to rounding
 #: leave a piece of ~1e-16 s whose highest (discontinuous) derivative carries both neighbours'
