@@ -337,8 +337,8 @@ class ToolPath:
         ``K``-th nearest sample lies beyond that radius the bound is the distance, and the other
         points take a ball query of that radius. The minimum over a set of blocks that holds the
         nearest one, each block's distance the same arithmetic: the same values as ball queries
-        alone, without their per-point lists (3.4 -> 0.9 s on 858,073 samples of a 76,461-chord
-        program, benchmarks/README.md)."""
+        alone, without their per-point lists (2.0 -> 0.80 s on the 858,073 samples of a
+        76,461-chord program, benchmarks/README.md)."""
         tree, owner, h = self._tree()
         K = min(NEAREST_SAMPLES, tree.n)
         near_d, near = tree.query(q, k=K)
