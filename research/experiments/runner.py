@@ -20,13 +20,13 @@ Example:
 from __future__ import annotations
 
 import io
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from research.experiments import json_text
 from research.experiments.config import ExperimentConfig, input_files, load_config
 from research.experiments.paper_numbers import check_paper_numbers
 from research.experiments.store import COSMETIC, ResultStore, atomic_write, code_version, file_digest, result_key
@@ -160,7 +160,7 @@ def run_experiment(config_file: str | Path, *, cache_dir: str | Path = DEFAULT_C
     shown = ", ".join(f"{k} = {v:.6g} {record['units'][k]}" for k, v in record["scalars"].items())
     log(f"[2/3] results: {shown}")
     out = Path(cache_dir if results_dir is None else results_dir) / stem
-    results_file = atomic_write(out / "results.json", json.dumps(record, indent=2).encode())
+    results_file = atomic_write(out / "results.json", json_text.dumps(record, indent=2).encode())
     # files of a stored entry are read back through their manifest checksums (never served damaged)
     stored = (lambda name: entry.read_bytes(name) if entry.file(name) else None) if entry else files.get
     written = ["results.json"]

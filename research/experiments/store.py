@@ -48,6 +48,7 @@ from pathlib import Path
 import numpy as np
 
 from research.errors import StoreError
+from research.experiments import json_text
 from research.experiments.store_io import TMP_SUFFIX, atomic_write, fsync_dir, store_error, write_synced
 from research.experiments.store_key import COSMETIC, code_version, file_digest, json_default, result_key
 
@@ -173,7 +174,7 @@ class ResultStore:
             StoreError: the store cannot be written (full disk, permissions); no partial entry is left.
         """
         final = self.folder(key)
-        contents = {"record.json": json.dumps(record, indent=1, default=json_default).encode()}
+        contents = {"record.json": json_text.dumps(record, indent=1, default=json_default).encode()}
         if arrays:
             buf = io.BytesIO()
             np.savez(buf, **{k: np.asarray(v) for k, v in arrays.items()})

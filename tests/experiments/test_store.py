@@ -233,3 +233,23 @@ def test_stored_file_copied_in_pieces_is_checked_and_never_half_written(tmp_path
         atomic_write(target, e.chunks("trajectory.npz"))
     assert target.read_bytes() == data
     assert sorted(p.name for p in target.parent.iterdir()) == ["trajectory.npz"]
+
+
+def test_readable_json_is_json_dumps_with_number_lists_inline():
+    """``json_text.dumps`` parses back to what ``json.dumps`` writes (numbers in the same ``repr``
+    digits, NaN and inf as ``json`` writes them, bools and strings in lists left as they are, NumPy
+    scalars through ``default``), and a list of numbers takes one line where ``json.dumps(indent=2)``
+    takes one per item."""
+    import json
+
+    from research.experiments import json_text
+    from research.experiments.store_key import json_default
+
+    rng = np.random.default_rng(3)
+    doc = {"scalars": {"t": 1.25, "n": 3}, "corners": rng.normal(size=500).tolist(), "flags": [True, False],
+           "mixed": [1, "a", [2.0, 3.0]], "rows": [{"x": [0.1, 1e-300, float("nan"), float("inf")]}],
+           "np": [np.float64(0.5), np.int64(7)], "empty": [], "text": "a \"quoted\" [1, 2]"}
+    text = json_text.dumps(doc, indent=2, default=json_default)
+    want = json.dumps(doc, indent=2, default=json_default)
+    assert json.dumps(json.loads(text)) == json.dumps(json.loads(want))
+    assert len(text.splitlines()) < 40 < len(want.splitlines())
