@@ -21,6 +21,8 @@ Example:
 
 from __future__ import annotations
 
+import contextlib
+import threading
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -141,7 +143,10 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
                                              f"{path.n_segments} chords" if path_counts else f"{path.n_segments} segments"))
             if getattr(ic, "limits_from", None) is not None:  # the peaks of an earlier interpolator as the limits
                 ic = _limits_of(ic, next(tr for lb, _, tr, _ in objects["runs"] if lb == ic.limits_from))
-            traj, info, plan = interpolate(ic, path, program_feeds, blocks, pauses)
+            with _notice_after(NOTICE_AFTER_S, log, f"interpolator {label}: still planning after {NOTICE_AFTER_S:g} s "
+                               "(the first plan on a machine also compiles the planner's Numba kernels, "
+                               "30-60 s once; kept in __pycache__ beside the modules or $NUMBA_CACHE_DIR)"):
+                traj, info, plan = interpolate(ic, path, program_feeds, blocks, pauses)
             # a program's contour error against its own blocks (arcs exact, not their chords)
             metrics = summarize(traj, path, programmed=None if blocks is None else blocks.blocks)
             objects.setdefault("runs", []).append((label, plan, traj, metrics))
@@ -185,6 +190,23 @@ def evaluate(cfg: ExperimentConfig, base: str | Path, log=None, *, model_file: b
         scalars = {k: v for k, v in scalars.items() if _metric_name(k) in cfg.metrics}
     units = {k: METRIC_UNITS[_metric_name(k)] for k in scalars}
     return Evaluation({"scalars": scalars, "units": units, "details": details}, arrays, objects)
+
+
+#: seconds of a stage without output after which the run says what it is doing (a silent first run
+#: that compiles for ~40 s reads as a hang)
+NOTICE_AFTER_S = 10.0
+
+
+@contextlib.contextmanager
+def _notice_after(seconds: float, log, message: str):
+    """Log ``message`` once if the block is still running after ``seconds`` (a timer thread)."""
+    timer = threading.Timer(seconds, log, args=(message,))
+    timer.daemon = True
+    timer.start()
+    try:
+        yield
+    finally:
+        timer.cancel()
 
 
 def _pauses_planned(cfg: ExperimentConfig, program):

@@ -345,3 +345,20 @@ def test_time_optimal_windows_take_a_braking_lookahead(tmp_path):
     with pytest.raises(ConfigError, match="lookahead"):
         validate({"name": "t", "reproduces": "-", "path": {"points_mm": pts.tolist()},
                   "interpolator": ic | {"lookahead": "brake"}}, tmp_path / "t.toml")
+
+
+def test_a_long_stage_says_what_it_is_doing_once():
+    """A stage still running after the notice delay logs its message once (the first plan on a
+    machine compiles for ~40 s without other output); a stage that ends before it logs nothing."""
+    import time
+
+    from research.experiments.evaluate import _notice_after
+
+    said = []
+    with _notice_after(0.05, said.append, "still planning"):
+        time.sleep(0.3)
+    assert said == ["still planning"]
+    with _notice_after(0.2, said.append, "not this"):
+        pass
+    time.sleep(0.3)
+    assert said == ["still planning"]
