@@ -18,11 +18,20 @@ from __future__ import annotations
 import numba
 
 
+#: breaks the search doubles its way from the last count before it bisects the rest of that side
+#: (a time far from the last one then costs about a plain bisection, ``log2 K`` reads). Swept on
+#: 710,000 pieces (8 / 64 / 1024 / no bound): random times 239 / 272 / 289 / 322 ns, sorted times
+#: 15.8 / 17.1 / 16.2 / 16.0 ns an evaluation (NumPy's searchsorted and gather: 353 / 54 ns); 64
+#: still reaches the next golden-section row (a vertex on, ~10 pieces) by doubling
+_GALLOP = 1 << 6
+
+
 @numba.njit(cache=True, nogil=True, inline="always")
 def _count_at_most(breaks, x, g):
     """The number of ``breaks`` ``<= x`` (``np.searchsorted(breaks, x, side="right")``; ``breaks``
     non-decreasing, NaN sorting last), searched from the guess ``g``: doubling steps away from it
-    until the count is bracketed, then bisection. The count is unique, so any start gives the same
+    until the count is bracketed (at most up to :data:`_GALLOP` breaks away; beyond, the rest of
+    that side), then bisection. The count is unique, so any start gives the same
     one; from the previous time's it takes a few steps where the times come in order (a profile's
     breaks, golden-section rows in vertex order) instead of ``log2 K`` reads across the profile."""
     n = breaks.size
@@ -30,16 +39,16 @@ def _count_at_most(breaks, x, g):
         return n
     if g < n and breaks[g] <= x:  # the count is above g
         lo, step = g + 1, 1
-        while lo + step - 1 < n and breaks[lo + step - 1] <= x:
+        while step <= _GALLOP and lo + step - 1 < n and breaks[lo + step - 1] <= x:
             lo += step
             step *= 2
-        hi = min(lo + step - 1, n)
+        hi = n if step > _GALLOP else min(lo + step - 1, n)
     else:  # at most g
         hi, step = g, 1
-        while hi - step >= 0 and not breaks[hi - step] <= x:
+        while step <= _GALLOP and hi - step >= 0 and not breaks[hi - step] <= x:
             hi -= step
             step *= 2
-        lo = max(hi - step + 1, 0)
+        lo = 0 if step > _GALLOP else max(hi - step + 1, 0)
     while lo < hi:
         mid = (lo + hi) >> 1
         if breaks[mid] <= x:
