@@ -5,9 +5,10 @@ The golden-section refinements and break scans of :mod:`research.metrics` evalua
 millions of scattered times (a 76,461-chord program: 858,073 samples, 710,032 pieces). In NumPy each
 evaluation gathers its piece's whole coefficient rows into temporaries and runs Horner's rule over
 them array by array; here one loop per time finds the piece (``np.searchsorted(side="right")``'s
-count, searched from the previous time's piece) and runs Horner's rule in registers. The same
-operations in the same order as the NumPy form it replaced (clip, search, local time, ``c_m m! / (m - nu)!`` by
-Horner), so the same values bit for bit (tests/test_piecewise.py compares the two).
+count, searched from the previous time's: ``research._sorted_search.right_from``) and runs Horner's
+rule in registers. The same operations in the same order as the NumPy form it replaced (clip,
+search, local time, ``c_m m! / (m - nu)!`` by Horner), so the same values bit for bit
+(tests/test_piecewise.py compares the two).
 
 Imported on first evaluation (Numba's import costs ~0.3 s that a run served from the store never
 needs); compiled once and cached on disk.
@@ -17,45 +18,7 @@ from __future__ import annotations
 
 import numba
 
-
-#: breaks the search doubles its way from the last count before it bisects the rest of that side
-#: (a time far from the last one then costs about a plain bisection, ``log2 K`` reads). Swept on
-#: 710,000 pieces (8 / 64 / 1024 / no bound): random times 239 / 272 / 289 / 322 ns, sorted times
-#: 15.8 / 17.1 / 16.2 / 16.0 ns an evaluation (NumPy's searchsorted and gather: 353 / 54 ns); 64
-#: still reaches the next golden-section row (a vertex on, ~10 pieces) by doubling
-_GALLOP = 1 << 6
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
-def _count_at_most(breaks, x, g):
-    """The number of ``breaks`` ``<= x`` (``np.searchsorted(breaks, x, side="right")``; ``breaks``
-    non-decreasing, NaN sorting last), searched from the guess ``g``: doubling steps away from it
-    until the count is bracketed (at most up to :data:`_GALLOP` breaks away; beyond, the rest of
-    that side), then bisection. The count is unique, so any start gives the same
-    one; from the previous time's it takes a few steps where the times come in order (a profile's
-    breaks, golden-section rows in vertex order) instead of ``log2 K`` reads across the profile."""
-    n = breaks.size
-    if x != x:
-        return n
-    if g < n and breaks[g] <= x:  # the count is above g
-        lo, step = g + 1, 1
-        while step <= _GALLOP and lo + step - 1 < n and breaks[lo + step - 1] <= x:
-            lo += step
-            step *= 2
-        hi = n if step > _GALLOP else min(lo + step - 1, n)
-    else:  # at most g
-        hi, step = g, 1
-        while step <= _GALLOP and hi - step >= 0 and not breaks[hi - step] <= x:
-            hi -= step
-            step *= 2
-        lo = 0 if step > _GALLOP else max(hi - step + 1, 0)
-    while lo < hi:
-        mid = (lo + hi) >> 1
-        if breaks[mid] <= x:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
+from research._sorted_search import right_from
 
 
 @numba.njit(cache=True, nogil=True)
@@ -81,7 +44,7 @@ def evaluate(breaks, coeffs, times, nu, snap, scale, out):
         elif t > bK:
             c = bK
         x = c + snap
-        g = _count_at_most(breaks, x, g)
+        g = K + 1 if x != x else right_from(breaks, x, g)  # NaN sorts last, as in NumPy
         p = min(max(g - 1, 0), K - 1)
         tau = c - breaks[p]
         for a in range(A):

@@ -33,6 +33,9 @@ import math
 import numba
 import numpy as np
 
+from research._sorted_search import left as _left, left_in as _left_in, right as _right, right_in as _right_in
+from research._sorted_search import right_from as _right_from  # noqa: F401 (the verification kernels' search)
+
 _OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
 
 #: rounding slack of every tolerance check of the planner: an error [mm] passes a tolerance ``eps``
@@ -52,69 +55,6 @@ _NEAR_BUDGET = 2.0 ** 20
 def verified_bound(tolerance):
     """The largest error [mm] that passes ``tolerance`` [mm] (scalar or array), rounding slack included."""
     return tolerance * (1.0 + VERIFY_RTOL) + VERIFY_ATOL
-
-
-@numba.njit(**_OPTIONS)
-def _left_in(a, v, lo, hi):
-    """``np.searchsorted(a, v, side="left")`` where the answer is known to lie in ``[lo, hi]``."""
-    while lo < hi:
-        mid = (lo + hi) >> 1
-        if a[mid] < v:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
-
-
-@numba.njit(**_OPTIONS)
-def _right_in(a, v, lo, hi):
-    """``np.searchsorted(a, v, side="right")`` where the answer is known to lie in ``[lo, hi]``."""
-    while lo < hi:
-        mid = (lo + hi) >> 1
-        if a[mid] <= v:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
-
-
-@numba.njit(**_OPTIONS)
-def _left(a, v):
-    """``np.searchsorted(a, v, side="left")``."""
-    return _left_in(a, v, 0, a.size)
-
-
-@numba.njit(**_OPTIONS)
-def _right(a, v):
-    """``np.searchsorted(a, v, side="right")``."""
-    return _right_in(a, v, 0, a.size)
-
-
-@numba.njit(**_OPTIONS)
-def _right_from(a, v, hint):
-    """``np.searchsorted(a, v, side="right")`` (the count of entries ``<= v``, unique on a sorted
-    array) found from a nearby index ``hint`` by a galloping search: steps of 1, 2, 4, ... away from
-    ``hint`` until the answer is bracketed, then a binary search in the bracket. ``O(log distance)``
-    for queries that move little along ``a``."""
-    n = a.size
-    i = min(max(hint, 0), n)
-    if i > 0 and a[i - 1] > v:  # the answer is below i
-        hi, step = i, 1
-        lo = hi - step
-        while lo > 0 and a[lo - 1] > v:
-            hi = lo
-            step *= 2
-            lo = max(hi - step, 0)
-        lo = max(lo, 0)
-    else:  # the answer is at or above i
-        lo, step = i, 1
-        hi = lo + step
-        while hi <= n and a[hi - 1] <= v:
-            lo = hi
-            step *= 2
-            hi = lo + step
-        hi = min(hi, n)
-    return _right_in(a, v, lo, hi)  # binary search inside the bracket
 
 
 @numba.njit(**_OPTIONS)
