@@ -13,6 +13,8 @@ import json
 import re
 import secrets
 
+import numpy as np
+
 
 def dumps(obj, indent: int = 2, default=None) -> str:
     """``json.dumps(obj, indent=indent, default=default)`` with every list (or tuple) whose items
@@ -45,9 +47,5 @@ def dumps(obj, indent: int = 2, default=None) -> str:
 
 
 def _is_number(v) -> bool:
-    """A JSON number: int or float (NumPy scalars too, through ``default``), not a bool."""
-    if isinstance(v, bool):
-        return False
-    if isinstance(v, (int, float)):
-        return True
-    return type(v).__module__ == "numpy" and getattr(v, "ndim", None) == 0 and v.dtype.kind in "iuf"
+    """A JSON number: an int or float, NumPy's too (written through ``default``), not a bool."""
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
