@@ -249,16 +249,8 @@ def profile(start, geo, block, gap, fraction, piece_tv, gaps, delays, joins=None
     ``joins``: ``PulseTable.joins`` (None: no piece goes on with the one before it), whose pieces
     at their predecessor's feed lengthen it (:func:`_input_pulses`)."""
     delays = np.ascontiguousarray(delays, dtype=np.float64)
-    block, gaps = np.ascontiguousarray(block), np.ascontiguousarray(gaps, dtype=np.float64)
-    joins = np.zeros(block.size, dtype=bool) if joins is None else np.ascontiguousarray(joins)
-    vb, vl, vc, block = _input_pulses(np.ascontiguousarray(geo, dtype=np.float64), block,
-                                      np.ascontiguousarray(gap), np.ascontiguousarray(fraction, dtype=np.float64),
-                                      np.ascontiguousarray(piece_tv, dtype=np.float64), gaps, joins)
-    Td = 0.0
-    for d in delays.tolist():  # summed in order, as the compiled build did
-        Td += d
     # the blocks' times first: no filter's input is held once the next one is built (memory)
-    starts, ends, centre = _block_times(vb, block, gaps, Td)
+    (vb, vl, vc), (starts, ends, centre) = _pulses_and_times(geo, block, gap, fraction, piece_tv, gaps, delays, joins)
     for k in range(delays.size - 1):
         vb, vl, vc = _moving_average(vb, vl, vc, delays[k])
     # the last filter integrated as it goes: the position, closed by a rest piece of zero length (as
@@ -267,6 +259,38 @@ def profile(start, geo, block, gap, fraction, piece_tv, gaps, delays, joins=None
     # at rest, ``Trajectory.from_piecewise``)
     pos_breaks, _, position = _filter(vb, vl, vc, delays[-1], start, True)
     return starts, ends, pos_breaks, position, centre
+
+
+def schedule_span(geo, block, gap, fraction, piece_tv, gaps, delays, joins=None):
+    """The block times and the span of :func:`profile` without its filters (the same arguments):
+    ``(block_starts, block_ends, span, centre)`` with ``span`` ``(2,)`` the profile's first and
+    last break [s], the same floats. Each filter's merge runs from its input's first break to
+    its last plus ``T`` (``_merge_step``: ``breaks[K] + T``, rounded, the largest break it
+    meets; an empty last piece leaves that value all the same), so the span is the input's
+    first break and its last plus each delay in turn, rounded after each. What ``plan_fir``
+    without refinement or limits needs: its plan keeps the inputs, not the coefficients
+    (:class:`ProfileInputs`), and checks nothing on the profile."""
+    delays = np.ascontiguousarray(delays, dtype=np.float64)
+    (vb, _, _), times = _pulses_and_times(geo, block, gap, fraction, piece_tv, gaps, delays, joins)
+    end = float(vb[-1])
+    for d in delays.tolist():
+        end = end + d
+    starts, ends, centre = times
+    return starts, ends, np.array([float(vb[0]), end]), centre
+
+
+def _pulses_and_times(geo, block, gap, fraction, piece_tv, gaps, delays, joins):
+    """``((breaks, low parts, coefficients) of the input pulses, (block starts, ends, corner
+    instants))`` of :func:`profile` (:func:`_input_pulses`, :func:`_block_times`)."""
+    block, gaps = np.ascontiguousarray(block), np.ascontiguousarray(gaps, dtype=np.float64)
+    joins = np.zeros(block.size, dtype=bool) if joins is None else np.ascontiguousarray(joins)
+    vb, vl, vc, block = _input_pulses(np.ascontiguousarray(geo, dtype=np.float64), block,
+                                      np.ascontiguousarray(gap), np.ascontiguousarray(fraction, dtype=np.float64),
+                                      np.ascontiguousarray(piece_tv, dtype=np.float64), gaps, joins)
+    Td = 0.0
+    for d in delays.tolist():  # summed in order, as the compiled build did
+        Td += d
+    return (vb, vl, vc), _block_times(vb, block, gaps, Td)
 
 
 @numba.njit(inline="always", **_OPTIONS)

@@ -156,10 +156,16 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         frac, piece_tv, cruise, overlaps = timing(*candidate, top=top)
         return frac, piece_tv, cruise, overlaps, np.concatenate([Td_np - overlaps, np.zeros(Mp - M + 1)])
 
-    def schedule(factor, head, tail, full, shrink, others, arc_rel):
+    def schedule(factor, head, tail, full, shrink, others, arc_rel, build=True):
         """``(feeds, overlaps, pulse lengths, pulse starts, position, corner instants, inputs)`` on
-        concrete arrays (the position a :class:`NumpyPiecewise`)."""
+        concrete arrays (the position a :class:`NumpyPiecewise`; without ``build`` only its first
+        and last break ``(2,)``, ``_fir_profile.schedule_span``: a plan that checks nothing)."""
         frac, piece_tv, cruise, overlaps, gaps = timing_gaps(factor, head, tail, full, shrink, others, arc_rel)
+        if not build:
+            starts, ends, span, centre = _fir_profile.schedule_span(table.geo, table.block, table.gap, frac, piece_tv,
+                                                                    gaps, d_np, table.joins)
+            return (F_np * cruise, overlaps, ends[:M] - starts[:M], starts[:M], span, centre[: M - 1],
+                    (factor, head, tail, full, shrink, others, arc_rel), None)
         starts, ends, breaks, coeffs, centre = _fir_profile.profile(tp.start, table.geo, table.block, table.gap, frac,
                                                                     piece_tv, gaps, d_np, table.joins)
         durations = np.where(table.gap, np.append(gaps, 0.0)[table.block], frac * piece_tv)  # of the input pieces
@@ -313,7 +319,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
             bound = prefix_bound(factor, head, tail, full, shrink, others, arc_rel, K, limit_v, repairs)
             if bound is not None:
                 yield bound, repaired, False
-        state = schedule(factor, head, tail, full, shrink, others, arc_rel)
+        state = schedule(factor, head, tail, full, shrink, others, arc_rel, build=refine or limits is not None)
         rounds, deviation = 0, float("nan")
         if refine or limits is not None:
             max_rounds = MAX_ROUNDS + (2 * M if limits is not None else 0)
@@ -542,7 +548,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
                 heapq.heappush(queue, (max(bound, step), i, steps))
             except StopIteration as done:
                 state, rounds, deviation, repaired = done.value
-                breaks = state[4].breaks
+                breaks = state[4] if isinstance(state[4], np.ndarray) else state[4].breaks  # the span alone: unchecked
                 t = float(breaks[-1] - breaks[0])
                 if t < best_time:  # kept without its profile (rebuilt from the inputs when used)
                     best, best_time = (state[:4] + ((breaks[0], breaks[-1]), state[5], state[6]), rounds, deviation), t

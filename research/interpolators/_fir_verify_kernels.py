@@ -573,4 +573,7 @@ def charge_samples(t, d2, block, centre, tol_block, is_arc, half_window, redo, w
             deviation = max(deviation, dist)
             if keep and dist > worst[key]:
                 worst[key] = dist
-    return deviation, over[:n_over], o_dist[:n_over], o_limit[:n_over], o_key[:n_over], o_keep[:n_over], s_limit, s_key
+    # the violations copied out of their (N,) buffers: they wait in batches across chunks
+    # (``_fir_verify._scan``), where views would keep every chunk's buffers (0.6 kB a segment)
+    return (deviation, over[:n_over], o_dist[:n_over].copy(), o_limit[:n_over].copy(), o_key[:n_over].copy(),
+            o_keep[:n_over].copy(), s_limit, s_key)

@@ -67,6 +67,38 @@ def test_profile_matches_the_jax_build(delays):
     np.testing.assert_allclose(ours(np.array([breaks[-1]]))[0], tp.ends[-1], atol=1e-9)
 
 
+@pytest.mark.parametrize("n_filters", [1, 2, 3])
+def test_schedule_span_is_the_built_profiles_first_and_last_break(n_filters):
+    """``schedule_span`` (no filter run) against the profile built by the filters: the same block
+    starts, ends and corner instants, and a span equal, bit for bit, to the built profile's first
+    and last break; on random programs of lines and arcs with random shares, feeds and gaps (full
+    overlaps, so empty gap pieces, included), and through ``plan_fir(refine=False)``, whose plan
+    keeps the span and builds the profile only when read."""
+    from research.interpolators import plan_fir
+
+    rng = np.random.default_rng(40 + n_filters)
+    for trial in range(40):
+        tp = random_program(rng, arcs=bool(trial % 2))
+        table = PulseTable.from_path(tp)
+        M, Mp = tp.n_blocks, table.m_pad
+        d = rng.uniform(0.002, 0.12, n_filters)
+        head, tail = rng.uniform(0.0, 0.4, M), rng.uniform(0.0, 0.4, M)
+        frac, factor = table.pieces(head, tail, rng.uniform(0.3, 1.0, (M, 3)),
+                                    rng.uniform(0.5, 1.0, table.arc_pieces.size))
+        piece_tv = np.concatenate([tp.lengths, np.ones(Mp - M + 1)])[table.block] / (rng.uniform(20, 300) * factor)
+        gaps = np.where(rng.random(M - 1) < 0.5, 0.0, rng.uniform(0.0, d.sum(), M - 1))
+        gaps = np.concatenate([gaps, np.zeros(Mp - M + 1)])
+        args = (table.geo, table.block, table.gap, frac, piece_tv, gaps, d, table.joins)
+        starts, ends, breaks, _, centre = _fir_profile.profile(tp.start, *args)
+        s2, e2, span, c2 = _fir_profile.schedule_span(*args)
+        for got, want in ((s2, starts), (e2, ends), (c2, centre)):
+            np.testing.assert_array_equal(got, want)
+        assert span[0] == breaks[0] and span[1] == breaks[-1]
+        plan = plan_fir(tp, rng.uniform(20, 300), d, rng.uniform(0.01, 0.2), refine=False)
+        built = plan.position.breaks  # the profile built on first read, from the plan's inputs
+        assert float(plan.cycle_time) == float(built[-1] - built[0])
+
+
 def test_overlaps_follow_eq14_and_the_jax_inversion():
     """Two filters: eq 14's branches, ``(24 T1 T2 eps / (F sin(b/2)))^(1/3)`` up to ``2 T2`` and
     ``T2 + sqrt(4 T1 eps / (F sin(b/2)) - T2^2 / 3)`` beyond (with ``|dF| = 2 F sin(b/2)``); full
