@@ -25,3 +25,15 @@ def device_array(x) -> Array:
         return jnp.asarray(x, dtype=jnp.float64)
     a = np.asarray(x, dtype=np.float64)  # (np.ascontiguousarray would make a 0-d array 1-d)
     return jax.device_put(a if a.flags.c_contiguous else np.ascontiguousarray(a))
+
+
+def device_arrays(*xs) -> tuple[Array, ...]:
+    """:func:`device_array` of each of ``xs``, the NumPy ones in one transfer: ``jax.device_put``
+    has a fixed cost per call (about 20 us on the CPU, a sixth of an unrefined 1,000-block
+    ``plan_fir``), which one call for the tuple pays once."""
+    out = [device_array(x) if isinstance(x, jax.Array) else None for x in xs]
+    host = [(i, np.asarray(x, dtype=np.float64)) for i, x in enumerate(xs) if out[i] is None]
+    moved = jax.device_put([a if a.flags.c_contiguous else np.ascontiguousarray(a) for _, a in host])
+    for (i, _), y in zip(host, moved):
+        out[i] = y
+    return tuple(out)

@@ -20,7 +20,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from research._device import device_array
+from research._device import device_array, device_arrays
 from research.errors import ConvergenceError, ParameterError
 from research.interpolators._fir_blocks import PulseTable, build_profile
 from research.interpolators._fir_feed import arc_feed_caps
@@ -629,14 +629,16 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
     state, rounds, deviation = verify(first, capped)
     if traced:
         (feeds, overlaps, pulse, starts, profile, centre), pieces = traced_plan(*state[6])
-    else:
-        feeds, overlaps, pulse, starts, centre = (device_array(state[i]) for i in (0, 1, 2, 3, 5))
+        delays, vertices = device_array(delays), device_array(tp.vertices)
+    else:  # the concrete arrays in one transfer (research._device.device_arrays)
+        feeds, overlaps, pulse, starts, centre, delays, vertices = device_arrays(*(state[i] for i in (0, 1, 2, 3, 5)),
+                                                                                  delays, tp.vertices)
         # the profile's inputs, not its coefficients (the same arrays when rebuilt: ``settle``'s release)
         frac, piece_tv, _, _, gaps = timing_gaps(*state[6])
         profile = _fir_profile.ProfileInputs(table, frac, piece_tv, gaps, d_np, tp.start, np.array(state[4]))
         pieces = (frac, piece_tv)
-    return (starts, pulse, overlaps, feeds, device_array(delays), profile, centre, device_array(tp.vertices),
-            float(deviation), int(rounds), tp.axes), pieces + (table.first_motion,)
+    return (starts, pulse, overlaps, feeds, delays, profile, centre, vertices, float(deviation), int(rounds),
+            tp.axes), pieces + (table.first_motion,)
 
 
 @functools.partial(jax.jit, static_argnames="turn")

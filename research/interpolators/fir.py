@@ -323,7 +323,7 @@ def plan_fir(path, feed, delays, tolerance, *, refine: bool = True, limits: Axis
             scale /= ratio
             candidate, ratio = without_limits(scale)
         return best
-    return min(plans, key=lambda p: float(_primal(p.cycle_time)))
+    return plans[0] if len(plans) == 1 else min(plans, key=lambda p: float(_primal(p.cycle_time)))
 
 
 #: tries of the plan without limits at scaled feeds where it breaks the limits (``plan_fir``):
