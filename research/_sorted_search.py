@@ -1,8 +1,8 @@
 """Searches in sorted arrays, compiled: ``np.searchsorted``'s counts inside compiled loops.
 
-Shared by the planner's kernels (``research.interpolators._fir_kernels`` and the modules that import
-them from there) and the piecewise evaluator (``research._piecewise_eval``), which sit on both sides
-of the package's layers. Each returns the same index as ``np.searchsorted`` on a non-decreasing array
+Shared by the planner's kernels (``research.interpolators._fir_kernels``, ``_fir_verify_kernels``,
+``_fir_candidate_kernels``) and the piecewise evaluator (``research._piecewise_eval``), which sit on
+both sides of the package's layers. Each returns the same index as ``np.searchsorted`` on a non-decreasing array
 (no NaN; callers that meet one handle it before).
 """
 
@@ -72,3 +72,28 @@ def right_from(a, v, hint):
             hi = lo + step
         hi = min(hi, n)
     return right_in(a, v, lo, hi)  # binary search inside the bracket
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def left_from(a, v, hint):
+    """``np.searchsorted(a, v, side="left")`` (the count of entries ``< v``) found from a nearby
+    index ``hint`` by the galloping search of :func:`right_from`."""
+    n = a.size
+    i = min(max(hint, 0), n)
+    if i > 0 and a[i - 1] >= v:  # the answer is below i
+        hi, step = i, 1
+        lo = hi - step
+        while lo > 0 and a[lo - 1] >= v:
+            hi = lo
+            step *= 2
+            lo = max(hi - step, 0)
+        lo = max(lo, 0)
+    else:  # the answer is at or above i
+        lo, step = i, 1
+        hi = lo + step
+        while hi <= n and a[hi - 1] < v:
+            lo = hi
+            step *= 2
+            hi = lo + step
+        hi = min(hi, n)
+    return left_in(a, v, lo, hi)  # binary search inside the bracket

@@ -15,6 +15,7 @@ import math
 import numba
 import numpy as np
 
+from research._sorted_search import left_from, right_from
 from research.interpolators._fir_kernels import _OPTIONS
 
 
@@ -297,44 +298,6 @@ def line_piece_feeds(h_blk, h_reach, h_feed, t_blk, t_reach, t_feed, L, body, F,
 
 
 @numba.njit(**_OPTIONS)
-def _below(x, v, right):
-    """The search of :func:`_search` goes on past an entry ``x``."""
-    return x < v or (right and x == v)
-
-
-@numba.njit(**_OPTIONS)
-def _search(a, v, right, hint):
-    """``np.searchsorted(a, v, side="right" if right else "left")`` for a non-decreasing ``a`` and
-    a number ``v`` (not NaN): the first index whose entry is above ``v`` (right) or not below it.
-    Galloping from ``hint`` (the answer for a nearby ``v``), then bisecting: ``O(log d)`` for an
-    answer ``d`` entries from the hint."""
-    n = a.size
-    if n == 0:
-        return 0
-    i = min(max(hint, 0), n - 1)
-    step = 1
-    if _below(a[i], v, right):  # the answer is in [i + 1, n]
-        lo = i + 1
-        while lo + step - 1 < n and _below(a[lo + step - 1], v, right):
-            lo += step
-            step <<= 1
-        hi = min(lo + step - 1, n)
-    else:  # in [0, i]
-        hi = i
-        while hi - step >= 0 and not _below(a[hi - step], v, right):
-            hi -= step
-            step <<= 1
-        lo = max(hi - step + 1, 0)
-    while lo < hi:
-        mid = (lo + hi) >> 1
-        if _below(a[mid], v, right):
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
-
-
-@numba.njit(**_OPTIONS)
 def slowing_windows(F, s_v, full, f_full, hold):
     """The windows of :func:`candidate_pieces` that slow the path: those of the full-overlap
     vertices ``full`` ``(M - 1,)`` whose feed ``f_full`` (one per such vertex) is below the faster
@@ -377,10 +340,10 @@ def candidate_pieces(cum, L, F, s_v, full, f_full, hold, arc, span_start, span_e
     for w in range(n):
         j = js[w]
         half[w] = hold[j]
-        right = _search(cum, hi[w], True, j + 1)
-        first[w], last[w] = _search(cum, lo[w], False, j + 1), right - 2
+        right = right_from(cum, hi[w], j + 1)
+        first[w], last[w] = left_from(cum, lo[w], j + 1), right - 2
         k_r[w] = min(max(right - 1, 0), M - 1)
-        k_l[w] = min(max(_search(cum, lo[w], True, first[w]) - 1, 0), M - 1)
+        k_l[w] = min(max(right_from(cum, lo[w], first[w]) - 1, 0), M - 1)
     body = F.copy()
     _range_min_into(body, first, last, fs[:n])
     t_cum = np.empty(M + 1)
@@ -409,8 +372,8 @@ def candidate_pieces(cum, L, F, s_v, full, f_full, hold, arc, span_start, span_e
     if A:
         a_first, a_last = np.empty(n, np.int64), np.empty(n, np.int64)
         for w in range(n):  # windows in path order: each search starts from the one before
-            a_first[w] = _search(span_end, lo[w], True, a_first[w - 1] if w else 0)
-            a_last[w] = _search(span_start, hi[w], False, a_last[w - 1] + 1 if w else 0) - 1
+            a_first[w] = right_from(span_end, lo[w], a_first[w - 1] if w else 0)
+            a_last[w] = left_from(span_start, hi[w], a_last[w - 1] + 1 if w else 0) - 1
         _range_min_into(arc_rel, a_first, a_last, fs[:n])
         for a in range(A):
             arc_rel[a] = min(arc_rel[a] / arc_F[a], 1.0)

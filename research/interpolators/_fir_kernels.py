@@ -34,7 +34,6 @@ import numba
 import numpy as np
 
 from research._sorted_search import left as _left, left_in as _left_in, right as _right, right_in as _right_in
-from research._sorted_search import right_from as _right_from  # noqa: F401 (the verification kernels' search)
 
 _OPTIONS = dict(cache=True, nogil=True, error_model="numpy")
 

@@ -18,7 +18,8 @@ import math
 import numba
 import numpy as np
 
-from research.interpolators._fir_kernels import _OPTIONS, VERIFY_ATOL, VERIFY_RTOL, _left_in, _right_from
+from research._sorted_search import left_from as _left_from, right_from as _right_from
+from research.interpolators._fir_kernels import _OPTIONS, VERIFY_ATOL, VERIFY_RTOL
 
 
 def sampled_line_distances(breaks, coeffs, t, starts, half_window, seg_start, seg_vec, seg_inv):
@@ -393,31 +394,6 @@ def scatter_max(out, index, values):
         k = index[i]
         if values[i] > out[k]:
             out[k] = values[i]
-
-
-@numba.njit(**_OPTIONS)
-def _left_from(a, v, hint):
-    """``np.searchsorted(a, v, side="left")`` (the count of entries ``< v``) by a galloping search
-    from ``hint``, as :func:`_right_from`."""
-    n = a.size
-    i = min(max(hint, 0), n)
-    if i > 0 and a[i - 1] >= v:
-        hi, step = i, 1
-        lo = hi - step
-        while lo > 0 and a[lo - 1] >= v:
-            hi = lo
-            step *= 2
-            lo = max(hi - step, 0)
-        lo = max(lo, 0)
-    else:
-        lo, step = i, 1
-        hi = lo + step
-        while hi <= n and a[hi - 1] < v:
-            lo = hi
-            step *= 2
-            hi = lo + step
-        hi = min(hi, n)
-    return _left_in(a, v, lo, hi)
 
 
 @numba.njit(**_OPTIONS)

@@ -342,10 +342,11 @@ def test_corner_search_refined_above_its_bound_is_closer_and_still_a_distance_to
         assert refined[c] >= least - 0.5e-6 * speed - 1e-12
 
 
-def test_hinted_search_is_searchsorted_right():
-    """The kernels' galloping search from a hint gives ``np.searchsorted(a, v, "right")`` for any
-    hint, including repeated entries (zero-length pieces) and values outside the array."""
-    from research.interpolators._fir_kernels import _right_from
+def test_hinted_searches_are_searchsorted():
+    """The kernels' galloping searches from a hint (``research._sorted_search.right_from`` and
+    ``left_from``) give ``np.searchsorted(a, v, "right")`` and ``(..., "left")`` for any hint,
+    including repeated entries (zero-length pieces) and values outside the array."""
+    from research._sorted_search import left_from, right_from
 
     rng = np.random.default_rng(0)
     for _ in range(2000):
@@ -353,7 +354,8 @@ def test_hinted_search_is_searchsorted_right():
         a = np.sort(rng.integers(0, 20, n).astype(np.float64))
         v = float(rng.integers(-2, 22)) + float(rng.choice([0.0, 0.5]))
         hint = int(rng.integers(-3, n + 4))
-        assert _right_from(a, v, hint) == np.searchsorted(a, v, side="right")
+        assert right_from(a, v, hint) == np.searchsorted(a, v, side="right")
+        assert left_from(a, v, hint) == np.searchsorted(a, v, side="left")
 
 
 def test_scatter_max_is_numpys_maximum_at():
