@@ -27,7 +27,7 @@ from research.interpolators._fir_certify import derivative_bound
 from research.interpolators._fir_kernels import verified_bound
 from research.interpolators._fir_limits import LIMIT_RTOL
 from research.interpolators._fir_piece_peaks import PiecePeaks, range_max
-from research.interpolators._fir_verify import CERTIFY_SPAN, path_deviations, profile_rounding, vertex_distances
+from research.interpolators._fir_verify import certify_settings, path_deviations, profile_rounding, vertex_distances
 from research.interpolators.fir import FIRPlan
 from research.limits import AxisLimits
 from research.paths.toolpath import ToolPath
@@ -100,7 +100,7 @@ def violations(plan: FIRPlan, tp: ToolPath, tol: np.ndarray, limits: AxisLimits 
     deviation, at_vertex, at_block = path_deviations(pos, tp, starts, centre, Td, held, period, durations=durations,
                                                      slack=slack, stopped=stopped, stride_cap=cap, spans=local,
                                                      keys_only=True,
-                                                     certify=(CERTIFY_SPAN * check_period, margin, 0.0) if whole else None)
+                                                     certify=certify_settings(check_period, margin, 0.0) if whole else None)
     times.append(centre[sorted(at_vertex)] if at_vertex else np.zeros(0))
     middle = starts + 0.5 * pulses + 0.5 * Td  # the window centred on the block
     times.append(middle[sorted(at_block)] if at_block else np.zeros(0))

@@ -62,8 +62,7 @@ from research.interpolators._fir_limits import LIMIT_RTOL, feed_caps
 from research.interpolators._fir_piece_peaks import corner_peak_ratios
 from research.interpolators._fir_polish import polish
 from research.interpolators._fir_reorder import mode_tuples, profile_residuals, smooth_search
-from research.interpolators._fir_certify import BETWEEN_RTOL
-from research.interpolators._fir_verify import CERTIFY_SPAN, corner_distances, path_deviations
+from research.interpolators._fir_verify import certify_settings, corner_distances, path_deviations
 from research.interpolators._fir_settle import _pulse_table
 from research.interpolators.fir import CHECK_PERIOD, FIRPlan, _as_toolpath, plan_fir
 from research.limits import AxisLimits
@@ -327,7 +326,7 @@ class _Problem:
         M = self.M
         pos_np = NumpyPiecewise(np.asarray(position.breaks), np.asarray(position.coeffs))
         dev, _, _ = path_deviations(pos_np, self.tp, np.asarray(starts[:M]), np.asarray(centre[: M - 1]), self.Td,
-                                    np.full(M, self.eps), check_period, certify=(CERTIFY_SPAN * check_period, 0.0, BETWEEN_RTOL))
+                                    np.full(M, self.eps), check_period, certify=certify_settings(check_period))
         x = np.asarray(x)
         cruise = np.max(x[M - 1: 4 * M - 1].reshape(3, M), axis=0) * self.F
         return FIRPlan(starts[:M], ends[:M] - starts[:M], jnp.asarray(x[: M - 1] * self.Td), jnp.asarray(cruise),

@@ -94,9 +94,15 @@ class ProfileInputs(eqx.Module):
     def durations(self) -> np.ndarray:
         """``(P,)`` length [s] of every input piece, the dwell of its block for a gap piece (the
         durations the path check's thinned grid and ``RoundChecks`` read)."""
-        table = self.pieces.table
-        return np.where(table.gap, np.append(np.asarray(self.gaps), 0.0)[table.block],
-                        np.asarray(self.fraction) * np.asarray(self.piece_tv))
+        return input_durations(self.pieces.table, np.asarray(self.fraction), np.asarray(self.piece_tv),
+                               np.asarray(self.gaps))
+
+
+def input_durations(table, fraction: np.ndarray, piece_tv: np.ndarray, gaps: np.ndarray) -> np.ndarray:
+    """``(P,)`` length [s] of every input piece of ``table`` (``_fir_blocks.PulseTable``): its share
+    ``fraction`` of its block's pulse ``piece_tv``, or for a gap piece its block's dwell ``gaps``
+    ``(M_pad,)`` (0 after the last block)."""
+    return np.where(table.gap, np.append(gaps, 0.0)[table.block], fraction * piece_tv)
 
 
 def kernel_second_integral(r: np.ndarray, delays: np.ndarray) -> np.ndarray:

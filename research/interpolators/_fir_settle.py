@@ -168,7 +168,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
                     (factor, head, tail, full, shrink, others, arc_rel), None)
         starts, ends, breaks, coeffs, centre = _fir_profile.profile(tp.start, table.geo, table.block, table.gap, frac,
                                                                     piece_tv, gaps, d_np, table.joins)
-        durations = np.where(table.gap, np.append(gaps, 0.0)[table.block], frac * piece_tv)  # of the input pieces
+        durations = _fir_profile.input_durations(table, frac, piece_tv, gaps)
         return (F_np * cruise, overlaps, ends[:M] - starts[:M], starts[:M], NumpyPiecewise(breaks, coeffs),
                 centre[: M - 1], (factor, head, tail, full, shrink, others, arc_rel), durations)
 

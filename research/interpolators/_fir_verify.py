@@ -58,6 +58,15 @@ STEADY_SAMPLES = 64
 CERTIFY_SPAN = 1.5
 
 
+def certify_settings(check_period: float, extra: float = 0.0, rel: float = BETWEEN_RTOL) -> tuple[float, float, float]:
+    """The ``certify`` argument of :func:`path_deviations` and :func:`_scan` for a check sampled every
+    ``check_period`` [s]: ``(span [s], extra [mm], rel)``, intervals up to :data:`CERTIFY_SPAN` grid
+    periods apart bounded, each against its samples' limits plus ``extra`` and ``rel`` of their
+    tolerance (``plan_fir``'s checks: no extra, :data:`_fir_certify.BETWEEN_RTOL`; the mirror's:
+    its margin, 0)."""
+    return CERTIFY_SPAN * check_period, extra, rel
+
+
 def corner_distances(position: PiecewisePolynomial, vertices: Array, centre: Array, half_window: Array) -> Array:
     """Distance [mm] from each vertex ``(C, d)`` to the profile, searched in ``centre +- half_window`` [s].
 
@@ -485,7 +494,7 @@ class RoundChecks:
     def __init__(self, path: ToolPath, tol_block: np.ndarray, piece_block: np.ndarray, Td: float, check_period: float,
                  fraction: np.ndarray | None = None, joins: np.ndarray | None = None):
         self.path, self.tol, self.Td, self.period = path, tol_block, Td, check_period
-        self.certify = (CERTIFY_SPAN * check_period, 0.0, BETWEEN_RTOL)  # the intervals between grid samples
+        self.certify = certify_settings(check_period)  # the intervals between grid samples
         self.piece_block = piece_block  # padding pieces (block M_pad) count as the last block's
         self.joins = None if joins is None else np.flatnonzero(joins)
         self.fraction = fraction
