@@ -356,6 +356,13 @@ def test_hinted_searches_are_searchsorted():
         hint = int(rng.integers(-3, n + 4))
         assert right_from(a, v, hint) == np.searchsorted(a, v, side="right")
         assert left_from(a, v, hint) == np.searchsorted(a, v, side="left")
+    for n in (0, 1, 2, 7, 100, 1000):  # empty and one-entry arrays; hints before, at, after the answer
+        a = np.sort(np.round(rng.uniform(0.0, 10.0, n), 1))
+        for v in np.concatenate([rng.uniform(-1.0, 11.0, 40), a[:: max(n // 10, 1)]]):
+            for search, side in ((left_from, "left"), (right_from, "right")):
+                want = np.searchsorted(a, v, side=side)
+                for hint in (-5, 0, n // 2, n - 1, n + 3, int(want)):
+                    assert search(a, v, hint) == want, (n, v, side, hint)
 
 
 def test_scatter_max_is_numpys_maximum_at():

@@ -201,22 +201,6 @@ def test_compiled_candidate_matches_the_numpy_form(arcs):
     assert n_arcs > 0 or not arcs
 
 
-def test_galloping_search_is_searchsorted():
-    """``_fir_candidate_kernels._search`` from any hint equals ``np.searchsorted`` on both sides, on sorted
-    arrays with repeated entries (and empty and one-entry arrays)."""
-    from research.interpolators._fir_candidate_kernels import _search
-
-    rng = np.random.default_rng(11)
-    for n in (0, 1, 2, 7, 100, 1000):
-        a = np.sort(np.round(rng.uniform(0.0, 10.0, n), 1))
-        for v in np.concatenate([rng.uniform(-1.0, 11.0, 40), a[:: max(n // 10, 1)]]):
-            for right in (False, True):
-                want = np.searchsorted(a, v, side="right" if right else "left")
-                for hint in (-5, 0, n // 2, n - 1, n + 3, int(want)):
-                    assert _search(a, v, right, hint) == want, (n, v, right, hint)
-
-
-
 def _kinked_chain(seed: int) -> np.ndarray:
     """400 chords of 0.3 mm turning by 0.01 +- 0.004 rad each, with 12 kinks of 0.05-0.3 rad
     (a finishing pass with a few sharper vertices): windows of many chords whose reach at the
