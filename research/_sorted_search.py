@@ -47,53 +47,55 @@ def right(a, v):
     return right_in(a, v, 0, a.size)
 
 
+@numba.njit(inline="always", cache=True, nogil=True, error_model="numpy")
+def _past(x, v, right):
+    """The search goes on past an entry ``x``: ``x <= v`` for the right side, ``x < v`` for the left."""
+    return x <= v if right else x < v
+
+
+@numba.njit(inline="always", cache=True, nogil=True, error_model="numpy")
+def _from(a, v, hint, right):
+    """:func:`right_from` (``right``) or :func:`left_from`, inlined into each with its side a
+    constant: steps of 1, 2, 4, ... away from ``hint`` until the answer is bracketed, then a binary
+    search in the bracket."""
+    n = a.size
+    i = min(max(hint, 0), n)
+    if i > 0 and not _past(a[i - 1], v, right):  # the answer is below i
+        hi, step = i, 1
+        lo = hi - step
+        while lo > 0 and not _past(a[lo - 1], v, right):
+            hi = lo
+            step *= 2
+            lo = max(hi - step, 0)
+        lo = max(lo, 0)
+    else:  # the answer is at or above i
+        lo, step = i, 1
+        hi = lo + step
+        while hi <= n and _past(a[hi - 1], v, right):
+            lo = hi
+            step *= 2
+            hi = lo + step
+        hi = min(hi, n)
+    while lo < hi:  # binary search inside the bracket
+        mid = (lo + hi) >> 1
+        if _past(a[mid], v, right):
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def right_from(a, v, hint):
     """``np.searchsorted(a, v, side="right")`` (the count of entries ``<= v``, unique on a sorted
     array) found from a nearby index ``hint`` by a galloping search: steps of 1, 2, 4, ... away from
     ``hint`` until the answer is bracketed, then a binary search in the bracket. ``O(log distance)``
     for queries that move little along ``a``."""
-    n = a.size
-    i = min(max(hint, 0), n)
-    if i > 0 and a[i - 1] > v:  # the answer is below i
-        hi, step = i, 1
-        lo = hi - step
-        while lo > 0 and a[lo - 1] > v:
-            hi = lo
-            step *= 2
-            lo = max(hi - step, 0)
-        lo = max(lo, 0)
-    else:  # the answer is at or above i
-        lo, step = i, 1
-        hi = lo + step
-        while hi <= n and a[hi - 1] <= v:
-            lo = hi
-            step *= 2
-            hi = lo + step
-        hi = min(hi, n)
-    return right_in(a, v, lo, hi)  # binary search inside the bracket
+    return _from(a, v, hint, True)
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def left_from(a, v, hint):
     """``np.searchsorted(a, v, side="left")`` (the count of entries ``< v``) found from a nearby
     index ``hint`` by the galloping search of :func:`right_from`."""
-    n = a.size
-    i = min(max(hint, 0), n)
-    if i > 0 and a[i - 1] >= v:  # the answer is below i
-        hi, step = i, 1
-        lo = hi - step
-        while lo > 0 and a[lo - 1] >= v:
-            hi = lo
-            step *= 2
-            lo = max(hi - step, 0)
-        lo = max(lo, 0)
-    else:  # the answer is at or above i
-        lo, step = i, 1
-        hi = lo + step
-        while hi <= n and a[hi - 1] < v:
-            lo = hi
-            step *= 2
-            hi = lo + step
-        hi = min(hi, n)
-    return left_in(a, v, lo, hi)  # binary search inside the bracket
+    return _from(a, v, hint, False)
