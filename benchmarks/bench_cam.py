@@ -24,8 +24,9 @@ little); every target prints PASS or MISS as measured, nothing is tuned to pass.
      and the rate of seeded random programs (lines; lines and arcs) slower at 1.5 eps, for both,
      and rising anywhere along eps x 1, 1.1, 1.25, 1.5, 2, 3 for plan_fir alone.
    * cycle time against the chord tolerance (same program at 1, 2, 5, 10 um; spread <= 2 %).
-   * planning cost per segment (median of ``R`` warm repeats; the first call, compilation
-     included, printed apart) against ruckig on the same file: for each chord one
+   * planning cost per segment (median of ``R`` warm repeats of ``plan_fir`` and its exact profile,
+     built by reading it; the first call, compilation included, printed apart) against ruckig on
+     the same file: for each chord one
      ``Ruckig(3).calculate`` from the state reached at the chord start (position, velocity, zero
      acceleration) to the chord end with target velocity ``F u_chord`` (zero at the program end),
      default time synchronisation, per-axis limits = the FIR nominal envelope
@@ -90,7 +91,8 @@ from research.paths import Polyline
 from research.paths.library import random_program
 from research.paths.gcode import parse_gcode, to_gcode
 
-from bench_fir import TARGET_MEMORY_PER_SEGMENT, Table, peak_memory, timed, verdict  # the benchmarks' shared table and timer (same folder)
+# the benchmarks' shared table and timer (same folder)
+from bench_fir import TARGET_MEMORY_PER_SEGMENT, Table, peak_memory, plan_with_profile, timed, verdict
 
 # The benchmark's settings (stated by the issue, not tuned)
 FEED = 200.0  # commanded feed F [mm/s]
@@ -337,8 +339,8 @@ def bench_cam(args, table: Table, t0: float) -> None:
 
     # plain FIR: warm-up (compile) apart, then median of repeats
     progress("part 1: plan_fir warm-up", t0)
-    plan, t_cold = timed(plan_fir, path, FEED, DELAYS, EPS)
-    plan, t_fir = median_of(args.repeats, plan_fir, path, FEED, DELAYS, EPS)
+    plan, t_cold = timed(plan_with_profile, path, FEED, DELAYS, EPS)  # each plan with its profile built, as ruckig's
+    plan, t_fir = median_of(args.repeats, plan_with_profile, path, FEED, DELAYS, EPS)
     T = float(plan.cycle_time)
     table.row("FIR cycle time (refine=True)", f"{T:.4f} s", f"{T / lower:.4f}x L/F + T_d = {lower:.4f} s")
     table.row("  rounds / max corner error / path deviation", f"{plan.rounds}",
@@ -388,13 +390,13 @@ def bench_cam(args, table: Table, t0: float) -> None:
     table.row(f"plan_fir first call (compile + run) / warm median of {args.repeats}", f"{t_cold:.2f} s",
               f"warm {t_fir * 1e3:.1f} ms")
     ours = t_fir / M
-    table.row("plan_fir per segment (warm median)", f"{ours * 1e6:.2f} us", load())
+    table.row("plan_fir and its exact profile per segment (warm median)", f"{ours * 1e6:.2f} us", load())
     peak = peak_memory(plan_fir, path, FEED, DELAYS, EPS)
     table.row("plan_fir peak traced memory (tracemalloc), per segment", f"{peak / M / 1e3:.2f} kB",
               f"{peak / 1e6:.1f} MB in all", f"<= {TARGET_MEMORY_PER_SEGMENT / 1e3:g} kB",
               verdict(peak / M <= TARGET_MEMORY_PER_SEGMENT))
-    timed(plan_fir, path, FEED, DELAYS, EPS, refine=False)  # warm-up
-    _, t_eq = median_of(args.repeats, plan_fir, path, FEED, DELAYS, EPS, refine=False)
+    timed(plan_with_profile, path, FEED, DELAYS, EPS, refine=False)  # warm-up
+    _, t_eq = median_of(args.repeats, plan_with_profile, path, FEED, DELAYS, EPS, refine=False)
     table.row("  for information: plan_fir(refine=False) (eq 13/14 only), per segment", f"{t_eq / M * 1e6:.2f} us",
               f"{t_eq / t_fir:.0%} of the verified plan")
     check = one_check(plan, path, EPS)
@@ -421,8 +423,8 @@ def bench_cam(args, table: Table, t0: float) -> None:
     # limit-holding FIR
     progress("part 1: limit-holding FIR", t0)
     limits = AxisLimits.fir_envelope(path.dim, FEED, DELAYS)
-    pl, t_lcold = timed(plan_fir, path, FEED, DELAYS, EPS, limits=limits)
-    pl, t_lim = median_of(args.repeats, plan_fir, path, FEED, DELAYS, EPS, limits=limits)
+    pl, t_lcold = timed(plan_with_profile, path, FEED, DELAYS, EPS, limits=limits)
+    pl, t_lim = median_of(args.repeats, plan_with_profile, path, FEED, DELAYS, EPS, limits=limits)
     Tl = float(pl.cycle_time)
     table.row("FIR, limits held: cycle time", f"{Tl:.4f} s", f"{Tl / lower:.4f}x bound, {Tl / T:.4f}x plain FIR")
     table.row("  worst limit ratio (plain FIR / limits held)", f"{worst_ratio(plan, limits):.3f} / "
@@ -441,7 +443,7 @@ def bench_cam(args, table: Table, t0: float) -> None:
     # chains, staircases of isolated steps (the feed of a start from rest: min(A T1, J T1 T2))
     for share in BELOW_ENVELOPE:
         below = AxisLimits(limits.velocity, share * limits.acceleration, share * limits.jerk)
-        pb, t_below = median_of(min(args.repeats, 3), plan_fir, path, FEED, DELAYS, EPS, limits=below)
+        pb, t_below = median_of(min(args.repeats, 3), plan_with_profile, path, FEED, DELAYS, EPS, limits=below)
         Tb = float(pb.cycle_time)
         step = float(np.min(share * limits.acceleration * max(DELAYS)))
         table.row(f"FIR, limits held at {share:g}x the envelope's a and j: cycle time", f"{Tb:.4f} s",

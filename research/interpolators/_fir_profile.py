@@ -37,7 +37,7 @@ import jax
 import numba
 import numpy as np
 
-from research._device import device_array
+from research._device import device_array, device_arrays
 from research.interpolators._illinois import narrowed, secant_point
 from research.piecewise import PiecewisePolynomial
 
@@ -88,7 +88,7 @@ class ProfileInputs(eqx.Module):
             t = self.pieces.table
             _, _, breaks, coeffs, _ = profile(self.start, t.geo, t.block, t.gap, self.fraction, self.piece_tv, self.gaps,
                                               self.delays, t.joins)
-            self.pieces.built = PiecewisePolynomial(device_array(breaks), device_array(coeffs))
+            self.pieces.built = PiecewisePolynomial(*device_arrays(breaks, coeffs))
         return self.pieces.built
 
     def durations(self) -> np.ndarray:

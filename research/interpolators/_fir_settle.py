@@ -157,20 +157,23 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         return frac, piece_tv, cruise, overlaps, np.concatenate([Td_np - overlaps, np.zeros(Mp - M + 1)])
 
     def schedule(factor, head, tail, full, shrink, others, arc_rel, build=True):
-        """``(feeds, overlaps, pulse lengths, pulse starts, position, corner instants, inputs)`` on
-        concrete arrays (the position a :class:`NumpyPiecewise`; without ``build`` only its first
-        and last break ``(2,)``, ``_fir_profile.schedule_span``: a plan that checks nothing)."""
+        """``(feeds, overlaps, pulse lengths, pulse starts, position, corner instants, inputs, input
+        durations, timing)`` on concrete arrays (the position a :class:`NumpyPiecewise`). Without
+        ``build``, for a plan that checks nothing: the position only its first and last break
+        ``(2,)`` (``_fir_profile.schedule_span``), no durations, and the timing ``(fraction,
+        pulse lengths, gaps)`` that the plan returned keeps (:func:`timing_gaps`'s; None when built:
+        a round's state does not hold it)."""
         frac, piece_tv, cruise, overlaps, gaps = timing_gaps(factor, head, tail, full, shrink, others, arc_rel)
         if not build:
             starts, ends, span, centre = _fir_profile.schedule_span(table.geo, table.block, table.gap, frac, piece_tv,
                                                                     gaps, d_np, table.joins)
             return (F_np * cruise, overlaps, ends[:M] - starts[:M], starts[:M], span, centre[: M - 1],
-                    (factor, head, tail, full, shrink, others, arc_rel), None)
+                    (factor, head, tail, full, shrink, others, arc_rel), None, (frac, piece_tv, gaps))
         starts, ends, breaks, coeffs, centre = _fir_profile.profile(tp.start, table.geo, table.block, table.gap, frac,
                                                                     piece_tv, gaps, d_np, table.joins)
         durations = _fir_profile.input_durations(table, frac, piece_tv, gaps)
         return (F_np * cruise, overlaps, ends[:M] - starts[:M], starts[:M], NumpyPiecewise(breaks, coeffs),
-                centre[: M - 1], (factor, head, tail, full, shrink, others, arc_rel), durations)
+                centre[: M - 1], (factor, head, tail, full, shrink, others, arc_rel), durations, None)
 
     def traced_plan(factor, head, tail, full, shrink, others, arc_rel):
         """The JAX form of :func:`schedule` (differentiable through ``feed``, ``delays``, ``tolerance``)."""
@@ -499,7 +502,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         its closed-form safe feed up front: slower blocks whose corners keep their overlap can beat
         exact stops; and one at the feeds the path's end ramps allow) join the same queue. Returns
         the best settled ``(state, rounds, deviation)``, the state without its profile (its first
-        and last break in its place)."""
+        and last break in its place) and its input durations (its schedule's timing after them)."""
         nonlocal rival
         best, best_time = None, np.inf
         several = len(candidates) > 1
@@ -551,7 +554,8 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
                 breaks = state[4] if isinstance(state[4], np.ndarray) else state[4].breaks  # the span alone: unchecked
                 t = float(breaks[-1] - breaks[0])
                 if t < best_time:  # kept without its profile (rebuilt from the inputs when used)
-                    best, best_time = (state[:4] + ((breaks[0], breaks[-1]), state[5], state[6]), rounds, deviation), t
+                    best, best_time = (state[:4] + ((breaks[0], breaks[-1]), state[5], state[6], state[8]), rounds,
+                                       deviation), t
                 state = breaks = done = None
             while forks:  # the same candidate settled with slow_futile, from its start
                 c, low = forks.pop()
@@ -631,11 +635,14 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         (feeds, overlaps, pulse, starts, profile, centre), pieces = traced_plan(*state[6])
         delays, vertices = device_array(delays), device_array(tp.vertices)
     else:  # the concrete arrays in one transfer (research._device.device_arrays)
-        feeds, overlaps, pulse, starts, centre, delays, vertices = device_arrays(*(state[i] for i in (0, 1, 2, 3, 5)),
-                                                                                  delays, tp.vertices)
+        feeds, overlaps, pulse, starts, centre, delays, vertices, span = device_arrays(
+            *(state[i] for i in (0, 1, 2, 3, 5)), delays, tp.vertices, np.array(state[4]))
         # the profile's inputs, not its coefficients (the same arrays when rebuilt: ``settle``'s release)
-        frac, piece_tv, _, _, gaps = timing_gaps(*state[6])
-        profile = _fir_profile.ProfileInputs(table, frac, piece_tv, gaps, d_np, tp.start, np.array(state[4]))
+        if state[7] is not None:  # the timing its schedule kept (a plan that checked nothing)
+            frac, piece_tv, gaps = state[7]
+        else:
+            frac, piece_tv, _, _, gaps = timing_gaps(*state[6])
+        profile = _fir_profile.ProfileInputs(table, frac, piece_tv, gaps, d_np, tp.start, span)
         pieces = (frac, piece_tv)
     return (starts, pulse, overlaps, feeds, delays, profile, centre, vertices, float(deviation), int(rounds),
             tp.axes), pieces + (table.first_motion,)
