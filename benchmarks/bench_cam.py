@@ -397,7 +397,7 @@ def bench_cam(args, table: Table, t0: float) -> None:
               verdict(peak / M <= TARGET_MEMORY_PER_SEGMENT))
     timed(plan_with_profile, path, FEED, DELAYS, EPS, refine=False)  # warm-up
     _, t_eq = median_of(args.repeats, plan_with_profile, path, FEED, DELAYS, EPS, refine=False)
-    table.row("  for information: plan_fir(refine=False) (eq 13/14 only), per segment", f"{t_eq / M * 1e6:.2f} us",
+    table.row("  for information: plan_fir(refine=False) (eq 13/14 only) and its profile, per segment", f"{t_eq / M * 1e6:.2f} us",
               f"{t_eq / t_fir:.0%} of the verified plan")
     check = one_check(plan, path, EPS)
     check()  # warm-up
