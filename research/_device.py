@@ -29,8 +29,8 @@ def device_array(x) -> Array:
 
 def device_arrays(*xs) -> tuple[Array, ...]:
     """:func:`device_array` of each of ``xs``, the NumPy ones in one transfer: ``jax.device_put``
-    has a fixed cost per call (about 20 us on the CPU, a sixth of an unrefined 1,000-block
-    ``plan_fir``), which one call for the tuple pays once."""
+    has a fixed cost per call (about 20 us on the CPU; the eight of an unrefined 1,000-block
+    ``plan_fir`` took a sixth of its time), which one call for the tuple pays once."""
     out = [device_array(x) if isinstance(x, jax.Array) else None for x in xs]
     host = [(i, np.asarray(x, dtype=np.float64)) for i, x in enumerate(xs) if out[i] is None]
     moved = jax.device_put([a if a.flags.c_contiguous else np.ascontiguousarray(a) for _, a in host])

@@ -2,8 +2,8 @@
 
 Shared by the planner's kernels (``research.interpolators._fir_kernels``, ``_fir_verify_kernels``,
 ``_fir_candidate_kernels``) and the piecewise evaluator (``research._piecewise_eval``), which sit on
-both sides of the package's layers. Each returns the same index as ``np.searchsorted`` on a non-decreasing array
-(no NaN; callers that meet one handle it before).
+both sides of the package's layers. Each returns the same index as ``np.searchsorted`` on a
+non-decreasing array (no NaN; callers that meet one handle it before).
 """
 
 from __future__ import annotations

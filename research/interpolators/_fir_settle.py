@@ -502,7 +502,9 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
         its closed-form safe feed up front: slower blocks whose corners keep their overlap can beat
         exact stops; and one at the feeds the path's end ramps allow) join the same queue. Returns
         the best settled ``(state, rounds, deviation)``, the state without its profile (its first
-        and last break in its place) and its input durations (its schedule's timing after them)."""
+        and last break in its place) and without its input durations (in their place the timing its
+        schedule kept: ``(fraction, pulse lengths, gaps)`` for a plan that checked nothing, else
+        None)."""
         nonlocal rival
         best, best_time = None, np.inf
         several = len(candidates) > 1
