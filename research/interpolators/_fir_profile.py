@@ -491,12 +491,15 @@ def _filter_rows(breaks, lo, coeffs, delay, initial, integrate, D):
             hp[0] = h
             for m in range(1, D + 1):
                 hp[m] = hp[m - 1] * h
+            # the offsets of the piece's left end in the two pieces in use (the same on every axis)
+            at_now = _between(breaks, lo, delay, lsrc, lidx, 0, now)
+            at_before = _between(breaks, lo, delay, lsrc, lidx, 1, before) if before >= 0 else 0.0
             for a in range(A):
-                _shifted_c(coeffs, now, a, _between(breaks, lo, delay, lsrc, lidx, 0, now), c, D)
+                _shifted_c(coeffs, now, a, at_now, c, D)
                 for m in range(D + 1):
                     w[m] = 0.0 + 1.0 * c[m]
                 if before >= 0:
-                    _shifted_c(coeffs, before, a, _between(breaks, lo, delay, lsrc, lidx, 1, before), c, D)
+                    _shifted_c(coeffs, before, a, at_before, c, D)
                     for m in range(D + 1):
                         w[m] += -1.0 * c[m]
                 w[0] += wh[a] + wl[a]  # the input's integral between the two pieces' breaks

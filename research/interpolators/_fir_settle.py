@@ -112,12 +112,9 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
     head, tail = np.zeros(M), np.zeros(M)
     full = np.zeros(M - 1, dtype=bool)
     others = np.zeros(M - 1)  # tolerance taken by the other direction changes of a dwell corner's window
-    lengths_np = np.concatenate([tp.lengths, np.ones(Mp - M + 1)])
     feeds_np = np.concatenate([F_np, np.ones(Mp - M + 1)])
-    cum_np = np.concatenate([[0.0], np.cumsum(tp.lengths)])  # arc length at each block start (Repairs)
     pad_b = Mp - M  # per-block inputs padded to the bucketed block count (one compiled JAX kernel)
-    motion_ends_np = np.stack([np.pad(table.first_motion, (0, pad_b)), np.pad(table.last_motion, (0, pad_b))])
-    tangents_np = np.stack([np.pad(t_in, ((0, pad_b), (0, 0))), np.pad(t_out, ((0, pad_b), (0, 0)))])
+    lengths_np, cum_np, motion_ends_np, tangents_np = _padded(tp, table, t_in, t_out)
     windows = CornerWindows(table, tp.lengths, F_np, t_in, t_out, tv_np, d_np, limits, turn) if limits is not None else None
     steps = FeedSteps(F_np, t_in, tp.is_arc, d_np, limits) if limits is not None else None
 
@@ -635,10 +632,10 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
     state, rounds, deviation = verify(first, capped)
     if traced:
         (feeds, overlaps, pulse, starts, profile, centre), pieces = traced_plan(*state[6])
-        delays, vertices = device_array(delays), device_array(tp.vertices)
+        delays, vertices = device_array(delays), _device_vertices(tp)
     else:  # the concrete arrays in one transfer (research._device.device_arrays)
         feeds, overlaps, pulse, starts, centre, delays, vertices, span = device_arrays(
-            *(state[i] for i in (0, 1, 2, 3, 5)), delays, tp.vertices, np.array(state[4]))
+            *(state[i] for i in (0, 1, 2, 3, 5)), delays, _device_vertices(tp), np.array(state[4]))
         # the profile's inputs, not its coefficients (the same arrays when rebuilt: ``settle``'s release)
         if state[7] is not None:  # the timing its schedule kept (a plan that checked nothing)
             frac, piece_tv, gaps = state[7]
@@ -705,6 +702,37 @@ def _block_keys(ks: np.ndarray, safe: np.ndarray, owner: np.ndarray, frac: np.nd
     rows[owner, 2 + col] = frac
     rows[owner, 2 + width + col] = piece_factor
     return np.ascontiguousarray(rows).view(np.dtype((np.void, rows.shape[1] * 8))).ravel().tolist()
+
+
+def _padded(tp: ToolPath, table: PulseTable, t_in: np.ndarray, t_out: np.ndarray):
+    """The path's per-block arrays on ``table``'s padded block count ``M_pad`` (the planner's
+    timing takes them so): block lengths [mm] ``(M_pad + 1,)`` (1 on padding), arc length at each
+    block start [mm] ``(M + 1,)``, first and last motion piece ``(2, M_pad)`` and entry and exit
+    tangents ``(2, M_pad, d)`` (0 on padding). Made once per table (kept with the path's own
+    table: every plan of the path reads them; not to be written)."""
+    kept = tp._cache.get("padded")
+    if kept is not None and kept[0] is table:
+        return kept[1]
+    M, Mp = tp.n_blocks, table.m_pad
+    lengths, cum = np.ones(Mp + 1), np.zeros(M + 1)
+    lengths[:M] = tp.lengths
+    np.cumsum(tp.lengths, out=cum[1:])
+    motion_ends = np.zeros((2, Mp), dtype=table.first_motion.dtype)
+    motion_ends[0, :M], motion_ends[1, :M] = table.first_motion, table.last_motion
+    tangents = np.zeros((2, Mp, tp.dim))
+    tangents[0, :M], tangents[1, :M] = t_in, t_out
+    arrays = (lengths, cum, motion_ends, tangents)
+    if table is tp._cache.get("pulse_table"):
+        tp._cache["padded"] = (table, arrays)
+    return arrays
+
+
+def _device_vertices(tp: ToolPath) -> jax.Array:
+    """The path's corner vertices ``(M - 1, d)`` [mm] as a JAX array (a plan's ``vertices``), made
+    once per path: a JAX array is immutable, so every plan of the path can hold the same one."""
+    if "device_vertices" not in tp._cache:
+        tp._cache["device_vertices"] = device_array(tp.vertices)
+    return tp._cache["device_vertices"]
 
 
 def _pulse_table(tp: ToolPath) -> PulseTable:

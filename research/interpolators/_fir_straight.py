@@ -73,21 +73,45 @@ def straight_runs(tp: ToolPath, feeds: np.ndarray, tol_block: np.ndarray) -> np.
     end. A stretch of such vertices is one run where every inner vertex lies that close to the
     run's own chord (start of its first block to end of its last); otherwise it is split at its
     farthest vertex and each side is tried again (as Douglas and Peucker simplify a polyline): one
-    pass over a straight stretch, ``O(n log n)`` at worst."""
+    pass over a straight stretch, ``O(n log n)`` at worst. The path's part (:func:`_collinear`) is
+    made once per path, and the runs of the last call are kept with the vertices they were found
+    for (a sweep plans one path many times)."""
     M = tp.n_blocks
     if M < 2:
         return None
-    V = np.vstack([tp.start, tp.ends])
-    line = ~tp.is_arc & (tp.lengths > 0)
-    local = line[:-1] & line[1:] & (feeds[:-1] == feeds[1:]) & (tol_block[:-1] == tol_block[1:])
-    j = np.flatnonzero(local)
-    if j.size:
-        ab = V[j + 2] - V[j]
-        ab2 = np.einsum("kd,kd->k", ab, ab)  # 0 where the path returns to its point: a reversal
-        u = np.clip(np.einsum("kd,kd->k", V[j + 1] - V[j], ab) / np.where(ab2 > 0, ab2, 1.0), 0.0, 1.0)
-        local[j] = np.linalg.norm(V[j + 1] - V[j] - u[:, None] * ab, axis=1) <= VERIFY_ATOL
+    local = _collinear(tp) & (feeds[:-1] == feeds[1:]) & (tol_block[:-1] == tol_block[1:])
     if not local.any():
         return None
+    key, last = local.tobytes(), tp._cache.get("straight_runs")
+    if last is not None and last[0] == key:
+        return last[1]
+    run = _runs(tp, local)
+    if run is not None:
+        run.setflags(write=False)
+    tp._cache["straight_runs"] = (key, run)
+    return run
+
+
+def _collinear(tp: ToolPath) -> np.ndarray:
+    """``(M - 1,)`` True at each vertex between two line blocks of nonzero length that lies within
+    ``VERIFY_ATOL`` of the segment from the first one's start to the second one's end (read-only;
+    made once per path)."""
+    if "collinear" not in tp._cache:
+        V = np.vstack([tp.start, tp.ends])
+        line = ~tp.is_arc & (tp.lengths > 0)
+        ab, a1 = V[2:] - V[:-2], V[1:-1] - V[:-2]  # every vertex's (the arcs' are not read)
+        ab2 = np.einsum("kd,kd->k", ab, ab)  # 0 where the path returns to its point: a reversal
+        u = np.clip(np.einsum("kd,kd->k", a1, ab) / np.where(ab2 > 0, ab2, 1.0), 0.0, 1.0)
+        local = line[:-1] & line[1:] & (np.linalg.norm(a1 - u[:, None] * ab, axis=1) <= VERIFY_ATOL)
+        local.setflags(write=False)
+        tp._cache["collinear"] = local
+    return tp._cache["collinear"]
+
+
+def _runs(tp: ToolPath, local: np.ndarray) -> np.ndarray | None:
+    """:func:`straight_runs` from the vertices ``local`` ``(M - 1,)`` that may join their blocks."""
+    M = tp.n_blocks
+    V = np.vstack([tp.start, tp.ends])
     joined = np.zeros(M - 1, dtype=bool)  # vertex j inside a run
     edges = np.flatnonzero(np.diff(np.concatenate([[0], local.astype(np.int8), [0]])))
     stack = [(int(a), int(b)) for a, b in zip(edges[0::2], edges[1::2])]  # vertex ranges [a, b)
@@ -108,9 +132,16 @@ def straight_runs(tp: ToolPath, feeds: np.ndarray, tol_block: np.ndarray) -> np.
 
 
 def merged_path(tp: ToolPath, run: np.ndarray) -> ToolPath:
-    """``tp`` with each run of :func:`straight_runs` one line block (a block alone: itself)."""
+    """``tp`` with each run of :func:`straight_runs` one line block (a block alone: itself). The
+    last one made is kept with its runs (its own caches, the pulse table among them, then serve
+    every plan of the same runs)."""
+    key, last = run.tobytes(), tp._cache.get("merged_path")
+    if last is not None and last[0] == key:
+        return last[1]
     _, last = run_bounds(run)
-    return ToolPath(tp.start, tp.ends[last], tp.centers[last], tp.normals[last], tp.sweeps[last])
+    merged = ToolPath(tp.start, tp.ends[last], tp.centers[last], tp.normals[last], tp.sweeps[last])
+    tp._cache["merged_path"] = (key, merged)
+    return merged
 
 
 def split_plan(merged, pieces, first_motion, tp: ToolPath, merged_tp: ToolPath, run: np.ndarray, plan_type):

@@ -220,7 +220,13 @@ class ToolPath:
         return self.ends[:-1]
 
     def tangents(self) -> tuple[np.ndarray, np.ndarray]:
-        """Unit tangents ``(M, d)`` at the start and at the end of every block."""
+        """Unit tangents ``(M, d)`` at the start and at the end of every block (made once, as every
+        plan of the path reads them; copies returned, writable as compiled kernels take them)."""
+        if "tangents" not in self._cache:
+            self._cache["tangents"] = self._tangents()
+        return tuple(t.copy() for t in self._cache["tangents"])
+
+    def _tangents(self) -> tuple[np.ndarray, np.ndarray]:
         chord = self.ends - self.starts
         t_in = chord / np.linalg.norm(chord, axis=1, keepdims=True).clip(1e-300)
         t_out = t_in.copy()

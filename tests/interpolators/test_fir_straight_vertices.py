@@ -273,3 +273,65 @@ def test_plans_under_limits_below_the_envelope_hold_limits_tolerance_and_timing(
         assert np.all(np.asarray(plan.corner_errors) <= verified_bound(tol) + 1e-8), seed
         start, pulse, ov = (np.asarray(x) for x in (plan.start_times, plan.pulse_times, plan.overlaps))
         np.testing.assert_allclose(start[1:] - (start[:-1] + pulse[:-1]), sum(delays) - ov, rtol=0, atol=1e-9)
+
+
+def test_a_path_planned_again_with_other_feeds_and_tolerances_plans_as_a_path_read_anew():
+    """A path keeps its analysis between plans (``_fir_straight``'s collinear vertices, the runs
+    and merged path of its last plan, its tangents and padded block arrays): random zigzags with
+    collinear points (seeds 0-7), each planned on one path object under a sequence of feeds and
+    tolerances that split and re-join its runs (uniform, per block from two values, back to
+    uniform), give at every step the runs and the plan of a new object of the same points: the
+    same run labels and the same timing, bit for bit."""
+    from research.interpolators._fir_straight import straight_runs
+    from research.interpolators.fir import _as_toolpath
+    from research.paths.toolpath import ToolPath
+
+    for seed in range(8):
+        rng = np.random.default_rng(100 + seed)
+        pts = _with_splits(rng, _grid_zigzag(rng, int(rng.integers(3, 7))), True)
+        kept = Polyline(pts)
+        M = len(pts) - 1
+        steps = [(np.full(M, 100.0), np.full(M, 0.01)),
+                 (rng.choice([80.0, 100.0], M), np.full(M, 0.01)),
+                 (np.full(M, 100.0), rng.choice([0.0, 0.01], M)),
+                 (np.full(M, 100.0), np.full(M, 0.01))]
+        for feeds, tol in steps:
+            again = straight_runs(_as_toolpath(kept), feeds, tol)  # the path object plan_fir keeps
+            anew = straight_runs(ToolPath.from_polyline(Polyline(pts.copy())), feeds, tol)
+            assert (again is None) == (anew is None) and (anew is None or again.tolist() == anew.tolist()), seed
+            a = plan_fir(kept, feeds, (0.06, 0.03), tol, refine=False)
+            b = plan_fir(Polyline(pts.copy()), feeds, (0.06, 0.03), tol, refine=False)
+            for x, y in ((a.start_times, b.start_times), (a.pulse_times, b.pulse_times), (a.overlaps, b.overlaps),
+                         (a.position.coeffs, b.position.coeffs)):
+                assert np.array_equal(np.asarray(x), np.asarray(y)), seed
+
+
+def test_a_paths_tangents_are_copies():
+    """``ToolPath.tangents`` is made once per path and handed out as copies: writing into what it
+    returned leaves the next call's values (those of a path read anew) unchanged."""
+    from research.paths.toolpath import ToolPath
+
+    pts = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 2.0], [3.0, 3.0]])
+    tp = ToolPath.from_polyline(Polyline(pts))
+    t_in, t_out = tp.tangents()
+    t_in[:] = np.nan
+    t_out[:] = np.nan
+    ref = ToolPath.from_polyline(Polyline(pts.copy())).tangents()
+    for x, y in zip(tp.tangents(), ref):
+        assert np.array_equal(x, y)
+
+
+def test_a_path_with_arcs_planned_again_plans_as_a_path_read_anew():
+    """Lines and arcs (G1 - G3 - G1 - G2 - G1, two split lines), planned on one path object
+    without refinement, with it (the verification cuts the sub-arcs: a table of its own, not the
+    path's kept one), and without again: each plan's timing and profile those of the same program
+    read anew, bit for bit."""
+    program = ("G21 G90 G17 G64 P0.01\nG1 X20 Y0 F6000\nG1 X40 Y0\nG3 X40 Y40 I0 J20\nG1 X20 Y40\nG1 X0 Y40\n"
+               "G2 X-20 Y20 I0 J-20\nG1 X-20 Y0\nM2\n")
+    kept = parse_gcode(program).blocks
+    for refine in (False, True, False):
+        a = plan_fir(kept, 100.0, (0.06, 0.03), 0.01, refine=refine)
+        b = plan_fir(parse_gcode(program).blocks, 100.0, (0.06, 0.03), 0.01, refine=refine)
+        for x, y in ((a.start_times, b.start_times), (a.pulse_times, b.pulse_times), (a.overlaps, b.overlaps),
+                     (a.position.coeffs, b.position.coeffs)):
+            assert np.array_equal(np.asarray(x), np.asarray(y)), refine
