@@ -89,8 +89,10 @@ class PulseTable:
         gap = local == n_sub[block]
         fraction = np.where(gap, 0.0, 1.0 / n_sub[block])
         role = np.where(gap | arc[block], -1, local)  # 0 head, 1 body, 2 tail of a line; -1 otherwise
-        geo = np.zeros((P, deg + 1, d))
-        lines = ~arc[block] & ~gap
+        Pp, Mp = bucket_size(P, 64), bucket_size(M, 16)  # small paths share one compiled build
+        pad = Pp - P
+        geo = np.zeros((Pp, deg + 1, d))  # padded: the pieces past P stay 0
+        lines = np.flatnonzero(~arc[block] & ~gap)
         geo[lines, 0, :] = (path.ends - path.starts)[block[lines]]  # dP/du = L u for a line (any share)
         if arc.any():
             k = np.flatnonzero(arc)
@@ -100,11 +102,9 @@ class PulseTable:
         k, i = block[arc_pieces], local[arc_pieces]
         share = path.lengths[k] / n_sub[k]
         arc_span = np.stack([cum[k] + i * share, cum[k] + (i + 1) * share], axis=1)
-        Pp, Mp = bucket_size(P, 64), bucket_size(M, 16)  # small paths share one compiled build
-        pad = Pp - P
         return PulseTable(
             np.concatenate([block, np.full(pad, Mp)]), np.concatenate([gap, np.ones(pad, bool)]),
-            np.concatenate([fraction, np.zeros(pad)]), np.concatenate([geo, np.zeros((pad,) + geo.shape[1:])]),
+            np.concatenate([fraction, np.zeros(pad)]), geo,
             np.concatenate([role, np.full(pad, -1)]), first, first + n_sub - 1, arc_pieces, arc_span, M, Mp,
         )
 
