@@ -28,10 +28,14 @@ because absolute times on a shared machine mean little):
    ``v = F |u_axis|``, ``a = F |u_axis| / T1``, ``j = F |u_axis| / (T1 T2)`` and phase
    synchronisation (a straight G01 line); the default time synchronisation is shown for
    information. Target: ours <= ruckig per segment (speed ratio t_ruckig / t_ours >= 1), judged
-   twice: for the paper's planning (``refine=False``: eq 13/14 overlaps and the exact profile, read
+   for the paper's planning (``refine=False``: eq 13/14 overlaps and the exact profile, read
    once so that it is built, the like-for-like counterpart of a ruckig profile) and for the
    verified plan (which also measures every corner's error on the profile and repairs
-   interacting corners).
+   interacting corners). Ruckig's inputs (per-segment limits as lists, :func:`ruckig_rows`) are
+   made outside its timing, and a path keeps its analysis between plans (its blocks, tangents,
+   pulse table, straight runs): both sides plan from prepared inputs. The paper's planning is
+   also judged on a path's first plan (its analysis in the timing) against ruckig with its
+   inputs made from a path not read before (``ruckig_rows`` in the timing).
 
 Targets: issue "Core pipeline" §8. Each target line prints PASS or MISS as measured; nothing is
 tuned to make them pass. When a target is missed, the "where the time goes" block splits the warm
