@@ -289,6 +289,12 @@ def ruckig_rows(path: Polyline, feeds) -> list:
                     (v / (T1 * T2)).tolist()))
 
 
+def unread_copies(path: Polyline, n: int):
+    """An iterator over ``n`` new polylines of ``path``'s points, made here (outside any timing):
+    paths that no plan has read, so none holds an analysis kept from an earlier plan."""
+    return iter([Polyline(path.points.copy(), path.axes) for _ in range(n)])
+
+
 def plan_with_profile(*args, **kwargs):
     """``plan_fir(*args, **kwargs)`` with its exact profile built: a plan builds its profile's
     coefficients on first read (``FIRPlan.position``), and ruckig's ``calculate`` makes its
@@ -306,7 +312,7 @@ def bench_planning(path: Polyline, feeds, repeats: int, table: Table) -> None:
     _, t_plan_eq = best_of(repeats, plan_with_profile, path, feeds, DELAYS, TOLERANCE, refine=False)
     # the same on a path not planned before: its analysis (blocks, tangents, pulse table,
     # straight runs), made once per path and kept for every later plan of it, is in the timing
-    fresh = iter([Polyline(path.points.copy(), path.axes) for _ in range(repeats)])  # made outside the timing
+    fresh = unread_copies(path, repeats)
     _, t_plan_fresh = best_of(repeats, lambda: plan_with_profile(next(fresh), feeds, DELAYS, TOLERANCE, refine=False))
     ours = t_plan / M
     table.row("plan_fir (warm) and its exact profile, per segment", f"{ours * 1e6:.2f} us", load())
@@ -328,7 +334,7 @@ def bench_planning(path: Polyline, feeds, repeats: int, table: Table) -> None:
 
     rows = ruckig_rows(path, feeds)  # built outside the timing
     # ruckig's counterpart of a path's first plan: its inputs made from a path not read before
-    fresh = iter([Polyline(path.points.copy(), path.axes) for _ in range(repeats)])
+    fresh = unread_copies(path, repeats)
     _, t_rows = best_of(repeats, lambda: len(ruckig_rows(next(fresh), feeds)))  # (timed blocks on a result's leaves)
     table.row("ruckig's inputs made from the path (ruckig_rows), per segment", f"{t_rows / M * 1e6:.2f} us", "")
 

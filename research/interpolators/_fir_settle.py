@@ -114,7 +114,7 @@ def plan_blocks(tp: ToolPath, feed, delays, tolerance, refine: bool, limits, che
     others = np.zeros(M - 1)  # tolerance taken by the other direction changes of a dwell corner's window
     feeds_np = np.concatenate([F_np, np.ones(Mp - M + 1)])
     pad_b = Mp - M  # per-block inputs padded to the bucketed block count (one compiled JAX kernel)
-    lengths_np, cum_np, motion_ends_np, tangents_np = _padded(tp, table, t_in, t_out)
+    lengths_np, cum_np, motion_ends_np, tangents_np = _padded(tp, table)
     windows = CornerWindows(table, tp.lengths, F_np, t_in, t_out, tv_np, d_np, limits, turn) if limits is not None else None
     steps = FeedSteps(F_np, t_in, tp.is_arc, d_np, limits) if limits is not None else None
 
@@ -704,7 +704,7 @@ def _block_keys(ks: np.ndarray, safe: np.ndarray, owner: np.ndarray, frac: np.nd
     return np.ascontiguousarray(rows).view(np.dtype((np.void, rows.shape[1] * 8))).ravel().tolist()
 
 
-def _padded(tp: ToolPath, table: PulseTable, t_in: np.ndarray, t_out: np.ndarray):
+def _padded(tp: ToolPath, table: PulseTable):
     """The path's per-block arrays on ``table``'s padded block count ``M_pad`` (the planner's
     timing takes them so): block lengths [mm] ``(M_pad + 1,)`` (1 on padding), arc length at each
     block start [mm] ``(M + 1,)``, first and last motion piece ``(2, M_pad)`` and entry and exit
@@ -720,7 +720,7 @@ def _padded(tp: ToolPath, table: PulseTable, t_in: np.ndarray, t_out: np.ndarray
     motion_ends = np.zeros((2, Mp), dtype=table.first_motion.dtype)
     motion_ends[0, :M], motion_ends[1, :M] = table.first_motion, table.last_motion
     tangents = np.zeros((2, Mp, tp.dim))
-    tangents[0, :M], tangents[1, :M] = t_in, t_out
+    tangents[0, :M], tangents[1, :M] = tp.tangents()
     arrays = (lengths, cum, motion_ends, tangents)
     if table is tp._cache.get("pulse_table"):
         tp._cache["padded"] = (table, arrays)

@@ -275,6 +275,13 @@ def test_plans_under_limits_below_the_envelope_hold_limits_tolerance_and_timing(
         np.testing.assert_allclose(start[1:] - (start[:-1] + pulse[:-1]), sum(delays) - ov, rtol=0, atol=1e-9)
 
 
+
+def _same_timing_and_profile(a, b) -> bool:
+    """Two plans with the same pulse starts, pulse lengths, overlaps and profile coefficients, bit for bit."""
+    return all(np.array_equal(np.asarray(x), np.asarray(y)) for x, y in (
+        (a.start_times, b.start_times), (a.pulse_times, b.pulse_times), (a.overlaps, b.overlaps),
+        (a.position.coeffs, b.position.coeffs)))
+
 def test_a_path_planned_again_with_other_feeds_and_tolerances_plans_as_a_path_read_anew():
     """A path keeps its analysis between plans (``_fir_straight``'s collinear vertices, the runs
     and merged path of its last plan, its tangents and padded block arrays): random zigzags with
@@ -301,9 +308,7 @@ def test_a_path_planned_again_with_other_feeds_and_tolerances_plans_as_a_path_re
             assert (again is None) == (anew is None) and (anew is None or again.tolist() == anew.tolist()), seed
             a = plan_fir(kept, feeds, (0.06, 0.03), tol, refine=False)
             b = plan_fir(Polyline(pts.copy()), feeds, (0.06, 0.03), tol, refine=False)
-            for x, y in ((a.start_times, b.start_times), (a.pulse_times, b.pulse_times), (a.overlaps, b.overlaps),
-                         (a.position.coeffs, b.position.coeffs)):
-                assert np.array_equal(np.asarray(x), np.asarray(y)), seed
+            assert _same_timing_and_profile(a, b), seed
 
 
 def test_a_paths_tangents_are_copies():
@@ -332,6 +337,4 @@ def test_a_path_with_arcs_planned_again_plans_as_a_path_read_anew():
     for refine in (False, True, False):
         a = plan_fir(kept, 100.0, (0.06, 0.03), 0.01, refine=refine)
         b = plan_fir(parse_gcode(program).blocks, 100.0, (0.06, 0.03), 0.01, refine=refine)
-        for x, y in ((a.start_times, b.start_times), (a.pulse_times, b.pulse_times), (a.overlaps, b.overlaps),
-                     (a.position.coeffs, b.position.coeffs)):
-            assert np.array_equal(np.asarray(x), np.asarray(y)), refine
+        assert _same_timing_and_profile(a, b), refine
