@@ -92,7 +92,7 @@ from research.paths.library import random_program
 from research.paths.gcode import parse_gcode, to_gcode
 
 # the benchmarks' shared table and timer (same folder)
-from bench_fir import TARGET_MEMORY_PER_SEGMENT, Table, peak_memory, plan_with_profile, timed, verdict
+from bench_fir import TARGET_MEMORY_PER_SEGMENT, Table, one_check, peak_memory, plan_with_profile, timed, verdict
 
 # The benchmark's settings (stated by the issue, not tuned)
 FEED = 200.0  # commanded feed F [mm/s]
@@ -258,37 +258,6 @@ def worst_ratio(plan, limits) -> float:
 
 
 # -- part 1 ----------------------------------------------------------------------------------------
-def one_check(plan, path: Polyline, tolerance: float):
-    """A callable that runs one full verification pass of ``plan`` as ``plan_fir``'s rounds do
-    (``_fir_settle``): its exact profile from its inputs, every vertex error, every path sample
-    (bounded between samples, ``_fir_certify``), from scratch (no earlier check to reuse). ``plan_fir``
-    runs at least one such pass per plan it returns, so its time per segment is a floor under the
-    verified planner's own (its look-ahead, other candidates and repair rounds come on top)."""
-    from research.interpolators import _fir_profile
-    from research.interpolators._fir_verify import RoundChecks
-    from research.interpolators.fir import CHECK_PERIOD, _as_toolpath
-    from research.piecewise import NumpyPiecewise
-
-    inputs = plan.profile
-    tab = inputs.pieces.table
-    tp = _as_toolpath(path)
-    M = tp.n_blocks
-    durations = inputs.durations()
-    tol = np.full(M, tolerance)
-    Td = float(np.sum(inputs.delays))
-
-    def run():
-        starts, _, breaks, coeffs, centre = _fir_profile.profile(inputs.start, tab.geo, tab.block, tab.gap,
-                                                                 inputs.fraction, inputs.piece_tv, inputs.gaps,
-                                                                 inputs.delays, tab.joins)
-        checks = RoundChecks(tp, tol, tab.block, Td, CHECK_PERIOD, tab.fraction, tab.joins)
-        errors = checks.vertices(NumpyPiecewise(breaks, coeffs), starts[:M], centre[: M - 1], durations, True)
-        deviation, _, _ = checks.samples_check()
-        return float(np.max(errors, initial=0.0)), deviation
-
-    return run
-
-
 def ruckig_follow(path: Polyline, feed: float, delays):
     """Callable running ruckig chord by chord (see the module docstring); inputs built outside."""
     from ruckig import InputParameter, Result, Ruckig, Trajectory
@@ -401,7 +370,7 @@ def bench_cam(args, table: Table, t0: float) -> None:
               f"{t_eq / t_fir:.0%} of the verified plan")
     check = one_check(plan, path, EPS)
     check()  # warm-up
-    (_, dev_check), t_check = median_of(args.repeats, check)
+    (_, dev_check, _), t_check = median_of(args.repeats, check)
     table.row("  for information: one full check of the plan (profile, vertex errors, path samples), per segment",
               f"{t_check / M * 1e6:.2f} us", f"{t_check / t_fir:.0%} of the verified plan; deviation {dev_check * 1e3:.2f} um")
     try:

@@ -35,7 +35,9 @@ because absolute times on a shared machine mean little):
    made outside its timing, and a path keeps its analysis between plans (its blocks, tangents,
    pulse table, straight runs): both sides plan from prepared inputs. The paper's planning is
    also judged on a path's first plan (its analysis in the timing) against ruckig with its
-   inputs made from a path not read before (``ruckig_rows`` in the timing).
+   inputs made from a path not read before (``ruckig_rows`` in the timing). One full check of the
+   verified plan (:func:`one_check`: its profile, vertex errors and certified path samples, from
+   scratch) is timed as well: ruckig's time over it is a ceiling on the verified plan's ratio.
 
 Targets: issue "Core pipeline" §8. Each target line prints PASS or MISS as measured; nothing is
 tuned to make them pass. When a target is missed, the "where the time goes" block splits the warm
@@ -304,6 +306,49 @@ def plan_with_profile(*args, **kwargs):
     return plan
 
 
+def one_check(plan, path: Polyline, tolerance: float, check_period: float = fir_module.CHECK_PERIOD):
+    """A callable that runs one full verification pass of the verified ``plan`` of ``path`` as
+    ``plan_fir``'s rounds do (``_fir_settle``), from scratch (no earlier check to reuse): its exact
+    profile built from its inputs, every vertex error and every path sample every ``check_period``
+    [s], bounded between samples (``_fir_certify``), against ``tolerance`` [mm] up to the profile's
+    rounding. ``plan_fir`` runs at least one such pass for the plan it returns, so its time is a
+    floor under the verified planner's own (its look-ahead, other candidates and repair rounds come
+    on top), and ruckig's time over it a ceiling on any ratio a plan checked this way can reach.
+    The callable returns ``(largest vertex error [mm], largest sampled deviation [mm], path
+    samples)``.
+
+    Raises:
+        ValueError: the plan was made on another pulse table than the path's own (its straight
+            runs planned as one block each), whose blocks are not the path's.
+    """
+    from research.interpolators import _fir_profile
+    from research.interpolators._fir_verify import RoundChecks, profile_rounding
+    from research.piecewise import NumpyPiecewise
+
+    inputs = plan.profile
+    tab = inputs.pieces.table
+    tp = fir_module._as_toolpath(path)
+    M = tp.n_blocks
+    if tab.first_motion.size != M:
+        raise ValueError(f"one_check: the plan's pulse table has {tab.first_motion.size} blocks, the path {M}")
+    durations = inputs.durations()
+    tol = np.full(M, float(tolerance))
+    Td = float(np.sum(inputs.delays))
+
+    def run():
+        starts, _, breaks, coeffs, centre = _fir_profile.profile(inputs.start, tab.geo, tab.block, tab.gap,
+                                                                 inputs.fraction, inputs.piece_tv, inputs.gaps,
+                                                                 inputs.delays, tab.joins)
+        position = NumpyPiecewise(breaks, coeffs)
+        checks = RoundChecks(tp, tol, tab.block, Td, check_period, tab.fraction, tab.joins)
+        checks.slack = profile_rounding(position, tp.ends[-1])
+        errors = checks.vertices(position, starts[:M], centre[: M - 1], durations, True)
+        deviation, _, _ = checks.samples_check(certify=True)
+        return float(np.max(errors, initial=0.0)), deviation, checks.samples
+
+    return run
+
+
 def bench_planning(path: Polyline, feeds, repeats: int, table: Table) -> None:
     """Per-segment planning cost: plan_fir against ruckig exact-stop segments."""
     M = path.n_segments
@@ -338,6 +383,13 @@ def bench_planning(path: Polyline, feeds, repeats: int, table: Table) -> None:
     _, t_rows = best_of(repeats, lambda: len(ruckig_rows(next(fresh), feeds)))  # (timed blocks on a result's leaves)
     table.row("ruckig's inputs made from the path (ruckig_rows), per segment", f"{t_rows / M * 1e6:.2f} us", "")
 
+    # the verified plan's floor: one full check of the plan it returns, from scratch
+    plan = plan_fir(path, feeds, DELAYS, TOLERANCE)
+    (_, deviation, samples), t_check = best_of(repeats, one_check(plan, path, TOLERANCE))
+    table.row("one full check of the verified plan (profile, vertex errors, certified path samples), per segment",
+              f"{t_check / M * 1e6:.2f} us",
+              f"{samples} samples, deviation {deviation * 1e3:.2f} um (the plan's {plan.path_deviation * 1e3:.2f})")
+
     def ruckig_loop(sync):
         otg, inp, traj = Ruckig(path.dim), InputParameter(path.dim), Trajectory(path.dim)
         inp.synchronization = sync
@@ -369,6 +421,9 @@ def bench_planning(path: Polyline, feeds, repeats: int, table: Table) -> None:
             table.row(f"  speed ratio ours ({ours_label}) / {rk_label} (t_ruckig / t_ours)", "", f"{rk_t / ours_t:.3f}x",
                       f">= {TARGET_VS_RUCKIG:g}x" if is_target else "",
                       verdict(rk_t / ours_t >= TARGET_VS_RUCKIG) if is_target else "")
+        # no plan checked on its exact profile every check period gets past this ratio: one check
+        # costs that much before any candidate, round or look-ahead
+        table.row("  ceiling on the verified plan's ratio: ruckig / one full check", "", f"{theirs / (t_check / M):.3f}x")
 
 
 # -- main ------------------------------------------------------------------------------------------
