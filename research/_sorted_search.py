@@ -76,13 +76,7 @@ def _from(a, v, hint, right):
             step *= 2
             hi = lo + step
         hi = min(hi, n)
-    while lo < hi:  # binary search inside the bracket
-        mid = (lo + hi) >> 1
-        if _past(a[mid], v, right):
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
+    return right_in(a, v, lo, hi) if right else left_in(a, v, lo, hi)  # binary search inside the bracket
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")

@@ -275,12 +275,12 @@ def test_plans_under_limits_below_the_envelope_hold_limits_tolerance_and_timing(
         np.testing.assert_allclose(start[1:] - (start[:-1] + pulse[:-1]), sum(delays) - ov, rtol=0, atol=1e-9)
 
 
-
 def _same_timing_and_profile(a, b) -> bool:
     """Two plans with the same pulse starts, pulse lengths, overlaps and profile coefficients, bit for bit."""
     return all(np.array_equal(np.asarray(x), np.asarray(y)) for x, y in (
         (a.start_times, b.start_times), (a.pulse_times, b.pulse_times), (a.overlaps, b.overlaps),
         (a.position.coeffs, b.position.coeffs)))
+
 
 def test_a_path_planned_again_with_other_feeds_and_tolerances_plans_as_a_path_read_anew():
     """A path keeps its analysis between plans (``_fir_straight``'s collinear vertices, the runs
